@@ -1,0 +1,48 @@
+# The README's two commands: `make demo` (the main job on the default scene) and `make test`.
+# Both start from a fresh Debian 12 machine: missing packages are installed with apt-get.
+
+BUILD_DIR  ?= build
+BUILD_TYPE ?= Release
+JOBS       ?= $(shell nproc)
+OUT_DIR    ?= out
+SHARCBAKE  := $(BUILD_DIR)/bin/sharcbake
+
+# Debian packages the build, the demo and the tests need.
+DEB_PACKAGES := build-essential cmake pkg-config python3 \
+    libembree-dev libtbb-dev libopenvdb-dev libopenexr-dev libglm-dev libcli11-dev \
+    libtinygltf-dev nlohmann-json3-dev libstb-dev libgtest-dev libbenchmark-dev
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: all deps configure build demo test clean
+
+all: build
+
+# Installs only what is missing, so a second run costs nothing and needs no network.
+deps:
+	@missing=""; for p in $(DEB_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	    echo "Installing Debian packages:$$missing"; \
+	    $(SUDO) apt-get update -q && \
+	    DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q --no-install-recommends $$missing; \
+	else echo "All Debian packages present."; fi
+
+configure: deps
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
+
+build: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+demo: build
+	@mkdir -p $(OUT_DIR)
+	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box.exr \
+	    --resolution 256x256 --spp 64
+	@echo "Demo outputs are in $(OUT_DIR)/: cornell_box.exr (linear) and cornell_box.png (tone-mapped)."
+
+test: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+clean:
+	rm -rf $(BUILD_DIR) $(OUT_DIR)

@@ -1,0 +1,150 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file scene.h
+/// @brief The renderer's view of a static scene: world-space triangles, glTF materials,
+/// punctual lights, cameras and the sky. Everything is flattened to world space at load time,
+/// so the tracer never walks a node hierarchy.
+///
+/// Units and conventions follow glTF 2.0: metres, right-handed, +Y up, cameras look down -Z.
+/// Radiometric quantities are in the renderer's linear units (emission factor x strength is
+/// radiance; punctual lights are converted from photometric glTF units with 683 lm/W).
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// How texture coordinates outside [0,1] are mapped (glTF sampler wrap modes).
+enum class WrapMode : uint8_t { Repeat, ClampToEdge, MirroredRepeat };
+
+/// A decoded texture: linear-light RGBA float texels, row 0 at the top (glTF/image convention,
+/// v = 0 is the first row). sRGB-encoded images (base colour, emissive, specular colour) are
+/// decoded to linear at load time so the tracer does one bilinear fetch and no conversion.
+struct Texture {
+    std::string name;
+    int width = 0;
+    int height = 0;
+    std::vector<glm::vec4> texels;  ///< width * height, row-major
+    WrapMode wrap_s = WrapMode::Repeat;
+    WrapMode wrap_t = WrapMode::Repeat;
+    bool nearest = false;  ///< magnification filter NEAREST; otherwise bilinear
+
+    /// Bilinear (or nearest) lookup with the texture's wrap modes. uv in glTF convention.
+    glm::vec4 sample(glm::vec2 uv) const;
+};
+
+/// A material's reference to a texture: index into Scene::textures and which UV set to use.
+struct TextureRef {
+    int32_t texture = -1;   ///< -1: no texture
+    uint32_t texcoord = 0;  ///< 0 = TEXCOORD_0, 1 = TEXCOORD_1
+    bool isSet() const { return texture >= 0; }
+};
+
+/// glTF PBR metallic-roughness with KHR_materials_emissive_strength and KHR_materials_specular.
+/// Texture values multiply the factors, as the glTF specification says.
+struct Material {
+    std::string name;
+    glm::vec3 base_color{1.0f};
+    TextureRef base_color_texture;
+    float metallic = 1.0f;
+    float roughness = 1.0f;
+    TextureRef metallic_roughness_texture;  ///< B = metallic, G = roughness
+    glm::vec3 emissive{0.0f};               ///< emissiveFactor (linear)
+    float emissive_strength = 1.0f;         ///< KHR_materials_emissive_strength
+    TextureRef emissive_texture;
+    float specular = 1.0f;                  ///< KHR_materials_specular specularFactor
+    glm::vec3 specular_color{1.0f};         ///< KHR_materials_specular specularColorFactor
+    TextureRef specular_texture;            ///< A channel
+    TextureRef specular_color_texture;      ///< RGB
+    float ior = 1.5f;                       ///< KHR_materials_ior (1.5 when absent)
+    bool double_sided = false;
+
+    /// True when some surface with this material emits light.
+    bool isEmissive() const {
+        return emissive_strength > 0.0f &&
+               (emissive.x > 0.0f || emissive.y > 0.0f || emissive.z > 0.0f);
+    }
+    bool hasTextures() const {
+        return base_color_texture.isSet() || metallic_roughness_texture.isSet() ||
+               emissive_texture.isSet() || specular_texture.isSet() ||
+               specular_color_texture.isSet();
+    }
+};
+
+/// KHR_lights_punctual, converted to radiometric units.
+enum class LightType : uint8_t { Point, Spot, Directional };
+
+struct PunctualLight {
+    std::string name;
+    LightType type = LightType::Point;
+    glm::vec3 position{0.0f};            ///< world space (point, spot)
+    glm::vec3 direction{0.0f, 0.0f, -1.0f};  ///< world-space direction the light travels (spot, directional)
+    /// Point/spot: radiant intensity in W/sr (candela / 683).
+    /// Directional: irradiance in W/m^2 on a surface facing the light (lux / 683).
+    glm::vec3 intensity{0.0f};
+    float range = 0.0f;  ///< 0 = infinite. glTF's range is a cut-off hint; we honour it as a hard cut-off.
+    float inner_cone_angle = 0.0f;                    ///< spot, radians
+    float outer_cone_angle = 0.785398163397448f;      ///< spot, radians (pi/4 default)
+};
+
+/// A pinhole camera, from a glTF node with a perspective camera or from the command line.
+struct Camera {
+    std::string name;
+    glm::vec3 position{0.0f};
+    glm::vec3 forward{0.0f, 0.0f, -1.0f};  ///< unit, world space
+    glm::vec3 up{0.0f, 1.0f, 0.0f};        ///< unit, orthogonal to forward
+    float yfov = 0.8f;                     ///< vertical field of view, radians
+    std::optional<float> aspect_ratio;     ///< width / height if the glTF camera gives one
+};
+
+/// The environment seen by rays that leave the scene. Either a uniform radiance or an
+/// equirectangular (lat-long) map; the map is multiplied by `scale`.
+struct Sky {
+    glm::vec3 uniform{0.0f};
+    std::optional<Texture> map;  ///< equirectangular, +Y up, u = 0 at -X? see sky.h for the mapping
+    float scale = 1.0f;
+    bool isBlack() const {
+        return !map && uniform.x <= 0.0f && uniform.y <= 0.0f && uniform.z <= 0.0f;
+    }
+};
+
+/// Counters the loader fills so the CLI can say what it dropped or assumed.
+struct LoadStats {
+    uint64_t triangles_loaded = 0;
+    uint64_t degenerate_triangles_dropped = 0;  ///< zero area or repeated indices
+    uint64_t primitives_skipped = 0;            ///< non-triangle modes (points, lines)
+    std::vector<std::string> warnings;          ///< human-readable, one per issue
+};
+
+/// The whole scene, flattened to world space.
+struct Scene {
+    std::string source_path;
+
+    // Geometry: one indexed triangle soup in world space. Vertex attributes are per vertex;
+    // triangles index them; each triangle has a material index.
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;     ///< empty, or one per vertex (unit, world space)
+    std::vector<glm::vec2> texcoords0;  ///< empty, or one per vertex
+    std::vector<glm::vec2> texcoords1;  ///< empty, or one per vertex
+    std::vector<glm::uvec3> triangles;
+    std::vector<uint32_t> triangle_materials;
+
+    std::vector<Material> materials;  ///< never empty after loading (a default is appended if needed)
+    std::vector<Texture> textures;
+    std::vector<PunctualLight> lights;
+    std::vector<Camera> cameras;
+    Sky sky;
+    LoadStats stats;
+
+    /// Axis-aligned bounds of all triangles (min, max). Both zero for an empty scene.
+    glm::vec3 bounds_min{0.0f};
+    glm::vec3 bounds_max{0.0f};
+
+    bool empty() const { return triangles.empty(); }
+};
+
+}  // namespace sharcbake

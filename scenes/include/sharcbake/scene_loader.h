@@ -1,0 +1,32 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file scene_loader.h
+/// @brief Loading glTF 2.0 scenes (.gltf and .glb) and equirectangular EXR skies.
+#pragma once
+
+#include "sharcbake/scene.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace sharcbake {
+
+/// Thrown for any file that cannot be loaded. what() names the file and the problem, e.g.
+/// "scene.gltf: accessor 3 (indices of mesh 'Floor'): index 812 out of range (412 vertices)".
+class SceneLoadError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Loads a glTF 2.0 file (.gltf with external or embedded buffers, or .glb) and flattens the
+/// default scene (or scene 0) into world space. Degenerate triangles are dropped and counted
+/// in Scene::stats; anything that would make the scene wrong (missing buffer, index out of
+/// range, NaN/Inf vertex, unsupported required extension) throws SceneLoadError.
+Scene loadGltf(const std::string& path);
+
+/// Reads an equirectangular (lat-long) environment map from an OpenEXR file into a linear
+/// texture. Throws SceneLoadError with the file name on failure.
+/// Mapping (the same as Blender's, converted to glTF's +Y-up axes): for a unit direction d,
+///   u = 0.5 + atan2(d.z, d.x) / (2 pi),  v = acos(d.y) / pi   (v = 0 is the top row, +Y).
+Texture loadEquirectExr(const std::string& path);
+
+}  // namespace sharcbake

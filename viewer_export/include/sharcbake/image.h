@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file image.h
+/// @brief Linear float RGB images and their files: OpenEXR (linear, 32-bit float) for data,
+/// PNG (tone-mapped, sRGB, 8-bit) for people.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// Row-major RGB image, row 0 at the top.
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<glm::vec3> pixels;
+
+    Image() = default;
+    Image(int w, int h) : width(w), height(h), pixels(size_t(w) * size_t(h), glm::vec3(0.0f)) {}
+    glm::vec3& at(int x, int y) { return pixels[size_t(y) * size_t(width) + size_t(x)]; }
+    const glm::vec3& at(int x, int y) const { return pixels[size_t(y) * size_t(width) + size_t(x)]; }
+};
+
+/// Thrown when an image file cannot be written or read; what() names the file.
+class ImageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// String attributes stored in the EXR header (provenance: tool version, settings, timings).
+using ImageMetadata = std::map<std::string, std::string>;
+
+/// Writes a 32-bit float RGB OpenEXR file. Throws ImageError.
+void writeExr(const std::string& path, const Image& image, const ImageMetadata& metadata = {});
+
+/// Reads the R, G, B channels of an OpenEXR file (any pixel type) as float. A missing channel
+/// reads as 0; a single Y (luminance) channel is replicated. Throws ImageError.
+Image readExr(const std::string& path, ImageMetadata* metadata = nullptr);
+
+/// Tone-mapping for PNG previews: exposure (in stops), then the operator, then the sRGB curve.
+enum class ToneMap { Clamp, Reinhard, Aces };
+
+/// Writes an 8-bit sRGB PNG preview of a linear image. Throws ImageError.
+void writePng(const std::string& path, const Image& image, float exposure_stops = 0.0f,
+              ToneMap tone_map = ToneMap::Aces);
+
+/// The tone-mapped, sRGB-encoded value in [0,1] of one linear pixel (exposed for tests).
+glm::vec3 toneMapPixel(glm::vec3 linear, float exposure_stops, ToneMap tone_map);
+
+}  // namespace sharcbake
