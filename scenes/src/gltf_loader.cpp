@@ -1,0 +1,897 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file gltf_loader.cpp
+/// @brief glTF 2.0 (.gltf / .glb) to sharcbake::Scene: flattens the node hierarchy into one
+/// world-space triangle soup and converts materials, textures, lights, cameras and the sky.
+///
+/// tinygltf parses JSON, resolves buffers and decodes images; everything it does not check
+/// (accessor ranges, index ranges, finite positions, required extensions) is checked here,
+/// because a bad scene must fail loudly at load time rather than render wrong hours later.
+#include "sharcbake/scene_loader.h"
+
+#include <tiny_gltf.h>
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <sstream>
+#include <utility>
+
+namespace sharcbake {
+namespace {
+
+/// Luminous efficacy used by KHR_lights_punctual exporters (Blender's PBR_WATTS_TO_LUMENS)
+/// to turn watts into lumens; dividing by it gives back radiometric units.
+constexpr double kLumensPerWatt = 683.0;
+
+/// Extensions this loader understands well enough to honour when a file requires them.
+/// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
+/// converts anyway.
+const std::array<const char*, 5> kSupportedRequiredExtensions = {
+    "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
+    "KHR_materials_ior", "KHR_mesh_quantization"};
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+/// sRGB transfer function to linear (IEC 61966-2-1).
+float srgbToLinear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+glm::vec3 vec3Or(const std::vector<double>& v, glm::vec3 fallback) {
+    if (v.size() < 3) return fallback;
+    return glm::vec3(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
+}
+
+bool isFinite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+/// A texture reference as found in core glTF (TextureInfo) or inside extension JSON.
+struct TextureSlot {
+    int index = -1;
+    int texcoord = 0;
+};
+
+/// Where an accessor's elements live in memory, after range checks.
+struct ElementLayout {
+    const unsigned char* data = nullptr;
+    size_t stride = 0;
+    size_t count = 0;
+    int component_type = 0;
+    int components = 0;
+    bool normalized = false;
+};
+
+/// One primitive's geometry, already in world space and with degenerate triangles removed.
+struct PrimitiveGeometry {
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;  ///< empty when the primitive has none
+    std::vector<glm::vec2> uv0;      ///< empty when absent
+    std::vector<glm::vec2> uv1;      ///< empty when absent
+    std::vector<glm::uvec3> triangles;
+};
+
+/// Reads one component at p and converts it to double; normalized integers map to [0,1] or
+/// [-1,1] as the glTF specification defines.
+double readComponent(const unsigned char* p, int componentType, bool normalized) {
+    auto load = [p](auto value) {
+        std::memcpy(&value, p, sizeof(value));  // memcpy: glTF data need not be aligned
+        return value;
+    };
+    switch (componentType) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return load(float{});
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        const double v = load(int8_t{});
+        return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: {
+        const double v = load(uint8_t{});
+        return normalized ? v / 255.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        const double v = load(int16_t{});
+        return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        const double v = load(uint16_t{});
+        return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        const double v = load(uint32_t{});
+        return normalized ? v / 4294967295.0 : v;
+    }
+    default: return 0.0;  // rejected earlier by ElementLayout validation
+    }
+}
+
+/// Turns the index list of a primitive into triangles according to its mode
+/// (TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN), using the glTF specification's orderings.
+std::vector<glm::uvec3> assembleTriangles(int mode, const std::vector<uint32_t>& idx) {
+    std::vector<glm::uvec3> tris;
+    const size_t n = idx.size();
+    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        for (size_t i = 0; i + 2 < n; ++i) {
+            // Odd triangles swap their first two vertices so all keep the same winding.
+            if (i % 2 == 0) tris.emplace_back(idx[i], idx[i + 1], idx[i + 2]);
+            else tris.emplace_back(idx[i + 1], idx[i], idx[i + 2]);
+        }
+    } else if (mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+        for (size_t i = 1; i + 1 < n; ++i) tris.emplace_back(idx[i], idx[i + 1], idx[0]);
+    } else {
+        for (size_t i = 0; i + 2 < n; i += 3) tris.emplace_back(idx[i], idx[i + 1], idx[i + 2]);
+    }
+    return tris;
+}
+
+/// A node's local transform: the matrix if given, else T * R * S.
+glm::dmat4 localTransform(const tinygltf::Node& node) {
+    if (node.matrix.size() == 16) return glm::make_mat4(node.matrix.data());  // column-major, like glm
+    glm::dmat4 m(1.0);
+    if (node.translation.size() == 3)
+        m = glm::translate(m, glm::dvec3(node.translation[0], node.translation[1], node.translation[2]));
+    if (node.rotation.size() == 4) {
+        // glTF stores quaternions as (x, y, z, w); glm's constructor takes w first.
+        const glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+        m *= glm::mat4_cast(glm::normalize(q));
+    }
+    if (node.scale.size() == 3) m = glm::scale(m, glm::dvec3(node.scale[0], node.scale[1], node.scale[2]));
+    return m;
+}
+
+/// Builds the glTF-spec default material used by primitives without one.
+Material defaultMaterial() {
+    Material m;
+    m.name = "(default)";
+    // Material's member defaults already are the glTF defaults: white, metallic 1, rough 1.
+    return m;
+}
+
+class GltfLoader {
+public:
+    explicit GltfLoader(std::string path) : path_(std::move(path)) { scene_.source_path = path_; }
+
+    Scene load() {
+        parseFile();
+        checkRequiredExtensions();
+        convertMaterials();
+        readSky();
+        for (int root : rootNodes()) visitNode(root, glm::dmat4(1.0));
+        if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
+        computeBounds();
+        scene_.stats.triangles_loaded = scene_.triangles.size();
+        return std::move(scene_);
+    }
+
+private:
+    std::string path_;
+    tinygltf::Model model_;
+    Scene scene_;
+    int default_material_ = -1;
+    /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
+    /// colour and as data needs two decoded copies.
+    std::map<std::pair<int, bool>, int> texture_cache_;
+    std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
+
+    // ---------------------------------------------------------------- errors and warnings
+
+    [[noreturn]] void fail(const std::string& what) const { throw SceneLoadError(path_ + ": " + what); }
+
+    void warn(const std::string& what) { scene_.stats.warnings.push_back(path_ + ": " + what); }
+
+    std::string meshLabel(int meshIndex, size_t primIndex) const {
+        const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
+        std::string label = "mesh " + std::to_string(meshIndex);
+        if (!mesh.name.empty()) label += " " + quoted(mesh.name);
+        return label + " primitive " + std::to_string(primIndex);
+    }
+
+    // ---------------------------------------------------------------- file parsing
+
+    static bool hasGlbMagic(const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        char magic[4] = {};
+        in.read(magic, 4);
+        return in.gcount() == 4 && std::memcmp(magic, "glTF", 4) == 0;
+    }
+
+    void parseFile() {
+        if (!std::filesystem::exists(path_)) fail("file not found");
+        tinygltf::TinyGLTF parser;
+        std::string err;
+        std::string warnings;
+        // Decide by content, not extension: a .gltf that is really binary still loads.
+        const bool ok = hasGlbMagic(path_) ? parser.LoadBinaryFromFile(&model_, &err, &warnings, path_)
+                                           : parser.LoadASCIIFromFile(&model_, &err, &warnings, path_);
+        std::istringstream lines(warnings);
+        for (std::string line; std::getline(lines, line);)
+            if (!line.empty()) warn("tinygltf: " + line);
+        if (!ok) {
+            while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
+            fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : err));
+        }
+    }
+
+    void checkRequiredExtensions() const {
+        for (const std::string& ext : model_.extensionsRequired) {
+            const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
+                                           [&](const char* s) { return ext == s; });
+            if (!known) fail("required extension " + quoted(ext) + " is not supported by sharcbake");
+        }
+    }
+
+    // ---------------------------------------------------------------- accessors
+
+    const tinygltf::Accessor& accessorAt(int index, const std::string& what) const {
+        if (index < 0 || static_cast<size_t>(index) >= model_.accessors.size())
+            fail(what + ": accessor " + std::to_string(index) + " does not exist");
+        return model_.accessors[index];
+    }
+
+    /// Validates that `count` elements of `components` x `componentType`, starting at
+    /// `byteOffset` within buffer view `viewIndex`, lie inside the view and the view inside
+    /// its buffer, and returns where they are.
+    ElementLayout layoutInView(int viewIndex, size_t byteOffset, size_t count, int componentType,
+                               int components, bool allowStride, const std::string& what) const {
+        if (viewIndex < 0 || static_cast<size_t>(viewIndex) >= model_.bufferViews.size())
+            fail(what + ": bufferView " + std::to_string(viewIndex) + " does not exist");
+        const tinygltf::BufferView& view = model_.bufferViews[viewIndex];
+        if (view.buffer < 0 || static_cast<size_t>(view.buffer) >= model_.buffers.size())
+            fail(what + ": bufferView " + std::to_string(viewIndex) + " names missing buffer " +
+                 std::to_string(view.buffer));
+        const tinygltf::Buffer& buffer = model_.buffers[view.buffer];
+        if (view.byteOffset > buffer.data.size() || view.byteLength > buffer.data.size() - view.byteOffset)
+            fail(what + ": bufferView " + std::to_string(viewIndex) + " spans bytes [" +
+                 std::to_string(view.byteOffset) + ", " + std::to_string(view.byteOffset + view.byteLength) +
+                 ") but buffer " + std::to_string(view.buffer) +
+                 (buffer.uri.empty() || buffer.uri.rfind("data:", 0) == 0 ? "" : " (" + quoted(buffer.uri) + ")") +
+                 " holds only " + std::to_string(buffer.data.size()) + " bytes (missing or short buffer)");
+
+        const int componentSize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(componentType));
+        if (componentSize <= 0 || componentType == TINYGLTF_COMPONENT_TYPE_DOUBLE)
+            fail(what + ": unsupported component type " + std::to_string(componentType));
+        const size_t elementSize = static_cast<size_t>(componentSize) * components;
+        const size_t stride = allowStride && view.byteStride != 0 ? view.byteStride : elementSize;
+        if (stride < elementSize)
+            fail(what + ": byteStride " + std::to_string(stride) + " is smaller than the element size " +
+                 std::to_string(elementSize));
+
+        ElementLayout layout{buffer.data.data() + view.byteOffset + byteOffset, stride, count, componentType,
+                             components, false};
+        if (count == 0) return layout;
+        // Every element takes at least one byte, so a count beyond the view length is out of
+        // range; checking it first keeps the multiplication below from overflowing.
+        const bool fits = byteOffset <= view.byteLength && count <= view.byteLength &&
+                          stride * (count - 1) + elementSize <= view.byteLength - byteOffset;
+        if (!fits)
+            fail(what + ": " + std::to_string(count) + " elements of " + std::to_string(elementSize) +
+                 " bytes (stride " + std::to_string(stride) + ") from byte " + std::to_string(byteOffset) +
+                 " run past the end of bufferView " + std::to_string(viewIndex) + " (" +
+                 std::to_string(view.byteLength) + " bytes): accessor out of buffer range");
+        return layout;
+    }
+
+    static void readElements(const ElementLayout& layout, std::vector<double>& out, size_t firstOut = 0) {
+        const int componentSize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(layout.component_type));
+        for (size_t i = 0; i < layout.count; ++i) {
+            const unsigned char* element = layout.data + i * layout.stride;
+            for (int c = 0; c < layout.components; ++c)
+                out[(firstOut + i) * layout.components + c] =
+                    readComponent(element + c * componentSize, layout.component_type, layout.normalized);
+        }
+    }
+
+    /// Overwrites the elements a sparse accessor substitutes (glTF 2.0 sparse storage).
+    void applySparse(const tinygltf::Accessor& acc, int components, std::vector<double>& out,
+                     const std::string& what) const {
+        const auto& sparse = acc.sparse;
+        if (sparse.count <= 0 || static_cast<size_t>(sparse.count) > acc.count)
+            fail(what + ": sparse count " + std::to_string(sparse.count) + " is invalid for " +
+                 std::to_string(acc.count) + " elements");
+        const int indexType = sparse.indices.componentType;
+        if (indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(what + ": sparse indices have unsupported component type " + std::to_string(indexType));
+        const auto count = static_cast<size_t>(sparse.count);
+        ElementLayout indices = layoutInView(sparse.indices.bufferView, static_cast<size_t>(sparse.indices.byteOffset),
+                                             count, indexType, 1, false, what + " (sparse indices)");
+        ElementLayout values = layoutInView(sparse.values.bufferView, static_cast<size_t>(sparse.values.byteOffset),
+                                            count, acc.componentType, components, false, what + " (sparse values)");
+        values.normalized = acc.normalized;
+        std::vector<double> target(count);
+        readElements(indices, target);
+        std::vector<double> substitutes(count * components);
+        readElements(values, substitutes);
+        for (size_t i = 0; i < count; ++i) {
+            const double t = target[i];
+            if (t >= static_cast<double>(acc.count))
+                fail(what + ": sparse index " + std::to_string(static_cast<uint64_t>(t)) + " out of range (" +
+                     std::to_string(acc.count) + " elements)");
+            const auto dst = static_cast<size_t>(t);
+            for (int c = 0; c < components; ++c) out[dst * components + c] = substitutes[i * components + c];
+        }
+    }
+
+    /// Reads any accessor as doubles (exact for every glTF component type), count x components.
+    std::vector<double> readAccessor(int index, int expectedType, const std::string& what) const {
+        const std::string label = what + " (accessor " + std::to_string(index) + ")";
+        const tinygltf::Accessor& acc = accessorAt(index, what);
+        if (acc.type != expectedType)
+            fail(label + ": has type " + std::to_string(acc.type) + ", expected " + std::to_string(expectedType));
+        const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
+        std::vector<double> out(acc.count * components, 0.0);
+        // Without a bufferView the accessor is all zeros (plus any sparse substitutions).
+        if (acc.bufferView >= 0) {
+            ElementLayout layout =
+                layoutInView(acc.bufferView, acc.byteOffset, acc.count, acc.componentType, components, true, label);
+            layout.normalized = acc.normalized;
+            readElements(layout, out);
+        } else if (tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(acc.componentType)) <= 0) {
+            fail(label + ": unsupported component type " + std::to_string(acc.componentType));
+        }
+        if (acc.sparse.isSparse) applySparse(acc, components, out, label);
+        return out;
+    }
+
+    std::vector<glm::vec3> readVec3(int index, const std::string& what) const {
+        const std::vector<double> raw = readAccessor(index, TINYGLTF_TYPE_VEC3, what);
+        std::vector<glm::vec3> out(raw.size() / 3);
+        for (size_t i = 0; i < out.size(); ++i)
+            out[i] = glm::vec3(glm::dvec3(raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]));
+        return out;
+    }
+
+    std::vector<glm::vec2> readVec2(int index, const std::string& what) const {
+        const std::vector<double> raw = readAccessor(index, TINYGLTF_TYPE_VEC2, what);
+        std::vector<glm::vec2> out(raw.size() / 2);
+        for (size_t i = 0; i < out.size(); ++i) out[i] = glm::vec2(glm::dvec2(raw[2 * i], raw[2 * i + 1]));
+        return out;
+    }
+
+    std::vector<uint32_t> readIndices(int index, size_t vertexCount, const std::string& what) const {
+        const tinygltf::Accessor& acc = accessorAt(index, what + " indices");
+        const int type = acc.componentType;
+        if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(what + " indices (accessor " + std::to_string(index) + "): component type " + std::to_string(type) +
+                 " is not an unsigned integer type");
+        if (acc.normalized) fail(what + " indices (accessor " + std::to_string(index) + "): normalized indices");
+        const std::vector<double> raw = readAccessor(index, TINYGLTF_TYPE_SCALAR, what + " indices");
+        std::vector<uint32_t> out(raw.size());
+        for (size_t i = 0; i < raw.size(); ++i) {
+            if (raw[i] >= static_cast<double>(vertexCount))
+                fail(what + " indices (accessor " + std::to_string(index) + "): index " +
+                     std::to_string(static_cast<uint64_t>(raw[i])) + " at position " + std::to_string(i) +
+                     " out of range (" + std::to_string(vertexCount) + " vertices)");
+            out[i] = static_cast<uint32_t>(raw[i]);
+        }
+        return out;
+    }
+
+    // ---------------------------------------------------------------- scene graph
+
+    /// The default scene's roots, else scene 0's, else every node that is nobody's child.
+    std::vector<int> rootNodes() const {
+        if (!model_.scenes.empty()) {
+            int s = model_.defaultScene;
+            if (s < 0 || static_cast<size_t>(s) >= model_.scenes.size()) s = 0;
+            return model_.scenes[s].nodes;
+        }
+        std::vector<bool> isChild(model_.nodes.size(), false);
+        for (const tinygltf::Node& n : model_.nodes)
+            for (int c : n.children)
+                if (c >= 0 && static_cast<size_t>(c) < isChild.size()) isChild[c] = true;
+        std::vector<int> roots;
+        for (size_t i = 0; i < isChild.size(); ++i)
+            if (!isChild[i]) roots.push_back(static_cast<int>(i));
+        return roots;
+    }
+
+    void visitNode(int index, const glm::dmat4& parent) {
+        if (index < 0 || static_cast<size_t>(index) >= model_.nodes.size())
+            fail("node " + std::to_string(index) + " does not exist");
+        if (on_path_.empty()) on_path_.assign(model_.nodes.size(), false);
+        if (on_path_[index]) fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
+        on_path_[index] = true;
+
+        const tinygltf::Node& node = model_.nodes[index];
+        const glm::dmat4 world = parent * localTransform(node);
+        if (node.mesh >= 0) addMesh(node.mesh, world, index);
+        if (node.camera >= 0) addCamera(node, world);
+        addNodeLight(node, world);
+        for (int child : node.children) visitNode(child, world);
+
+        on_path_[index] = false;
+    }
+
+    // ---------------------------------------------------------------- geometry
+
+    void addMesh(int meshIndex, const glm::dmat4& world, int nodeIndex) {
+        if (static_cast<size_t>(meshIndex) >= model_.meshes.size())
+            fail("node " + std::to_string(nodeIndex) + " names missing mesh " + std::to_string(meshIndex));
+        if (model_.nodes[nodeIndex].skin >= 0)
+            warn("node " + std::to_string(nodeIndex) + ": skinning ignored, mesh used in its bind pose");
+        const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
+        for (size_t p = 0; p < mesh.primitives.size(); ++p) addPrimitive(meshIndex, p, world);
+    }
+
+    static bool isTriangleMode(int mode) {
+        return mode == -1 || mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+               mode == TINYGLTF_MODE_TRIANGLE_FAN;
+    }
+
+    void addPrimitive(int meshIndex, size_t primIndex, const glm::dmat4& world) {
+        const tinygltf::Primitive& prim = model_.meshes[meshIndex].primitives[primIndex];
+        const std::string label = meshLabel(meshIndex, primIndex);
+        if (!isTriangleMode(prim.mode)) {
+            ++scene_.stats.primitives_skipped;  // points and lines have no surface to hit
+            return;
+        }
+        PrimitiveGeometry geo = readPrimitive(prim, label);
+        const std::vector<uint32_t> indices = primitiveIndices(prim, geo.positions.size(), label);
+        if (prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP && prim.mode != TINYGLTF_MODE_TRIANGLE_FAN &&
+            indices.size() % 3 != 0)
+            warn(label + ": " + std::to_string(indices.size()) + " indices is not a multiple of 3; the last " +
+                 std::to_string(indices.size() % 3) + " ignored");
+        geo.triangles = assembleTriangles(prim.mode, indices);
+
+        transformToWorld(geo, world, label);
+        dropDegenerateTriangles(geo);
+        if (geo.normals.empty()) makeFlatShaded(geo);
+        else repairNormals(geo, label);
+        appendGeometry(geo, materialForPrimitive(prim, label));
+    }
+
+    PrimitiveGeometry readPrimitive(const tinygltf::Primitive& prim, const std::string& label) const {
+        PrimitiveGeometry geo;
+        auto attribute = [&](const char* name) {
+            const auto it = prim.attributes.find(name);
+            return it == prim.attributes.end() ? -1 : it->second;
+        };
+        const int position = attribute("POSITION");
+        if (position < 0) fail(label + ": no POSITION attribute");
+        geo.positions = readVec3(position, label + " POSITION");
+        for (size_t i = 0; i < geo.positions.size(); ++i)
+            if (!isFinite(geo.positions[i]))
+                fail(label + " POSITION (accessor " + std::to_string(position) + "): vertex " + std::to_string(i) +
+                     " is NaN or infinite");
+
+        const size_t n = geo.positions.size();
+        auto checkCount = [&](size_t count, const char* name) {
+            if (count != n)
+                fail(label + ": " + name + " has " + std::to_string(count) + " elements but POSITION has " +
+                     std::to_string(n));
+        };
+        if (const int a = attribute("NORMAL"); a >= 0) {
+            geo.normals = readVec3(a, label + " NORMAL");
+            checkCount(geo.normals.size(), "NORMAL");
+        }
+        if (const int a = attribute("TEXCOORD_0"); a >= 0) {
+            geo.uv0 = readVec2(a, label + " TEXCOORD_0");
+            checkCount(geo.uv0.size(), "TEXCOORD_0");
+        }
+        if (const int a = attribute("TEXCOORD_1"); a >= 0) {
+            geo.uv1 = readVec2(a, label + " TEXCOORD_1");
+            checkCount(geo.uv1.size(), "TEXCOORD_1");
+        }
+        return geo;
+    }
+
+    std::vector<uint32_t> primitiveIndices(const tinygltf::Primitive& prim, size_t vertexCount,
+                                           const std::string& label) const {
+        if (prim.indices >= 0) return readIndices(prim.indices, vertexCount, label);
+        if (vertexCount > std::numeric_limits<uint32_t>::max()) fail(label + ": more than 2^32 vertices");
+        std::vector<uint32_t> indices(vertexCount);
+        std::iota(indices.begin(), indices.end(), 0u);  // non-indexed: vertices in order
+        return indices;
+    }
+
+    /// Positions by the world matrix, normals by its inverse transpose (so they stay
+    /// perpendicular under non-uniform scale). A mirroring transform (negative determinant)
+    /// turns counter-clockwise triangles clockwise, so their winding is flipped back.
+    void transformToWorld(PrimitiveGeometry& geo, const glm::dmat4& world, const std::string& label) {
+        for (glm::vec3& p : geo.positions) p = glm::vec3(world * glm::dvec4(glm::dvec3(p), 1.0));
+        const glm::dmat3 linear(world);
+        const double det = glm::determinant(linear);
+        if (det == 0.0 || !std::isfinite(det))
+            warn(label + ": node transform is singular; the primitive is flattened");
+        const glm::dmat3 normalMatrix = det != 0.0 ? glm::inverseTranspose(linear) : linear;
+        for (glm::vec3& n : geo.normals) n = glm::vec3(glm::normalize(normalMatrix * glm::dvec3(n)));
+        if (det < 0.0)
+            for (glm::uvec3& t : geo.triangles) std::swap(t.y, t.z);
+    }
+
+    static glm::dvec3 triangleCross(const PrimitiveGeometry& geo, const glm::uvec3& t) {
+        const glm::dvec3 a(geo.positions[t.x]);
+        return glm::cross(glm::dvec3(geo.positions[t.y]) - a, glm::dvec3(geo.positions[t.z]) - a);
+    }
+
+    /// Drops triangles with a repeated index or (numerically) zero area: they cannot be hit
+    /// and would give NaN geometric normals. Zero area is judged relative to the edge lengths
+    /// so that tiny but well-shaped triangles survive.
+    void dropDegenerateTriangles(PrimitiveGeometry& geo) {
+        auto degenerate = [&](const glm::uvec3& t) {
+            if (t.x == t.y || t.y == t.z || t.x == t.z) return true;
+            const glm::dvec3 a(geo.positions[t.x]);
+            const glm::dvec3 e1 = glm::dvec3(geo.positions[t.y]) - a;
+            const glm::dvec3 e2 = glm::dvec3(geo.positions[t.z]) - a;
+            const double crossLength = glm::length(glm::cross(e1, e2));  // NaN-safe: !(x > y)
+            return !(crossLength > 1e-7 * glm::length(e1) * glm::length(e2));
+        };
+        const size_t before = geo.triangles.size();
+        std::erase_if(geo.triangles, degenerate);
+        scene_.stats.degenerate_triangles_dropped += before - geo.triangles.size();
+    }
+
+    /// glTF says a primitive without normals is flat shaded; that needs one vertex per
+    /// triangle corner so each can carry its face normal.
+    static void makeFlatShaded(PrimitiveGeometry& geo) {
+        PrimitiveGeometry flat;
+        const size_t corners = geo.triangles.size() * 3;
+        flat.positions.reserve(corners);
+        flat.normals.reserve(corners);
+        for (const glm::uvec3& t : geo.triangles) {
+            const glm::vec3 n(glm::normalize(triangleCross(geo, t)));
+            const auto base = static_cast<uint32_t>(flat.positions.size());
+            for (uint32_t v : {t.x, t.y, t.z}) {
+                flat.positions.push_back(geo.positions[v]);
+                flat.normals.push_back(n);
+                if (!geo.uv0.empty()) flat.uv0.push_back(geo.uv0[v]);
+                if (!geo.uv1.empty()) flat.uv1.push_back(geo.uv1[v]);
+            }
+            flat.triangles.emplace_back(base, base + 1, base + 2);
+        }
+        geo = std::move(flat);
+    }
+
+    /// Replaces NaN, infinite or zero normals with the area-weighted geometric normal of the
+    /// triangles around the vertex, and says how many were fixed.
+    void repairNormals(PrimitiveGeometry& geo, const std::string& label) {
+        std::vector<bool> bad(geo.normals.size());
+        size_t badCount = 0;
+        for (size_t i = 0; i < geo.normals.size(); ++i) {
+            bad[i] = !isFinite(geo.normals[i]) || glm::dot(geo.normals[i], geo.normals[i]) < 0.5f;
+            badCount += bad[i];
+        }
+        if (badCount == 0) return;
+        std::vector<glm::dvec3> accumulated(geo.normals.size(), glm::dvec3(0.0));
+        for (const glm::uvec3& t : geo.triangles) {
+            const glm::dvec3 c = triangleCross(geo, t);  // length = 2 x area: area weighting
+            for (uint32_t v : {t.x, t.y, t.z})
+                if (bad[v]) accumulated[v] += c;
+        }
+        for (size_t i = 0; i < geo.normals.size(); ++i) {
+            if (!bad[i]) continue;
+            const double len = glm::length(accumulated[i]);
+            // A vertex no triangle uses cannot be shaded; any unit vector keeps the data valid.
+            geo.normals[i] = len > 0.0 ? glm::vec3(accumulated[i] / len) : glm::vec3(0.0f, 1.0f, 0.0f);
+        }
+        warn(label + ": " + std::to_string(badCount) +
+             " NaN, infinite or zero normals replaced by the geometric normal");
+    }
+
+    /// Appends a primitive to the scene's single vertex/triangle soup. Attributes one
+    /// primitive lacks but another has are filled with zeros so every array stays one per
+    /// vertex.
+    void appendGeometry(const PrimitiveGeometry& geo, uint32_t material) {
+        const size_t base = scene_.positions.size();
+        if (base + geo.positions.size() > std::numeric_limits<uint32_t>::max())
+            fail("scene has more than 2^32 vertices");
+        auto appendUv = [&](std::vector<glm::vec2>& dst, const std::vector<glm::vec2>& src) {
+            if (src.empty() && dst.empty()) return;  // nobody has this set (yet)
+            dst.resize(base, glm::vec2(0.0f));       // back-fill earlier primitives without it
+            if (src.empty()) dst.resize(base + geo.positions.size(), glm::vec2(0.0f));
+            else dst.insert(dst.end(), src.begin(), src.end());
+        };
+        appendUv(scene_.texcoords0, geo.uv0);
+        appendUv(scene_.texcoords1, geo.uv1);
+        scene_.positions.insert(scene_.positions.end(), geo.positions.begin(), geo.positions.end());
+        scene_.normals.insert(scene_.normals.end(), geo.normals.begin(), geo.normals.end());
+        const auto offset = static_cast<uint32_t>(base);
+        for (const glm::uvec3& t : geo.triangles) {
+            scene_.triangles.push_back(t + glm::uvec3(offset));
+            scene_.triangle_materials.push_back(material);
+        }
+    }
+
+    void computeBounds() {
+        if (scene_.triangles.empty()) return;
+        glm::vec3 lo(std::numeric_limits<float>::max());
+        glm::vec3 hi(std::numeric_limits<float>::lowest());
+        for (const glm::uvec3& t : scene_.triangles)
+            for (uint32_t v : {t.x, t.y, t.z}) {
+                lo = glm::min(lo, scene_.positions[v]);
+                hi = glm::max(hi, scene_.positions[v]);
+            }
+        scene_.bounds_min = lo;
+        scene_.bounds_max = hi;
+    }
+
+    // ---------------------------------------------------------------- materials
+
+    uint32_t materialForPrimitive(const tinygltf::Primitive& prim, const std::string& label) {
+        if (prim.material >= 0) {
+            if (static_cast<size_t>(prim.material) >= model_.materials.size())
+                fail(label + ": material " + std::to_string(prim.material) + " does not exist");
+            return static_cast<uint32_t>(prim.material);  // scene materials mirror glTF's order
+        }
+        if (default_material_ < 0) {
+            default_material_ = static_cast<int>(scene_.materials.size());
+            scene_.materials.push_back(defaultMaterial());
+        }
+        return static_cast<uint32_t>(default_material_);
+    }
+
+    void convertMaterials() {
+        scene_.materials.reserve(model_.materials.size() + 1);
+        for (size_t i = 0; i < model_.materials.size(); ++i) scene_.materials.push_back(convertMaterial(i));
+    }
+
+    Material convertMaterial(size_t index) {
+        const tinygltf::Material& src = model_.materials[index];
+        const std::string label = "material " + std::to_string(index) + (src.name.empty() ? "" : " " + quoted(src.name));
+        const tinygltf::PbrMetallicRoughness& pbr = src.pbrMetallicRoughness;
+        Material m;
+        m.name = src.name;
+        m.base_color = vec3Or(pbr.baseColorFactor, glm::vec3(1.0f));
+        m.metallic = static_cast<float>(pbr.metallicFactor);
+        m.roughness = static_cast<float>(pbr.roughnessFactor);
+        m.emissive = vec3Or(src.emissiveFactor, glm::vec3(0.0f));
+        m.double_sided = src.doubleSided;
+        m.base_color_texture = textureRef({pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord}, true, label);
+        m.metallic_roughness_texture =
+            textureRef({pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord}, false, label);
+        m.emissive_texture = textureRef({src.emissiveTexture.index, src.emissiveTexture.texCoord}, true, label);
+        if (src.alphaMode != "OPAQUE")
+            warn(label + ": alphaMode " + src.alphaMode + " treated as OPAQUE");
+        readMaterialExtensions(src, m, label);
+        return m;
+    }
+
+    static const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const char* name) {
+        const auto it = extensions.find(name);
+        return it == extensions.end() || !it->second.IsObject() ? nullptr : &it->second;
+    }
+
+    static std::optional<double> number(const tinygltf::Value& object, const char* key) {
+        if (!object.Has(key) || !object.Get(key).IsNumber()) return std::nullopt;
+        return object.Get(key).GetNumberAsDouble();
+    }
+
+    static std::optional<glm::vec3> vec3Value(const tinygltf::Value& object, const char* key) {
+        if (!object.Has(key)) return std::nullopt;
+        const tinygltf::Value& a = object.Get(key);
+        if (!a.IsArray() || a.ArrayLen() != 3) return std::nullopt;
+        glm::vec3 v;
+        for (int i = 0; i < 3; ++i) {
+            if (!a.Get(i).IsNumber()) return std::nullopt;
+            v[i] = static_cast<float>(a.Get(i).GetNumberAsDouble());
+        }
+        return v;
+    }
+
+    static TextureSlot textureSlot(const tinygltf::Value& object, const char* key) {
+        TextureSlot slot;
+        if (!object.Has(key) || !object.Get(key).IsObject()) return slot;
+        const tinygltf::Value& info = object.Get(key);
+        if (auto i = number(info, "index")) slot.index = static_cast<int>(*i);
+        if (auto t = number(info, "texCoord")) slot.texcoord = static_cast<int>(*t);
+        return slot;
+    }
+
+    void readMaterialExtensions(const tinygltf::Material& src, Material& m, const std::string& label) {
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_emissive_strength"))
+            m.emissive_strength = static_cast<float>(number(*ext, "emissiveStrength").value_or(1.0));
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_ior"))
+            m.ior = static_cast<float>(number(*ext, "ior").value_or(1.5));
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_specular")) {
+            m.specular = static_cast<float>(number(*ext, "specularFactor").value_or(1.0));
+            m.specular_color = vec3Value(*ext, "specularColorFactor").value_or(glm::vec3(1.0f));
+            m.specular_texture = textureRef(textureSlot(*ext, "specularTexture"), false, label);
+            m.specular_color_texture = textureRef(textureSlot(*ext, "specularColorTexture"), true, label);
+        }
+        if (extension(src.extensions, "KHR_texture_transform") || hasTextureTransform(src))
+            warn(label + ": KHR_texture_transform ignored");
+    }
+
+    static bool hasTextureTransform(const tinygltf::Material& src) {
+        auto has = [](const tinygltf::ExtensionMap& e) { return e.count("KHR_texture_transform") > 0; };
+        return has(src.pbrMetallicRoughness.baseColorTexture.extensions) ||
+               has(src.pbrMetallicRoughness.metallicRoughnessTexture.extensions) || has(src.emissiveTexture.extensions);
+    }
+
+    // ---------------------------------------------------------------- textures
+
+    TextureRef textureRef(TextureSlot slot, bool srgb, const std::string& label) {
+        TextureRef ref;
+        if (slot.index < 0) return ref;
+        if (static_cast<size_t>(slot.index) >= model_.textures.size())
+            fail(label + ": texture " + std::to_string(slot.index) + " does not exist");
+        if (slot.texcoord < 0 || slot.texcoord > 1) {
+            warn(label + ": texture " + std::to_string(slot.index) + " uses TEXCOORD_" + std::to_string(slot.texcoord) +
+                 "; only TEXCOORD_0 and TEXCOORD_1 are loaded, texture ignored");
+            return ref;
+        }
+        const auto key = std::make_pair(slot.index, srgb);
+        auto it = texture_cache_.find(key);
+        if (it == texture_cache_.end()) it = texture_cache_.emplace(key, decodeTexture(slot.index, srgb, label)).first;
+        ref.texture = it->second;
+        ref.texcoord = static_cast<uint32_t>(slot.texcoord);
+        return ref;
+    }
+
+    static WrapMode wrapMode(int glWrap) {
+        switch (glWrap) {
+        case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: return WrapMode::ClampToEdge;
+        case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: return WrapMode::MirroredRepeat;
+        default: return WrapMode::Repeat;
+        }
+    }
+
+    /// Decodes a glTF texture's image into linear RGBA floats and returns its Scene index, or
+    /// -1 (with a warning) when the image is unavailable, so the material falls back to its
+    /// factors instead of failing the whole scene.
+    int decodeTexture(int textureIndex, bool srgb, const std::string& label) {
+        const tinygltf::Texture& src = model_.textures[textureIndex];
+        const std::string what = label + ": texture " + std::to_string(textureIndex);
+        if (src.source < 0 || static_cast<size_t>(src.source) >= model_.images.size()) {
+            warn(what + " has no image sharcbake can decode; texture ignored");
+            return -1;
+        }
+        const tinygltf::Image& image = model_.images[src.source];
+        Texture tex;
+        tex.name = image.name.empty() ? image.uri.substr(0, 64) : image.name;
+        if (!convertPixels(image, srgb, tex)) {
+            warn(what + ": image " + std::to_string(src.source) + " could not be decoded; texture ignored");
+            return -1;
+        }
+        if (src.sampler >= 0 && static_cast<size_t>(src.sampler) < model_.samplers.size()) {
+            const tinygltf::Sampler& sampler = model_.samplers[src.sampler];
+            tex.wrap_s = wrapMode(sampler.wrapS);
+            tex.wrap_t = wrapMode(sampler.wrapT);
+            tex.nearest = sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+        }
+        scene_.textures.push_back(std::move(tex));
+        return static_cast<int>(scene_.textures.size()) - 1;
+    }
+
+    /// Image bytes (8 or 16 bits, 1-4 channels, as tinygltf decoded them) to linear RGBA.
+    /// Colour channels of sRGB images are decoded; alpha is always linear.
+    static bool convertPixels(const tinygltf::Image& image, bool srgb, Texture& tex) {
+        const int channels = image.component;
+        const int bytesPerChannel = image.bits / 8;
+        if (image.width <= 0 || image.height <= 0 || channels < 1 || channels > 4 ||
+            (image.bits != 8 && image.bits != 16))
+            return false;
+        const size_t pixels = static_cast<size_t>(image.width) * image.height;
+        if (image.image.size() < pixels * channels * bytesPerChannel) return false;
+
+        std::array<float, 256> colour8{};  // 8-bit colour: one pow() per code, not per texel
+        for (int i = 0; i < 256; ++i) colour8[i] = srgb ? srgbToLinear(i / 255.0f) : i / 255.0f;
+        auto linear = [&](size_t pixel, int c) -> float {
+            const size_t at = (pixel * channels + c) * bytesPerChannel;
+            if (image.bits == 8) return image.image[at] / 255.0f;
+            uint16_t v;
+            std::memcpy(&v, &image.image[at], 2);  // stb returns 16-bit samples in host order
+            return v / 65535.0f;
+        };
+        auto colour = [&](size_t pixel, int c) -> float {
+            if (image.bits == 8) return colour8[image.image[pixel * channels + c]];
+            const float v = linear(pixel, c);
+            return srgb ? srgbToLinear(v) : v;
+        };
+
+        tex.width = image.width;
+        tex.height = image.height;
+        tex.texels.resize(pixels);
+        const bool hasAlpha = channels == 2 || channels == 4;
+        for (size_t p = 0; p < pixels; ++p) {
+            const float alpha = hasAlpha ? linear(p, channels - 1) : 1.0f;
+            if (channels <= 2) {  // grey or grey + alpha
+                const float g = colour(p, 0);
+                tex.texels[p] = glm::vec4(g, g, g, alpha);
+            } else {
+                tex.texels[p] = glm::vec4(colour(p, 0), colour(p, 1), colour(p, 2), alpha);
+            }
+        }
+        return true;
+    }
+
+    // ---------------------------------------------------------------- lights
+
+    void addNodeLight(const tinygltf::Node& node, const glm::dmat4& world) {
+        const tinygltf::Value* ext = extension(node.extensions, "KHR_lights_punctual");
+        if (!ext) return;
+        const std::optional<double> index = number(*ext, "light");
+        if (!index || *index < 0 || *index >= static_cast<double>(model_.lights.size()))
+            fail("node " + quoted(node.name) + ": KHR_lights_punctual light " +
+                 (index ? std::to_string(static_cast<long long>(*index)) : std::string("(missing)")) +
+                 " does not exist");
+        scene_.lights.push_back(convertLight(model_.lights[static_cast<size_t>(*index)], world));
+    }
+
+    /// Photometric glTF units to the renderer's radiometric ones: candela (lm/sr) / 683 =
+    /// W/sr for point and spot, lux (lm/m^2) / 683 = W/m^2 for directional. The colour is a
+    /// per-channel multiplier on the intensity (KHR_lights_punctual).
+    PunctualLight convertLight(const tinygltf::Light& src, const glm::dmat4& world) {
+        PunctualLight light;
+        light.name = src.name;
+        if (src.type == "directional") light.type = LightType::Directional;
+        else if (src.type == "spot") light.type = LightType::Spot;
+        else if (src.type == "point") light.type = LightType::Point;
+        else fail("light " + quoted(src.name) + ": unknown type " + quoted(src.type));
+
+        light.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        const glm::dvec3 dir = glm::dmat3(world) * glm::dvec3(0.0, 0.0, -1.0);
+        if (glm::length(dir) > 0.0) light.direction = glm::vec3(glm::normalize(dir));
+        const glm::vec3 colour = vec3Or(src.color, glm::vec3(1.0f));
+        light.intensity = colour * static_cast<float>(src.intensity / kLumensPerWatt);
+        light.range = src.range > 0.0 ? static_cast<float>(src.range) : 0.0f;
+        if (light.type == LightType::Spot) {
+            light.inner_cone_angle = static_cast<float>(src.spot.innerConeAngle);
+            light.outer_cone_angle = static_cast<float>(src.spot.outerConeAngle);
+        }
+        return light;
+    }
+
+    // ---------------------------------------------------------------- cameras
+
+    void addCamera(const tinygltf::Node& node, const glm::dmat4& world) {
+        if (static_cast<size_t>(node.camera) >= model_.cameras.size())
+            fail("node " + quoted(node.name) + ": camera " + std::to_string(node.camera) + " does not exist");
+        const tinygltf::Camera& src = model_.cameras[node.camera];
+        const std::string name = src.name.empty() ? node.name : src.name;
+        if (src.type != "perspective") {
+            warn("camera " + quoted(name) + ": " + src.type + " cameras are not supported; skipped");
+            return;
+        }
+        Camera cam;
+        cam.name = name;
+        cam.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        const glm::dmat3 linear(world);
+        const glm::dvec3 forward = glm::normalize(linear * glm::dvec3(0.0, 0.0, -1.0));
+        // Scale or shear in the node matrix can tilt +Y off perpendicular; project it back.
+        glm::dvec3 up = linear * glm::dvec3(0.0, 1.0, 0.0);
+        up = glm::normalize(up - glm::dot(up, forward) * forward);
+        if (!isFinite(glm::vec3(forward)) || !isFinite(glm::vec3(up))) {
+            warn("camera " + quoted(name) + ": degenerate node transform; skipped");
+            return;
+        }
+        cam.forward = glm::vec3(forward);
+        cam.up = glm::vec3(up);
+        if (src.perspective.yfov > 0.0) cam.yfov = static_cast<float>(src.perspective.yfov);
+        if (src.perspective.aspectRatio > 0.0) cam.aspect_ratio = static_cast<float>(src.perspective.aspectRatio);
+        scene_.cameras.push_back(cam);
+    }
+
+    // ---------------------------------------------------------------- sky
+
+    /// sharcbake's own convention: root extras {"sharcbake": {"sky_radiance": [r, g, b]}} gives
+    /// a uniform sky radiance (linear, W/(m^2 sr)); glTF has no standard way to say this.
+    void readSky() {
+        if (!model_.extras.IsObject() || !model_.extras.Has("sharcbake")) return;
+        const tinygltf::Value& ours = model_.extras.Get("sharcbake");
+        if (!ours.IsObject() || !ours.Has("sky_radiance")) return;
+        const std::optional<glm::vec3> sky = vec3Value(ours, "sky_radiance");
+        if (!sky || !isFinite(*sky) || sky->x < 0.0f || sky->y < 0.0f || sky->z < 0.0f)
+            fail("extras.sharcbake.sky_radiance must be an array of 3 finite, non-negative numbers");
+        scene_.sky.uniform = *sky;
+    }
+};
+
+}  // namespace
+
+Scene loadGltf(const std::string& path) { return GltfLoader(path).load(); }
+
+}  // namespace sharcbake

@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file texture.cpp
+/// @brief Texture::sample: bilinear or nearest lookup with glTF wrap modes.
+#include "sharcbake/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sharcbake {
+namespace {
+
+/// Brings a texture coordinate into a small range before scaling by the texture size, so a
+/// huge coordinate (tiling by 1e9) cannot overflow the integer texel index. The reduced value
+/// maps to the same texels as the original under the wrap mode.
+double reduceCoordinate(double c, WrapMode mode) {
+    if (!std::isfinite(c)) return 0.0;  // a NaN uv must not become an out-of-range index
+    switch (mode) {
+    case WrapMode::Repeat: return c - std::floor(c);                      // [0, 1)
+    case WrapMode::MirroredRepeat: return c - 2.0 * std::floor(c * 0.5);  // [0, 2): one period
+    case WrapMode::ClampToEdge: return std::clamp(c, -1.0, 2.0);          // beyond is all edge
+    }
+    return c;
+}
+
+/// Maps an integer texel index (possibly just outside [0, n)) into [0, n).
+int wrapIndex(int64_t i, int n, WrapMode mode) {
+    switch (mode) {
+    case WrapMode::Repeat: {
+        int64_t m = i % n;
+        return static_cast<int>(m < 0 ? m + n : m);
+    }
+    case WrapMode::MirroredRepeat: {
+        const int64_t period = 2 * static_cast<int64_t>(n);
+        int64_t m = i % period;
+        if (m < 0) m += period;
+        return static_cast<int>(m < n ? m : period - 1 - m);
+    }
+    case WrapMode::ClampToEdge: return static_cast<int>(std::clamp<int64_t>(i, 0, n - 1));
+    }
+    return 0;
+}
+
+}  // namespace
+
+glm::vec4 Texture::sample(glm::vec2 uv) const {
+    // An empty texture is neutral: textures multiply factors, so white changes nothing.
+    if (width <= 0 || height <= 0 || texels.size() < static_cast<size_t>(width) * height)
+        return glm::vec4(1.0f);
+
+    const double u = reduceCoordinate(uv.x, wrap_s);
+    const double v = reduceCoordinate(uv.y, wrap_t);
+    auto texel = [&](int64_t x, int64_t y) -> const glm::vec4& {
+        const int xi = wrapIndex(x, width, wrap_s);
+        const int yi = wrapIndex(y, height, wrap_t);
+        return texels[static_cast<size_t>(yi) * width + xi];
+    };
+
+    if (nearest) {
+        return texel(static_cast<int64_t>(std::floor(u * width)),
+                     static_cast<int64_t>(std::floor(v * height)));
+    }
+    // Texel centres sit at half-integer coordinates, so shift by half a texel before
+    // splitting into the integer corner and the interpolation weights.
+    const double x = u * width - 0.5;
+    const double y = v * height - 0.5;
+    const double x0 = std::floor(x);
+    const double y0 = std::floor(y);
+    const float fx = static_cast<float>(x - x0);
+    const float fy = static_cast<float>(y - y0);
+    const auto ix = static_cast<int64_t>(x0);
+    const auto iy = static_cast<int64_t>(y0);
+    const glm::vec4 top = glm::mix(texel(ix, iy), texel(ix + 1, iy), fx);
+    const glm::vec4 bottom = glm::mix(texel(ix, iy + 1), texel(ix + 1, iy + 1), fx);
+    return glm::mix(top, bottom, fy);
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,599 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file gltf_loader_test.cpp
+/// @brief loadGltf on small glTF / GLB files written by the tests themselves.
+#include "gltf_builder.h"
+
+#include "sharcbake/scene_loader.h"
+
+#include <gtest/gtest.h>
+#include <stb_image_write.h>
+
+#include <cmath>
+#include <limits>
+
+namespace sharcbake {
+namespace {
+
+using nlohmann::json;
+using test::GltfBuilder;
+using test::TempDir;
+
+constexpr float kEps = 1e-5f;
+
+void expectVec3Near(const glm::vec3& actual, const glm::vec3& expected, float eps = kEps) {
+    EXPECT_NEAR(actual.x, expected.x, eps) << "x";
+    EXPECT_NEAR(actual.y, expected.y, eps) << "y";
+    EXPECT_NEAR(actual.z, expected.z, eps) << "z";
+}
+
+/// Runs `load` and returns the SceneLoadError message, failing the test if nothing throws.
+template <class F>
+std::string loadErrorOf(F&& load) {
+    try {
+        load();
+    } catch (const SceneLoadError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected SceneLoadError";
+    return {};
+}
+
+glm::vec3 geometricNormal(const Scene& s, size_t tri) {
+    const glm::uvec3 t = s.triangles[tri];
+    return glm::normalize(glm::cross(s.positions[t.y] - s.positions[t.x], s.positions[t.z] - s.positions[t.x]));
+}
+
+/// A unit right triangle in the XY plane facing +Z, with normals.
+json unitTrianglePrimitive(GltfBuilder& b) {
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int nrm = b.addPositions({0, 0, 1, 0, 0, 1, 0, 0, 1});
+    return {{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}}}};
+}
+
+// ------------------------------------------------------------------------------------ geometry
+
+TEST(GltfLoader, NodeHierarchyAccumulatesTranslationRotationScale) {
+    TempDir dir;
+    GltfBuilder b;
+    // A tilted triangle with its true normal, so the inverse transpose is exercised by the
+    // non-uniform scale below.
+    const int pos = b.addPositions({1, 0, 0, 0, 1, 0, 0, 0, 1});
+    const float k = 1.0f / std::sqrt(3.0f);
+    const int nrm = b.addPositions({k, k, k, k, k, k, k, k, k});
+    const int child = b.addMeshNode({{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}}}},
+                                    {{"translation", {0, 1, 0}}, {"scale", {2, 1, 1}}});
+    const float s = std::sqrt(0.5f);  // 90 degrees about +Y: (x, y, z) -> (z, y, -x)
+    const int parent = b.addNode({{"translation", {10, 0, 0}}, {"rotation", {0, s, 0, s}}, {"children", {child}}});
+    b.setScene({parent});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "hierarchy.gltf"));
+
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    const glm::uvec3 t = scene.triangles[0];
+    // child: scale then translate; parent: rotate then translate.
+    expectVec3Near(scene.positions[t.x], {10, 1, -2});
+    expectVec3Near(scene.positions[t.y], {10, 2, 0});
+    expectVec3Near(scene.positions[t.z], {11, 1, 0});
+    // Normal of the scaled plane x/2 + y + z = 1 is (0.5, 1, 1), rotated to (1, 1, -0.5).
+    const glm::vec3 expectedNormal = glm::normalize(glm::vec3(1, 1, -0.5f));
+    for (uint32_t v : {t.x, t.y, t.z}) expectVec3Near(scene.normals[v], expectedNormal);
+    expectVec3Near(geometricNormal(scene, 0), expectedNormal);
+    expectVec3Near(scene.bounds_min, {10, 1, -2});
+    expectVec3Near(scene.bounds_max, {11, 2, 0});
+}
+
+TEST(GltfLoader, MatrixNodeTransform) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    // Column-major: translation (0, 0, 5) in elements 12..14, uniform scale 3.
+    const int node = b.addMeshNode(prim, {{"matrix", {3, 0, 0, 0, 0, 3, 0, 0, 0, 0, 3, 0, 0, 0, 5, 1}}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "matrix.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    expectVec3Near(scene.bounds_min, {0, 0, 5});
+    expectVec3Near(scene.bounds_max, {3, 3, 5});
+}
+
+TEST(GltfLoader, MirroringTransformFlipsWinding) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const int node = b.addMeshNode(prim, {{"scale", {-1, 1, 1}}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "mirror.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    // The shading normal stays +Z and the winding must still agree with it.
+    expectVec3Near(scene.normals[scene.triangles[0].x], {0, 0, 1});
+    expectVec3Near(geometricNormal(scene, 0), {0, 0, 1});
+}
+
+TEST(GltfLoader, IndexedU8U16U32AndNonIndexed) {
+    TempDir dir;
+    GltfBuilder b;
+    const std::vector<float> quad = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const std::vector<uint8_t> i8 = {0, 1, 2, 0, 2, 3};
+    const std::vector<uint16_t> i16 = {0, 1, 2, 0, 2, 3};
+    const std::vector<uint32_t> i32 = {0, 1, 2, 0, 2, 3};
+    json prims = json::array();
+    prims.push_back({{"attributes", {{"POSITION", b.addPositions(quad)}}},
+                     {"indices", b.addData(i8, test::kUnsignedByte, "SCALAR")}});
+    prims.push_back({{"attributes", {{"POSITION", b.addPositions(quad)}}},
+                     {"indices", b.addData(i16, test::kUnsignedShort, "SCALAR")}});
+    prims.push_back({{"attributes", {{"POSITION", b.addPositions(quad)}}},
+                     {"indices", b.addData(i32, test::kUnsignedInt, "SCALAR")}});
+    prims.push_back({{"attributes", {{"POSITION", b.addPositions({0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 0, 1, 1, 1, 1, 0, 1, 1})}}},
+                     {"mode", 4}});
+    b.addMesh(prims, "Quads");
+    b.addNode({{"mesh", 0}});
+    b.setScene({0});
+    const Scene scene = loadGltf(b.writeExternal(dir, "indexed.gltf", "indexed.bin"));
+    EXPECT_EQ(scene.triangles.size(), 8u);
+    EXPECT_EQ(scene.stats.triangles_loaded, 8u);
+    EXPECT_EQ(scene.stats.degenerate_triangles_dropped, 0u);
+    for (size_t i = 0; i < scene.triangles.size(); ++i) expectVec3Near(geometricNormal(scene, i), {0, 0, 1});
+    ASSERT_EQ(scene.normals.size(), scene.positions.size());  // flat normals generated
+    for (const glm::vec3& n : scene.normals) expectVec3Near(n, {0, 0, 1});
+}
+
+TEST(GltfLoader, InterleavedStrideAndNormalizedTexcoords) {
+    TempDir dir;
+    GltfBuilder b;
+    // position xyz + normal xyz per vertex: a byteStride of 24 shared by two accessors.
+    const std::vector<float> interleaved = {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 1, 0, 0, 0, 1};
+    const int view = b.addView(interleaved.data(), interleaved.size() * sizeof(float), 24);
+    const int pos = b.addAccessor(view, test::kFloat, 3, "VEC3", 0);
+    const int nrm = b.addAccessor(view, test::kFloat, 3, "VEC3", 12);
+    const std::vector<uint16_t> uv = {0, 0, 65535, 0, 0, 32768};
+    const int tex = b.addData(uv, test::kUnsignedShort, "VEC2", true);
+    const int node = b.addMeshNode({{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", tex}}}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "stride.gltf"));
+    ASSERT_EQ(scene.positions.size(), 3u);
+    expectVec3Near(scene.positions[1], {1, 0, 0});
+    expectVec3Near(scene.positions[2], {0, 1, 0});
+    expectVec3Near(scene.normals[2], {0, 0, 1});
+    ASSERT_EQ(scene.texcoords0.size(), 3u);
+    EXPECT_NEAR(scene.texcoords0[1].x, 1.0f, kEps);
+    EXPECT_NEAR(scene.texcoords0[2].y, 32768.0f / 65535.0f, kEps);
+    EXPECT_TRUE(scene.texcoords1.empty());
+}
+
+TEST(GltfLoader, StripAndFanBecomeConsistentlyWoundTriangles) {
+    TempDir dir;
+    GltfBuilder b;
+    // Strip zig-zag along +X, fan around the origin; both in the XY plane facing +Z.
+    const int strip = b.addPositions({0, 0, 0, 0, 1, 0, 1, 0, 0, 1, 1, 0, 2, 0, 0});
+    const int fan = b.addPositions({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, -1, 1, 0});
+    b.addMesh(json::array({{{"attributes", {{"POSITION", strip}}}, {"mode", 5}},
+                           {{"attributes", {{"POSITION", fan}}}, {"mode", 6}}}));
+    b.addNode({{"mesh", 0}});
+    b.setScene({0});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "strip.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 6u);  // 3 from the strip, 3 from the fan
+    for (size_t i = 0; i < scene.triangles.size(); ++i) {
+        SCOPED_TRACE(i);
+        // The strip starts clockwise (0,0)->(0,1)->(1,0), so its triangles all face -Z.
+        expectVec3Near(geometricNormal(scene, i), i < 3 ? glm::vec3(0, 0, -1) : glm::vec3(0, 0, 1));
+    }
+}
+
+TEST(GltfLoader, PointsAndLinesSkippedAndCounted) {
+    TempDir dir;
+    GltfBuilder b;
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    b.addMesh(json::array({{{"attributes", {{"POSITION", pos}}}, {"mode", 0}},
+                           {{"attributes", {{"POSITION", pos}}}, {"mode", 1}},
+                           {{"attributes", {{"POSITION", pos}}}}}));
+    b.addNode({{"mesh", 0}});
+    b.setScene({0});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "lines.gltf"));
+    EXPECT_EQ(scene.stats.primitives_skipped, 2u);
+    EXPECT_EQ(scene.triangles.size(), 1u);
+}
+
+TEST(GltfLoader, DegenerateTrianglesDroppedAndCounted) {
+    TempDir dir;
+    GltfBuilder b;
+    // Vertices 3, 4, 5 are collinear.
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 2, 1, 0, 2, 2, 0, 2});
+    const std::vector<uint16_t> idx = {0, 1, 2, 0, 0, 1, 3, 4, 5};
+    const int node = b.addMeshNode({{"attributes", {{"POSITION", pos}}},
+                                    {"indices", b.addData(idx, test::kUnsignedShort, "SCALAR")}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "degenerate.gltf"));
+    EXPECT_EQ(scene.triangles.size(), 1u);
+    EXPECT_EQ(scene.stats.triangles_loaded, 1u);
+    EXPECT_EQ(scene.stats.degenerate_triangles_dropped, 2u);
+    // Bounds cover only the kept triangle, not the dropped ones at z = 2.
+    expectVec3Near(scene.bounds_max, {1, 1, 0});
+}
+
+TEST(GltfLoader, SparseAccessorSubstitutesValues) {
+    TempDir dir;
+    GltfBuilder b;
+    const std::vector<float> base = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const int pos = b.addPositions(base);
+    const std::vector<uint8_t> sparseIdx = {2};
+    const std::vector<float> sparseVal = {0, 5, 0};
+    const int idxView = b.addView(sparseIdx.data(), sparseIdx.size());
+    const int valView = b.addView(sparseVal.data(), sparseVal.size() * sizeof(float));
+    b.doc["accessors"][pos]["sparse"] = {{"count", 1},
+                                         {"indices", {{"bufferView", idxView}, {"componentType", test::kUnsignedByte}}},
+                                         {"values", {{"bufferView", valView}}}};
+    const int node = b.addMeshNode({{"attributes", {{"POSITION", pos}}}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "sparse.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    expectVec3Near(scene.bounds_max, {1, 5, 0});
+}
+
+TEST(GltfLoader, NanNormalReplacedByGeometricNormalWithWarning) {
+    TempDir dir;
+    GltfBuilder b;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int nrm = b.addPositions({0, 0, 1, nan, nan, nan, 0, 0, 0});
+    const int node = b.addMeshNode({{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}}}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "nan_normal.gltf"));
+    ASSERT_EQ(scene.normals.size(), 3u);
+    for (const glm::vec3& n : scene.normals) expectVec3Near(n, {0, 0, 1});
+    ASSERT_FALSE(scene.stats.warnings.empty());
+    EXPECT_NE(scene.stats.warnings.back().find("2 NaN"), std::string::npos) << scene.stats.warnings.back();
+}
+
+TEST(GltfLoader, GlbMatchesGltf) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const int node = b.addMeshNode(prim, {{"translation", {1, 2, 3}}});
+    b.setScene({node});
+    const Scene a = loadGltf(b.writeEmbedded(dir, "scene.gltf"));
+    const Scene g = loadGltf(b.writeGlb(dir, "scene.glb"));
+    ASSERT_EQ(g.triangles.size(), 1u);
+    ASSERT_EQ(a.positions.size(), g.positions.size());
+    for (size_t i = 0; i < a.positions.size(); ++i) expectVec3Near(g.positions[i], a.positions[i]);
+    expectVec3Near(g.bounds_min, {1, 2, 3});
+}
+
+TEST(GltfLoader, DefaultSceneChosenAndAllRootsWithoutScenes) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const int n0 = b.addMeshNode(prim, {{"translation", {100, 0, 0}}});
+    const int n1 = b.addMeshNode(prim, {{"translation", {-100, 0, 0}}});
+    b.doc["scenes"] = json::array({{{"nodes", {n0}}}, {{"nodes", {n1}}}});
+    b.doc["scene"] = 1;
+    const Scene chosen = loadGltf(b.writeEmbedded(dir, "two_scenes.gltf"));
+    ASSERT_EQ(chosen.triangles.size(), 1u);
+    EXPECT_NEAR(chosen.bounds_min.x, -100.0f, kEps);
+
+    b.doc.erase("scenes");
+    b.doc.erase("scene");
+    const Scene all = loadGltf(b.writeEmbedded(dir, "no_scenes.gltf"));
+    EXPECT_EQ(all.triangles.size(), 2u);
+}
+
+// ------------------------------------------------------------------------------------ errors
+
+TEST(GltfLoaderErrors, IndexOutOfRangeNamesFileMeshAndIndex) {
+    TempDir dir;
+    GltfBuilder b;
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::vector<uint16_t> idx = {0, 1, 7};
+    b.addMesh(json::array({{{"attributes", {{"POSITION", pos}}}, {"indices", b.addData(idx, test::kUnsignedShort, "SCALAR")}}}),
+              "Floor");
+    b.addNode({{"mesh", 0}});
+    b.setScene({0});
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "bad_index.gltf")); });
+    EXPECT_NE(msg.find("bad_index.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("'Floor'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("index 7"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("3 vertices"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, MissingBufferFile) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    const std::string msg =
+        loadErrorOf([&] { loadGltf(b.writeExternal(dir, "no_bin.gltf", "missing.bin", /*writeBin=*/false)); });
+    EXPECT_NE(msg.find("no_bin.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("missing.bin"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, MissingSceneFile) {
+    TempDir dir;
+    const std::string msg = loadErrorOf([&] { loadGltf(dir.file("nothing_here.gltf")); });
+    EXPECT_NE(msg.find("nothing_here.gltf"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, BufferViewPastEndOfBuffer) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    b.doc["bufferViews"][1]["byteLength"] = 4096;  // the buffer holds 72 bytes
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "short.gltf")); });
+    EXPECT_NE(msg.find("short.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("short buffer"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, AccessorPastEndOfBufferView) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    b.doc["accessors"][0]["count"] = 4;  // the view holds 3 vertices
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "overrun.gltf")); });
+    EXPECT_NE(msg.find("overrun.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("out of buffer range"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, NanPosition) {
+    TempDir dir;
+    GltfBuilder b;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const int pos = b.addPositions({0, 0, 0, 1, nan, 0, 0, 1, 0});
+    const int node = b.addMeshNode({{"attributes", {{"POSITION", pos}}}});
+    b.setScene({node});
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "nan.gltf")); });
+    EXPECT_NE(msg.find("nan.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("vertex 1"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("NaN"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, UnknownRequiredExtension) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    b.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+    b.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "draco.gltf")); });
+    EXPECT_NE(msg.find("draco.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("KHR_draco_mesh_compression"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, KnownRequiredExtensionAccepted) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    b.doc["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+    b.doc["extensionsRequired"] = {"KHR_materials_emissive_strength"};
+    EXPECT_NO_THROW(loadGltf(b.writeEmbedded(dir, "known.gltf")));
+}
+
+// ------------------------------------------------------------------------------------ materials
+
+TEST(GltfLoaderMaterials, FactorsAndExtensionsParsed) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial(
+        {{"name", "Lamp"},
+         {"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.25, 0.125, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", 0.3}}},
+         {"emissiveFactor", {1.0, 0.5, 0.0}},
+         {"doubleSided", true},
+         {"extensions",
+          {{"KHR_materials_emissive_strength", {{"emissiveStrength", 40.0}}},
+           {"KHR_materials_specular", {{"specularFactor", 0.25}, {"specularColorFactor", {0.5, 0.75, 1.0}}}},
+           {"KHR_materials_ior", {{"ior", 1.33}}}}}});
+    const int lit = b.addMeshNode(prim);
+    const int plain = b.addMeshNode(unitTrianglePrimitive(b));  // no material: default appended
+    b.setScene({lit, plain});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "materials.gltf"));
+
+    ASSERT_EQ(scene.materials.size(), 2u);
+    const Material& m = scene.materials[0];
+    EXPECT_EQ(m.name, "Lamp");
+    expectVec3Near(m.base_color, {0.5f, 0.25f, 0.125f});
+    EXPECT_FLOAT_EQ(m.metallic, 0.0f);
+    EXPECT_FLOAT_EQ(m.roughness, 0.3f);
+    expectVec3Near(m.emissive, {1.0f, 0.5f, 0.0f});
+    EXPECT_FLOAT_EQ(m.emissive_strength, 40.0f);
+    EXPECT_FLOAT_EQ(m.specular, 0.25f);
+    expectVec3Near(m.specular_color, {0.5f, 0.75f, 1.0f});
+    EXPECT_FLOAT_EQ(m.ior, 1.33f);
+    EXPECT_TRUE(m.double_sided);
+    EXPECT_TRUE(m.isEmissive());
+
+    const Material& d = scene.materials[1];  // glTF default material
+    expectVec3Near(d.base_color, {1, 1, 1});
+    EXPECT_FLOAT_EQ(d.metallic, 1.0f);
+    EXPECT_FLOAT_EQ(d.roughness, 1.0f);
+    EXPECT_FALSE(d.isEmissive());
+    ASSERT_EQ(scene.triangle_materials.size(), 2u);
+    EXPECT_EQ(scene.triangle_materials[0], 0u);
+    EXPECT_EQ(scene.triangle_materials[1], 1u);
+}
+
+TEST(GltfLoaderMaterials, SceneWithoutMaterialsGetsDefault) {
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "empty.gltf"));
+    EXPECT_TRUE(scene.empty());
+    EXPECT_EQ(scene.materials.size(), 1u);
+    expectVec3Near(scene.bounds_min, {0, 0, 0});
+}
+
+/// A 2x2 RGBA PNG: row 0 = (0, 128, 255, 255), (255, 0, 0, 128); row 1 = grey 64, white.
+std::vector<uint8_t> tinyPng() {
+    const uint8_t pixels[16] = {0, 128, 255, 255, 255, 0, 0, 128, 64, 64, 64, 255, 255, 255, 255, 255};
+    std::vector<uint8_t> png;
+    stbi_write_png_to_func(
+        [](void* ctx, void* data, int size) {
+            auto* out = static_cast<std::vector<uint8_t>*>(ctx);
+            out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+        },
+        &png, 2, 2, 4, pixels, 8);
+    return png;
+}
+
+float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+
+TEST(GltfLoaderMaterials, BaseColourTextureDecodedFromSrgbAndDataTextureLinear) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
+    b.doc["samplers"] = json::array({{{"magFilter", 9728}, {"wrapS", 33071}, {"wrapT", 33648}}});
+    b.doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
+    json prim = unitTrianglePrimitive(b);
+    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    prim["material"] = b.addMaterial({{"pbrMetallicRoughness",
+                                       {{"baseColorTexture", {{"index", 0}}},
+                                        {"metallicRoughnessTexture", {{"index", 0}, {"texCoord", 1}}}}}});
+    const int node = b.addMeshNode(prim);
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "textured.gltf"));
+
+    const Material& m = scene.materials.at(0);
+    ASSERT_TRUE(m.base_color_texture.isSet());
+    ASSERT_TRUE(m.metallic_roughness_texture.isSet());
+    EXPECT_EQ(m.base_color_texture.texcoord, 0u);
+    EXPECT_EQ(m.metallic_roughness_texture.texcoord, 1u);
+    ASSERT_EQ(scene.textures.size(), 2u);  // one sRGB-decoded copy, one linear copy
+
+    const Texture& colour = scene.textures[m.base_color_texture.texture];
+    ASSERT_EQ(colour.width, 2);
+    ASSERT_EQ(colour.height, 2);
+    EXPECT_NEAR(colour.texels[0].y, srgb(128 / 255.0f), 1e-6f);
+    EXPECT_NEAR(colour.texels[0].z, 1.0f, 1e-6f);
+    EXPECT_NEAR(colour.texels[1].w, 128 / 255.0f, 1e-6f);  // alpha stays linear
+    EXPECT_NEAR(colour.texels[2].x, srgb(64 / 255.0f), 1e-6f);
+    EXPECT_EQ(colour.wrap_s, WrapMode::ClampToEdge);
+    EXPECT_EQ(colour.wrap_t, WrapMode::MirroredRepeat);
+    EXPECT_TRUE(colour.nearest);
+    // v = 0 is the top row of the image.
+    EXPECT_NEAR(colour.sample({0.25f, 0.25f}).y, srgb(128 / 255.0f), 1e-6f);
+    EXPECT_NEAR(colour.sample({0.25f, 0.75f}).x, srgb(64 / 255.0f), 1e-6f);
+
+    const Texture& data = scene.textures[m.metallic_roughness_texture.texture];
+    EXPECT_NEAR(data.texels[0].y, 128 / 255.0f, 1e-6f);
+    EXPECT_NEAR(data.texels[2].x, 64 / 255.0f, 1e-6f);
+    ASSERT_EQ(scene.texcoords0.size(), scene.positions.size());
+    EXPECT_TRUE(scene.texcoords1.empty());
+}
+
+TEST(GltfLoaderMaterials, SpecularTexturesAndEmissiveTextureReferenced) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
+    b.doc["textures"] = json::array({{{"source", 0}}});
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial(
+        {{"emissiveTexture", {{"index", 0}}},
+         {"extensions",
+          {{"KHR_materials_specular",
+            {{"specularTexture", {{"index", 0}}}, {"specularColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}}});
+    const int node = b.addMeshNode(prim);
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "specular.gltf"));
+    const Material& m = scene.materials.at(0);
+    ASSERT_TRUE(m.emissive_texture.isSet());
+    ASSERT_TRUE(m.specular_texture.isSet());
+    ASSERT_TRUE(m.specular_color_texture.isSet());
+    EXPECT_EQ(m.specular_color_texture.texcoord, 1u);
+    EXPECT_EQ(m.emissive_texture.texture, m.specular_color_texture.texture);  // both sRGB, shared
+    EXPECT_NE(m.specular_texture.texture, m.specular_color_texture.texture);  // linear vs sRGB
+    EXPECT_FLOAT_EQ(m.specular, 1.0f);
+    EXPECT_EQ(scene.textures.size(), 2u);
+}
+
+// ------------------------------------------------------------------------------------ lights etc.
+
+TEST(GltfLoaderLights, PhotometricToRadiometric) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "bulb"}, {"type", "point"}, {"intensity", 683.0}, {"color", {1.0, 0.5, 0.25}}, {"range", 7.0}},
+         {{"name", "sun"}, {"type", "directional"}, {"intensity", 683.0}},
+         {{"name", "spot"},
+          {"type", "spot"},
+          {"intensity", 1366.0},
+          {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.5}}}}});
+    const float s = std::sqrt(0.5f);
+    const int bulb = b.addNode({{"translation", {1, 2, 3}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    // Rotated -90 degrees about X: -Z turns into -Y (the sun shines straight down).
+    const int sun = b.addNode({{"rotation", {-s, 0, 0, s}}, {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});
+    const int spotChild = b.addNode({{"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}}});
+    const int spotParent = b.addNode({{"translation", {0, 4, 0}}, {"children", {spotChild}}});
+    b.setScene({bulb, sun, spotParent});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "lights.gltf"));
+
+    ASSERT_EQ(scene.lights.size(), 3u);
+    const PunctualLight& p = scene.lights[0];
+    EXPECT_EQ(p.type, LightType::Point);
+    expectVec3Near(p.intensity, {1.0f, 0.5f, 0.25f});  // 683 cd = 1 W/sr, times colour
+    expectVec3Near(p.position, {1, 2, 3});
+    EXPECT_FLOAT_EQ(p.range, 7.0f);
+
+    const PunctualLight& d = scene.lights[1];
+    EXPECT_EQ(d.type, LightType::Directional);
+    expectVec3Near(d.intensity, {1, 1, 1});  // 683 lux = 1 W/m^2
+    expectVec3Near(d.direction, {0, -1, 0});
+    EXPECT_FLOAT_EQ(d.range, 0.0f);
+
+    const PunctualLight& sp = scene.lights[2];
+    EXPECT_EQ(sp.type, LightType::Spot);
+    expectVec3Near(sp.intensity, {2, 2, 2});
+    expectVec3Near(sp.position, {0, 4, 0});
+    expectVec3Near(sp.direction, {0, 0, -1});
+    EXPECT_FLOAT_EQ(sp.inner_cone_angle, 0.2f);
+    EXPECT_FLOAT_EQ(sp.outer_cone_angle, 0.5f);
+}
+
+TEST(GltfLoaderCameras, PerspectiveParsedOrthographicSkipped) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["cameras"] = json::array(
+        {{{"name", "Main"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 0.1}, {"aspectRatio", 1.5}}}},
+         {{"type", "orthographic"}, {"orthographic", {{"xmag", 1}, {"ymag", 1}, {"znear", 0.1}, {"zfar", 10}}}},
+         {{"type", "perspective"}, {"perspective", {{"yfov", 0.9}, {"znear", 0.1}}}}});
+    const float s = std::sqrt(0.5f);  // 90 degrees about +Y: forward -Z becomes -X
+    const int main = b.addNode({{"camera", 0}, {"translation", {1, 2, 3}}, {"rotation", {0, s, 0, s}}});
+    const int ortho = b.addNode({{"camera", 1}});
+    const int plain = b.addNode({{"camera", 2}, {"name", "NodeName"}});
+    b.setScene({main, ortho, plain});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "cameras.gltf"));
+
+    ASSERT_EQ(scene.cameras.size(), 2u);
+    const Camera& c = scene.cameras[0];
+    EXPECT_EQ(c.name, "Main");
+    expectVec3Near(c.position, {1, 2, 3});
+    expectVec3Near(c.forward, {-1, 0, 0});
+    expectVec3Near(c.up, {0, 1, 0});
+    EXPECT_FLOAT_EQ(c.yfov, 0.6f);
+    ASSERT_TRUE(c.aspect_ratio.has_value());
+    EXPECT_FLOAT_EQ(*c.aspect_ratio, 1.5f);
+
+    EXPECT_EQ(scene.cameras[1].name, "NodeName");
+    EXPECT_FALSE(scene.cameras[1].aspect_ratio.has_value());
+    bool warned = false;
+    for (const std::string& w : scene.stats.warnings) warned |= w.find("orthographic") != std::string::npos;
+    EXPECT_TRUE(warned);
+}
+
+TEST(GltfLoaderSky, UniformRadianceFromRootExtras) {
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({});
+    const Scene black = loadGltf(b.writeEmbedded(dir, "black.gltf"));
+    EXPECT_TRUE(black.sky.isBlack());
+
+    b.doc["extras"] = {{"sharcbake", {{"sky_radiance", {0.5, 1.0, 2.0}}}}};
+    const Scene sky = loadGltf(b.writeEmbedded(dir, "sky.gltf"));
+    expectVec3Near(sky.sky.uniform, {0.5f, 1.0f, 2.0f});
+    EXPECT_FALSE(sky.sky.isBlack());
+
+    b.doc["extras"] = {{"sharcbake", {{"sky_radiance", {1.0, 2.0}}}}};
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "bad_sky.gltf")); });
+    EXPECT_NE(msg.find("sky_radiance"), std::string::npos) << msg;
+}
+
+}  // namespace
+}  // namespace sharcbake
