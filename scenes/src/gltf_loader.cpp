@@ -25,6 +25,7 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -165,6 +166,7 @@ public:
     Scene load() {
         parseFile();
         checkRequiredExtensions();
+        warnAboutIgnoredExtensions();
         convertMaterials();
         readSky();
         for (int root : rootNodes()) visitNode(root, glm::dmat4(1.0));
@@ -183,12 +185,18 @@ private:
     /// colour and as data needs two decoded copies.
     std::map<std::pair<int, bool>, int> texture_cache_;
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
+    std::set<std::string> warned_;
 
     // ---------------------------------------------------------------- errors and warnings
 
     [[noreturn]] void fail(const std::string& what) const { throw SceneLoadError(path_ + ": " + what); }
 
-    void warn(const std::string& what) { scene_.stats.warnings.push_back(path_ + ": " + what); }
+    /// Records a warning once: a mesh instanced a thousand times should not repeat its
+    /// repaired-normals warning a thousand times.
+    void warn(const std::string& what) {
+        std::string line = path_ + ": " + what;
+        if (warned_.insert(line).second) scene_.stats.warnings.push_back(std::move(line));
+    }
 
     std::string meshLabel(int meshIndex, size_t primIndex) const {
         const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
@@ -228,6 +236,16 @@ private:
             const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
                                            [&](const char* s) { return ext == s; });
             if (!known) fail("required extension " + quoted(ext) + " is not supported by sharcbake");
+        }
+    }
+
+    /// Extensions that are only "used" may be ignored by a loader, but some change what the
+    /// scene looks like (instancing, texture transforms, transmission), so say so.
+    void warnAboutIgnoredExtensions() {
+        for (const std::string& ext : model_.extensionsUsed) {
+            const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
+                                           [&](const char* s) { return ext == s; });
+            if (!known) warn("extension " + quoted(ext) + " is not supported and is ignored");
         }
     }
 
@@ -701,14 +719,6 @@ private:
             m.specular_texture = textureRef(textureSlot(*ext, "specularTexture"), false, label);
             m.specular_color_texture = textureRef(textureSlot(*ext, "specularColorTexture"), true, label);
         }
-        if (extension(src.extensions, "KHR_texture_transform") || hasTextureTransform(src))
-            warn(label + ": KHR_texture_transform ignored");
-    }
-
-    static bool hasTextureTransform(const tinygltf::Material& src) {
-        auto has = [](const tinygltf::ExtensionMap& e) { return e.count("KHR_texture_transform") > 0; };
-        return has(src.pbrMetallicRoughness.baseColorTexture.extensions) ||
-               has(src.pbrMetallicRoughness.metallicRoughnessTexture.extensions) || has(src.emissiveTexture.extensions);
     }
 
     // ---------------------------------------------------------------- textures
@@ -751,7 +761,7 @@ private:
         }
         const tinygltf::Image& image = model_.images[src.source];
         Texture tex;
-        tex.name = image.name.empty() ? image.uri.substr(0, 64) : image.name;
+        tex.name = imageName(image, src.source);
         if (!convertPixels(image, srgb, tex)) {
             warn(what + ": image " + std::to_string(src.source) + " could not be decoded; texture ignored");
             return -1;
@@ -764,6 +774,12 @@ private:
         }
         scene_.textures.push_back(std::move(tex));
         return static_cast<int>(scene_.textures.size()) - 1;
+    }
+
+    static std::string imageName(const tinygltf::Image& image, int index) {
+        if (!image.name.empty()) return image.name;
+        if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) return image.uri;
+        return "image " + std::to_string(index);  // embedded: the URI is the pixels themselves
     }
 
     /// Image bytes (8 or 16 bits, 1-4 channels, as tinygltf decoded them) to linear RGBA.
@@ -838,11 +854,21 @@ private:
         const glm::vec3 colour = vec3Or(src.color, glm::vec3(1.0f));
         light.intensity = colour * static_cast<float>(src.intensity / kLumensPerWatt);
         light.range = src.range > 0.0 ? static_cast<float>(src.range) : 0.0f;
-        if (light.type == LightType::Spot) {
-            light.inner_cone_angle = static_cast<float>(src.spot.innerConeAngle);
-            light.outer_cone_angle = static_cast<float>(src.spot.outerConeAngle);
-        }
+        if (light.type == LightType::Spot) setSpotCone(src, light);
         return light;
+    }
+
+    /// The extension requires 0 <= inner < outer <= pi/2; clamp anything else so the
+    /// renderer's smooth-step between the cones stays well defined.
+    void setSpotCone(const tinygltf::Light& src, PunctualLight& light) {
+        constexpr double halfPi = 1.5707963267948966;
+        const double outer = std::clamp(src.spot.outerConeAngle, 0.0, halfPi);
+        const double inner = std::clamp(src.spot.innerConeAngle, 0.0, outer);
+        if (outer != src.spot.outerConeAngle || inner != src.spot.innerConeAngle || inner == outer)
+            warn("light " + quoted(src.name) + ": spot cone angles (inner " + std::to_string(src.spot.innerConeAngle) +
+                 ", outer " + std::to_string(src.spot.outerConeAngle) + ") outside 0 <= inner < outer <= pi/2; clamped");
+        light.inner_cone_angle = static_cast<float>(inner);
+        light.outer_cone_angle = static_cast<float>(outer);
     }
 
     // ---------------------------------------------------------------- cameras
@@ -870,7 +896,11 @@ private:
         }
         cam.forward = glm::vec3(forward);
         cam.up = glm::vec3(up);
-        if (src.perspective.yfov > 0.0) cam.yfov = static_cast<float>(src.perspective.yfov);
+        if (src.perspective.yfov > 0.0 && src.perspective.yfov < 3.14159)
+            cam.yfov = static_cast<float>(src.perspective.yfov);
+        else
+            warn("camera " + quoted(name) + ": invalid yfov " + std::to_string(src.perspective.yfov) +
+                 "; using " + std::to_string(cam.yfov));
         if (src.perspective.aspectRatio > 0.0) cam.aspect_ratio = static_cast<float>(src.perspective.aspectRatio);
         scene_.cameras.push_back(cam);
     }

@@ -303,6 +303,18 @@ TEST(GltfLoaderErrors, MissingBufferFile) {
     EXPECT_NE(msg.find("missing.bin"), std::string::npos) << msg;
 }
 
+TEST(GltfLoaderErrors, ShortBinFile) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    const std::string path = b.writeExternal(dir, "short_bin.gltf", "short.bin");
+    test::writeFile(dir.file("short.bin"), b.bin.data(), b.bin.size() / 2);  // truncated
+    const std::string msg = loadErrorOf([&] { loadGltf(path); });
+    EXPECT_NE(msg.find("short_bin.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("short.bin"), std::string::npos) << msg;
+}
+
 TEST(GltfLoaderErrors, MissingSceneFile) {
     TempDir dir;
     const std::string msg = loadErrorOf([&] { loadGltf(dir.file("nothing_here.gltf")); });
@@ -354,6 +366,19 @@ TEST(GltfLoaderErrors, UnknownRequiredExtension) {
     const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "draco.gltf")); });
     EXPECT_NE(msg.find("draco.gltf"), std::string::npos) << msg;
     EXPECT_NE(msg.find("KHR_draco_mesh_compression"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    b.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "instancing.gltf"));
+    EXPECT_EQ(scene.triangles.size(), 1u);
+    bool warned = false;
+    for (const std::string& w : scene.stats.warnings) warned |= w.find("EXT_mesh_gpu_instancing") != std::string::npos;
+    EXPECT_TRUE(warned);
 }
 
 TEST(GltfLoaderErrors, KnownRequiredExtensionAccepted) {
@@ -478,6 +503,72 @@ TEST(GltfLoaderMaterials, BaseColourTextureDecodedFromSrgbAndDataTextureLinear) 
     EXPECT_TRUE(scene.texcoords1.empty());
 }
 
+/// Big-endian helpers for the hand-written PNG below.
+void put32be(std::vector<uint8_t>& out, uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<uint8_t>(v >> s));
+}
+
+uint32_t crc32(const uint8_t* data, size_t n) {
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i) {
+        c ^= data[i];
+        for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return ~c;
+}
+
+void pngChunk(std::vector<uint8_t>& png, const char* type, const std::vector<uint8_t>& body) {
+    put32be(png, static_cast<uint32_t>(body.size()));
+    std::vector<uint8_t> typed(type, type + 4);
+    typed.insert(typed.end(), body.begin(), body.end());
+    png.insert(png.end(), typed.begin(), typed.end());
+    put32be(png, crc32(typed.data(), typed.size()));
+}
+
+/// A 1x1 16-bit RGB PNG (stb_image_write only writes 8-bit), zlib with one stored block.
+std::vector<uint8_t> png16(uint16_t r, uint16_t g, uint16_t b) {
+    const std::vector<uint8_t> raw = {0,  // filter type None
+                                      uint8_t(r >> 8), uint8_t(r), uint8_t(g >> 8), uint8_t(g), uint8_t(b >> 8), uint8_t(b)};
+    std::vector<uint8_t> z = {0x78, 0x01, 0x01, uint8_t(raw.size()), 0, uint8_t(~raw.size()), 0xFF};
+    z.insert(z.end(), raw.begin(), raw.end());
+    uint32_t a = 1, bsum = 0;  // Adler-32
+    for (uint8_t v : raw) {
+        a = (a + v) % 65521;
+        bsum = (bsum + a) % 65521;
+    }
+    put32be(z, (bsum << 16) | a);
+    std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    std::vector<uint8_t> ihdr;
+    put32be(ihdr, 1);
+    put32be(ihdr, 1);
+    ihdr.insert(ihdr.end(), {16, 2, 0, 0, 0});  // 16 bits, truecolour, deflate, no filter, no interlace
+    pngChunk(png, "IHDR", ihdr);
+    pngChunk(png, "IDAT", z);
+    pngChunk(png, "IEND", {});
+    return png;
+}
+
+TEST(GltfLoaderMaterials, SixteenBitTextureKeepsPrecision) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(png16(1000, 32768, 65535))}}});
+    b.doc["textures"] = json::array({{{"source", 0}}});
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial({{"pbrMetallicRoughness",
+                                       {{"baseColorTexture", {{"index", 0}}}, {"metallicRoughnessTexture", {{"index", 0}}}}}});
+    const int node = b.addMeshNode(prim);
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "png16.gltf"));
+    const Material& m = scene.materials.at(0);
+    const glm::vec4 colour = scene.textures.at(m.base_color_texture.texture).texels.at(0);
+    const glm::vec4 data = scene.textures.at(m.metallic_roughness_texture.texture).texels.at(0);
+    EXPECT_NEAR(data.x, 1000 / 65535.0f, 1e-7f);  // finer than any 8-bit code
+    EXPECT_NEAR(data.y, 32768 / 65535.0f, 1e-7f);
+    EXPECT_NEAR(colour.x, srgb(1000 / 65535.0f), 1e-7f);
+    EXPECT_NEAR(colour.z, 1.0f, 1e-6f);
+    EXPECT_FLOAT_EQ(colour.w, 1.0f);
+}
+
 TEST(GltfLoaderMaterials, SpecularTexturesAndEmissiveTextureReferenced) {
     TempDir dir;
     GltfBuilder b;
@@ -545,6 +636,31 @@ TEST(GltfLoaderLights, PhotometricToRadiometric) {
     expectVec3Near(sp.direction, {0, 0, -1});
     EXPECT_FLOAT_EQ(sp.inner_cone_angle, 0.2f);
     EXPECT_FLOAT_EQ(sp.outer_cone_angle, 0.5f);
+}
+
+TEST(GltfLoaderLights, SpotConesClampedToValidRange) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"type", "spot"}, {"spot", {{"innerConeAngle", 0.9}, {"outerConeAngle", 2.0}}}}});
+    const int node = b.addNode({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    b.setScene({node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "spot.gltf"));
+    ASSERT_EQ(scene.lights.size(), 1u);
+    EXPECT_FLOAT_EQ(scene.lights[0].outer_cone_angle, 1.5707963f);
+    EXPECT_FLOAT_EQ(scene.lights[0].inner_cone_angle, 0.9f);
+    expectVec3Near(scene.lights[0].intensity, glm::vec3(1.0f / 683.0f));  // default intensity 1 cd
+    EXPECT_FALSE(scene.stats.warnings.empty());
+}
+
+TEST(GltfLoaderLights, MissingLightIndexIsAnError) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addNode({{"name", "lamp"}, {"extensions", {{"KHR_lights_punctual", {{"light", 3}}}}}});
+    b.setScene({node});
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "nolight.gltf")); });
+    EXPECT_NE(msg.find("nolight.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("'lamp'"), std::string::npos) << msg;
 }
 
 TEST(GltfLoaderCameras, PerspectiveParsedOrthographicSkipped) {
