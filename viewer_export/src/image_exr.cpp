@@ -1,0 +1,193 @@
+// SPDX-License-Identifier: Apache-2.0
+// OpenEXR files: 32-bit float RGB, ZIP compression, provenance as string attributes.
+#include "image_internal.h"
+#include "sharcbake/image.h"
+
+#include <ImfArray.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfRgbaFile.h>
+#include <ImfStringAttribute.h>
+
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <new>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+namespace {
+
+/// An Imf::OStream that collects the file in memory, so that the bytes reach the disk through
+/// detail::writeFileAtomically (temporary file + fsync + rename) with every error checked.
+/// (Imf::OutputFile writes its line-offset table in its destructor and swallows errors there.)
+class MemoryOStream final : public Imf::OStream {
+public:
+    explicit MemoryOStream(const std::string& name) : Imf::OStream(name.c_str()) {}
+
+    void write(const char c[], int n) override {
+        if (n <= 0) return;
+        const size_t end = pos_ + size_t(n);
+        if (end > bytes_.size()) bytes_.resize(end);
+        std::memcpy(bytes_.data() + pos_, c, size_t(n));
+        pos_ = end;
+    }
+    uint64_t tellp() override { return pos_; }
+    void seekp(uint64_t pos) override { pos_ = size_t(pos); }
+
+    const std::vector<char>& bytes() const { return bytes_; }
+
+private:
+    std::vector<char> bytes_;
+    size_t pos_ = 0;
+};
+
+[[noreturn]] void throwReadError(const std::string& path, const std::string& reason) {
+    throw ImageError("cannot read EXR '" + path + "': " + reason);
+}
+
+/// Luminance/chroma files (Y, RY, BY; possibly sub-sampled) are converted by OpenEXR's RGBA
+/// interface. Precision is half, which is what such files store.
+Image readLuminanceChroma(const std::string& path, const Imath::Box2i& dw) {
+    Imf::RgbaInputFile file(path.c_str());
+    const int width = dw.max.x - dw.min.x + 1;
+    const int height = dw.max.y - dw.min.y + 1;
+    Imf::Array2D<Imf::Rgba> rgba(height, width);
+    const auto base = reinterpret_cast<intptr_t>(&rgba[0][0]) -
+                      (intptr_t(dw.min.x) + intptr_t(dw.min.y) * intptr_t(width)) *
+                          intptr_t(sizeof(Imf::Rgba));
+    file.setFrameBuffer(reinterpret_cast<Imf::Rgba*>(base), 1, size_t(width));
+    file.readPixels(dw.min.y, dw.max.y);
+    Image image(width, height);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const Imf::Rgba& p = rgba[y][x];
+            image.at(x, y) = glm::vec3(float(p.r), float(p.g), float(p.b));
+        }
+    }
+    return image;
+}
+
+}  // namespace
+
+void writeExr(const std::string& path, const Image& image, const ImageMetadata& metadata) {
+    detail::checkImageShape(path, image, "EXR");
+    std::vector<char> bytes;
+    try {
+        Imf::Header header(image.width, image.height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+        header.channels().insert("G", Imf::Channel(Imf::FLOAT));
+        header.channels().insert("B", Imf::Channel(Imf::FLOAT));
+        for (const auto& [name, value] : metadata) {
+            if (name.empty()) throw ImageError("cannot write EXR '" + path + "': empty metadata name");
+            if (header.find(name) != header.end()) {
+                throw ImageError("cannot write EXR '" + path + "': metadata name '" + name +
+                                 "' clashes with a standard EXR header attribute");
+            }
+            header.insert(name, Imf::StringAttribute(value));
+        }
+
+        const Imath::Box2i dw = header.dataWindow();
+        const char* first = reinterpret_cast<const char*>(image.pixels.data());
+        const size_t x_stride = sizeof(glm::vec3);
+        const size_t y_stride = x_stride * size_t(image.width);
+        Imf::FrameBuffer frame;
+        frame.insert("R", Imf::Slice::Make(Imf::FLOAT, first + 0 * sizeof(float), dw, x_stride, y_stride));
+        frame.insert("G", Imf::Slice::Make(Imf::FLOAT, first + 1 * sizeof(float), dw, x_stride, y_stride));
+        frame.insert("B", Imf::Slice::Make(Imf::FLOAT, first + 2 * sizeof(float), dw, x_stride, y_stride));
+
+        MemoryOStream stream(path);
+        {
+            Imf::OutputFile file(stream, header);
+            file.setFrameBuffer(frame);
+            file.writePixels(image.height);
+        }  // The destructor writes the line-offset table.
+        bytes = stream.bytes();
+    } catch (const ImageError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw ImageError("cannot write EXR '" + path + "': " + e.what());
+    }
+    detail::writeFileAtomically(path, bytes.data(), bytes.size());
+}
+
+Image readExr(const std::string& path, ImageMetadata* metadata) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        const Imath::Box2i dw = header.dataWindow();
+        const int64_t width64 = int64_t(dw.max.x) - int64_t(dw.min.x) + 1;
+        const int64_t height64 = int64_t(dw.max.y) - int64_t(dw.min.y) + 1;
+        if (width64 <= 0 || height64 <= 0 || width64 > std::numeric_limits<int>::max() ||
+            height64 > std::numeric_limits<int>::max()) {
+            throwReadError(path, "invalid data window");
+        }
+        const int width = int(width64);
+        const int height = int(height64);
+
+        ImageMetadata attributes;
+        if (metadata != nullptr) {
+            for (auto it = header.begin(); it != header.end(); ++it) {
+                if (std::strcmp(it.attribute().typeName(), Imf::StringAttribute::staticTypeName()) == 0) {
+                    attributes[it.name()] = static_cast<const Imf::StringAttribute&>(it.attribute()).value();
+                }
+            }
+        }
+
+        const Imf::ChannelList& channels = header.channels();
+        const Imf::Channel* rgb[3] = {channels.findChannel("R"), channels.findChannel("G"),
+                                      channels.findChannel("B")};
+        const Imf::Channel* luminance = channels.findChannel("Y");
+        const bool has_rgb = rgb[0] != nullptr || rgb[1] != nullptr || rgb[2] != nullptr;
+        const bool has_chroma = channels.findChannel("RY") != nullptr || channels.findChannel("BY") != nullptr;
+
+        Image image;
+        if (!has_rgb && luminance != nullptr && has_chroma) {
+            image = readLuminanceChroma(path, dw);
+        } else {
+            image = Image(width, height);
+            char* first = reinterpret_cast<char*>(image.pixels.data());
+            const size_t x_stride = sizeof(glm::vec3);
+            const size_t y_stride = x_stride * size_t(width);
+            Imf::FrameBuffer frame;
+            auto insert = [&](const char* name, const Imf::Channel* channel, int component) {
+                if (channel->xSampling != 1 || channel->ySampling != 1) {
+                    throwReadError(path, std::string("sub-sampled channel '") + name + "' is not supported");
+                }
+                frame.insert(name, Imf::Slice::Make(Imf::FLOAT, first + size_t(component) * sizeof(float), dw,
+                                                    x_stride, y_stride));
+            };
+            const bool luminance_only = !has_rgb && luminance != nullptr;
+            if (luminance_only) {
+                insert("Y", luminance, 0);
+            } else {
+                static const char* const kNames[3] = {"R", "G", "B"};
+                for (int c = 0; c < 3; ++c) {
+                    if (rgb[c] != nullptr) insert(kNames[c], rgb[c], c);  // missing: stays 0
+                }
+            }
+            file.setFrameBuffer(frame);
+            file.readPixels(dw.min.y, dw.max.y);
+            if (luminance_only) {
+                for (glm::vec3& p : image.pixels) p = glm::vec3(p.r);
+            }
+        }
+        if (metadata != nullptr) *metadata = std::move(attributes);
+        return image;
+    } catch (const ImageError&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throwReadError(path, "out of memory (image too large?)");
+    } catch (const std::exception& e) {
+        throwReadError(path, e.what());
+    }
+}
+
+}  // namespace sharcbake
