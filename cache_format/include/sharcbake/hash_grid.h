@@ -1,0 +1,233 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file hash_grid.h
+/// @brief The SHaRC hash grid: (position, normal, camera) -> 64-bit key -> 32-bit hash -> bucket.
+///
+/// Keys and hashes are bit-exact with the current SHaRC SDK (1.7.2 / 1.8.x, default 64-bit keys,
+/// `HASH_GRID_USE_NORMALS = 1`). The normative description, the float32 evaluation order and the
+/// test vectors are in cache_format/SPEC.md, section "Hash grid"; the section numbers quoted in
+/// this file ("SPEC §H.n") point there.
+///
+/// The runtime has no third-party dependency and throws no exceptions. Every function here is
+/// safe for any input value, including NaN/Inf positions and degenerate parameters: such inputs
+/// give a defined (documented) key, never undefined behaviour.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace sharcbake {
+
+/// Plain 3-component float vector (no GLM in the runtime's interface).
+struct Float3 {
+    float x, y, z;
+};
+
+/// Plain 3-component signed integer vector (grid cell coordinates).
+struct Int3 {
+    int32_t x, y, z;
+};
+
+// ------------------------------------------------------------------------------------------------
+// Constants (SPEC §H.1). Names follow the SDK's HASH_GRID_* / SHARC_* constants.
+// ------------------------------------------------------------------------------------------------
+
+inline constexpr uint32_t kHashGridPositionBits = 17;  ///< bits per grid coordinate
+inline constexpr uint32_t kHashGridLevelBits = 9;      ///< level field width (10 before SDK 1.7)
+inline constexpr uint32_t kHashGridNormalBits = 3;     ///< normal sign bits x, y, z
+inline constexpr uint32_t kHashGridLevelOffset = 3 * kHashGridPositionBits;                // 51
+inline constexpr uint32_t kHashGridNormalOffset = kHashGridLevelOffset + kHashGridLevelBits;  // 60
+inline constexpr uint32_t kHashGridUserBit = 63;  ///< reserved (SDK responsive lighting); 0 here
+inline constexpr uint32_t kHashGridPositionMask = (1u << kHashGridPositionBits) - 1;  // 0x1FFFF
+inline constexpr uint32_t kHashGridLevelMask = (1u << kHashGridLevelBits) - 1;        // 511
+inline constexpr uint32_t kHashGridNormalMask = (1u << kHashGridNormalBits) - 1;      // 7
+inline constexpr uint32_t kHashGridLevelMin = 1;                   ///< level 0 is never produced
+inline constexpr uint32_t kHashGridLevelMax = kHashGridLevelMask;  ///< 511
+
+inline constexpr float kHashGridPositionBias = 1e-4f;  ///< added to every position component
+inline constexpr float kHashGridNormalBias = 1e-3f;    ///< added to every normal component
+inline constexpr float kHashGridMinDistance2 = 1e-10f;  ///< lower clamp of squared distance
+
+inline constexpr uint32_t kHashGridBucketSize = 16;  ///< HASH_GRID_HASH_MAP_BUCKET_SIZE
+inline constexpr uint64_t kHashGridInvalidKey = 0;   ///< empty slot
+inline constexpr uint32_t kHashGridInvalidIndex = 0xFFFFFFFFu;  ///< "no slot"
+
+inline constexpr float kHashGridDefaultLogarithmBase = 2.0f;  ///< SHARC_GRID_LOGARITHM_BASE
+inline constexpr float kHashGridDefaultSceneScale = 50.0f;    ///< RTXGI sample value
+inline constexpr float kHashGridDefaultLevelBias = 0.0f;      ///< SHARC_GRID_LEVEL_BIAS
+inline constexpr uint32_t kHashGridDefaultCapacity = 1u << 22;  ///< 4 Mi entries
+
+// ------------------------------------------------------------------------------------------------
+// Parameters
+// ------------------------------------------------------------------------------------------------
+
+/// Every value that feeds a key or a slot. Plain aggregate; copy freely.
+///
+/// The same `camera_position` must be used by everything that builds keys for one table
+/// (insert and lookup), otherwise levels and keys differ (SPEC §H.2).
+struct HashGridParameters {
+    Float3 camera_position{0.0f, 0.0f, 0.0f};             ///< LOD centre `c`
+    float logarithm_base = kHashGridDefaultLogarithmBase;  ///< `b`, must be > 1
+    float scene_scale = kHashGridDefaultSceneScale;        ///< `S`, must be > 0
+    float level_bias = kHashGridDefaultLevelBias;          ///< `beta`
+    uint32_t capacity = kHashGridDefaultCapacity;          ///< table slots `N`, >= 1
+    uint32_t bucket_size = kHashGridBucketSize;  ///< probe window; SDK-compatible only when 16
+};
+
+/// Outcome of parameter validation and table construction.
+enum class HashGridStatus : uint32_t {
+    kOk = 0,
+    kInvalidCapacity,     ///< capacity == 0
+    kInvalidBucketSize,   ///< bucket_size == 0
+    kInvalidLogBase,      ///< logarithm_base not finite or <= 1
+    kInvalidSceneScale,   ///< scene_scale not finite or <= 0
+    kInvalidLevelBias,    ///< level_bias not finite
+    kInvalidCamera,       ///< camera_position has a NaN/Inf component
+};
+
+/// @brief Human-readable name of a status ("ok", "invalid capacity", ...). Never null.
+const char* toString(HashGridStatus status);
+
+/// @brief Checks parameters for values that make levels or voxel sizes meaningless.
+///
+/// The key functions accept any parameters (the result is still defined), but a baker should
+/// refuse parameters for which this returns anything but kOk. Capacities below the bucket size
+/// are valid (see bucketBase()), although the SDK itself requires N >= 16.
+HashGridStatus validateHashGridParameters(const HashGridParameters& params);
+
+// ------------------------------------------------------------------------------------------------
+// Key construction (SPEC §H.2 - §H.6)
+// ------------------------------------------------------------------------------------------------
+
+/// @brief Level of detail of a point: clamp(floor(log_b |c - p| + beta), 1, 511).
+///
+/// Like the SDK's HashGridGetLevel this takes the position as given; hashGridKey() applies the
+/// +1e-4 position bias first and then calls this. Evaluated in float32 as in SPEC §H.3.
+/// NaN distances give level 1; an infinite distance gives 511.
+uint32_t gridLevel(const Float3& position, const HashGridParameters& params);
+
+/// @brief Voxel edge length of a level: b^L / (S * b^beta), float32 as in SPEC §H.4.
+/// May be +Inf or NaN for absurd levels/biases (b^L overflows float); callers get a defined key.
+float voxelSize(uint32_t level, const HashGridParameters& params);
+
+/// @brief floor(position / voxel_size) per component, converted to int32 with saturation
+/// (NaN -> 0, below INT32_MIN -> INT32_MIN, above INT32_MAX -> INT32_MAX). SPEC §H.5.
+Int3 quantisePosition(const Float3& position, float voxel_size);
+
+/// A key's decoded fields (or a cell before packing).
+struct HashGridCell {
+    Int3 grid;             ///< grid coordinates; after decoding: sign-extended 17-bit values
+    uint32_t level;        ///< 1..511 for valid keys
+    uint32_t normal_bits;  ///< bit0 = x negative, bit1 = y negative, bit2 = z negative
+    bool user_bit;         ///< bit 63 (SDK responsive-lighting marker); false for our keys
+};
+
+/// @brief The cell a point falls in: position bias, level, voxel size and quantisation.
+/// Returns the full (unmasked) int32 grid coordinates; normal_bits = 0, user_bit = false.
+HashGridCell gridCell(const Float3& position, const HashGridParameters& params);
+
+/// @brief The 3 normal sign bits: bit i is set unless (n_i + 1e-3) >= 0 (so NaN sets the bit).
+uint32_t normalBits(const Float3& normal);
+
+/// @brief Packs fields into a key: x, y, z masked to 17 bits (two's complement), level masked to
+/// 9 bits, normal bits masked to 3 bits, user bit at 63. Never fails; the caller is responsible
+/// for passing level >= 1 if the key must be non-zero.
+uint64_t packHashGridKey(const Int3& grid, uint32_t level, uint32_t normal_bits,
+                         bool user_bit = false);
+
+/// @brief The SHaRC key of a surface point (HashGridComputeSpatialHash). Never 0: the level
+/// field is always in 1..511 (SPEC §H.6).
+uint64_t hashGridKey(const Float3& position, const Float3& normal,
+                     const HashGridParameters& params);
+
+/// @brief Decodes a key: grid coordinates sign-extended from 17 bits, level, normal bits and the
+/// user bit. Exact inverse of packHashGridKey() for coordinates in [-65536, 65535].
+HashGridCell decodeHashGridKey(uint64_t key);
+
+/// @brief Centre of a key's voxel in world units: (g + 0.5) * voxelSize(level), float32, as the
+/// SDK's HashGridGetPositionFromKey. The +1e-4 bias is not removed. Coordinates that wrapped at
+/// 17 bits decode to the wrapped cell (SPEC §H.6).
+Float3 voxelCenter(uint64_t key, const HashGridParameters& params);
+
+// ------------------------------------------------------------------------------------------------
+// Hash and bucket (SPEC §H.7)
+// ------------------------------------------------------------------------------------------------
+
+/// @brief Bob Jenkins' 32-bit integer hash (six shift/add/xor steps, wrap-around arithmetic).
+uint32_t jenkins32(uint32_t value);
+
+/// @brief The SDK's Hash32: jenkins32(low 32 bits) XOR jenkins32(high 32 bits).
+uint32_t hashGridHash(uint64_t key);
+
+/// @brief Number of slots probed in a table of `capacity` slots: min(bucket_size, capacity).
+uint32_t bucketProbeCount(uint32_t capacity, uint32_t bucket_size = kHashGridBucketSize);
+
+/// @brief First slot of a hash's bucket: min(hash % N, N - bucket_size) for N >= bucket_size
+/// (identical to the SDK for N >= 16 and bucket_size 16). For 0 < N < bucket_size the bucket is
+/// the whole table and the base is 0 (the SDK would underflow here). N == 0 returns
+/// kHashGridInvalidIndex. The window [base, base + bucketProbeCount(N)) always lies inside [0, N).
+uint32_t bucketBase(uint32_t hash, uint32_t capacity, uint32_t bucket_size = kHashGridBucketSize);
+
+/// @brief Debug colour of a key: colorFromHash(hashGridHash(key)) * colorFromHash(jenkins32(L)),
+/// with colorFromHash(h) = ((h & 0x3FF) / 1023, ((h >> 11) & 0x7FF) / 2047,
+/// ((h >> 22) & 0x7FF) / 2047) in float32. L is the key's level. (The SDK's
+/// HashGridDebugColoredHash recomputes L from the unbiased position, which can differ from the
+/// key's level within ~1e-4 of a level boundary; see SPEC §H.8.)
+Float3 hashDebugColor(uint64_t key);
+
+// ------------------------------------------------------------------------------------------------
+// CPU hash table (SPEC §H.7)
+// ------------------------------------------------------------------------------------------------
+
+/// @brief Lock-free key table with SHaRC's bucket rule: linear probing inside a bounded,
+/// non-wrapping window of min(bucket_size, N) slots, 64-bit CAS from 0, key 0 = empty.
+///
+/// insert() and find() are thread-safe with respect to each other. Two threads inserting the same
+/// key always get the same slot. A full bucket makes insert() return std::nullopt and increments
+/// failedInserts(); a failed insert never yields an index (unlike SDK <= 1.6, which returned 0 or
+/// N - 1). Slot assignment depends on insertion order when keys share a bucket.
+/// Not copyable or movable-while-in-use; create with create().
+class HashGridTable {
+public:
+    HashGridTable() = default;
+
+    /// @brief Allocates `capacity` empty slots. Errors: kInvalidCapacity (capacity == 0),
+    /// kInvalidBucketSize (bucket_size == 0). On error `*out` is left unchanged.
+    static HashGridStatus create(uint32_t capacity, HashGridTable* out,
+                                 uint32_t bucket_size = kHashGridBucketSize);
+
+    /// @brief Inserts `key` (or finds it if present) and returns its slot.
+    /// @return the slot, or std::nullopt if the bucket is full or key == 0 (not a valid key) or
+    /// the table was never created. Every nullopt increments failedInserts().
+    std::optional<uint32_t> insert(uint64_t key);
+
+    /// @brief First slot in the key's bucket holding `key`, scanning the whole window (no early
+    /// exit on empty slots). std::nullopt if absent or key == 0.
+    std::optional<uint32_t> find(uint64_t key) const;
+
+    /// Key stored in `slot` (0 = empty). `slot` must be < capacity().
+    uint64_t keyAt(uint32_t slot) const { return keys_[slot].load(std::memory_order_acquire); }
+
+    /// @brief Writes 0 into `slot` (eviction). `slot` must be < capacity().
+    void clearSlot(uint32_t slot) { keys_[slot].store(kHashGridInvalidKey, std::memory_order_release); }
+
+    uint32_t capacity() const { return static_cast<uint32_t>(keys_.size()); }
+    uint32_t bucketSize() const { return bucket_size_; }
+    /// Number of insert() calls that returned std::nullopt.
+    uint64_t failedInserts() const { return failed_inserts_.load(std::memory_order_relaxed); }
+    /// Number of non-empty slots (O(N) scan; not synchronised with concurrent inserts).
+    uint32_t occupiedSlots() const;
+
+    HashGridTable(HashGridTable&& other) noexcept;
+    HashGridTable& operator=(HashGridTable&& other) noexcept;
+    HashGridTable(const HashGridTable&) = delete;
+    HashGridTable& operator=(const HashGridTable&) = delete;
+
+private:
+    std::vector<std::atomic<uint64_t>> keys_;
+    uint32_t bucket_size_ = kHashGridBucketSize;
+    std::atomic<uint64_t> failed_inserts_{0};
+};
+
+}  // namespace sharcbake

@@ -1,0 +1,287 @@
+// SPDX-License-Identifier: Apache-2.0
+// SHaRC hash grid: keys, hash, buckets and the CPU key table. Written from the algorithm
+// description (shared/reference/sharc_algorithm.md §2) and cache_format/SPEC.md "Hash grid";
+// every float operation below is one IEEE-754 binary32 operation in the order SPEC §H.3-§H.5
+// prescribes, because a different order or a fused multiply-add changes keys near cell and level
+// boundaries.
+#include "sharcbake/hash_grid.h"
+
+#include <cfloat>
+#include <cmath>
+#include <cstring>
+
+// Bit-exact keys need plain binary32 arithmetic: no value-changing optimisations, no excess
+// precision. (CMake also builds this file with -ffp-contract=off so a*b+c is never fused.)
+#if defined(__FAST_MATH__)
+#error "hash_grid.cpp must not be compiled with -ffast-math: SHaRC keys would not be bit-exact"
+#endif
+#if defined(FLT_EVAL_METHOD) && (FLT_EVAL_METHOD == 1 || FLT_EVAL_METHOD == 2)
+#error "hash_grid.cpp needs FLT_EVAL_METHOD == 0 (SSE float arithmetic, no x87 excess precision)"
+#endif
+
+namespace sharcbake {
+namespace {
+
+// Rounds a double to binary32 without undefined behaviour on overflow (a plain cast of a double
+// outside the float range is UB in C++). Values at or above the midpoint between FLT_MAX and
+// 2^128 round to infinity, exactly as IEEE round-to-nearest-even does.
+float roundToFloat(double value) {
+    constexpr double kOverflowThreshold = 0x1.ffffffp127;  // (FLT_MAX + 2^128) / 2
+    if (value >= kOverflowThreshold) return INFINITY;
+    if (value <= -kOverflowThreshold) return -INFINITY;
+    return static_cast<float>(value);  // NaN stays NaN
+}
+
+// log2 and exp2 in binary32, correctly rounded in practice: the double result is within 1 double
+// ulp, so rounding it to float gives the correctly rounded float except in vanishingly rare
+// double-rounding cases (SPEC §H.3, "transcendentals").
+float log2F32(float x) { return roundToFloat(std::log2(static_cast<double>(x))); }
+float exp2F32(float x) { return roundToFloat(std::exp2(static_cast<double>(x))); }
+
+// HLSL pow(x, y) is lowered by DXC to exp2(y * log2(x)); we use the same decomposition.
+float powF32(float x, float y) { return exp2F32(y * log2F32(x)); }
+
+// HLSL max/min are IEEE maxNum/minNum on the GPU: a NaN operand yields the other operand.
+float maxNum(float a, float b) { return std::isnan(a) ? b : (a >= b ? a : b); }
+float minNum(float a, float b) { return std::isnan(a) ? b : (a <= b ? a : b); }
+
+// float -> int32 like GPU hardware conversion: truncation with saturation, NaN -> 0. (In C++ an
+// out-of-range conversion is UB; the input here is already floor()ed.)
+int32_t saturateToInt32(float value) {
+    if (std::isnan(value)) return 0;
+    if (value <= -2147483648.0f) return INT32_MIN;
+    if (value >= 2147483648.0f) return INT32_MAX;
+    return static_cast<int32_t>(value);
+}
+
+// SDK debug palette: R from bits 0-9, G from bits 11-21, B from bits 22-31.
+Float3 colorFromHash(uint32_t hash) {
+    return Float3{static_cast<float>(hash & 0x3FFu) / 1023.0f,
+                  static_cast<float>((hash >> 11) & 0x7FFu) / 2047.0f,
+                  static_cast<float>((hash >> 22) & 0x7FFu) / 2047.0f};
+}
+
+int32_t signExtend17(uint32_t field) {
+    // (field ^ sign) - sign maps [0, 2^17) onto [-2^16, 2^16) without implementation-defined shifts.
+    const int32_t sign = 1 << (kHashGridPositionBits - 1);
+    return (static_cast<int32_t>(field & kHashGridPositionMask) ^ sign) - sign;
+}
+
+}  // namespace
+
+const char* toString(HashGridStatus status) {
+    switch (status) {
+        case HashGridStatus::kOk: return "ok";
+        case HashGridStatus::kInvalidCapacity: return "invalid capacity (must be >= 1)";
+        case HashGridStatus::kInvalidBucketSize: return "invalid bucket size (must be >= 1)";
+        case HashGridStatus::kInvalidLogBase: return "invalid logarithm base (must be finite and > 1)";
+        case HashGridStatus::kInvalidSceneScale: return "invalid scene scale (must be finite and > 0)";
+        case HashGridStatus::kInvalidLevelBias: return "invalid level bias (must be finite)";
+        case HashGridStatus::kInvalidCamera: return "invalid camera position (must be finite)";
+    }
+    return "unknown status";
+}
+
+HashGridStatus validateHashGridParameters(const HashGridParameters& params) {
+    if (params.capacity == 0) return HashGridStatus::kInvalidCapacity;
+    if (params.bucket_size == 0) return HashGridStatus::kInvalidBucketSize;
+    if (!std::isfinite(params.logarithm_base) || !(params.logarithm_base > 1.0f)) {
+        return HashGridStatus::kInvalidLogBase;
+    }
+    if (!std::isfinite(params.scene_scale) || !(params.scene_scale > 0.0f)) {
+        return HashGridStatus::kInvalidSceneScale;
+    }
+    if (!std::isfinite(params.level_bias)) return HashGridStatus::kInvalidLevelBias;
+    const Float3& c = params.camera_position;
+    if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) {
+        return HashGridStatus::kInvalidCamera;
+    }
+    return HashGridStatus::kOk;
+}
+
+uint32_t gridLevel(const Float3& position, const HashGridParameters& params) {
+    // 1) Squared distance, dot(c - p, c - p) evaluated as (dx*dx + dy*dy) + dz*dz, unfused.
+    const float dx = params.camera_position.x - position.x;
+    const float dy = params.camera_position.y - position.y;
+    const float dz = params.camera_position.z - position.z;
+    float distance2 = dx * dx;
+    distance2 = distance2 + dy * dy;
+    distance2 = distance2 + dz * dz;
+    // 2) Clamp (SDK 1.7+): never log(0); a NaN distance becomes 1e-10 (maxNum), i.e. level 1.
+    distance2 = maxNum(distance2, kHashGridMinDistance2);
+    // 3) 0.5 * log_b(d^2) + beta with log_b(x) = log2(x) / log2(b) (SPEC §H.3 on log vs log2).
+    const float log_ratio = log2F32(distance2) / log2F32(params.logarithm_base);
+    const float level = 0.5f * log_ratio + params.level_bias;
+    // 4) clamp to [1, 511] (NaN -> 1), then truncate.
+    const float clamped = minNum(maxNum(level, static_cast<float>(kHashGridLevelMin)),
+                                 static_cast<float>(kHashGridLevelMax));
+    return static_cast<uint32_t>(clamped);
+}
+
+float voxelSize(uint32_t level, const HashGridParameters& params) {
+    const float b = params.logarithm_base;
+    const float numerator = powF32(b, static_cast<float>(level));
+    const float denominator = params.scene_scale * powF32(b, params.level_bias);
+    return numerator / denominator;
+}
+
+Int3 quantisePosition(const Float3& position, float voxel_size) {
+    return Int3{saturateToInt32(std::floor(position.x / voxel_size)),
+                saturateToInt32(std::floor(position.y / voxel_size)),
+                saturateToInt32(std::floor(position.z / voxel_size))};
+}
+
+HashGridCell gridCell(const Float3& position, const HashGridParameters& params) {
+    const Float3 biased{position.x + kHashGridPositionBias, position.y + kHashGridPositionBias,
+                        position.z + kHashGridPositionBias};
+    const uint32_t level = gridLevel(biased, params);
+    const float size = voxelSize(level, params);
+    return HashGridCell{quantisePosition(biased, size), level, 0u, false};
+}
+
+uint32_t normalBits(const Float3& normal) {
+    // "(n + bias) >= 0 ? 0 : bit" - written this way so that NaN sets the bit, as in the SDK.
+    uint32_t bits = 0;
+    if (!(normal.x + kHashGridNormalBias >= 0.0f)) bits |= 1u;
+    if (!(normal.y + kHashGridNormalBias >= 0.0f)) bits |= 2u;
+    if (!(normal.z + kHashGridNormalBias >= 0.0f)) bits |= 4u;
+    return bits;
+}
+
+uint64_t packHashGridKey(const Int3& grid, uint32_t level, uint32_t normal_bits, bool user_bit) {
+    auto field = [](int32_t v) {
+        return static_cast<uint64_t>(static_cast<uint32_t>(v) & kHashGridPositionMask);
+    };
+    return field(grid.x) | (field(grid.y) << kHashGridPositionBits) |
+           (field(grid.z) << (2 * kHashGridPositionBits)) |
+           (static_cast<uint64_t>(level & kHashGridLevelMask) << kHashGridLevelOffset) |
+           (static_cast<uint64_t>(normal_bits & kHashGridNormalMask) << kHashGridNormalOffset) |
+           (static_cast<uint64_t>(user_bit ? 1u : 0u) << kHashGridUserBit);
+}
+
+uint64_t hashGridKey(const Float3& position, const Float3& normal,
+                     const HashGridParameters& params) {
+    const HashGridCell cell = gridCell(position, params);
+    return packHashGridKey(cell.grid, cell.level, normalBits(normal), false);
+}
+
+HashGridCell decodeHashGridKey(uint64_t key) {
+    HashGridCell cell;
+    cell.grid.x = signExtend17(static_cast<uint32_t>(key));
+    cell.grid.y = signExtend17(static_cast<uint32_t>(key >> kHashGridPositionBits));
+    cell.grid.z = signExtend17(static_cast<uint32_t>(key >> (2 * kHashGridPositionBits)));
+    cell.level = static_cast<uint32_t>(key >> kHashGridLevelOffset) & kHashGridLevelMask;
+    cell.normal_bits = static_cast<uint32_t>(key >> kHashGridNormalOffset) & kHashGridNormalMask;
+    cell.user_bit = ((key >> kHashGridUserBit) & 1u) != 0;
+    return cell;
+}
+
+Float3 voxelCenter(uint64_t key, const HashGridParameters& params) {
+    const HashGridCell cell = decodeHashGridKey(key);
+    const float size = voxelSize(cell.level, params);
+    // |g| <= 65536, so the int -> float conversion is exact.
+    return Float3{(static_cast<float>(cell.grid.x) + 0.5f) * size,
+                  (static_cast<float>(cell.grid.y) + 0.5f) * size,
+                  (static_cast<float>(cell.grid.z) + 0.5f) * size};
+}
+
+uint32_t jenkins32(uint32_t a) {
+    // burtleburtle.net integer hash; uint32_t arithmetic wraps as the shader's uint does.
+    a = (a + 0x7ED55D16u) + (a << 12);
+    a = (a ^ 0xC761C23Cu) ^ (a >> 19);
+    a = (a + 0x165667B1u) + (a << 5);
+    a = (a + 0xD3A2646Cu) ^ (a << 9);
+    a = (a + 0xFD7046C5u) + (a << 3);
+    a = (a ^ 0xB55A4F09u) ^ (a >> 16);
+    return a;
+}
+
+uint32_t hashGridHash(uint64_t key) {
+    return jenkins32(static_cast<uint32_t>(key)) ^ jenkins32(static_cast<uint32_t>(key >> 32));
+}
+
+uint32_t bucketProbeCount(uint32_t capacity, uint32_t bucket_size) {
+    const uint32_t size = bucket_size == 0 ? 1u : bucket_size;
+    return capacity < size ? capacity : size;
+}
+
+uint32_t bucketBase(uint32_t hash, uint32_t capacity, uint32_t bucket_size) {
+    if (capacity == 0) return kHashGridInvalidIndex;
+    const uint32_t slot = hash % capacity;
+    const uint32_t last_base = capacity - bucketProbeCount(capacity, bucket_size);  // no underflow
+    return slot < last_base ? slot : last_base;
+}
+
+Float3 hashDebugColor(uint64_t key) {
+    const Float3 a = colorFromHash(hashGridHash(key));
+    const Float3 b = colorFromHash(jenkins32(decodeHashGridKey(key).level));
+    return Float3{a.x * b.x, a.y * b.y, a.z * b.z};
+}
+
+// ------------------------------------------------------------------------------------------------
+// HashGridTable
+// ------------------------------------------------------------------------------------------------
+
+HashGridStatus HashGridTable::create(uint32_t capacity, HashGridTable* out, uint32_t bucket_size) {
+    if (capacity == 0) return HashGridStatus::kInvalidCapacity;
+    if (bucket_size == 0) return HashGridStatus::kInvalidBucketSize;
+    HashGridTable table;
+    table.keys_ = std::vector<std::atomic<uint64_t>>(capacity);
+    for (auto& slot : table.keys_) slot.store(kHashGridInvalidKey, std::memory_order_relaxed);
+    table.bucket_size_ = bucket_size;
+    *out = std::move(table);
+    return HashGridStatus::kOk;
+}
+
+HashGridTable::HashGridTable(HashGridTable&& other) noexcept
+    : keys_(std::move(other.keys_)),
+      bucket_size_(other.bucket_size_),
+      failed_inserts_(other.failed_inserts_.load(std::memory_order_relaxed)) {}
+
+HashGridTable& HashGridTable::operator=(HashGridTable&& other) noexcept {
+    keys_ = std::move(other.keys_);
+    bucket_size_ = other.bucket_size_;
+    failed_inserts_.store(other.failed_inserts_.load(std::memory_order_relaxed),
+                          std::memory_order_relaxed);
+    return *this;
+}
+
+std::optional<uint32_t> HashGridTable::insert(uint64_t key) {
+    const uint32_t n = capacity();
+    if (key != kHashGridInvalidKey && n != 0) {
+        const uint32_t base = bucketBase(hashGridHash(key), n, bucket_size_);
+        const uint32_t probes = bucketProbeCount(n, bucket_size_);
+        for (uint32_t k = 0; k < probes; ++k) {
+            uint64_t expected = kHashGridInvalidKey;
+            // Claim an empty slot, or stop at our own key (possibly written by a racing thread).
+            if (keys_[base + k].compare_exchange_strong(expected, key, std::memory_order_acq_rel,
+                                                        std::memory_order_acquire) ||
+                expected == key) {
+                return base + k;
+            }
+        }
+    }
+    failed_inserts_.fetch_add(1, std::memory_order_relaxed);
+    return std::nullopt;
+}
+
+std::optional<uint32_t> HashGridTable::find(uint64_t key) const {
+    const uint32_t n = capacity();
+    if (key == kHashGridInvalidKey || n == 0) return std::nullopt;
+    const uint32_t base = bucketBase(hashGridHash(key), n, bucket_size_);
+    const uint32_t probes = bucketProbeCount(n, bucket_size_);
+    for (uint32_t k = 0; k < probes; ++k) {
+        if (keys_[base + k].load(std::memory_order_acquire) == key) return base + k;
+    }
+    return std::nullopt;
+}
+
+uint32_t HashGridTable::occupiedSlots() const {
+    uint32_t count = 0;
+    for (const auto& slot : keys_) {
+        if (slot.load(std::memory_order_relaxed) != kHashGridInvalidKey) ++count;
+    }
+    return count;
+}
+
+}  // namespace sharcbake
