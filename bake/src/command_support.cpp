@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "command_support.h"
+
+#include "sharcbake/scene_loader.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+namespace sharcbake {
+
+const char* const kExitCodeHelp =
+    "Exit status:\n"
+    "  0    success\n"
+    "  1    usage error (bad command line)\n"
+    "  2    I/O error (a file could not be read or written)\n"
+    "  3    invalid input (a scene or cache file is malformed)\n"
+    "  4    runtime failure\n"
+    "  130  interrupted (SIGINT)\n";
+
+glm::vec3 parseVec3(const std::string& text, const std::string& option_name) {
+    std::istringstream in(text);
+    glm::vec3 v;
+    char comma1 = 0, comma2 = 0;
+    if (!(in >> v.x >> comma1 >> v.y >> comma2 >> v.z) || comma1 != ',' || comma2 != ',' ||
+        !(in >> std::ws).eof() || !std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+        throw CommandError(kExitUsage, option_name + ": expected three finite numbers \"x,y,z\", got \"" +
+                                           text + "\"");
+    }
+    return v;
+}
+
+void addSkyOptions(CLI::App& command, SkyOptions& options) {
+    command.add_option("--sky", options.uniform,
+                       "Uniform sky radiance \"r,g,b\" (linear), replacing the scene's sky "
+                       "(scenes may set one in scene extras: sharcbake.sky_radiance)");
+    command.add_option("--sky-exr", options.exr_path,
+                       "Equirectangular EXR environment map for the sky (+Y up, Blender's "
+                       "orientation)")
+        ->check(CLI::ExistingFile);
+    command.add_option("--sky-scale", options.scale, "Multiplier for the sky map")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+}
+
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(path, error)) {
+        throw CommandError(kExitIo, path + ": no such file");
+    }
+    Scene scene;
+    try {
+        scene = loadGltf(path);
+        if (!sky.exr_path.empty()) {
+            scene.sky.map = loadEquirectExr(sky.exr_path);
+            scene.sky.scale = sky.scale;
+        }
+    } catch (const SceneLoadError& e) {
+        throw CommandError(kExitInvalidInput, e.what());
+    }
+    if (!sky.uniform.empty()) {
+        scene.sky.uniform = parseVec3(sky.uniform, "--sky");
+        scene.sky.map.reset();
+    }
+    if (!quiet) describeScene(scene);
+    return scene;
+}
+
+void describeScene(const Scene& scene) {
+    std::printf("Scene %s: %llu triangles, %zu materials, %zu textures, %zu punctual lights, "
+                "%zu cameras, sky %s\n",
+                scene.source_path.c_str(), (unsigned long long)scene.triangles.size(),
+                scene.materials.size(), scene.textures.size(), scene.lights.size(),
+                scene.cameras.size(),
+                scene.sky.map ? "map" : (scene.sky.isBlack() ? "black" : "uniform"));
+    if (scene.stats.degenerate_triangles_dropped > 0 || scene.stats.primitives_skipped > 0) {
+        std::printf("  dropped %llu degenerate triangles, skipped %llu non-triangle primitives\n",
+                    (unsigned long long)scene.stats.degenerate_triangles_dropped,
+                    (unsigned long long)scene.stats.primitives_skipped);
+    }
+    for (const std::string& warning : scene.stats.warnings) {
+        std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    }
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file command_support.h
+/// @brief What every sharcbake subcommand shares: documented exit codes, the error type that
+/// carries one, parsing of vector arguments, and scene loading with the sky options.
+#pragma once
+
+#include "sharcbake/scene.h"
+
+#include <CLI/CLI.hpp>
+#include <glm/glm.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace sharcbake {
+
+/// Exit codes, documented in `sharcbake --help` and the README.
+enum ExitCode : int {
+    kExitOk = 0,
+    kExitUsage = 1,         ///< bad command line
+    kExitIo = 2,            ///< a file could not be read or written
+    kExitInvalidInput = 3,  ///< a scene or cache file is malformed
+    kExitRuntime = 4,       ///< the work itself failed
+    kExitInterrupted = 130  ///< stopped by SIGINT (128 + 2, as shells report it)
+};
+
+/// The text appended to the top-level --help.
+extern const char* const kExitCodeHelp;
+
+/// An error that ends the command with a given exit code; main() prints what() once.
+class CommandError : public std::runtime_error {
+public:
+    CommandError(ExitCode code, const std::string& message)
+        : std::runtime_error(message), code_(code) {}
+    ExitCode code() const { return code_; }
+
+private:
+    ExitCode code_;
+};
+
+/// Parses "x,y,z" into a vector; throws CommandError(kExitUsage) naming the option.
+glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
+
+/// Options that choose the sky, shared by render and bake.
+struct SkyOptions {
+    std::string uniform;  ///< "r,g,b" or empty
+    std::string exr_path;
+    float scale = 1.0f;
+};
+void addSkyOptions(CLI::App& command, SkyOptions& options);
+
+/// Loads the scene (kExitIo if the file is missing, kExitInvalidInput if it is malformed) and
+/// applies the sky options over what the scene file says.
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet);
+
+/// One line about the loaded scene (triangles, materials, lights, what was dropped), and the
+/// loader's warnings, on stdout.
+void describeScene(const Scene& scene);
+
+}  // namespace sharcbake

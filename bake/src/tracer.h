@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file tracer.h
+/// @brief Ray casting against a Scene with Embree 3: closest hit and occlusion (shadow) rays.
+#pragma once
+
+#include "sharcbake/scene.h"
+
+#include <embree3/rtcore.h>
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <limits>
+
+namespace sharcbake {
+
+struct Ray {
+    glm::vec3 origin;
+    glm::vec3 direction;  ///< unit length
+    float t_max = std::numeric_limits<float>::infinity();
+};
+
+/// What the closest-hit query returns; the surface itself is reconstructed by the caller from
+/// the triangle and barycentrics (see surface.h).
+struct RayHit {
+    uint32_t triangle = 0;
+    float t = 0.0f;
+    float u = 0.0f;  ///< barycentric of vertex 1
+    float v = 0.0f;  ///< barycentric of vertex 2
+};
+
+/// Owns an Embree device and a committed scene built over Scene's triangles. Thread-safe for
+/// queries after construction. Holds a reference to the Scene, which must outlive it.
+class Tracer {
+public:
+    explicit Tracer(const Scene& scene);
+    ~Tracer();
+    Tracer(const Tracer&) = delete;
+    Tracer& operator=(const Tracer&) = delete;
+
+    /// Closest hit along the ray within (0, t_max). Returns false on a miss.
+    bool intersect(const Ray& ray, RayHit& hit) const;
+    /// True if anything blocks the segment (0, t_max).
+    bool occluded(const Ray& ray) const;
+
+    const Scene& scene() const { return scene_; }
+
+private:
+    const Scene& scene_;
+    RTCDevice device_ = nullptr;
+    RTCScene rtc_scene_ = nullptr;
+};
+
+/// Moves a ray origin off a surface so the new ray does not re-hit it, using an offset that
+/// scales with the magnitude of the position (integer ULP steps, after Waechter and Binder,
+/// "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems 2019).
+/// @param normal the geometric normal on the side the ray leaves from.
+glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal);
+
+}  // namespace sharcbake
