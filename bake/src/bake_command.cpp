@@ -1,0 +1,340 @@
+// SPDX-License-Identifier: Apache-2.0
+// `sharcbake bake`: the SHaRC bake from a roaming virtual camera into a .sharc cache file.
+#include "baker.h"
+#include "camera_path.h"
+#include "command_support.h"
+#include "commands.h"
+#include "coverage.h"
+#include "progress.h"
+#include "sharcbake/cache_file.h"
+#include "tracer.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+namespace sharcbake {
+namespace {
+
+struct BakeOptions {
+    std::string scene_path;
+    std::string output_path;
+    uint32_t iterations = 512;
+    double time_budget = 0.0;
+    unsigned threads = 0;
+    uint32_t seed = 0;
+    float scene_scale = kHashGridDefaultSceneScale;
+    float log_base = kHashGridDefaultLogarithmBase;
+    float level_bias = kHashGridDefaultLevelBias;
+    uint32_t capacity = 1u << 20;
+    uint32_t update_stride = 5;
+    std::string resolution = "1280x720";
+    uint32_t max_bounces = 8;
+    std::string history = "ramp:8";
+    std::string camera_source = "explore";
+    std::string camera_path;
+    uint32_t explore_points = 64;
+    uint32_t iterations_per_leg = 8;
+    uint32_t coverage_points = 20000;
+    SkyOptions sky;
+    std::string stats_json;
+    bool quiet = false;
+};
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void onInterrupt(int) { g_interrupted.store(true); }
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void parseSize(const std::string& text, const char* option, int& width, int& height) {
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> width >> x >> height) || x != 'x' || width <= 0 || height <= 0 || !(in >> std::ws).eof() ||
+        int64_t(width) * height > (int64_t(1) << 26)) {
+        throw CommandError(kExitUsage, std::string(option) + ": expected WxH with positive integers, got \"" + text + "\"");
+    }
+}
+
+/// The roaming camera the options ask for.
+CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer& tracer, std::string& description) {
+    const float diagonal = glm::length(scene.bounds_max - scene.bounds_min);
+    if (!o.camera_path.empty()) {
+        std::vector<CameraPose> poses;
+        try {
+            poses = readCameraPathFile(o.camera_path);
+        } catch (const CameraPathError& e) {
+            throw CommandError(kExitInvalidInput, e.what());
+        }
+        description = "path file " + o.camera_path + " (" + std::to_string(poses.size()) + " waypoints)";
+        return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
+    }
+    if (o.camera_source == "gltf") {
+        if (scene.cameras.empty()) {
+            throw CommandError(kExitInvalidInput, o.scene_path + ": --camera-source gltf, but the scene has no camera");
+        }
+        std::vector<CameraPose> poses;
+        for (const Camera& c : scene.cameras) poses.push_back(CameraPose{c.position, c.forward, c.up, c.yfov});
+        description = "glTF cameras (" + std::to_string(poses.size()) + " waypoints)";
+        return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
+    }
+    std::vector<glm::vec3> starts;
+    for (const Camera& c : scene.cameras) starts.push_back(c.position);
+    if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
+    const ExplorationResult explored = exploreFreeSpace(tracer, starts, o.explore_points, o.seed);
+    if (explored.points.empty()) {
+        throw CommandError(kExitInvalidInput,
+                           o.scene_path + ": found no free space to place the camera in (tried " +
+                               std::to_string(explored.candidates) +
+                               " points); give a --camera-path or --camera-source gltf");
+    }
+    std::vector<CameraPose> poses;
+    for (const glm::vec3& p : explored.points) {
+        CameraPose pose;
+        pose.position = p;
+        poses.push_back(pose);
+    }
+    description = "exploration (" + std::to_string(poses.size()) + " reachable free-space points of " +
+                  std::to_string(explored.candidates) + " tried)";
+    return CameraPath(std::move(poses), true, 1, 0.0f, o.seed);
+}
+
+CacheData toCacheData(const SharcCache& cache) {
+    CacheData data;
+    const SharcSettings& s = cache.settings();
+    data.logarithm_base = s.grid.logarithm_base;
+    data.scene_scale = s.grid.scene_scale;
+    data.level_bias = s.grid.level_bias;
+    data.bucket_size = s.grid.bucket_size;
+    data.bake_capacity = cache.capacity();
+    const HashGridTable& table = cache.table();
+    for (uint32_t slot = 0; slot < table.capacity(); ++slot) {
+        const uint64_t key = table.keyAt(slot);
+        const ResolvedEntry& r = cache.resolved()[slot];
+        if (key == kHashGridInvalidKey || !(r.weight > 0.0)) continue;
+        CacheVoxel v;
+        v.key = key;
+        v.radiance[0] = r.mean.x;
+        v.radiance[1] = r.mean.y;
+        v.radiance[2] = r.mean.z;
+        v.sample_weight = float(r.weight);
+        data.voxels.push_back(v);
+    }
+    sortVoxels(data.voxels);
+    return data;
+}
+
+void runBake(const BakeOptions& o) {
+    const auto start = std::chrono::steady_clock::now();
+    const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
+    tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+
+    BakeSettings settings;
+    parseSize(o.resolution, "--resolution", settings.width, settings.height);
+    settings.update_stride = o.update_stride;
+    settings.seed = o.seed;
+    settings.path.max_bounces = o.max_bounces;
+    settings.sharc.capacity = o.capacity;
+    settings.sharc.grid.scene_scale = o.scene_scale;
+    settings.sharc.grid.logarithm_base = o.log_base;
+    settings.sharc.grid.level_bias = o.level_bias;
+    settings.sharc.grid.capacity = o.capacity;
+    if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
+        throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
+                                           o.history + "\"");
+    }
+    const HashGridStatus grid_status = validateHashGridParameters(settings.sharc.grid);
+    if (grid_status != HashGridStatus::kOk) {
+        throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(grid_status));
+    }
+
+    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
+    if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
+    const auto setup_start = std::chrono::steady_clock::now();
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);
+    if (!o.quiet && !lights.hasLights()) {
+        std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
+                             "the cache will be black\n");
+    }
+    std::string camera_description;
+    const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
+    const double max_radiance = estimateMaxRadiance(scene);
+    Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
+    const double setup_seconds = secondsSince(setup_start);
+    if (!o.quiet) {
+        std::printf("Camera: %s\n", camera_description.c_str());
+        std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
+                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, o.capacity,
+                    settings.sharc.history.describe().c_str(), threads);
+        std::fflush(stdout);
+    }
+
+    g_interrupted = false;
+    auto previous_handler = std::signal(SIGINT, onInterrupt);
+    const auto bake_start = std::chrono::steady_clock::now();
+    const char* stop_reason = "iterations";
+    {
+        Progress progress("Baking", o.iterations, !o.quiet && Progress::isTerminal());
+        while (baker.iterationsDone() < o.iterations) {
+            if (g_interrupted) {
+                stop_reason = "interrupted";
+                break;
+            }
+            if (o.time_budget > 0.0 && secondsSince(bake_start) >= o.time_budget) {
+                stop_reason = "time budget";
+                break;
+            }
+            baker.runIteration();
+            progress.advance();
+        }
+        progress.finish();
+    }
+    std::signal(SIGINT, previous_handler);
+    const double bake_seconds = secondsSince(bake_start);
+
+    const auto finish_start = std::chrono::steady_clock::now();
+    const SharcCache& cache = baker.cache();
+    const CoverageReport coverage = measureCoverage(scene, cache, o.coverage_points);
+    const std::vector<uint32_t> levels = levelsPresent(cache);
+    CacheData data = toCacheData(cache);
+    data.metadata = {
+        {"writer", "sharcbake " SHARCBAKE_VERSION},
+        {"scene", o.scene_path},
+        {"iterations", std::to_string(baker.iterationsDone())},
+        {"seed", std::to_string(o.seed)},
+        {"history", settings.sharc.history.describe()},
+        {"resolution", o.resolution},
+        {"update_stride", std::to_string(o.update_stride)},
+        {"max_bounces", std::to_string(o.max_bounces)},
+        {"camera", camera_description},
+        {"radiance_scale", std::to_string(cache.radianceScale())},
+        {"bake_seconds", std::to_string(bake_seconds)},
+    };
+    std::string message;
+    const CacheFileStatus status = writeCacheFile(o.output_path, data, &message);
+    if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
+    const double finish_seconds = secondsSince(finish_start);
+
+    const UpdateCounters& c = baker.counters();
+    const NumericsCounters& n = cache.numerics();
+    const StageSeconds& stage = baker.seconds();
+    const double rays_per_second = double(c.segments + c.shadow_rays) / std::max(stage.update, 1e-9);
+    const uint64_t live = data.voxels.size();
+    const double occupancy = double(cache.liveEntries()) / double(cache.capacity());
+    std::string level_list;
+    for (uint32_t l : levels) level_list += (level_list.empty() ? "" : ",") + std::to_string(l);
+
+    if (!o.quiet) {
+        std::printf("Baked %u iterations in %.2f s (stopped by %s)\n", baker.iterationsDone(), bake_seconds, stop_reason);
+        std::printf("  time: update %.2f s, commit %.2f s, resolve %.2f s; setup %.2f s, coverage+write %.2f s\n",
+                    stage.update, stage.commit, stage.resolve, setup_seconds, finish_seconds);
+        std::printf("  paths %llu, segments %llu, shadow rays %llu: %.3g rays/s, %.3g segments/s\n",
+                    (unsigned long long)c.paths, (unsigned long long)c.segments, (unsigned long long)c.shadow_rays,
+                    rays_per_second, double(c.segments) / std::max(stage.update, 1e-9));
+        std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n", (unsigned long long)live,
+                    100.0 * occupancy, cache.capacity(), level_list.c_str());
+        std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
+                    100.0 * coverage.unreached_area, coverage.points);
+        std::printf("  numerics: failed inserts %llu, non-finite dropped %llu, clamped deposits %llu, "
+                    "saturated sums %llu, negative clamped %llu\n",
+                    (unsigned long long)n.failed_inserts, (unsigned long long)(n.non_finite_deposits + c.non_finite),
+                    (unsigned long long)n.clamped_deposits, (unsigned long long)n.saturated_sums,
+                    (unsigned long long)n.negative_deposits);
+        std::printf("Wrote %s (%llu voxels)\n", o.output_path.c_str(), (unsigned long long)live);
+    }
+    if (!o.stats_json.empty()) {
+        std::ofstream json(o.stats_json);
+        json << "{\n"
+             << "  \"iterations\": " << baker.iterationsDone() << ",\n"
+             << "  \"stop_reason\": \"" << stop_reason << "\",\n"
+             << "  \"threads\": " << threads << ",\n"
+             << "  \"seconds\": {\"total\": " << secondsSince(start) << ", \"setup\": " << setup_seconds
+             << ", \"bake\": " << bake_seconds << ", \"update\": " << stage.update << ", \"commit\": " << stage.commit
+             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds << "},\n"
+             << "  \"paths\": " << c.paths << ",\n  \"segments\": " << c.segments << ",\n"
+             << "  \"shadow_rays\": " << c.shadow_rays << ",\n  \"rays_per_second\": " << rays_per_second << ",\n"
+             << "  \"resampled_paths\": " << c.resampled << ",\n"
+             << "  \"live_voxels\": " << live << ",\n  \"capacity\": " << cache.capacity() << ",\n"
+             << "  \"occupancy\": " << occupancy << ",\n  \"levels\": [" << level_list << "],\n"
+             << "  \"coverage\": {\"points\": " << coverage.points << ", \"unreached_area_fraction\": "
+             << coverage.unreached_area << "},\n"
+             << "  \"numerics\": {\"deposits\": " << n.deposits << ", \"failed_inserts\": " << n.failed_inserts
+             << ", \"failed_insert_energy\": " << (n.failed_insert_energy.x + n.failed_insert_energy.y + n.failed_insert_energy.z)
+             << ", \"non_finite_dropped\": " << (n.non_finite_deposits + c.non_finite)
+             << ", \"clamped_deposits\": " << n.clamped_deposits
+             << ", \"clamped_energy\": " << (n.clamped_energy.x + n.clamped_energy.y + n.clamped_energy.z)
+             << ", \"saturated_sums\": " << n.saturated_sums << ", \"negative_clamped\": " << n.negative_deposits
+             << ", \"resample_emission_clamped\": " << c.clamped_propagation
+             << ", \"radiance_scale\": " << cache.radianceScale() << "}\n"
+             << "}\n";
+        if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
+    }
+    if (g_interrupted) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
+}
+
+}  // namespace
+
+void registerBakeCommand(CLI::App& app) {
+    auto o = std::make_shared<BakeOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "bake",
+        "Bake a SHaRC radiance cache.\n\n"
+        "A virtual camera roams the scene; every iteration traces sparse update paths from it\n"
+        "(one random pixel per --update-stride block), deposits each path vertex's radiance into\n"
+        "its hash-grid voxel, and resolves the voxels. The result is written as a .sharc file.\n"
+        "Same scene, options and --seed give a byte-identical cache for any --threads.\n\n"
+        "Example:\n"
+        "  sharcbake bake scenes/cornell_box/cornell_box.gltf -o out/cornell_box.sharc --iterations 512");
+    cmd->add_option("scene", o->scene_path, "glTF 2.0 scene (.gltf or .glb)")->required();
+    cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc)")->required();
+    cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
+    cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
+        ->capture_default_str()->check(CLI::NonNegativeNumber);
+    cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+    cmd->add_option("--scene-scale", o->scene_scale,
+                    "SHaRC scene scale S: voxels are about distance/S wide (larger = finer)")->capture_default_str();
+    cmd->add_option("--log-base", o->log_base, "SHaRC level logarithm base b (> 1)")->capture_default_str();
+    cmd->add_option("--level-bias", o->level_bias, "SHaRC level bias (positive = finer levels near the camera)")
+        ->capture_default_str();
+    cmd->add_option("--capacity", o->capacity, "Hash table slots (>= 16; a power of two is SDK-friendly)")
+        ->capture_default_str()->check(CLI::Range(16u, 1u << 28));
+    cmd->add_option("--update-stride", o->update_stride, "One update path per NxN pixel block")
+        ->capture_default_str()->check(CLI::Range(1u, 64u));
+    cmd->add_option("--resolution", o->resolution, "Virtual camera image size WxH")->capture_default_str();
+    cmd->add_option("--max-bounces", o->max_bounces, "Surface interactions per update path")
+        ->capture_default_str()->check(CLI::Range(1u, 1024u));
+    cmd->add_option("--history", o->history,
+                    "How voxels forget early (biased) iterations: ramp:P (iteration k weighs k^P), "
+                    "window:A (SHaRC's exponential window of A iterations) or average")
+        ->capture_default_str();
+    cmd->add_option("--camera-source", o->camera_source,
+                    "Where the roaming camera goes: explore (free space reachable from the glTF cameras) "
+                    "or gltf (along the glTF cameras)")
+        ->capture_default_str()->check(CLI::IsMember({"explore", "gltf"}));
+    cmd->add_option("--camera-path", o->camera_path,
+                    "Camera path file (overrides --camera-source): one waypoint per line, "
+                    "\"px py pz tx ty tz [fov_degrees]\", '#' comments");
+    cmd->add_option("--explore-points", o->explore_points, "Free-space points the exploring camera visits")
+        ->capture_default_str()->check(CLI::Range(1u, 4096u));
+    cmd->add_option("--iterations-per-leg", o->iterations_per_leg,
+                    "Iterations between consecutive waypoints (gltf / path file)")->capture_default_str()->check(CLI::Range(1u, 1u << 20));
+    cmd->add_option("--coverage-points", o->coverage_points, "Surface points tested for the coverage report")
+        ->capture_default_str();
+    addSkyOptions(*cmd, o->sky);
+    cmd->add_option("--stats-json", o->stats_json, "Write the bake statistics as JSON");
+    cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
+    cmd->callback([o] { runBake(*o); });
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,125 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "baker.h"
+
+#include "render.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+
+namespace sharcbake {
+namespace {
+
+/// Paths per chunk: each chunk is traced by one task and owns its deposit list, so the commit
+/// can replay all deposits in path order whatever thread traced them.
+constexpr uint32_t kPathsPerChunk = 64;
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Camera cameraFromPose(const CameraPose& pose) {
+    Camera camera;
+    camera.position = pose.position;
+    camera.forward = pose.forward;
+    camera.up = pose.up;
+    camera.yfov = pose.yfov;
+    return camera;
+}
+
+}  // namespace
+
+double estimateMaxRadiance(const Scene& scene) {
+    double max_radiance = 0.0;
+    for (const Material& m : scene.materials) {
+        if (m.isEmissive()) max_radiance = std::max(max_radiance, double(maxComponent(m.emissive) * m.emissive_strength));
+    }
+    max_radiance = std::max(max_radiance, double(maxComponent(scene.sky.uniform)));
+    if (scene.sky.map) {
+        for (const glm::vec4& t : scene.sky.map->texels) {
+            max_radiance = std::max(max_radiance, double(maxComponent(glm::vec3(t)) * scene.sky.scale));
+        }
+    }
+    for (const PunctualLight& light : scene.lights) {
+        const double peak = double(maxComponent(light.intensity));
+        max_radiance = std::max(max_radiance, light.type == LightType::Directional ? peak / kPi : peak * 1e4 / kPi);
+    }
+    return max_radiance;
+}
+
+Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath& camera_path,
+             const BakeSettings& settings, double radiance_scale)
+    : tracer_(tracer),
+      lights_(lights),
+      camera_path_(camera_path),
+      settings_(settings),
+      cache_(settings.sharc, radiance_scale),
+      update_(tracer, lights, cache_, settings.path) {
+    const uint32_t stride = std::max(1u, settings_.update_stride);
+    blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
+    blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
+    chunk_deposits_.resize((pathsPerIteration() + kPathsPerChunk - 1) / kPathsPerChunk);
+}
+
+HashGridParameters Baker::gridForIteration(uint32_t iteration) const {
+    HashGridParameters grid = settings_.sharc.grid;
+    const glm::vec3 c = camera_path_.poseAt(iteration).position;
+    grid.camera_position = Float3{c.x, c.y, c.z};
+    return grid;
+}
+
+void Baker::runIteration() {
+    const uint32_t iteration = iteration_;
+    const CameraPose pose = camera_path_.poseAt(iteration);
+    const CameraRays camera(cameraFromPose(pose), settings_.width, settings_.height);
+    HashGridParameters grid = settings_.sharc.grid;
+    grid.camera_position = Float3{pose.position.x, pose.position.y, pose.position.z};
+    const uint32_t stride = std::max(1u, settings_.update_stride);
+    const uint32_t paths = pathsPerIteration();
+
+    // Update: every chunk of paths traced by one task into its own deposit list.
+    auto start = std::chrono::steady_clock::now();
+    tbb::enumerable_thread_specific<UpdateCounters> thread_counters;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk_deposits_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        UpdateCounters& counters = thread_counters.local();
+        for (size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
+            std::vector<Deposit>& deposits = chunk_deposits_[chunk];
+            deposits.clear();
+            const uint32_t first = uint32_t(chunk) * kPathsPerChunk;
+            const uint32_t last = std::min(paths, first + kPathsPerChunk);
+            for (uint32_t block = first; block < last; ++block) {
+                // One random pixel (and sub-pixel position) per block, new every iteration.
+                PixelSampler sampler(settings_.seed, block, iteration);
+                const glm::vec2 u = sampler.next2D() * float(stride);
+                const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
+                const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
+                const Ray ray = camera.generate(x, y, glm::fract(u));
+                update_.trace(ray, sampler, grid, deposits, counters);
+            }
+        }
+    });
+    for (const UpdateCounters& c : thread_counters) {
+        counters_.paths += c.paths;
+        counters_.segments += c.segments;
+        counters_.shadow_rays += c.shadow_rays;
+        counters_.resampled += c.resampled;
+        counters_.sky_misses += c.sky_misses;
+        counters_.non_finite += c.non_finite;
+        counters_.clamped_propagation += c.clamped_propagation;
+    }
+    seconds_.update += secondsSince(start);
+
+    // Commit in chunk order: the same slot assignment and sums on every run.
+    start = std::chrono::steady_clock::now();
+    for (const std::vector<Deposit>& deposits : chunk_deposits_) cache_.commit(deposits);
+    seconds_.commit += secondsSince(start);
+
+    start = std::chrono::steady_clock::now();
+    cache_.resolve(iteration);
+    seconds_.resolve += secondsSince(start);
+    ++iteration_;
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file baker.h
+/// @brief The bake loop: per iteration, place the virtual camera, trace the sparse update
+/// paths in parallel, commit their deposits in a fixed order, resolve.
+#pragma once
+
+#include "camera_path.h"
+#include "lights.h"
+#include "sharc_cache.h"
+#include "sharc_update.h"
+#include "tracer.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace sharcbake {
+
+struct BakeSettings {
+    int width = 1280;  ///< virtual camera image size; update paths start in 1 of stride^2 pixels
+    int height = 720;
+    uint32_t update_stride = 5;  ///< one random pixel per stride x stride block, per iteration
+    uint32_t seed = 0;
+    UpdatePathSettings path;
+    SharcSettings sharc;
+};
+
+/// Seconds spent per stage, summed over iterations.
+struct StageSeconds {
+    double update = 0.0;   ///< tracing update paths (parallel)
+    double commit = 0.0;   ///< inserting keys and adding deposits (serial, fixed order)
+    double resolve = 0.0;  ///< folding accumulation into the resolved entries (parallel)
+};
+
+class Baker {
+public:
+    Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath& camera_path,
+          const BakeSettings& settings, double radiance_scale);
+
+    /// Runs one update + resolve iteration.
+    void runIteration();
+
+    uint32_t iterationsDone() const { return iteration_; }
+    const SharcCache& cache() const { return cache_; }
+    const UpdateCounters& counters() const { return counters_; }
+    const StageSeconds& seconds() const { return seconds_; }
+    uint32_t pathsPerIteration() const { return blocks_x_ * blocks_y_; }
+    const BakeSettings& settings() const { return settings_; }
+
+    /// The grid parameters with the camera position of `iteration`.
+    HashGridParameters gridForIteration(uint32_t iteration) const;
+
+private:
+    const Tracer& tracer_;
+    const LightSampler& lights_;
+    const CameraPath& camera_path_;
+    BakeSettings settings_;
+    SharcCache cache_;
+    UpdatePathTracer update_;
+    uint32_t blocks_x_, blocks_y_;
+    uint32_t iteration_ = 0;
+    std::vector<std::vector<Deposit>> chunk_deposits_;  ///< one list per fixed chunk of paths
+    UpdateCounters counters_;
+    StageSeconds seconds_;
+};
+
+/// The brightest radiance the scene can put into a voxel, for the fixed-point scale:
+/// emission, sky, and the radiance a white surface facing a punctual light at 1 cm would have.
+double estimateMaxRadiance(const Scene& scene);
+
+}  // namespace sharcbake

@@ -1,0 +1,13 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file commands.h
+/// @brief Each sharcbake subcommand registers its options and its action on the CLI11 app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace sharcbake {
+
+void registerRenderCommand(CLI::App& app);
+void registerBakeCommand(CLI::App& app);
+
+}  // namespace sharcbake

@@ -1,0 +1,141 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file sharc_cache.h
+/// @brief The bake's radiance cache: SHaRC's hash grid plus, per slot, a fixed-point
+/// accumulation entry and a resolved entry.
+///
+/// Offline differences from the real-time SDK (see DESIGN.md section 3), each for a reason:
+/// - Sums are 64-bit fixed point, added in a fixed order, so a bake is bit-identical for any
+///   thread count and cannot wrap (the SDK's 32-bit sums can, sharc_algorithm.md 10.1).
+/// - Resolved means are float32 and weights double: no fp16 dead zone or saturation (10.5).
+/// - Voxels are never evicted: a static bake keeps everything it has seen.
+/// - The history schedule is a choice (HistorySchedule); the SDK's fixed window is one option.
+#pragma once
+
+#include "sharcbake/hash_grid.h"
+
+#include <glm/glm.hpp>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// How a voxel weighs its past iterations against the newest one.
+///
+/// Cache feedback makes early estimates biased low (the cache they resampled was still dark),
+/// so an offline bake must forget them, but forgetting too fast keeps the variance of a short
+/// window. Let F be the number of iterations in which the voxel received samples:
+/// - Window(A): the SDK's rule; history weight scaled by A/F once F > A. Variance never falls
+///   below that of ~A iterations.
+/// - Average: every iteration weighs the same; keeps the early bias for ever (decays as 1/F).
+/// - Ramp(p): history weight scaled by ((F-1)/F)^p, so iteration k weighs ~k^p: early bias
+///   decays as 1/F^(p+1) while the variance is only (p+1)^2/(2p+1) times the average's.
+struct HistorySchedule {
+    enum class Kind : uint8_t { Window, Average, Ramp };
+    Kind kind = Kind::Ramp;
+    float value = 8.0f;  ///< A for Window, p for Ramp
+
+    /// Factor applied to the history weight when the voxel's F-th sampled iteration arrives.
+    double historyFactor(uint32_t frames) const;
+    /// "ramp:1", "window:20", "average"
+    std::string describe() const;
+    /// Parses the --history syntax; returns false on bad input.
+    static bool parse(const std::string& text, HistorySchedule& out);
+};
+
+struct SharcSettings {
+    HashGridParameters grid;  ///< log base, scene scale, level bias (camera set per iteration)
+    uint32_t capacity = 1u << 20;
+    HistorySchedule history;
+    /// Path vertices that receive radiance propagated back from later ones (SDK default with
+    /// cache resampling: 2).
+    uint32_t propagation_depth = 2;
+    bool cache_resampling = true;
+    /// Roughness is raised to at least this in the update pass, so highlights are not cached.
+    float update_roughness_clamp = 0.4f;
+};
+
+/// Per-slot accumulation of one iteration: fixed-point radiance sums and the sample count.
+struct AccumulationEntry {
+    std::array<uint64_t, 3> sums{0, 0, 0};
+    uint32_t samples = 0;
+};
+
+/// Per-slot resolved state: what queries and cache resampling read.
+struct ResolvedEntry {
+    glm::vec3 mean{0.0f};     ///< mean outgoing radiance (emission included)
+    uint32_t frames = 0;      ///< iterations in which the voxel received samples
+    double weight = 0.0;      ///< effective sample count of the history (0 = no data yet)
+    uint32_t last_iteration = 0;  ///< iteration of the newest samples
+    uint32_t total_samples = 0;   ///< samples ever received (saturating)
+};
+
+/// One deposit of an update path into a voxel: radiance x weight, and whether it counts as a
+/// sample (the voxel's own direct light) or is propagated from a later vertex (count 0).
+struct Deposit {
+    uint64_t key = 0;
+    glm::vec3 radiance{0.0f};
+    uint32_t samples = 0;
+};
+
+/// What happened numerically in the accumulation; everything that was changed is counted.
+struct NumericsCounters {
+    uint64_t deposits = 0;
+    uint64_t failed_inserts = 0;           ///< deposits dropped because the bucket was full
+    glm::dvec3 failed_insert_energy{0.0};  ///< radiance x samples those deposits carried
+    uint64_t non_finite_deposits = 0;      ///< NaN/Inf deposits dropped
+    uint64_t negative_deposits = 0;        ///< negative channel values clamped to 0
+    uint64_t clamped_deposits = 0;         ///< single deposits above the fixed-point ceiling
+    glm::dvec3 clamped_energy{0.0};        ///< energy removed by that ceiling
+    uint64_t saturated_sums = 0;           ///< 64-bit sums that would have overflowed
+    uint64_t orphan_sums = 0;              ///< radiance without a sample (dropped at resolve)
+};
+
+class SharcCache {
+public:
+    /// @param radiance_scale fixed-point scale of the sums (a power of two, see chooseRadianceScale)
+    SharcCache(const SharcSettings& settings, double radiance_scale);
+
+    const SharcSettings& settings() const { return settings_; }
+    uint32_t capacity() const { return table_.capacity(); }
+    double radianceScale() const { return radiance_scale_; }
+
+    /// The resolved entry of a key, or nullptr when the key is absent. Safe to call from many
+    /// threads while no commit or resolve runs.
+    const ResolvedEntry* findResolved(uint64_t key) const;
+
+    /// Adds deposits in the given order: inserts their keys (so slot assignment is the same
+    /// on every run) and adds their fixed-point radiance. Single-threaded by design.
+    void commit(const std::vector<Deposit>& deposits);
+
+    /// Folds this iteration's accumulation into the resolved entries with the history schedule
+    /// and clears it. Each slot reads and writes only itself, so the result does not depend on
+    /// the thread count.
+    void resolve(uint32_t iteration);
+
+    const NumericsCounters& numerics() const { return numerics_; }
+    /// Slots holding a key (O(capacity)).
+    uint64_t liveEntries() const { return table_.occupiedSlots(); }
+
+    const HashGridTable& table() const { return table_; }
+    const std::vector<ResolvedEntry>& resolved() const { return resolved_; }
+
+    /// A power-of-two scale so that radiance up to `max_radiance` leaves 2^24 deposits of
+    /// headroom in a 63-bit sum, and small values keep ~40 bits of precision.
+    static double chooseRadianceScale(double max_radiance);
+
+private:
+    SharcSettings settings_;
+    HashGridTable table_;
+    double radiance_scale_;
+    uint64_t max_fixed_deposit_;
+    std::vector<AccumulationEntry> accumulation_;
+    std::vector<ResolvedEntry> resolved_;
+    std::vector<uint32_t> touched_;        ///< slots with accumulation this iteration, in commit order
+    std::vector<uint8_t> touched_flags_;   ///< per slot: already in touched_
+    NumericsCounters numerics_;
+};
+
+}  // namespace sharcbake

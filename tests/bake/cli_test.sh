@@ -1,0 +1,48 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# The command line's documented exit codes, and that render and bake write their outputs.
+# Usage: cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+rm -rf "$work" && mkdir -p "$work"
+failures=0
+
+expect() {  # expect CODE DESCRIPTION COMMAND...
+    code=$1; what=$2; shift 2
+    "$@" >"$work/out.txt" 2>"$work/err.txt"
+    got=$?
+    if [ "$got" -ne "$code" ]; then
+        echo "FAIL: $what: exit $got, expected $code"; cat "$work/err.txt"; failures=$((failures + 1))
+    else
+        echo "ok: $what (exit $got)"
+    fi
+}
+
+expect 0 "top-level --help" "$sharcbake" --help
+expect 0 "render --help" "$sharcbake" render --help
+expect 0 "bake --help" "$sharcbake" bake --help
+expect 1 "no subcommand" "$sharcbake"
+expect 1 "unknown option" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --no-such-option
+expect 1 "zero samples" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --spp 0
+expect 1 "bad resolution" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --resolution 10y
+expect 2 "missing scene" "$sharcbake" render "$work/missing.gltf" -o "$work/a.exr"
+printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri": "nowhere.bin" } ] }' > "$work/bad.gltf"
+expect 3 "malformed scene" "$sharcbake" render "$work/bad.gltf" -o "$work/a.exr"
+grep -q "bad.gltf" "$work/err.txt" || { echo "FAIL: the error does not name the file"; failures=$((failures + 1)); }
+expect 2 "unwritable output" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/no/such/dir/a.exr" --resolution 8 --spp 1 -q
+expect 1 "bad history" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --history ramp:x
+expect 3 "bad camera path" sh -c "echo '1 2 3' > '$work/path.txt' && '$sharcbake' bake '$scenes/cornell_box/cornell_box.gltf' -o '$work/a.sharc' --camera-path '$work/path.txt'"
+
+expect 0 "render" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/cornell.exr" --resolution 32 --spp 2
+for f in cornell.exr cornell.png; do
+    [ -s "$work/$f" ] || { echo "FAIL: render did not write $f"; failures=$((failures + 1)); }
+done
+expect 0 "bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/cornell.sharc" --iterations 4 \
+    --resolution 64x64 --stats-json "$work/bake.json"
+[ -s "$work/cornell.sharc" ] || { echo "FAIL: bake did not write the cache"; failures=$((failures + 1)); }
+grep -q '"live_voxels"' "$work/bake.json" || { echo "FAIL: bake stats JSON lacks live_voxels"; failures=$((failures + 1)); }
+
+[ "$failures" -eq 0 ] && echo "all CLI checks passed"
+exit "$failures"

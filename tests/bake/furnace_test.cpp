@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: Apache-2.0
+// Analytic checks on the furnace rooms, where every surface's outgoing radiance is exactly
+// Le / (1 - rho): the reference path tracer's image and the baked cache's voxels must match it.
+// Also: renders and bakes are identical for any thread count.
+#include "baker.h"
+#include "camera_path.h"
+#include "lights.h"
+#include "path_tracer.h"
+#include "render.h"
+#include "sharcbake/scene_loader.h"
+#include "tracer.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <string>
+
+namespace sharcbake {
+namespace {
+
+std::string scenePath(const std::string& name) {
+    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
+}
+
+struct FurnaceCase {
+    const char* scene;
+    double expected;   ///< Le / (1 - rho)
+    double tolerance;  ///< relative, on the image mean
+    int resolution;
+    uint32_t spp;
+};
+
+Image renderScene(const Scene& scene, int resolution, uint32_t spp, uint32_t seed) {
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);
+    const PathTracer path_tracer(tracer, lights, PathTracerSettings{});
+    TraceCounters counters;
+    const Camera& camera = scene.cameras.at(0);
+    return renderImage(CameraRays(camera, resolution, resolution), ImageRenderSettings{resolution, resolution, spp, seed},
+                       [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
+                       nullptr);
+}
+
+glm::dvec3 imageMean(const Image& image) {
+    glm::dvec3 sum(0.0);
+    for (const glm::vec3& p : image.pixels) sum += glm::dvec3(p);
+    return sum / double(image.pixels.size());
+}
+
+class FurnaceRender : public ::testing::TestWithParam<FurnaceCase> {};
+
+TEST_P(FurnaceRender, ImageMeanIsLeOverOneMinusRho) {
+    const FurnaceCase c = GetParam();
+    const Scene scene = loadGltf(scenePath(c.scene));
+    ASSERT_FALSE(scene.cameras.empty());
+    const glm::dvec3 mean = imageMean(renderScene(scene, c.resolution, c.spp, 1));
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(mean[ch], c.expected, c.tolerance * c.expected) << c.scene;
+}
+
+INSTANTIATE_TEST_SUITE_P(Furnace, FurnaceRender,
+                         ::testing::Values(FurnaceCase{"furnace_rho050", 2.0, 0.01, 32, 64},
+                                           FurnaceCase{"furnace_rho090", 10.0, 0.01, 32, 64},
+                                           FurnaceCase{"furnace_rho099", 100.0, 0.03, 16, 64}),
+                         [](const auto& info) { return std::string(info.param.scene); });
+
+TEST(Determinism, RenderIsIdenticalForAnyThreadCount) {
+    const Scene scene = loadGltf(scenePath("cornell_box"));
+    Image one, many;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = renderScene(scene, 48, 8, 5);
+    }
+    many = renderScene(scene, 48, 8, 5);
+    ASSERT_EQ(one.pixels.size(), many.pixels.size());
+    EXPECT_TRUE(std::equal(one.pixels.begin(), one.pixels.end(), many.pixels.begin()));
+}
+
+/// A small bake of a furnace room from its glTF camera path plus exploration.
+struct SmallBake {
+    Scene scene;
+    std::unique_ptr<Tracer> tracer;
+    std::unique_ptr<LightSampler> lights;
+    std::unique_ptr<CameraPath> path;
+    std::unique_ptr<Baker> baker;
+
+    SmallBake(const std::string& name, uint32_t iterations, HistorySchedule history, int resolution = 160) {
+        scene = loadGltf(scenePath(name));
+        tracer = std::make_unique<Tracer>(scene);
+        lights = std::make_unique<LightSampler>(scene);
+        std::vector<glm::vec3> starts;
+        for (const Camera& c : scene.cameras) starts.push_back(c.position);
+        const ExplorationResult explored = exploreFreeSpace(*tracer, starts, 16, 3);
+        std::vector<CameraPose> poses;
+        for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
+        path = std::make_unique<CameraPath>(poses, true, 1, 0.0f, 3);
+        BakeSettings settings;
+        settings.width = settings.height = resolution;
+        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+        settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
+        settings.sharc.history = history;
+        baker = std::make_unique<Baker>(*tracer, *lights, *path, settings,
+                                        SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        for (uint32_t i = 0; i < iterations; ++i) baker->runIteration();
+    }
+};
+
+/// Voxels with fewer samples than this are too noisy to hold to 2% (a handful of path samples);
+/// they are a small share of the cache and are reported, not tested.
+constexpr uint32_t kMinSamplesTested = 64;
+
+TEST(FurnaceBake, EveryVoxelConvergesToTheAnalyticRadiance) {
+    const SmallBake bake("furnace_rho090", 2048, HistorySchedule{});
+    const SharcCache& cache = bake.baker->cache();
+    uint32_t live = 0, within = 0;
+    double worst = 0.0;
+    for (uint32_t slot = 0; slot < cache.capacity(); ++slot) {
+        const ResolvedEntry& r = cache.resolved()[slot];
+        if (cache.table().keyAt(slot) == 0 || r.total_samples < kMinSamplesTested) continue;
+        ++live;
+        const double error = std::abs(double(r.mean.x) - 10.0) / 10.0;
+        if (error > 0.02) {
+            const HashGridCell cell = decodeHashGridKey(cache.table().keyAt(slot));
+            ADD_FAILURE() << "voxel " << cell.grid.x << "," << cell.grid.y << "," << cell.grid.z << " level " << cell.level
+                          << " normal bits " << cell.normal_bits << ": " << r.mean.x << " weight " << r.weight
+                          << " frames " << r.frames;
+        }
+        worst = std::max(worst, error);
+        within += error <= 0.02;
+    }
+    ASSERT_GT(live, 50u);
+    EXPECT_EQ(within, live) << "worst relative error " << worst;
+    EXPECT_EQ(cache.numerics().failed_inserts, 0u);
+    EXPECT_EQ(cache.numerics().non_finite_deposits, 0u);
+}
+
+TEST(Determinism, BakeIsIdenticalForAnyThreadCount) {
+    auto snapshot = [](const SmallBake& bake) {
+        std::vector<std::pair<uint64_t, glm::vec3>> entries;
+        const SharcCache& cache = bake.baker->cache();
+        for (uint32_t slot = 0; slot < cache.capacity(); ++slot) {
+            if (cache.table().keyAt(slot) != 0) entries.emplace_back(cache.table().keyAt(slot), cache.resolved()[slot].mean);
+        }
+        return entries;
+    };
+    std::vector<std::pair<uint64_t, glm::vec3>> one, many;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = snapshot(SmallBake("cornell_box", 8, HistorySchedule{}, 96));
+    }
+    many = snapshot(SmallBake("cornell_box", 8, HistorySchedule{}, 96));
+    ASSERT_FALSE(one.empty());
+    EXPECT_EQ(one, many);
+}
+
+}  // namespace
+}  // namespace sharcbake

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: Apache-2.0
+// The bake's cache: fixed-point accumulation, history schedules, table pressure.
+#include "sharc_cache.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace sharcbake {
+namespace {
+
+SharcSettings smallSettings(uint32_t capacity, HistorySchedule history = {}) {
+    SharcSettings s;
+    s.capacity = capacity;
+    s.grid.capacity = capacity;
+    s.history = history;
+    return s;
+}
+
+uint64_t keyAt(int x) {
+    return packHashGridKey(Int3{x, 0, 0}, 1, 0);
+}
+
+TEST(HistorySchedule, ParsesAndDescribes) {
+    HistorySchedule h;
+    ASSERT_TRUE(HistorySchedule::parse("ramp:2", h));
+    EXPECT_EQ(h.kind, HistorySchedule::Kind::Ramp);
+    EXPECT_EQ(h.describe(), "ramp:2");
+    ASSERT_TRUE(HistorySchedule::parse("window:20", h));
+    EXPECT_EQ(h.kind, HistorySchedule::Kind::Window);
+    ASSERT_TRUE(HistorySchedule::parse("average", h));
+    EXPECT_EQ(h.kind, HistorySchedule::Kind::Average);
+    for (const char* bad : {"", "ramp", "ramp:", "ramp:x", "window:0.5", "ramp:-1", "linear:1", "ramp:1x"}) {
+        EXPECT_FALSE(HistorySchedule::parse(bad, h)) << bad;
+    }
+}
+
+TEST(HistorySchedule, FactorsFollowTheirDefinitions) {
+    const HistorySchedule average{HistorySchedule::Kind::Average, 0.0f};
+    const HistorySchedule window{HistorySchedule::Kind::Window, 20.0f};
+    const HistorySchedule ramp{HistorySchedule::Kind::Ramp, 1.0f};
+    EXPECT_DOUBLE_EQ(average.historyFactor(100), 1.0);
+    EXPECT_DOUBLE_EQ(window.historyFactor(20), 1.0);
+    EXPECT_DOUBLE_EQ(window.historyFactor(21), 20.0 / 21.0);
+    EXPECT_DOUBLE_EQ(window.historyFactor(500), 20.0 / 21.0);
+    EXPECT_DOUBLE_EQ(ramp.historyFactor(4), 0.75);
+    EXPECT_DOUBLE_EQ(ramp.historyFactor(1), 0.0);
+}
+
+/// With the ramp, iteration k weighs k: the mean of values v_k = k is sum(k^2)/sum(k).
+TEST(SharcCache, RampWeighsIterationsLinearly) {
+    SharcCache cache(smallSettings(1024, {HistorySchedule::Kind::Ramp, 1.0f}), SharcCache::chooseRadianceScale(100.0));
+    const uint64_t key = keyAt(3);
+    double num = 0.0, den = 0.0;
+    for (uint32_t k = 1; k <= 10; ++k) {
+        cache.commit({Deposit{key, glm::vec3(float(k)), 1}});
+        cache.resolve(k);
+        num += double(k) * k;
+        den += double(k);
+    }
+    const ResolvedEntry* e = cache.findResolved(key);
+    ASSERT_NE(e, nullptr);
+    EXPECT_NEAR(e->mean.x, num / den, 1e-5);
+    EXPECT_EQ(e->frames, 10u);
+}
+
+TEST(SharcCache, AverageKeepsEveryIteration) {
+    SharcCache cache(smallSettings(1024, {HistorySchedule::Kind::Average, 0.0f}), SharcCache::chooseRadianceScale(1.0));
+    const uint64_t key = keyAt(-5);
+    for (uint32_t k = 0; k < 4; ++k) {
+        // Two own samples and one propagated deposit (no count) per iteration.
+        cache.commit({Deposit{key, glm::vec3(0.25f), 1}, Deposit{key, glm::vec3(0.5f), 1}, Deposit{key, glm::vec3(0.25f), 0}});
+        cache.resolve(k);
+    }
+    const ResolvedEntry* e = cache.findResolved(key);
+    ASSERT_NE(e, nullptr);
+    EXPECT_FLOAT_EQ(e->mean.x, 0.5f);  // (0.25 + 0.5 + 0.25) / 2 samples
+    EXPECT_DOUBLE_EQ(e->weight, 8.0);
+}
+
+TEST(SharcCache, FixedPointKeepsTinyAndHugeValues) {
+    for (double peak : {1e-6, 1.0, 1e7}) {
+        SharcCache cache(smallSettings(256), SharcCache::chooseRadianceScale(peak));
+        const uint64_t key = keyAt(1);
+        cache.commit({Deposit{key, glm::vec3(float(peak)), 1}, Deposit{key, glm::vec3(float(peak * 1e-3)), 0}});
+        cache.resolve(0);
+        const ResolvedEntry* e = cache.findResolved(key);
+        ASSERT_NE(e, nullptr);
+        EXPECT_NEAR(e->mean.x, peak * 1.001, peak * 1.001 * 1e-5) << "peak " << peak;
+        EXPECT_EQ(cache.numerics().clamped_deposits, 0u);
+    }
+}
+
+TEST(SharcCache, NonFiniteAndNegativeDepositsAreCountedNotStored) {
+    SharcCache cache(smallSettings(256), SharcCache::chooseRadianceScale(1.0));
+    const uint64_t key = keyAt(2);
+    cache.commit({Deposit{key, glm::vec3(NAN, 0.0f, 0.0f), 1}, Deposit{key, glm::vec3(INFINITY), 1},
+                  Deposit{key, glm::vec3(-1.0f, 2.0f, 2.0f), 1}});
+    cache.resolve(0);
+    EXPECT_EQ(cache.numerics().non_finite_deposits, 2u);
+    EXPECT_EQ(cache.numerics().negative_deposits, 1u);
+    const ResolvedEntry* e = cache.findResolved(key);
+    ASSERT_NE(e, nullptr);
+    EXPECT_EQ(e->mean, glm::vec3(0.0f, 2.0f, 2.0f));
+    EXPECT_TRUE(std::isfinite(e->mean.x));
+}
+
+TEST(SharcCache, HugeDepositIsClampedAndItsEnergyCounted) {
+    SharcCache cache(smallSettings(256), SharcCache::chooseRadianceScale(1.0));
+    cache.commit({Deposit{keyAt(4), glm::vec3(1e30f), 1}});
+    cache.resolve(0);
+    EXPECT_EQ(cache.numerics().clamped_deposits, 1u);
+    EXPECT_GT(cache.numerics().clamped_energy.x, 1e29);
+    const ResolvedEntry* e = cache.findResolved(keyAt(4));
+    ASSERT_NE(e, nullptr);
+    EXPECT_TRUE(std::isfinite(e->mean.x));
+}
+
+TEST(SharcCache, FullTableCountsFailedInsertsAndTheirEnergy) {
+    // 16 slots: one bucket. The 17th distinct key cannot be stored.
+    SharcCache cache(smallSettings(16), SharcCache::chooseRadianceScale(1.0));
+    std::vector<Deposit> deposits;
+    for (int i = 0; i < 20; ++i) deposits.push_back(Deposit{keyAt(i), glm::vec3(1.0f), 1});
+    cache.commit(deposits);
+    cache.resolve(0);
+    EXPECT_EQ(cache.numerics().failed_inserts, 4u);
+    EXPECT_DOUBLE_EQ(cache.numerics().failed_insert_energy.x, 4.0);
+    EXPECT_EQ(cache.liveEntries(), 16u);
+}
+
+TEST(SharcCache, ResultDoesNotDependOnDepositOrderWithinOneSlot) {
+    SharcCache a(smallSettings(256), SharcCache::chooseRadianceScale(1.0));
+    SharcCache b(smallSettings(256), SharcCache::chooseRadianceScale(1.0));
+    const std::vector<Deposit> forward = {Deposit{keyAt(1), glm::vec3(0.1f), 1}, Deposit{keyAt(1), glm::vec3(0.7f), 1},
+                                          Deposit{keyAt(1), glm::vec3(1e-7f), 0}};
+    const std::vector<Deposit> backward(forward.rbegin(), forward.rend());
+    a.commit(forward);
+    b.commit(backward);
+    a.resolve(0);
+    b.resolve(0);
+    EXPECT_EQ(a.findResolved(keyAt(1))->mean, b.findResolved(keyAt(1))->mean);
+}
+
+}  // namespace
+}  // namespace sharcbake
