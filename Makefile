@@ -37,9 +37,12 @@ build: configure
 
 demo: build
 	@mkdir -p $(OUT_DIR)
-	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box.exr \
+	$(SHARCBAKE) bake scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box.sharc \
+	    --stats-json $(OUT_DIR)/cornell_box_bake.json
+	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_reference.exr \
 	    --resolution 256x256 --spp 64
-	@echo "Demo outputs are in $(OUT_DIR)/: cornell_box.exr (linear) and cornell_box.png (tone-mapped)."
+	@echo "Demo outputs are in $(OUT_DIR)/: cornell_box.sharc (the baked cache), cornell_box_bake.json"
+	@echo "(bake statistics), cornell_box_reference.exr/.png (a reference path-traced image)."
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
