@@ -44,5 +44,31 @@ expect 0 "bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$wo
 [ -s "$work/cornell.sharc" ] || { echo "FAIL: bake did not write the cache"; failures=$((failures + 1)); }
 grep -q '"live_voxels"' "$work/bake.json" || { echo "FAIL: bake stats JSON lacks live_voxels"; failures=$((failures + 1)); }
 
+# render --cache and --debug-view (a tiny furnace bake; only exit codes and outputs are checked here,
+# the values are tested in cache_render_test.cpp).
+furnace="$scenes/furnace_rho090/furnace_rho090.gltf"
+expect 1 "--debug-view without --cache" "$sharcbake" render "$furnace" -o "$work/d.exr" --debug-view hash
+expect 1 "unknown debug view" "$sharcbake" render "$furnace" -o "$work/d.exr" --cache "$work/cornell.sharc" --debug-view nope
+expect 2 "missing cache" "$sharcbake" render "$furnace" -o "$work/d.exr" --cache "$work/missing.sharc" --resolution 8 --spp 1
+printf 'not a cache file at all, just some bytes' > "$work/bad.sharc"
+expect 3 "malformed cache" "$sharcbake" render "$furnace" -o "$work/d.exr" --cache "$work/bad.sharc" --resolution 8 --spp 1
+expect 0 "bake the furnace" "$sharcbake" bake "$furnace" -o "$work/furnace.sharc" --iterations 8 --resolution 64x64 -q
+expect 0 "cached render" "$sharcbake" render "$furnace" -o "$work/cached.exr" --cache "$work/furnace.sharc" \
+    --resolution 32 --spp 4 --stats-json "$work/cached.json"
+grep -q "hit rate" "$work/out.txt" || { echo "FAIL: cached render does not report its hit rate"; failures=$((failures + 1)); }
+grep -q '"cache_hits"' "$work/cached.json" || { echo "FAIL: stats JSON lacks cache_hits"; failures=$((failures + 1)); }
+for f in cached.exr cached.png; do
+    [ -s "$work/$f" ] || { echo "FAIL: cached render did not write $f"; failures=$((failures + 1)); }
+done
+for view in cache hash levels occupancy bounces; do
+    expect 0 "debug view $view" "$sharcbake" render "$furnace" -o "$work/debug_$view.exr" --cache "$work/furnace.sharc" \
+        --debug-view "$view" --resolution 32 --spp 2 -q
+    for f in "debug_$view.exr" "debug_$view.png"; do
+        [ -s "$work/$f" ] || { echo "FAIL: debug view $view did not write $f"; failures=$((failures + 1)); }
+    done
+    grep -q "sharcbake:debug_view" "$work/debug_$view.exr" ||
+        { echo "FAIL: debug_$view.exr lacks the sharcbake:debug_view attribute"; failures=$((failures + 1)); }
+done
+
 [ "$failures" -eq 0 ] && echo "all CLI checks passed"
 exit "$failures"

@@ -1,0 +1,212 @@
+// SPDX-License-Identifier: Apache-2.0
+// `render --cache`: SHaRC's query eligibility tests, BakedCache lookups, and a cached render of
+// the rho = 0.9 furnace, whose every surface has outgoing radiance Le / (1 - rho) = 10.
+#include "baker.h"
+#include "cache_query.h"
+#include "camera_path.h"
+#include "lights.h"
+#include "path_tracer.h"
+#include "render.h"
+#include "sharcbake/cache_file.h"
+#include "sharcbake/scene_loader.h"
+#include "surface.h"
+#include "tracer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace sharcbake {
+namespace {
+
+std::string scenePath(const std::string& name) {
+    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
+}
+
+// ---- Eligibility (algorithm notes §6, app-side tests) -------------------------------------------
+
+TEST(CacheEligibility, SegmentShorterThanTheVoxelDiagonalIsRefused) {
+    const float s = 1.0f;
+    EXPECT_FALSE(cacheQueryEligible(1.5f, 1.0f, s));             // t < sqrt(3) s, diffuse cone
+    EXPECT_FALSE(cacheQueryEligible(std::sqrt(3.0f), 5.0f, s));  // t == sqrt(3) s is not longer
+    EXPECT_TRUE(cacheQueryEligible(1.8f, 1.0f, s));              // just past the diagonal
+}
+
+TEST(CacheEligibility, MirrorLikeConeAtShortDistanceIsRefused) {
+    // r = 0.1: a = 0.01, footprint = t * sqrt(0.5e-4 / (1 - 1e-4)) ~ 0.00707 t, so t = 5 gives
+    // 0.035 voxels although the segment test passes.
+    EXPECT_FALSE(cacheQueryEligible(5.0f, 0.1f, 1.0f));
+    EXPECT_FALSE(cacheQueryEligible(100.0f, 0.1f, 1.0f));
+    EXPECT_TRUE(cacheQueryEligible(200.0f, 0.1f, 1.0f));  // 1.41 voxels
+    EXPECT_FALSE(cacheQueryEligible(5.0f, 0.0f, 1.0f));   // a perfect mirror never qualifies
+}
+
+TEST(CacheEligibility, DiffuseConeAtLongDistanceIsAccepted) {
+    // r clamped to 0.99: footprint ~ 3.49 t.
+    EXPECT_TRUE(cacheQueryEligible(10.0f, 1.0f, 1.0f));
+    EXPECT_TRUE(cacheQueryEligible(10.0f, 3.0f, 1.0f));
+    EXPECT_TRUE(cacheQueryEligible(1.8f, 1.0f, 1.0f));
+    EXPECT_FALSE(cacheQueryEligible(std::nanf(""), 1.0f, 1.0f));
+}
+
+// ---- BakedCache lookups ---------------------------------------------------------------------------
+
+TEST(BakedCache, LookupAppliesTheTestsAndFindsTheVoxel) {
+    const glm::vec3 camera(0.0f, 0.0f, 0.0f);
+    const glm::vec3 p(3.0f, 0.5f, -2.0f), n(0.0f, 1.0f, 0.0f);
+    CacheData data;
+    data.scene_scale = 5.0f;
+    data.bake_capacity = 1u << 10;
+    HashGridParameters params = data.gridParameters();
+    const uint64_t key = hashGridKey(Float3{p.x, p.y, p.z}, Float3{n.x, n.y, n.z}, params);
+    CacheVoxel v;
+    v.key = key;
+    v.radiance[0] = 1.0f;
+    v.radiance[1] = 2.0f;
+    v.radiance[2] = 3.0f;
+    v.sample_weight = 4.0f;
+    CacheVoxel empty;  // a voxel without samples is not usable
+    empty.key = hashGridKey(Float3{p.x, p.y, p.z}, Float3{0.0f, -1.0f, 0.0f}, params);
+    data.voxels = {v, empty};
+    sortVoxels(data.voxels);
+    const BakedCache cache(data, camera);
+    ASSERT_EQ(cache.key(p, n), key);
+    const float s = voxelSize(decodeHashGridKey(key).level, cache.parameters());
+
+    glm::vec3 radiance(-1.0f);
+    EXPECT_FALSE(cache.lookup(CacheQuery{p, n, 1.5f * s, 1.0f}, radiance));   // too short
+    EXPECT_FALSE(cache.lookup(CacheQuery{p, n, 5.0f * s, 0.1f}, radiance));   // cone too narrow
+    EXPECT_EQ(cache.refused(), 2u);
+    ASSERT_TRUE(cache.lookup(CacheQuery{p, n, 5.0f * s, 1.0f}, radiance));
+    EXPECT_EQ(radiance, glm::vec3(1.0f, 2.0f, 3.0f));
+    EXPECT_FALSE(cache.lookup(CacheQuery{p, -n, 5.0f * s, 1.0f}, radiance));  // weight 0
+    EXPECT_FALSE(cache.lookup(CacheQuery{p, glm::vec3(-1.0f, 0.0f, 0.0f), 5.0f * s, 1.0f}, radiance));  // absent
+    EXPECT_EQ(cache.hits(), 1u);
+    EXPECT_EQ(cache.misses(), 2u);
+    EXPECT_EQ(cache.find(empty.key), nullptr);
+    EXPECT_EQ(cache.find(12345u), nullptr);
+}
+
+// ---- The furnace, baked and rendered through the cache --------------------------------------------
+
+/// A small bake of a furnace room (as furnace_test.cpp's SmallBake), written to a .sharc file and
+/// read back, so the render goes through the file format.
+class FurnaceCache : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        scene_ = new Scene(loadGltf(scenePath("furnace_rho090")));
+        tracer_ = new Tracer(*scene_);
+        lights_ = new LightSampler(*scene_);
+        std::vector<glm::vec3> starts;
+        for (const Camera& c : scene_->cameras) starts.push_back(c.position);
+        const ExplorationResult explored = exploreFreeSpace(*tracer_, starts, 16, 3);
+        std::vector<CameraPose> poses;
+        for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
+        const CameraPath path(poses, true, 1, 0.0f, 3);
+        BakeSettings settings;
+        settings.width = settings.height = 128;
+        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+        settings.sharc.grid.scene_scale = 5.0f;
+        Baker baker(*tracer_, *lights_, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(*scene_)));
+        for (uint32_t i = 0; i < 2048; ++i) baker.runIteration();
+
+        const SharcCache& cache = baker.cache();
+        CacheData data;
+        data.logarithm_base = settings.sharc.grid.logarithm_base;
+        data.scene_scale = settings.sharc.grid.scene_scale;
+        data.level_bias = settings.sharc.grid.level_bias;
+        data.bucket_size = settings.sharc.grid.bucket_size;
+        data.bake_capacity = cache.capacity();
+        for (uint32_t slot = 0; slot < cache.capacity(); ++slot) {
+            const ResolvedEntry& r = cache.resolved()[slot];
+            if (cache.table().keyAt(slot) == 0 || !(r.weight > 0.0)) continue;
+            CacheVoxel v;
+            v.key = cache.table().keyAt(slot);
+            v.radiance[0] = r.mean.x;
+            v.radiance[1] = r.mean.y;
+            v.radiance[2] = r.mean.z;
+            v.sample_weight = float(r.weight);
+            data.voxels.push_back(v);
+        }
+        sortVoxels(data.voxels);
+        const std::string file =
+            (std::filesystem::temp_directory_path() / "sharcbake_cache_render_test.sharc").string();
+        std::string message;
+        ASSERT_EQ(writeCacheFile(file, data, &message), CacheFileStatus::kOk) << message;
+        data_ = new CacheData;
+        ASSERT_EQ(readCacheFile(file, data_, &message), CacheFileStatus::kOk) << message;
+        std::filesystem::remove(file);
+    }
+    static void TearDownTestSuite() {
+        delete data_;
+        delete lights_;
+        delete tracer_;
+        delete scene_;
+    }
+
+    static Scene* scene_;
+    static Tracer* tracer_;
+    static LightSampler* lights_;
+    static CacheData* data_;
+};
+Scene* FurnaceCache::scene_ = nullptr;
+Tracer* FurnaceCache::tracer_ = nullptr;
+LightSampler* FurnaceCache::lights_ = nullptr;
+CacheData* FurnaceCache::data_ = nullptr;
+
+TEST_F(FurnaceCache, CachedRenderMeanIsLeOverOneMinusRho) {
+    ASSERT_GT(data_->voxels.size(), 50u);
+    const Camera& camera = scene_->cameras.at(0);
+    const BakedCache cache(*data_, camera.position);
+    const PathTracer path_tracer(*tracer_, *lights_, PathTracerSettings{}, &cache);
+    TraceCounters counters;
+    const int res = 32;
+    const Image image = renderImage(
+        CameraRays(camera, res, res), ImageRenderSettings{res, res, 64, 1},
+        [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); }, nullptr);
+    glm::dvec3 mean(0.0);
+    for (const glm::vec3& p : image.pixels) mean += glm::dvec3(p);
+    mean /= double(image.pixels.size());
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(mean[ch], 10.0, 0.3) << "channel " << ch;
+    std::printf("cached furnace: mean %.4f, %zu voxels, %llu hits, %llu misses, %llu refused\n", mean.x,
+                data_->voxels.size(), (unsigned long long)cache.hits(), (unsigned long long)cache.misses(),
+                (unsigned long long)cache.refused());
+    // Most paths end on the cache after one bounce.
+    EXPECT_GT(counters.cache_hits.load(), uint64_t(res * res * 64) / 2);
+    EXPECT_EQ(counters.cache_hits.load(), cache.hits());
+    EXPECT_EQ(counters.non_finite_samples.load(), 0u);
+}
+
+TEST_F(FurnaceCache, CacheSeenFromTheCameraIsTenWhereVoxelsExist) {
+    const Camera& camera = scene_->cameras.at(0);
+    const BakedCache cache(*data_, camera.position);
+    const int res = 32;
+    const CameraRays rays(camera, res, res);
+    uint32_t hits = 0, found = 0;
+    double sum = 0.0, worst = 0.0;
+    for (int y = 0; y < res; ++y) {
+        for (int x = 0; x < res; ++x) {
+            const Ray ray = rays.generate(x, y, glm::vec2(0.5f));
+            RayHit ray_hit;
+            if (!tracer_->intersect(ray, ray_hit)) continue;
+            ++hits;
+            const SurfaceHit hit = makeSurfaceHit(*scene_, ray_hit, ray.direction);
+            const CacheVoxel* v = cache.find(cache.key(hit.position, hit.geometric_normal));
+            if (!v) continue;
+            ++found;
+            sum += v->radiance[0];
+            worst = std::max(worst, std::abs(double(v->radiance[0]) - 10.0) / 10.0);
+        }
+    }
+    ASSERT_EQ(hits, uint32_t(res * res));  // the camera is inside the closed room
+    EXPECT_GT(found, hits * 9 / 10) << "the bake's voxels should cover what the camera sees";
+    ASSERT_GT(found, 0u);
+    EXPECT_NEAR(sum / found, 10.0, 0.3);
+    EXPECT_LT(worst, 0.15);
+}
+
+}  // namespace
+}  // namespace sharcbake
