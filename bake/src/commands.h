@@ -9,5 +9,6 @@ namespace sharcbake {
 
 void registerRenderCommand(CLI::App& app);
 void registerBakeCommand(CLI::App& app);
+void registerInfoCommand(CLI::App& app);  ///< `info` and `validate` (info_command.cpp)
 
 }  // namespace sharcbake

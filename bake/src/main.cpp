@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "sharcbake " SHARCBAKE_VERSION);
     registerRenderCommand(app);
     registerBakeCommand(app);
+    registerInfoCommand(app);
 
     try {
         app.parse(argc, argv);

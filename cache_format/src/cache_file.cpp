@@ -1,74 +1,36 @@
 // SPDX-License-Identifier: Apache-2.0
-// The .sharc byte layout (SPEC.md, "File layout"). Everything that knows the bytes is here.
+// Writing the .sharc byte layout (SPEC.md §F), and readCacheFile over CacheView (runtime.cpp).
 #include "sharcbake/cache_file.h"
+#include "sharcbake/format.h"
+#include "sharcbake/runtime.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 
 #include <unistd.h>
 
 namespace sharcbake {
 namespace {
 
-constexpr char kMagic[8] = {'S', 'H', 'R', 'C', 'B', 'A', 'K', 'E'};
-constexpr uint16_t kVersionMajor = 0;
-constexpr uint16_t kVersionMinor = 1;
-constexpr size_t kVoxelBytes = 24;
-
-/// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), table-driven.
-uint32_t crc32(const uint8_t* data, size_t size) {
-    static const auto table = [] {
-        std::vector<uint32_t> t(256);
-        for (uint32_t i = 0; i < 256; ++i) {
-            uint32_t c = i;
-            for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-            t[i] = c;
-        }
-        return t;
-    }();
-    uint32_t crc = 0xFFFFFFFFu;
-    for (size_t i = 0; i < size; ++i) crc = table[(crc ^ data[i]) & 0xFFu] ^ (crc >> 8);
-    return crc ^ 0xFFFFFFFFu;
-}
-
 /// Little-endian writer into a byte vector.
 struct ByteWriter {
-    std::vector<uint8_t> bytes;
+    std::vector<uint8_t>& bytes;
     template <typename T> void put(T value) {
         const size_t at = bytes.size();
         bytes.resize(at + sizeof(T));
         std::memcpy(bytes.data() + at, &value, sizeof(T));  // the host is little-endian (checked)
     }
-    void putString(const std::string& s) {
-        put(uint32_t(s.size()));
+    void putBytes(const void* data, size_t size) {
         const size_t at = bytes.size();
-        bytes.resize(at + s.size());
-        if (!s.empty()) std::memcpy(bytes.data() + at, s.data(), s.size());
+        bytes.resize(at + size);
+        if (size) std::memcpy(bytes.data() + at, data, size);
     }
-};
-
-/// Bounds-checked little-endian reader.
-struct ByteReader {
-    const uint8_t* data;
-    size_t size;
-    size_t offset = 0;
-    template <typename T> bool get(T& value) {
-        if (size - offset < sizeof(T)) return false;
-        std::memcpy(&value, data + offset, sizeof(T));
-        offset += sizeof(T);
-        return true;
-    }
-    bool getString(std::string& s) {
-        uint32_t length = 0;
-        if (!get(length) || size - offset < length) return false;
-        s.assign(reinterpret_cast<const char*>(data + offset), length);
-        offset += length;
-        return true;
-    }
+    void pad8() { bytes.resize((bytes.size() + 7u) & ~size_t(7)); }
+    template <typename T> void patch(size_t at, T value) { std::memcpy(bytes.data() + at, &value, sizeof(T)); }
 };
 
 static_assert(sizeof(float) == 4 && sizeof(double) == 8, "IEEE 754 floats expected");
@@ -85,7 +47,41 @@ CacheFileStatus fail(CacheFileStatus status, std::string* message, const std::st
     return status;
 }
 
+/// CRC-32 tables for slicing-by-8 (8 KiB, built once).
+struct Crc32Tables {
+    uint32_t t[8][256];
+    Crc32Tables() {
+        for (uint32_t i = 0; i < 256; ++i) {
+            uint32_t c = i;
+            for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+            t[0][i] = c;
+        }
+        for (uint32_t i = 0; i < 256; ++i) {
+            for (int s = 1; s < 8; ++s) t[s][i] = (t[s - 1][i] >> 8) ^ t[0][t[s - 1][i] & 0xFFu];
+        }
+    }
+};
+
 }  // namespace
+
+uint32_t cacheCrc32(const void* data, size_t size, uint32_t crc) {
+    static const Crc32Tables tables;
+    const auto& t = tables.t;
+    const uint8_t* p = static_cast<const uint8_t*>(data);
+    crc = ~crc;
+    while (size >= 8) {  // little-endian slicing-by-8
+        uint32_t lo, hi;
+        std::memcpy(&lo, p, 4);
+        std::memcpy(&hi, p + 4, 4);
+        lo ^= crc;
+        crc = t[7][lo & 0xFFu] ^ t[6][(lo >> 8) & 0xFFu] ^ t[5][(lo >> 16) & 0xFFu] ^ t[4][lo >> 24] ^
+              t[3][hi & 0xFFu] ^ t[2][(hi >> 8) & 0xFFu] ^ t[1][(hi >> 16) & 0xFFu] ^ t[0][hi >> 24];
+        p += 8;
+        size -= 8;
+    }
+    while (size--) crc = t[0][(crc ^ *p++) & 0xFFu] ^ (crc >> 8);
+    return ~crc;
+}
 
 HashGridParameters CacheData::gridParameters() const {
     HashGridParameters p;
@@ -106,6 +102,10 @@ const char* toString(CacheFileStatus status) {
         case CacheFileStatus::kTruncated: return "truncated file";
         case CacheFileStatus::kCorrupt: return "corrupt file";
         case CacheFileStatus::kInvalidData: return "invalid cache data";
+        case CacheFileStatus::kChecksumMismatch: return "checksum mismatch";
+        case CacheFileStatus::kUnsupportedFeature: return "unsupported feature";
+        case CacheFileStatus::kTrailingBytes: return "trailing bytes";
+        case CacheFileStatus::kInvalidArgument: return "invalid argument";
     }
     return "unknown status";
 }
@@ -114,42 +114,171 @@ void sortVoxels(std::vector<CacheVoxel>& voxels) {
     std::sort(voxels.begin(), voxels.end(), [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; });
 }
 
-CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, std::string* message) {
-    if (!isLittleEndian()) return fail(CacheFileStatus::kIoError, message, "big-endian hosts are not supported");
+// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META.
+CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
+    if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
+    if (!isLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
+    // The writer refuses what a reader would reject (SPEC §F.10), with a writer-side message.
+    std::array<uint32_t, kHashGridLevelMax + 1> per_level{};
     for (size_t i = 0; i < data.voxels.size(); ++i) {
-        if (data.voxels[i].key == kHashGridInvalidKey || (i > 0 && data.voxels[i - 1].key >= data.voxels[i].key)) {
-            return fail(CacheFileStatus::kInvalidData, message, "voxels must have non-zero keys in strictly increasing order");
+        const CacheVoxel& v = data.voxels[i];
+        const uint32_t level = uint32_t(v.key >> kHashGridLevelOffset) & kHashGridLevelMask;
+        if (v.key == kHashGridInvalidKey || (i > 0 && data.voxels[i - 1].key >= v.key) || level == 0 ||
+            (v.key >> kHashGridUserBit) != 0) {
+            return fail(CacheFileStatus::kInvalidData, message,
+                        "voxels must have non-zero keys with level >= 1 and bit 63 clear, in strictly increasing order "
+                        "(voxel " + std::to_string(i) + ")");
+        }
+        for (float c : v.radiance) {
+            if (!std::isfinite(c) || c < 0.0f) {
+                return fail(CacheFileStatus::kInvalidData, message,
+                            "voxel " + std::to_string(i) + ": radiance must be finite and >= 0");
+            }
+        }
+        if (!std::isfinite(v.sample_weight) || !(v.sample_weight > 0.0f)) {
+            return fail(CacheFileStatus::kInvalidData, message,
+                        "voxel " + std::to_string(i) + ": sample weight must be finite and > 0 (only live voxels are stored)");
+        }
+        ++per_level[level];
+    }
+    if (validateHashGridParameters(data.gridParameters()) != HashGridStatus::kOk || data.bake_capacity == 0) {
+        return fail(CacheFileStatus::kInvalidData, message,
+                    std::string("grid parameters: ") + toString(validateHashGridParameters(data.gridParameters())));
+    }
+    for (size_t i = 0; i < data.metadata.size(); ++i) {
+        const auto& [key, value] = data.metadata[i];
+        if (key.empty() || key.size() > 0xFFFFFFFFu || value.size() > 0xFFFFFFFFu) {
+            return fail(CacheFileStatus::kInvalidData, message, "metadata keys must be non-empty");
+        }
+        for (size_t j = 0; j < i; ++j) {
+            if (data.metadata[j].first == key) {
+                return fail(CacheFileStatus::kInvalidData, message, "duplicate metadata key \"" + key + "\"");
+            }
         }
     }
-    ByteWriter w;
-    w.bytes.assign(std::begin(kMagic), std::end(kMagic));
-    w.put(kVersionMajor);
-    w.put(kVersionMinor);
+    std::vector<CacheLevel> levels;
+    for (uint32_t l = 1; l <= kHashGridLevelMax; ++l) {
+        if (per_level[l]) levels.push_back(CacheLevel{l, per_level[l]});
+    }
+
+    constexpr uint32_t kSections = 5;
+    std::vector<uint8_t>& bytes = *out;
+    bytes.clear();
+    bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
+                  levels.size() * 8 + 4096);
+    ByteWriter w{bytes};
+    // 1) Identifier and header (SPEC §F.3); file_size and the CRC are patched at the end.
+    w.putBytes(kCacheIdentifier, sizeof kCacheIdentifier);
+    w.put(kCacheVersionMajor);
+    w.put(kCacheVersionMinor);
+    w.put(kCacheHeaderSize);
+    w.put(uint32_t(0));  // flags
+    w.put(kSections);
+    w.put(uint64_t(kCacheHeaderSize));  // section table offset
+    w.put(uint64_t(0));                 // file size (patched)
+    w.put(kCacheSectionEntrySize);
+    w.put(uint32_t(0));
+    w.put(uint32_t(0));
+    w.put(uint32_t(0));  // header CRC (patched)
+    // 2) Section table placeholder (SPEC §F.4).
+    const size_t table = bytes.size();
+    bytes.resize(table + kSections * kCacheSectionEntrySize, 0);
+    w.pad8();
+    struct Placed {
+        uint32_t type;
+        uint32_t flags;
+        size_t offset, length;
+    };
+    std::vector<Placed> placed;
+    auto begin = [&](uint32_t type, uint32_t flags) { placed.push_back({type, flags, bytes.size(), 0}); };
+    auto end = [&] {
+        placed.back().length = bytes.size() - placed.back().offset;
+        w.pad8();
+    };
+    // 3) GRID (SPEC §F.5).
+    begin(kSectionGrid, kCacheSectionRequired);
+    w.put(kHashGridPositionBits);
+    w.put(kHashGridLevelBits);
+    w.put(kHashGridNormalBits);
+    w.put(data.bucket_size);
+    w.put(kCacheHashJenkins32Xor);
+    w.put(kCacheLodCameraDistance);
     w.put(data.logarithm_base);
     w.put(data.scene_scale);
     w.put(data.level_bias);
-    w.put(data.bucket_size);
     w.put(data.bake_capacity);
+    w.put(kHashGridPositionBias);
+    w.put(kHashGridNormalBias);
     w.put(uint64_t(data.voxels.size()));
-    w.put(uint32_t(data.metadata.size()));
-    for (const auto& [key, value] : data.metadata) {
-        w.putString(key);
-        w.putString(value);
-    }
+    w.put(uint32_t(levels.size()));
+    w.put(uint32_t(0));
+    end();
+    // 4) KEYS (SPEC §F.6).
+    begin(kSectionKeys, kCacheSectionRequired);
+    for (const CacheVoxel& v : data.voxels) w.put(v.key);
+    end();
+    // 5) VOXL (SPEC §F.6).
+    begin(kSectionVoxels, kCacheSectionRequired);
     for (const CacheVoxel& v : data.voxels) {
-        w.put(v.key);
         w.put(v.radiance[0]);
         w.put(v.radiance[1]);
         w.put(v.radiance[2]);
         w.put(v.sample_weight);
     }
-    w.put(crc32(w.bytes.data(), w.bytes.size()));
+    end();
+    // 6) LEVL (SPEC §F.7).
+    begin(kSectionLevels, kCacheSectionRequired);
+    for (const CacheLevel& l : levels) {
+        w.put(l.level);
+        w.put(l.voxel_count);
+    }
+    end();
+    // 7) META (SPEC §F.8), optional.
+    begin(kSectionMetadata, 0);
+    w.put(uint32_t(data.metadata.size()));
+    w.put(uint32_t(0));
+    for (const auto& [key, value] : data.metadata) {
+        w.put(uint32_t(key.size()));
+        w.put(uint32_t(value.size()));
+        w.putBytes(key.data(), key.size());
+        w.putBytes(value.data(), value.size());
+    }
+    end();
+    // 8) Table entries, file size, checksums.
+    for (size_t i = 0; i < placed.size(); ++i) {
+        const size_t e = table + i * kCacheSectionEntrySize;
+        w.patch(e, placed[i].type);
+        w.patch(e + 4, placed[i].flags);
+        w.patch(e + 8, uint64_t(placed[i].offset));
+        w.patch(e + 16, uint64_t(placed[i].length));
+        w.patch(e + 24, cacheCrc32(bytes.data() + placed[i].offset, placed[i].length));
+        w.patch(e + 28, uint32_t(0));
+    }
+    w.patch(40, uint64_t(bytes.size()));
+    uint32_t crc = cacheCrc32(bytes.data(), kCacheHeaderCrcOffset);
+    crc = cacheCrc32(bytes.data() + kCacheHeaderSize, kSections * kCacheSectionEntrySize, crc);
+    w.patch(kCacheHeaderCrcOffset, crc);
+    // Metadata text is validated as UTF-8 by the reader: check here, on the encoded bytes.
+    CacheView view;
+    CacheError error;
+    if (CacheView::openMemory(bytes.data(), bytes.size(), &view, &error) != CacheFileStatus::kOk) {
+        return fail(CacheFileStatus::kInvalidData, message, "the data cannot be stored: " + error.message);
+    }
+    return CacheFileStatus::kOk;
+}
 
+CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, std::string* message) {
+    std::vector<uint8_t> bytes;
+    const CacheFileStatus encoded = encodeCacheFile(data, &bytes, message);
+    if (encoded != CacheFileStatus::kOk) {
+        if (message) *message = path + ": " + *message;
+        return encoded;
+    }
     const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
     {
         std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
         if (!out) return fail(CacheFileStatus::kIoError, message, path + ": cannot create " + temporary);
-        out.write(reinterpret_cast<const char*>(w.bytes.data()), std::streamsize(w.bytes.size()));
+        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
         out.flush();
         if (!out) {
             out.close();
@@ -161,54 +290,43 @@ CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, s
         std::remove(temporary.c_str());
         return fail(CacheFileStatus::kIoError, message, path + ": cannot rename the temporary file into place");
     }
+    // Re-open what landed on disk and validate it (KTX habit); keep the file for the bug report.
+    CacheView view;
+    CacheError error;
+    const CacheFileStatus reread = CacheView::openFile(path, &view, &error);
+    if (reread != CacheFileStatus::kOk) {
+        return fail(reread == CacheFileStatus::kIoError ? CacheFileStatus::kIoError : CacheFileStatus::kCorrupt,
+                    message, "the file written does not validate (kept for inspection): " + error.message);
+    }
+    if (view.fileSize() != bytes.size() || view.voxelCount() != data.voxels.size()) {
+        return fail(CacheFileStatus::kIoError, message, path + ": the file read back differs from what was written");
+    }
     return CacheFileStatus::kOk;
 }
 
 CacheFileStatus readCacheFile(const std::string& path, CacheData* data, std::string* message) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return fail(CacheFileStatus::kIoError, message, path + ": cannot open");
-    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
-        return fail(CacheFileStatus::kBadMagic, message, path + ": not a sharcbake cache file (bad magic)");
-    }
-    ByteReader r{bytes.data(), bytes.size(), sizeof kMagic};
-    uint16_t major = 0, minor = 0;
-    if (!r.get(major) || !r.get(minor)) return fail(CacheFileStatus::kTruncated, message, path + ": truncated header");
-    if (major != kVersionMajor) {
-        return fail(CacheFileStatus::kUnsupportedVersion, message,
-                    path + ": format version " + std::to_string(major) + "." + std::to_string(minor) + " is not supported");
-    }
-    if (bytes.size() < r.offset + 4) return fail(CacheFileStatus::kTruncated, message, path + ": truncated");
-    uint32_t stored_crc = 0;
-    std::memcpy(&stored_crc, bytes.data() + bytes.size() - 4, 4);
-    if (crc32(bytes.data(), bytes.size() - 4) != stored_crc) {
-        return fail(CacheFileStatus::kCorrupt, message, path + ": checksum mismatch (truncated or corrupted)");
-    }
-    r.size = bytes.size() - 4;
+    CacheView view;
+    CacheError error;
+    const CacheFileStatus status = CacheView::openFile(path, &view, &error);
+    if (status != CacheFileStatus::kOk) return fail(status, message, error.message);
+    if (!data) return CacheFileStatus::kOk;
     CacheData result;
-    uint64_t voxel_count = 0;
-    uint32_t metadata_count = 0;
-    if (!r.get(result.logarithm_base) || !r.get(result.scene_scale) || !r.get(result.level_bias) ||
-        !r.get(result.bucket_size) || !r.get(result.bake_capacity) || !r.get(voxel_count) || !r.get(metadata_count)) {
-        return fail(CacheFileStatus::kTruncated, message, path + ": truncated header");
+    const HashGridParameters p = view.gridParameters();
+    result.logarithm_base = p.logarithm_base;
+    result.scene_scale = p.scene_scale;
+    result.level_bias = p.level_bias;
+    result.bucket_size = p.bucket_size;
+    result.bake_capacity = view.bakeCapacity();
+    result.version_major = view.versionMajor();
+    result.version_minor = view.versionMinor();
+    result.voxels.resize(size_t(view.voxelCount()));
+    for (uint64_t i = 0; i < view.voxelCount(); ++i) result.voxels[size_t(i)] = view.voxel(i);
+    result.levels = view.levels();
+    result.metadata.reserve(view.metadataCount());
+    for (size_t i = 0; i < view.metadataCount(); ++i) {
+        result.metadata.emplace_back(std::string(view.metadataKey(i)), std::string(view.metadataValue(i)));
     }
-    for (uint32_t i = 0; i < metadata_count; ++i) {
-        std::string key, value;
-        if (!r.getString(key) || !r.getString(value)) return fail(CacheFileStatus::kCorrupt, message, path + ": bad metadata");
-        result.metadata.emplace_back(std::move(key), std::move(value));
-    }
-    if (voxel_count > (r.size - r.offset) / kVoxelBytes || (r.size - r.offset) != voxel_count * kVoxelBytes) {
-        return fail(CacheFileStatus::kCorrupt, message, path + ": voxel count does not match the file size");
-    }
-    result.voxels.resize(size_t(voxel_count));
-    for (CacheVoxel& v : result.voxels) {
-        r.get(v.key);
-        r.get(v.radiance[0]);
-        r.get(v.radiance[1]);
-        r.get(v.radiance[2]);
-        r.get(v.sample_weight);
-    }
-    if (data) *data = std::move(result);
+    *data = std::move(result);
     return CacheFileStatus::kOk;
 }
 

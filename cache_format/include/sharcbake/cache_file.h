@@ -22,6 +22,12 @@ struct CacheVoxel {
     float sample_weight = 0.0f;              ///< effective sample count of the resolved mean
 };
 
+/// A level present in the cache and how many voxels it holds.
+struct CacheLevel {
+    uint32_t level = 0;        ///< 1..511
+    uint32_t voxel_count = 0;  ///< > 0
+};
+
 /// Everything a cache file holds.
 struct CacheData {
     /// Grid parameters that feed the key (the camera position is per query, stored as 0).
@@ -33,7 +39,14 @@ struct CacheData {
     /// Voxels sorted by key, keys unique and non-zero.
     std::vector<CacheVoxel> voxels;
     /// Provenance and settings as ordered key/value text (writer, scene, settings, timings).
+    /// Keys must be unique and non-empty, keys and values valid UTF-8 (SPEC §F.8).
     std::vector<std::pair<std::string, std::string>> metadata;
+    /// Levels present, ascending, with voxel counts. Filled by readCacheFile(); the writer derives
+    /// them from the keys and ignores this field.
+    std::vector<CacheLevel> levels;
+    /// Format version of the file read (readCacheFile); the writer always writes the current one.
+    uint16_t version_major = 0;
+    uint16_t version_minor = 0;
 
     HashGridParameters gridParameters() const;
 };
@@ -44,16 +57,26 @@ enum class CacheFileStatus : uint32_t {
     kBadMagic,          ///< not a sharcbake cache
     kUnsupportedVersion,
     kTruncated,         ///< shorter than its header says
-    kCorrupt,           ///< checksum mismatch or a field out of range
-    kInvalidData,       ///< (writing) voxels not sorted/unique, or a zero key
+    kCorrupt,           ///< a field out of range or inconsistent (SPEC validation rule cited)
+    kInvalidData,       ///< (writing) voxels not sorted/unique, a zero key, bad values or metadata
+    kChecksumMismatch,  ///< a CRC-32 of the header/table or of a section does not match
+    kUnsupportedFeature,  ///< an unknown REQUIRED section, header flag, hash function or LOD policy
+    kTrailingBytes,     ///< bytes after the end the header declares
+    kInvalidArgument,   ///< API misuse (null pointer, capacity 0, ...)
 };
 
 const char* toString(CacheFileStatus status);
 
-/// Writes `data` to `path` atomically: to a temporary file beside it, then rename.
+/// Writes `data` to `path` atomically (temporary file beside it, then rename) in the current
+/// format version, then re-opens the file and validates it (SPEC §F.10). Voxels must be sorted by
+/// key, unique, non-zero, with finite radiance >= 0 and finite weight > 0 (only live voxels).
 CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, std::string* message);
 
-/// Reads and validates a cache file.
+/// Serialises `data` into `bytes` (what writeCacheFile writes), without touching the disk.
+CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* bytes, std::string* message);
+
+/// Reads and fully validates a cache file (every rule of SPEC §F.10). The message names the
+/// violated rule ("V11: ...").
 CacheFileStatus readCacheFile(const std::string& path, CacheData* data, std::string* message);
 
 /// Sorts voxels by key (the canonical order files store).

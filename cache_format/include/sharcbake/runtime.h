@@ -1,0 +1,191 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file runtime.h
+/// @brief Runtime access to a baked .sharc cache: open + validate, lookups, iteration, statistics,
+/// and SHaRC GPU buffers for a warm start.
+///
+/// Safe for untrusted input: opening validates every rule of SPEC.md §F.10 before any accessor can
+/// be used, and no accessor reads outside the validated buffer. No exceptions are thrown (an
+/// allocation failure inside gpuBuffers()/openFile() is reported as a status); no third-party
+/// dependencies. A CacheView is immutable after opening, so concurrent lookups are safe.
+#pragma once
+
+#include "sharcbake/cache_file.h"
+#include "sharcbake/format.h"
+#include "sharcbake/hash_grid.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace sharcbake {
+
+/// Why an open or validation failed: the status, the SPEC rule number (V1..) and a message.
+struct CacheError {
+    CacheFileStatus status = CacheFileStatus::kOk;
+    uint32_t rule = 0;    ///< SPEC §F.10 rule, 0 when not a file rule (I/O, argument)
+    std::string message;  ///< "V11: section KEYS: checksum mismatch ..."
+};
+
+/// A section as listed in the table.
+struct CacheSectionInfo {
+    uint32_t type = 0;  ///< fourcc (first character in the low byte)
+    bool required = false;
+    bool known = false;  ///< a section this reader understands
+    uint64_t offset = 0;
+    uint64_t length = 0;
+    uint32_t crc32 = 0;
+};
+
+/// Aggregate numbers over all voxels (CacheView::stats()).
+struct CacheStats {
+    uint64_t voxels = 0;
+    uint32_t levels = 0;
+    float radiance_min[3] = {0, 0, 0};
+    float radiance_max[3] = {0, 0, 0};
+    double radiance_mean[3] = {0, 0, 0};  ///< unweighted mean over voxels
+    float weight_min = 0.0f;
+    float weight_max = 0.0f;
+    double weight_total = 0.0;
+    double bytes_per_voxel = 0.0;  ///< file size / voxels (0 when empty)
+};
+
+/// SHaRC 1.8 `SharcPackedData` (resolved buffer entry, 16 bytes).
+struct SharcPackedData {
+    uint16_t radiance[4];      ///< fp16 mean R, G, B and effective sample count (each <= 65504)
+    uint32_t sample_data;      ///< bits 0-15 accumulatedFrameNum, bits 16-31 staleFrameNum
+    uint32_t sample_data_ext;  ///< fade-acceleration mask; 0
+};
+static_assert(sizeof(SharcPackedData) == 16, "SharcPackedData is 16 bytes");
+
+/// Options for CacheView::gpuBuffers().
+struct GpuBufferOptions {
+    uint32_t capacity = kHashGridDefaultCapacity;  ///< slots N of the runtime table (>= 1)
+    /// accumulatedFrameNum stored for every entry (clamped to 0..65535). The SDK's resolve scales
+    /// the history by A/F once F exceeds its accumulation frame count A; 1 keeps the baked weight
+    /// intact for A frames, larger values let new frames take over sooner.
+    uint32_t accumulated_frame_num = 1;
+    /// The sample count stored is min(sample_weight, max_sample_count, 65504): caps how strongly
+    /// the baked mean resists new frames.
+    float max_sample_count = 65504.0f;
+};
+
+/// Buffers for a GPU SHaRC implementation (SDK 1.8 layout), `capacity` entries each.
+struct GpuBuffers {
+    uint32_t capacity = 0;
+    std::vector<uint64_t> hash_entries;     ///< keys placed by SHaRC's insert rule, 0 = empty
+    std::vector<SharcPackedData> resolved;  ///< resolved data at the key's slot, zero elsewhere
+    /// The SDK's accumulation buffer (uint4 per entry) starts at zero; not materialised here.
+    uint64_t inserted = 0;
+    uint64_t failed_inserts = 0;  ///< voxels dropped because their bucket was full
+};
+
+/// Float to IEEE binary16, round to nearest even, overflow -> Inf, NaN kept (quiet).
+uint16_t floatToHalf(float value);
+/// IEEE binary16 to float (exact).
+float halfToFloat(uint16_t value);
+
+/// Read-only view of a validated cache.
+class CacheView {
+public:
+    enum class FileMode { kRead, kMap };  ///< read into an owned buffer, or mmap (POSIX)
+
+    CacheView() = default;
+    ~CacheView();
+    CacheView(CacheView&& other) noexcept;
+    CacheView& operator=(CacheView&& other) noexcept;
+    CacheView(const CacheView&) = delete;
+    CacheView& operator=(const CacheView&) = delete;
+
+    /// @brief Validates `size` bytes at `data` and views them without copying; the caller keeps
+    /// the memory alive and unchanged while the view is used. Any alignment is accepted.
+    /// On failure `*out` is reset and `error` (optional) says which rule failed.
+    static CacheFileStatus openMemory(const void* data, size_t size, CacheView* out, CacheError* error);
+
+    /// @brief Reads (or maps) a file, then validates it as openMemory(). I/O errors: kIoError.
+    static CacheFileStatus openFile(const std::string& path, CacheView* out, CacheError* error,
+                                    FileMode mode = FileMode::kRead);
+
+    bool isOpen() const { return data_ != nullptr; }
+
+    // Header and table -------------------------------------------------------------------------
+    uint16_t versionMajor() const { return version_major_; }
+    uint16_t versionMinor() const { return version_minor_; }
+    uint64_t fileSize() const { return size_; }
+    uint32_t headerSize() const { return header_size_; }
+    const std::vector<CacheSectionInfo>& sections() const { return sections_; }
+
+    // Grid ---------------------------------------------------------------------------------------
+    /// Grid parameters with the given camera (LOD centre); capacity = the bake's capacity.
+    HashGridParameters gridParameters(const Float3& camera_position = {0, 0, 0}) const;
+    uint32_t bakeCapacity() const { return bake_capacity_; }
+
+    // Voxels (sorted by key) ---------------------------------------------------------------------
+    uint64_t voxelCount() const { return voxel_count_; }
+    uint64_t key(uint64_t index) const;         ///< index < voxelCount()
+    CacheVoxel voxel(uint64_t index) const;     ///< index < voxelCount()
+    /// Index of `key`, or voxelCount() when absent (binary search).
+    uint64_t findKey(uint64_t key) const;
+    CacheStats stats() const;
+
+    // Levels -------------------------------------------------------------------------------------
+    const std::vector<CacheLevel>& levels() const { return levels_; }
+
+    // Metadata -----------------------------------------------------------------------------------
+    size_t metadataCount() const { return metadata_.size(); }
+    std::string_view metadataKey(size_t i) const { return metadata_[i].first; }
+    std::string_view metadataValue(size_t i) const { return metadata_[i].second; }
+    /// Value of `key`, or an empty view with *found = false.
+    std::string_view metadata(std::string_view key, bool* found = nullptr) const;
+
+    // Lookups --------------------------------------------------------------------------------------
+    /// @brief Exact SHaRC query: the key of (position, normal) seen from `camera_position`, then
+    /// a binary search. Returns true and the mean radiance on a hit; false (radiance untouched)
+    /// when that voxel is not in the cache.
+    bool lookup(const Float3& position, const Float3& normal, const Float3& camera_position,
+                Float3* radiance) const;
+
+    /// @brief Like lookup(), but when the camera's level is missing tries the levels present in
+    /// order of distance from it (finer first on ties) at the same point and normal.
+    /// `*level_used` (optional) receives the level that hit.
+    bool lookupNearestLevel(const Float3& position, const Float3& normal, const Float3& camera_position,
+                            Float3* radiance, uint32_t* level_used = nullptr) const;
+
+    /// @brief `count` lookups (exact, or nearest-level when `nearest_level`). `hits` (optional)
+    /// receives 1/0 per query; misses leave radiance[i] as (0, 0, 0). Returns the number of hits.
+    size_t lookupBatch(size_t count, const Float3* positions, const Float3* normals,
+                       const Float3& camera_position, Float3* radiance, uint8_t* hits = nullptr,
+                       bool nearest_level = false) const;
+
+    // GPU ----------------------------------------------------------------------------------------
+    /// @brief SHaRC hash-entries and resolved buffers for a table of options.capacity slots:
+    /// keys inserted in file (key) order with bucketBase + linear probe (SPEC §H.7). Voxels whose
+    /// bucket is full are counted in failed_inserts. Errors: kInvalidArgument (capacity 0, null
+    /// out), kIoError (allocation failed).
+    CacheFileStatus gpuBuffers(const GpuBufferOptions& options, GpuBuffers* out, CacheError* error = nullptr) const;
+
+private:
+    void reset();
+    CacheFileStatus parse(CacheError* error);
+
+    const uint8_t* data_ = nullptr;
+    uint64_t size_ = 0;
+    std::vector<uint8_t> owned_;  ///< FileMode::kRead
+    void* mapping_ = nullptr;     ///< FileMode::kMap
+    size_t mapping_size_ = 0;
+
+    uint16_t version_major_ = 0, version_minor_ = 0;
+    uint32_t header_size_ = 0;
+    std::vector<CacheSectionInfo> sections_;
+    float logarithm_base_ = 2.0f, scene_scale_ = 50.0f, level_bias_ = 0.0f;
+    uint32_t bucket_size_ = kHashGridBucketSize;
+    uint32_t bake_capacity_ = 0;
+    uint64_t voxel_count_ = 0;
+    const uint8_t* keys_ = nullptr;    ///< voxel_count_ little-endian u64
+    const uint8_t* voxels_ = nullptr;  ///< voxel_count_ records of 16 bytes
+    std::vector<CacheLevel> levels_;
+    std::vector<std::pair<std::string_view, std::string_view>> metadata_;
+};
+
+}  // namespace sharcbake

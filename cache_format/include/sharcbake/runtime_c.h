@@ -1,0 +1,94 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/**
+ * @file runtime_c.h
+ * @brief Plain C interface over sharcbake::CacheView (runtime.h): open + validate a .sharc
+ * cache, look up radiance, iterate voxels, build SHaRC GPU buffers.
+ *
+ * Every function is safe for untrusted files, never throws across the boundary and reports
+ * failures as a sharcbake_status (the values of sharcbake::CacheFileStatus) plus, where a
+ * message buffer is given, a NUL-terminated message (truncated to fit).
+ */
+#ifndef SHARCBAKE_RUNTIME_C_H
+#define SHARCBAKE_RUNTIME_C_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum sharcbake_status {
+    SHARCBAKE_OK = 0,
+    SHARCBAKE_IO_ERROR = 1,
+    SHARCBAKE_BAD_MAGIC = 2,
+    SHARCBAKE_UNSUPPORTED_VERSION = 3,
+    SHARCBAKE_TRUNCATED = 4,
+    SHARCBAKE_CORRUPT = 5,
+    SHARCBAKE_INVALID_DATA = 6,
+    SHARCBAKE_CHECKSUM_MISMATCH = 7,
+    SHARCBAKE_UNSUPPORTED_FEATURE = 8,
+    SHARCBAKE_TRAILING_BYTES = 9,
+    SHARCBAKE_INVALID_ARGUMENT = 10
+} sharcbake_status;
+
+/** An open, validated cache. */
+typedef struct sharcbake_cache sharcbake_cache;
+
+/** SHaRC 1.8 SharcPackedData: fp16 x4 (mean RGB, sample count), sampleData, sampleDataExt. */
+typedef struct sharcbake_packed_data {
+    uint16_t radiance[4];
+    uint32_t sample_data;
+    uint32_t sample_data_ext;
+} sharcbake_packed_data;
+
+/** Reads (map = 0) or maps (map != 0) a file and validates it. *out is NULL on failure.
+ *  `rule` (optional) receives the SPEC validation rule number (0 if none). */
+sharcbake_status sharcbake_cache_open_file(const char* path, int map, sharcbake_cache** out, uint32_t* rule,
+                                           char* message, size_t message_size);
+/** Validates `size` bytes at `data` and views them without copying (keep them alive). */
+sharcbake_status sharcbake_cache_open_memory(const void* data, size_t size, sharcbake_cache** out, uint32_t* rule,
+                                             char* message, size_t message_size);
+/** Closes a cache (NULL is allowed). */
+void sharcbake_cache_close(sharcbake_cache* cache);
+
+/** Human-readable status name; never NULL. */
+const char* sharcbake_status_string(sharcbake_status status);
+
+uint64_t sharcbake_cache_voxel_count(const sharcbake_cache* cache);
+uint32_t sharcbake_cache_level_count(const sharcbake_cache* cache);
+/** Level `index` (ascending) and its voxel count; 0 if out of range. */
+int sharcbake_cache_level(const sharcbake_cache* cache, uint32_t index, uint32_t* level, uint32_t* voxel_count);
+/** Grid parameters: log base, scene scale, level bias, bake capacity (any pointer may be NULL). */
+void sharcbake_cache_grid(const sharcbake_cache* cache, float* logarithm_base, float* scene_scale,
+                          float* level_bias, uint32_t* bake_capacity);
+/** Voxel `index` (sorted by key); returns 0 if out of range. Output pointers may be NULL. */
+int sharcbake_cache_voxel(const sharcbake_cache* cache, uint64_t index, uint64_t* key, float radiance[3],
+                          float* sample_weight);
+/** Metadata value of `key` (NUL-terminated copy into `value`); returns 1 if present. */
+int sharcbake_cache_metadata(const sharcbake_cache* cache, const char* key, char* value, size_t value_size);
+
+/** Exact SHaRC lookup; 1 on a hit (radiance written), 0 on a miss. */
+int sharcbake_cache_lookup(const sharcbake_cache* cache, const float position[3], const float normal[3],
+                           const float camera_position[3], float radiance[3]);
+/** Lookup falling back to the nearest level present; `level_used` may be NULL. */
+int sharcbake_cache_lookup_nearest_level(const sharcbake_cache* cache, const float position[3],
+                                         const float normal[3], const float camera_position[3], float radiance[3],
+                                         uint32_t* level_used);
+/** `count` lookups: positions/normals/radiance are 3*count floats; hits (optional) count bytes.
+ *  Returns the number of hits. */
+size_t sharcbake_cache_lookup_batch(const sharcbake_cache* cache, size_t count, const float* positions,
+                                    const float* normals, const float camera_position[3], float* radiance,
+                                    uint8_t* hits, int nearest_level);
+
+/** Fills `hash_entries` (capacity u64) and `resolved` (capacity entries) for a SHaRC table of
+ *  `capacity` slots. accumulated_frame_num: see GpuBufferOptions. `failed_inserts` optional. */
+sharcbake_status sharcbake_cache_gpu_buffers(const sharcbake_cache* cache, uint32_t capacity,
+                                             uint32_t accumulated_frame_num, uint64_t* hash_entries,
+                                             sharcbake_packed_data* resolved, uint64_t* failed_inserts);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SHARCBAKE_RUNTIME_C_H */

@@ -1,0 +1,764 @@
+// SPDX-License-Identifier: Apache-2.0
+// CacheView: opening and validating a .sharc file (SPEC.md §F, rules V1..V18), lookups and GPU
+// buffers. Reads every field with memcpy from validated offsets; never trusts a count before
+// checking it against the bytes that hold it.
+#include "sharcbake/runtime.h"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <new>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace sharcbake {
+namespace {
+
+template <typename T> T load(const uint8_t* p) {
+    T value;
+    std::memcpy(&value, p, sizeof(T));  // little-endian host (checked in openMemory)
+    return value;
+}
+
+bool hostIsLittleEndian() {
+    const uint16_t one = 1;
+    uint8_t first;
+    std::memcpy(&first, &one, 1);
+    return first == 1;
+}
+
+uint64_t align8(uint64_t v) { return (v + 7u) & ~uint64_t(7); }
+
+std::string fourccText(uint32_t type) {
+    std::string s;
+    for (int i = 0; i < 4; ++i) {
+        const char c = char((type >> (8 * i)) & 0xFFu);
+        if (c >= 0x20 && c < 0x7F) {
+            s += c;
+        } else {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02X", unsigned(uint8_t(c)));
+            s += buf;
+        }
+    }
+    return s;
+}
+
+CacheFileStatus fail(CacheError* error, CacheFileStatus status, uint32_t rule, const std::string& message) {
+    if (error) {
+        error->status = status;
+        error->rule = rule;
+        error->message = rule ? "V" + std::to_string(rule) + ": " + message : message;
+    }
+    return status;
+}
+
+bool validUtf8(const uint8_t* s, size_t n) {
+    size_t i = 0;
+    while (i < n) {
+        const uint8_t c = s[i];
+        size_t extra;
+        uint32_t cp;
+        if (c < 0x80) {
+            ++i;
+            continue;
+        } else if ((c & 0xE0) == 0xC0) {
+            extra = 1;
+            cp = c & 0x1Fu;
+        } else if ((c & 0xF0) == 0xE0) {
+            extra = 2;
+            cp = c & 0x0Fu;
+        } else if ((c & 0xF8) == 0xF0) {
+            extra = 3;
+            cp = c & 0x07u;
+        } else {
+            return false;
+        }
+        if (n - i <= extra) return false;
+        for (size_t k = 1; k <= extra; ++k) {
+            if ((s[i + k] & 0xC0) != 0x80) return false;
+            cp = cp << 6 | (s[i + k] & 0x3Fu);
+        }
+        static const uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
+        if (cp < kMin[extra] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
+        i += extra + 1;
+    }
+    return true;
+}
+
+bool finiteNonNegative(float v) { return std::isfinite(v) && v >= 0.0f; }
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------------
+// fp16
+// ------------------------------------------------------------------------------------------------
+
+uint16_t floatToHalf(float value) {
+    uint32_t x;
+    std::memcpy(&x, &value, 4);
+    const uint16_t sign = uint16_t((x >> 16) & 0x8000u);
+    uint32_t a = x & 0x7FFFFFFFu;
+    if (a > 0x7F800000u) return uint16_t(sign | 0x7E00u);  // NaN (quiet)
+    if (a >= 0x47800000u) return uint16_t(sign | 0x7C00u);  // >= 65536 (and Inf): Inf
+    if (a < 0x38800000u) {                                  // below 2^-14: subnormal or zero
+        float f;
+        std::memcpy(&f, &a, 4);
+        return uint16_t(sign | uint16_t(std::nearbyint(f * 16777216.0f)));  // exact scale, RNE
+    }
+    const uint32_t odd = (a >> 13) & 1u;
+    a += 0xC8000FFFu + odd;  // rebias exponent by -112 and round to nearest even
+    return uint16_t(sign | uint16_t(a >> 13));
+}
+
+float halfToFloat(uint16_t h) {
+    const uint32_t sign = uint32_t(h & 0x8000u) << 16;
+    const uint32_t exponent = (h >> 10) & 0x1Fu;
+    const uint32_t mantissa = h & 0x3FFu;
+    float f;
+    if (exponent == 0) {
+        f = std::ldexp(float(mantissa), -24);
+        uint32_t bits;
+        std::memcpy(&bits, &f, 4);
+        bits |= sign;
+        std::memcpy(&f, &bits, 4);
+        return f;
+    }
+    uint32_t bits = exponent == 31 ? (sign | 0x7F800000u | mantissa << 13)
+                                   : (sign | (exponent + 112u) << 23 | mantissa << 13);
+    std::memcpy(&f, &bits, 4);
+    return f;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Lifetime
+// ------------------------------------------------------------------------------------------------
+
+CacheView::~CacheView() { reset(); }
+
+CacheView::CacheView(CacheView&& other) noexcept { *this = std::move(other); }
+
+CacheView& CacheView::operator=(CacheView&& other) noexcept {
+    if (this == &other) return *this;
+    reset();
+    data_ = other.data_;
+    size_ = other.size_;
+    owned_ = std::move(other.owned_);  // the buffer (and pointers into it) moves unchanged
+    mapping_ = other.mapping_;
+    mapping_size_ = other.mapping_size_;
+    version_major_ = other.version_major_;
+    version_minor_ = other.version_minor_;
+    header_size_ = other.header_size_;
+    sections_ = std::move(other.sections_);
+    logarithm_base_ = other.logarithm_base_;
+    scene_scale_ = other.scene_scale_;
+    level_bias_ = other.level_bias_;
+    bucket_size_ = other.bucket_size_;
+    bake_capacity_ = other.bake_capacity_;
+    voxel_count_ = other.voxel_count_;
+    keys_ = other.keys_;
+    voxels_ = other.voxels_;
+    levels_ = std::move(other.levels_);
+    metadata_ = std::move(other.metadata_);
+    other.data_ = nullptr;
+    other.mapping_ = nullptr;
+    other.mapping_size_ = 0;
+    other.reset();
+    return *this;
+}
+
+void CacheView::reset() {
+    if (mapping_) ::munmap(mapping_, mapping_size_);
+    mapping_ = nullptr;
+    mapping_size_ = 0;
+    owned_.clear();
+    owned_.shrink_to_fit();
+    data_ = nullptr;
+    size_ = 0;
+    version_major_ = version_minor_ = 0;
+    header_size_ = 0;
+    sections_.clear();
+    voxel_count_ = 0;
+    keys_ = voxels_ = nullptr;
+    levels_.clear();
+    metadata_.clear();
+}
+
+// ------------------------------------------------------------------------------------------------
+// Opening
+// ------------------------------------------------------------------------------------------------
+
+CacheFileStatus CacheView::openMemory(const void* data, size_t size, CacheView* out, CacheError* error) {
+    if (error) *error = CacheError{};
+    if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "openMemory: null output view");
+    out->reset();
+    if (!data && size > 0) return fail(error, CacheFileStatus::kInvalidArgument, 0, "openMemory: null data");
+    if (!hostIsLittleEndian()) {
+        return fail(error, CacheFileStatus::kUnsupportedFeature, 0, "big-endian hosts are not supported");
+    }
+    CacheView view;
+    view.data_ = static_cast<const uint8_t*>(data);
+    view.size_ = size;
+    CacheFileStatus status;
+    try {
+        status = view.parse(error);
+    } catch (const std::bad_alloc&) {
+        status = fail(error, CacheFileStatus::kIoError, 0, "out of memory while opening the cache");
+    }
+    if (status != CacheFileStatus::kOk) return status;
+    *out = std::move(view);
+    return CacheFileStatus::kOk;
+}
+
+CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, CacheError* error, FileMode mode) {
+    if (error) *error = CacheError{};
+    if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "openFile: null output view");
+    out->reset();
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return fail(error, CacheFileStatus::kIoError, 0, path + ": cannot open: " + std::strerror(errno));
+    struct stat st;
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        return fail(error, CacheFileStatus::kIoError, 0, path + ": not a regular file");
+    }
+    const size_t size = size_t(st.st_size);
+    CacheView view;
+    try {
+        if (mode == FileMode::kMap && size > 0) {
+            void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+            if (p == MAP_FAILED) {
+                ::close(fd);
+                return fail(error, CacheFileStatus::kIoError, 0, path + ": mmap failed: " + std::strerror(errno));
+            }
+            view.mapping_ = p;
+            view.mapping_size_ = size;
+            view.data_ = static_cast<const uint8_t*>(p);
+        } else {
+            view.owned_.resize(size);
+            size_t done = 0;
+            while (done < size) {
+                const ssize_t n = ::read(fd, view.owned_.data() + done, size - done);
+                if (n < 0 && errno == EINTR) continue;
+                if (n <= 0) {
+                    ::close(fd);
+                    return fail(error, CacheFileStatus::kIoError, 0, path + ": read failed");
+                }
+                done += size_t(n);
+            }
+            view.data_ = view.owned_.data();
+        }
+    } catch (const std::bad_alloc&) {
+        ::close(fd);
+        return fail(error, CacheFileStatus::kIoError, 0, path + ": out of memory reading the file");
+    }
+    ::close(fd);
+    view.size_ = size;
+    if (!view.data_) {
+        static const uint8_t kEmpty = 0;
+        view.data_ = &kEmpty;  // empty file: parse() rejects it (V1)
+    }
+    if (!hostIsLittleEndian()) {
+        return fail(error, CacheFileStatus::kUnsupportedFeature, 0, "big-endian hosts are not supported");
+    }
+    CacheFileStatus status;
+    try {
+        status = view.parse(error);
+    } catch (const std::bad_alloc&) {
+        status = fail(error, CacheFileStatus::kIoError, 0, "out of memory while opening the cache");
+    }
+    if (status != CacheFileStatus::kOk) {
+        if (error) error->message = path + ": " + error->message;
+        return status;
+    }
+    *out = std::move(view);
+    return CacheFileStatus::kOk;
+}
+
+// The numbered steps follow SPEC §F.10; each failure cites its rule.
+CacheFileStatus CacheView::parse(CacheError* error) {
+    using S = CacheFileStatus;
+    const uint8_t* d = data_;
+    const uint64_t size = size_;
+
+    // V1: identifier.
+    const size_t id_bytes = size_t(std::min<uint64_t>(size, sizeof kCacheIdentifier));
+    if (std::memcmp(d, kCacheIdentifier, id_bytes) != 0) {
+        if (size >= 8 && std::memcmp(d, "SHRCBAKE", 8) == 0) {
+            return fail(error, S::kUnsupportedVersion, 1,
+                        "interim format 0.1 (before the versioned layout) is not readable; re-bake the cache");
+        }
+        return fail(error, S::kBadMagic, 1, "not a sharcbake cache file (identifier mismatch)");
+    }
+    // V2: a complete header.
+    if (size < kCacheHeaderSize) {
+        return fail(error, S::kTruncated, 2,
+                    "truncated: " + std::to_string(size) + " bytes, the header alone is " +
+                        std::to_string(kCacheHeaderSize));
+    }
+    // V3: version.
+    version_major_ = load<uint16_t>(d + 16);
+    version_minor_ = load<uint16_t>(d + 18);
+    if (version_major_ != kCacheVersionMajor) {
+        return fail(error, S::kUnsupportedVersion, 3,
+                    "format version " + std::to_string(version_major_) + "." + std::to_string(version_minor_) +
+                        " is not supported (this reader reads " + std::to_string(kCacheVersionMajor) + ".x)");
+    }
+    // V4: declared file size equals the actual size.
+    const uint64_t file_size = load<uint64_t>(d + 40);
+    if (file_size > size) {
+        return fail(error, S::kTruncated, 4,
+                    "truncated: the header declares " + std::to_string(file_size) + " bytes, " +
+                        std::to_string(size) + " present");
+    }
+    if (file_size < size) {
+        return fail(error, S::kTrailingBytes, 4,
+                    std::to_string(size - file_size) + " trailing bytes after the declared end (" +
+                        std::to_string(file_size) + " bytes)");
+    }
+    // V5: header and table geometry.
+    header_size_ = load<uint32_t>(d + 20);
+    const uint32_t section_count = load<uint32_t>(d + 28);
+    const uint64_t table_offset = load<uint64_t>(d + 32);
+    const uint32_t entry_size = load<uint32_t>(d + 48);
+    if (header_size_ < kCacheHeaderSize || header_size_ % kCacheAlignment != 0 || header_size_ > size ||
+        (version_minor_ == 0 && header_size_ != kCacheHeaderSize)) {
+        return fail(error, S::kCorrupt, 5, "bad header size " + std::to_string(header_size_));
+    }
+    if (table_offset != header_size_ || entry_size != kCacheSectionEntrySize || section_count == 0 ||
+        section_count > kCacheMaxSections ||
+        table_offset + uint64_t(section_count) * kCacheSectionEntrySize > size) {
+        return fail(error, S::kCorrupt, 5,
+                    "bad section table (offset " + std::to_string(table_offset) + ", " +
+                        std::to_string(section_count) + " entries of " + std::to_string(entry_size) + " bytes)");
+    }
+    const uint64_t table_end = table_offset + uint64_t(section_count) * kCacheSectionEntrySize;
+    // V6: header + table checksum.
+    {
+        uint32_t crc = cacheCrc32(d, kCacheHeaderCrcOffset);
+        crc = cacheCrc32(d + kCacheHeaderSize, size_t(table_end - kCacheHeaderSize), crc);
+        const uint32_t stored = load<uint32_t>(d + kCacheHeaderCrcOffset);
+        if (crc != stored) {
+            char buf[96];
+            std::snprintf(buf, sizeof buf, "header/section-table checksum mismatch (stored %08X, computed %08X)",
+                          stored, crc);
+            return fail(error, S::kChecksumMismatch, 6, buf);
+        }
+    }
+    // V7: flags and reserved header fields.
+    const uint32_t flags = load<uint32_t>(d + 24);
+    if (flags != 0) {
+        char buf[80];
+        std::snprintf(buf, sizeof buf, "unknown required header flags 0x%08X", flags);
+        return fail(error, S::kUnsupportedFeature, 7, buf);
+    }
+    if (load<uint32_t>(d + 52) != 0 || load<uint32_t>(d + 56) != 0) {
+        return fail(error, S::kCorrupt, 7, "reserved header fields are not zero");
+    }
+
+    // V8, V9, V10: section entries, layout, checksums, types.
+    sections_.clear();
+    sections_.reserve(section_count);
+    uint64_t expected_offset = align8(table_end);
+    const CacheSectionInfo* grid = nullptr;
+    const CacheSectionInfo* keys = nullptr;
+    const CacheSectionInfo* voxels = nullptr;
+    const CacheSectionInfo* levels = nullptr;
+    const CacheSectionInfo* meta = nullptr;
+    for (uint32_t i = 0; i < section_count; ++i) {
+        const uint8_t* e = d + table_offset + uint64_t(i) * kCacheSectionEntrySize;
+        CacheSectionInfo s;
+        s.type = load<uint32_t>(e);
+        const uint32_t sflags = load<uint32_t>(e + 4);
+        s.offset = load<uint64_t>(e + 8);
+        s.length = load<uint64_t>(e + 16);
+        s.crc32 = load<uint32_t>(e + 24);
+        s.required = (sflags & kCacheSectionRequired) != 0;
+        const std::string name = "section " + std::to_string(i) + " (" + fourccText(s.type) + ")";
+        if ((sflags & ~kCacheSectionRequired) != 0 || load<uint32_t>(e + 28) != 0) {
+            return fail(error, S::kCorrupt, 8, name + ": unknown flag bits or non-zero reserved field");
+        }
+        if (s.offset != expected_offset || s.offset > size || s.length > size - s.offset) {
+            return fail(error, S::kCorrupt, 8,
+                        name + ": offset " + std::to_string(s.offset) + " length " + std::to_string(s.length) +
+                            " (expected offset " + std::to_string(expected_offset) + ", file " +
+                            std::to_string(size) + " bytes)");
+        }
+        const uint64_t end = s.offset + s.length;
+        expected_offset = align8(end);
+        if (expected_offset > size) {
+            return fail(error, S::kCorrupt, 8, name + ": padding after the section runs past the end of the file");
+        }
+        for (uint64_t p = end; p < expected_offset; ++p) {
+            if (d[p] != 0) return fail(error, S::kCorrupt, 8, name + ": non-zero padding byte at " + std::to_string(p));
+        }
+        if (cacheCrc32(d + s.offset, size_t(s.length)) != s.crc32) {
+            return fail(error, S::kChecksumMismatch, 9, name + ": checksum mismatch");
+        }
+        const CacheSectionInfo** slot = nullptr;
+        switch (s.type) {
+            case kSectionGrid: slot = &grid; break;
+            case kSectionKeys: slot = &keys; break;
+            case kSectionVoxels: slot = &voxels; break;
+            case kSectionLevels: slot = &levels; break;
+            case kSectionMetadata: slot = &meta; break;
+            default: break;
+        }
+        s.known = slot != nullptr;
+        if (!s.known && s.required) {
+            return fail(error, S::kUnsupportedFeature, 10, name + ": unknown section marked REQUIRED");
+        }
+        sections_.push_back(s);
+        if (slot) {
+            if (*slot) return fail(error, S::kCorrupt, 10, name + ": section type appears twice");
+            *slot = &sections_.back();  // reserve() above: pointers stay valid
+        }
+    }
+    if (expected_offset != size) {
+        return fail(error, S::kCorrupt, 8,
+                    "the last section ends at " + std::to_string(expected_offset) + ", the file at " +
+                        std::to_string(size));
+    }
+    // V11: required sections.
+    for (const auto& [section, type] : {std::pair{grid, "GRID"}, std::pair{keys, "KEYS"},
+                                        std::pair{voxels, "VOXL"}, std::pair{levels, "LEVL"}}) {
+        if (!section) return fail(error, S::kCorrupt, 11, std::string("missing section ") + type);
+        if (!section->required) return fail(error, S::kCorrupt, 11, std::string("section ") + type + " not marked REQUIRED");
+    }
+
+    // V12: GRID constants.
+    if (grid->length < kCacheGridSize || (version_minor_ == 0 && grid->length != kCacheGridSize)) {
+        return fail(error, S::kCorrupt, 12, "GRID: length " + std::to_string(grid->length) + ", expected 64");
+    }
+    const uint8_t* g = d + grid->offset;
+    const uint32_t position_bits = load<uint32_t>(g + 0), level_bits = load<uint32_t>(g + 4),
+                   normal_bits = load<uint32_t>(g + 8);
+    bucket_size_ = load<uint32_t>(g + 12);
+    const uint32_t hash_function = load<uint32_t>(g + 16), lod_policy = load<uint32_t>(g + 20);
+    logarithm_base_ = load<float>(g + 24);
+    scene_scale_ = load<float>(g + 28);
+    level_bias_ = load<float>(g + 32);
+    bake_capacity_ = load<uint32_t>(g + 36);
+    const float position_bias = load<float>(g + 40), normal_bias = load<float>(g + 44);
+    const uint64_t voxel_count = load<uint64_t>(g + 48);
+    const uint32_t level_count = load<uint32_t>(g + 56);
+    if (position_bits != kHashGridPositionBits || level_bits != kHashGridLevelBits ||
+        normal_bits != kHashGridNormalBits || position_bias != kHashGridPositionBias ||
+        normal_bias != kHashGridNormalBias) {
+        return fail(error, S::kUnsupportedFeature, 12,
+                    "GRID: key layout " + std::to_string(position_bits) + "/" + std::to_string(level_bits) + "/" +
+                        std::to_string(normal_bits) + " bits or biases differ from SHaRC 1.7+ (17/9/3, 1e-4, 1e-3)");
+    }
+    if (hash_function != kCacheHashJenkins32Xor) {
+        return fail(error, S::kUnsupportedFeature, 12, "GRID: unknown hash function " + std::to_string(hash_function));
+    }
+    if (lod_policy != kCacheLodCameraDistance) {
+        return fail(error, S::kUnsupportedFeature, 12, "GRID: unknown LOD policy " + std::to_string(lod_policy));
+    }
+    if (load<uint32_t>(g + 60) != 0) return fail(error, S::kCorrupt, 12, "GRID: reserved field is not zero");
+    // V13: GRID parameters.
+    if (bucket_size_ == 0 || bake_capacity_ == 0 || !std::isfinite(logarithm_base_) || !(logarithm_base_ > 1.0f) ||
+        !std::isfinite(scene_scale_) || !(scene_scale_ > 0.0f) || !std::isfinite(level_bias_)) {
+        return fail(error, S::kCorrupt, 13,
+                    "GRID: invalid parameters (bucket size " + std::to_string(bucket_size_) + ", capacity " +
+                        std::to_string(bake_capacity_) + ", log base " + std::to_string(logarithm_base_) +
+                        ", scene scale " + std::to_string(scene_scale_) + ", level bias " +
+                        std::to_string(level_bias_) + ")");
+    }
+    // V14: section lengths agree with the counts.
+    if (voxel_count > size / 24 || keys->length != voxel_count * 8 || voxels->length != voxel_count * 16 ||
+        level_count > kHashGridLevelMax || levels->length != uint64_t(level_count) * 8) {
+        return fail(error, S::kCorrupt, 14,
+                    "section lengths (KEYS " + std::to_string(keys->length) + ", VOXL " +
+                        std::to_string(voxels->length) + ", LEVL " + std::to_string(levels->length) +
+                        ") do not match " + std::to_string(voxel_count) + " voxels and " +
+                        std::to_string(level_count) + " levels");
+    }
+    voxel_count_ = voxel_count;
+    keys_ = d + keys->offset;
+    voxels_ = d + voxels->offset;
+    // V15: keys.
+    std::array<uint64_t, kHashGridLevelMax + 1> per_level{};
+    uint64_t previous = 0;
+    for (uint64_t i = 0; i < voxel_count; ++i) {
+        const uint64_t k = load<uint64_t>(keys_ + i * 8);
+        const uint32_t level = uint32_t(k >> kHashGridLevelOffset) & kHashGridLevelMask;
+        if (k <= previous || level < kHashGridLevelMin || (k >> kHashGridUserBit) != 0) {
+            char buf[120];
+            std::snprintf(buf, sizeof buf, "KEYS: key %llu (0x%016llX) is zero, out of order, level 0 or has bit 63 set",
+                          (unsigned long long)i, (unsigned long long)k);
+            return fail(error, S::kCorrupt, 15, buf);
+        }
+        previous = k;
+        ++per_level[level];
+    }
+    // V16: voxel values.
+    for (uint64_t i = 0; i < voxel_count; ++i) {
+        const uint8_t* v = voxels_ + i * 16;
+        const float r = load<float>(v), gr = load<float>(v + 4), b = load<float>(v + 8), w = load<float>(v + 12);
+        if (!finiteNonNegative(r) || !finiteNonNegative(gr) || !finiteNonNegative(b) || !std::isfinite(w) ||
+            !(w > 0.0f)) {
+            return fail(error, S::kCorrupt, 16,
+                        "VOXL: voxel " + std::to_string(i) + " has non-finite or negative radiance or weight <= 0");
+        }
+    }
+    // V17: levels.
+    levels_.clear();
+    levels_.reserve(level_count);
+    const uint8_t* l = d + levels->offset;
+    uint32_t previous_level = 0;
+    for (uint32_t i = 0; i < level_count; ++i) {
+        CacheLevel level{load<uint32_t>(l + i * 8), load<uint32_t>(l + i * 8 + 4)};
+        if (level.level <= previous_level || level.level > kHashGridLevelMax || level.voxel_count == 0 ||
+            per_level[level.level] != level.voxel_count) {
+            return fail(error, S::kCorrupt, 17,
+                        "LEVL: entry " + std::to_string(i) + " (level " + std::to_string(level.level) + ", " +
+                            std::to_string(level.voxel_count) + " voxels) is out of order or does not match KEYS");
+        }
+        previous_level = level.level;
+        per_level[level.level] = 0;
+        levels_.push_back(level);
+    }
+    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) {
+        if (per_level[level] != 0) {
+            return fail(error, S::kCorrupt, 17, "LEVL: level " + std::to_string(level) + " has keys but is not listed");
+        }
+    }
+    // V18: metadata.
+    metadata_.clear();
+    if (meta) {
+        const uint8_t* m = d + meta->offset;
+        const uint64_t n = meta->length;
+        if (n < 8 || load<uint32_t>(m + 4) != 0) {
+            return fail(error, S::kCorrupt, 18, "META: missing entry count or non-zero reserved field");
+        }
+        const uint32_t count = load<uint32_t>(m);
+        if (count > n / 8) return fail(error, S::kCorrupt, 18, "META: entry count exceeds the section");
+        uint64_t at = 8;
+        metadata_.reserve(count);
+        for (uint32_t i = 0; i < count; ++i) {
+            if (n - at < 8) return fail(error, S::kCorrupt, 18, "META: entry " + std::to_string(i) + " truncated");
+            const uint32_t klen = load<uint32_t>(m + at), vlen = load<uint32_t>(m + at + 4);
+            at += 8;
+            if (klen == 0 || klen > n - at || vlen > n - at - klen) {
+                return fail(error, S::kCorrupt, 18, "META: entry " + std::to_string(i) + " has a bad length");
+            }
+            if (!validUtf8(m + at, klen) || !validUtf8(m + at + klen, vlen)) {
+                return fail(error, S::kCorrupt, 18, "META: entry " + std::to_string(i) + " is not valid UTF-8");
+            }
+            std::string_view key(reinterpret_cast<const char*>(m + at), klen);
+            std::string_view value(reinterpret_cast<const char*>(m + at + klen), vlen);
+            at += uint64_t(klen) + vlen;
+            for (const auto& kv : metadata_) {
+                if (kv.first == key) {
+                    return fail(error, S::kCorrupt, 18, "META: duplicate key \"" + std::string(key) + "\"");
+                }
+            }
+            metadata_.emplace_back(key, value);
+        }
+        if (at != n) return fail(error, S::kCorrupt, 18, "META: bytes after the last entry");
+    }
+    return S::kOk;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Accessors
+// ------------------------------------------------------------------------------------------------
+
+HashGridParameters CacheView::gridParameters(const Float3& camera_position) const {
+    HashGridParameters p;
+    p.camera_position = camera_position;
+    p.logarithm_base = logarithm_base_;
+    p.scene_scale = scene_scale_;
+    p.level_bias = level_bias_;
+    p.capacity = bake_capacity_;
+    p.bucket_size = bucket_size_;
+    return p;
+}
+
+uint64_t CacheView::key(uint64_t index) const { return load<uint64_t>(keys_ + index * 8); }
+
+CacheVoxel CacheView::voxel(uint64_t index) const {
+    CacheVoxel v;
+    v.key = key(index);
+    std::memcpy(v.radiance, voxels_ + index * 16, 12);
+    v.sample_weight = load<float>(voxels_ + index * 16 + 12);
+    return v;
+}
+
+uint64_t CacheView::findKey(uint64_t k) const {
+    uint64_t lo = 0, n = voxel_count_;
+    while (n > 0) {  // lower_bound, branch-light
+        const uint64_t half = n / 2;
+        if (load<uint64_t>(keys_ + (lo + half) * 8) < k) {
+            lo += half + 1;
+            n -= half + 1;
+        } else {
+            n = half;
+        }
+    }
+    return (lo < voxel_count_ && load<uint64_t>(keys_ + lo * 8) == k) ? lo : voxel_count_;
+}
+
+std::string_view CacheView::metadata(std::string_view k, bool* found) const {
+    for (const auto& kv : metadata_) {
+        if (kv.first == k) {
+            if (found) *found = true;
+            return kv.second;
+        }
+    }
+    if (found) *found = false;
+    return {};
+}
+
+CacheStats CacheView::stats() const {
+    CacheStats s;
+    s.voxels = voxel_count_;
+    s.levels = uint32_t(levels_.size());
+    if (voxel_count_ == 0) return s;
+    s.bytes_per_voxel = double(size_) / double(voxel_count_);
+    for (int c = 0; c < 3; ++c) {
+        s.radiance_min[c] = INFINITY;
+        s.radiance_max[c] = 0.0f;
+    }
+    s.weight_min = INFINITY;
+    for (uint64_t i = 0; i < voxel_count_; ++i) {
+        const CacheVoxel v = voxel(i);
+        for (int c = 0; c < 3; ++c) {
+            s.radiance_min[c] = std::min(s.radiance_min[c], v.radiance[c]);
+            s.radiance_max[c] = std::max(s.radiance_max[c], v.radiance[c]);
+            s.radiance_mean[c] += v.radiance[c];
+        }
+        s.weight_min = std::min(s.weight_min, v.sample_weight);
+        s.weight_max = std::max(s.weight_max, v.sample_weight);
+        s.weight_total += v.sample_weight;
+    }
+    for (double& m : s.radiance_mean) m /= double(voxel_count_);
+    return s;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Lookups
+// ------------------------------------------------------------------------------------------------
+
+bool CacheView::lookup(const Float3& position, const Float3& normal, const Float3& camera_position,
+                       Float3* radiance) const {
+    if (!data_) return false;
+    const uint64_t index = findKey(hashGridKey(position, normal, gridParameters(camera_position)));
+    if (index == voxel_count_) return false;
+    if (radiance) std::memcpy(radiance, voxels_ + index * 16, 12);
+    return true;
+}
+
+bool CacheView::lookupNearestLevel(const Float3& position, const Float3& normal, const Float3& camera_position,
+                                   Float3* radiance, uint32_t* level_used) const {
+    if (!data_ || levels_.empty()) return false;
+    const HashGridParameters params = gridParameters(camera_position);
+    // SPEC §H.2 steps 1-2: biased position, level from the camera.
+    const Float3 biased{position.x + kHashGridPositionBias, position.y + kHashGridPositionBias,
+                        position.z + kHashGridPositionBias};
+    const uint32_t wanted = gridLevel(biased, params);
+    const uint32_t bits = normalBits(normal);
+    // Levels present, nearest first: walk outwards from the insertion point (finer on ties).
+    const auto it = std::lower_bound(levels_.begin(), levels_.end(), wanted,
+                                     [](const CacheLevel& l, uint32_t v) { return l.level < v; });
+    ptrdiff_t up = it - levels_.begin();  // first level >= wanted
+    ptrdiff_t down = up - 1;              // last level < wanted
+    const ptrdiff_t n = ptrdiff_t(levels_.size());
+    while (down >= 0 || up < n) {
+        ptrdiff_t pick;
+        if (up >= n) {
+            pick = down--;
+        } else if (down < 0) {
+            pick = up++;
+        } else if (levels_[size_t(up)].level - wanted < wanted - levels_[size_t(down)].level) {
+            pick = up++;
+        } else {
+            pick = down--;  // finer level on ties
+        }
+        const uint32_t level = levels_[size_t(pick)].level;
+        const Int3 grid = quantisePosition(biased, voxelSize(level, params));
+        const uint64_t index = findKey(packHashGridKey(grid, level, bits));
+        if (index != voxel_count_) {
+            if (radiance) std::memcpy(radiance, voxels_ + index * 16, 12);
+            if (level_used) *level_used = level;
+            return true;
+        }
+    }
+    return false;
+}
+
+size_t CacheView::lookupBatch(size_t count, const Float3* positions, const Float3* normals,
+                              const Float3& camera_position, Float3* radiance, uint8_t* hits,
+                              bool nearest_level) const {
+    if (!positions || !normals || !radiance) return 0;
+    size_t hit_count = 0;
+    for (size_t i = 0; i < count; ++i) {
+        Float3 value{0.0f, 0.0f, 0.0f};
+        const bool hit = nearest_level ? lookupNearestLevel(positions[i], normals[i], camera_position, &value)
+                                       : lookup(positions[i], normals[i], camera_position, &value);
+        radiance[i] = value;
+        if (hits) hits[i] = hit ? 1 : 0;
+        hit_count += hit ? 1 : 0;
+    }
+    return hit_count;
+}
+
+// ------------------------------------------------------------------------------------------------
+// GPU buffers
+// ------------------------------------------------------------------------------------------------
+
+CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffers* out, CacheError* error) const {
+    if (error) *error = CacheError{};
+    if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: null output");
+    if (!data_) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: the view is not open");
+    if (options.capacity == 0) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: capacity 0");
+    GpuBuffers result;
+    try {
+        result.hash_entries.assign(options.capacity, kHashGridInvalidKey);
+        result.resolved.assign(options.capacity, SharcPackedData{{0, 0, 0, 0}, 0, 0});
+    } catch (const std::bad_alloc&) {
+        return fail(error, CacheFileStatus::kIoError, 0,
+                    "gpuBuffers: out of memory for " + std::to_string(options.capacity) + " entries");
+    }
+    result.capacity = options.capacity;
+    const uint32_t probes = bucketProbeCount(options.capacity, bucket_size_);
+    const uint32_t frames = std::min<uint32_t>(options.accumulated_frame_num, 0xFFFFu);
+    const float max_count = std::min(std::isfinite(options.max_sample_count) && options.max_sample_count > 0.0f
+                                         ? options.max_sample_count
+                                         : 65504.0f,
+                                     65504.0f);
+    for (uint64_t i = 0; i < voxel_count_; ++i) {
+        const CacheVoxel v = voxel(i);
+        const uint32_t base = bucketBase(hashGridHash(v.key), options.capacity, bucket_size_);
+        uint32_t slot = kHashGridInvalidIndex;
+        for (uint32_t p = 0; p < probes; ++p) {
+            const uint64_t held = result.hash_entries[base + p];
+            if (held == kHashGridInvalidKey || held == v.key) {
+                slot = base + p;
+                break;
+            }
+        }
+        if (slot == kHashGridInvalidIndex) {
+            ++result.failed_inserts;
+            continue;
+        }
+        result.hash_entries[slot] = v.key;
+        SharcPackedData& packed = result.resolved[slot];
+        for (int c = 0; c < 3; ++c) packed.radiance[c] = floatToHalf(std::min(v.radiance[c], 65504.0f));
+        packed.radiance[3] = floatToHalf(std::min(v.sample_weight, max_count));
+        if (packed.radiance[3] == 0) packed.radiance[3] = 1;  // weight > 0 stays usable (> threshold 0)
+        packed.sample_data = frames;  // staleFrameNum (bits 16-31) = 0
+        packed.sample_data_ext = 0;
+        ++result.inserted;
+    }
+    *out = std::move(result);
+    return CacheFileStatus::kOk;
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,666 @@
+// SPDX-License-Identifier: Apache-2.0
+// The .sharc file format (SPEC.md §F) and the runtime library: round trip, golden file, reject
+// tests (every prefix, every flipped byte, versions, sections, trailing bytes), lookups and GPU
+// buffers. Links only sharcbake_runtime.
+#include "sharcbake/cache_file.h"
+#include "sharcbake/format.h"
+#include "sharcbake/hash_grid.h"
+#include "sharcbake/runtime.h"
+#include "sharcbake/runtime_c.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+namespace sharcbake {
+namespace {
+
+const std::string kGoldenPath = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.0.sharc";
+
+// ------------------------------------------------------------------------------------------------
+// Helpers
+// ------------------------------------------------------------------------------------------------
+
+/// The deterministic cache behind the golden file: 5 levels, all 8 normal octants, metadata.
+/// Never change it without bumping the golden file's name (goldens are kept forever).
+CacheData goldenData() {
+    CacheData data;
+    data.logarithm_base = 2.0f;
+    data.scene_scale = 50.0f;
+    data.level_bias = 0.0f;
+    data.bucket_size = 16;
+    data.bake_capacity = 4096;
+    const float distances[5] = {1.0f, 3.0f, 6.0f, 12.0f, 24.0f};  // levels 1, 1, 2, 3, 4
+    const Float3 dirs[4] = {{1, 0, 0}, {0, 0.6f, 0.8f}, {-0.48f, 0.6f, -0.64f}, {0, -1, 0}};
+    std::map<uint64_t, CacheVoxel> by_key;
+    for (int i = 0; i < 40; ++i) {
+        const float d = distances[i % 5] + 0.37f * float(i / 5);
+        const Float3 dir = dirs[i % 4];
+        const Float3 p{dir.x * d + 0.11f * float(i), dir.y * d, dir.z * d - 0.05f * float(i)};
+        const Float3 n{(i & 1) ? -1.0f : 1.0f, (i & 2) ? -1.0f : 1.0f, (i & 4) ? -1.0f : 1.0f};
+        HashGridParameters params = data.gridParameters();
+        CacheVoxel v;
+        v.key = hashGridKey(p, n, params);
+        v.radiance[0] = 0.125f * float(i);
+        v.radiance[1] = 0.5f + 0.25f * float(i % 7);
+        v.radiance[2] = 1.0f / float(i + 1);
+        v.sample_weight = 1.0f + float(i) * 3.5f;
+        by_key.emplace(v.key, v);
+    }
+    for (const auto& kv : by_key) data.voxels.push_back(kv.second);
+    data.metadata = {{"writer", "sharcbake golden generator"},
+                     {"scene_hash", "fnv1a64:0123456789abcdef"},
+                     {"iterations", "16"},
+                     {"seed", "7"},
+                     {"bake_settings", "--iterations 16 --seed 7"},
+                     {"bake_seconds", "0"},
+                     {"note", "UTF-8 \xC3\xA9\xE2\x82\xAC"}};
+    return data;
+}
+
+std::vector<uint8_t> encode(const CacheData& data) {
+    std::vector<uint8_t> bytes;
+    std::string message;
+    EXPECT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kOk) << message;
+    return bytes;
+}
+
+std::vector<uint8_t> readBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+CacheFileStatus openBytes(const std::vector<uint8_t>& bytes, CacheError* error = nullptr, CacheView* view = nullptr) {
+    CacheView local;
+    return CacheView::openMemory(bytes.data(), bytes.size(), view ? view : &local, error);
+}
+
+std::string tempPath(const char* name) {
+    return ::testing::TempDir() + "sharcbake_" + std::to_string(::getpid()) + "_" + name;
+}
+
+template <typename T> T get(const std::vector<uint8_t>& b, size_t at) {
+    T v;
+    std::memcpy(&v, b.data() + at, sizeof v);
+    return v;
+}
+template <typename T> void set(std::vector<uint8_t>& b, size_t at, T v) { std::memcpy(b.data() + at, &v, sizeof v); }
+
+void fixHeaderCrc(std::vector<uint8_t>& b) {
+    const uint32_t header_size = get<uint32_t>(b, 20);
+    const uint32_t count = get<uint32_t>(b, 28);
+    uint32_t crc = cacheCrc32(b.data(), kCacheHeaderCrcOffset);
+    crc = cacheCrc32(b.data() + kCacheHeaderSize, header_size - kCacheHeaderSize + count * kCacheSectionEntrySize, crc);
+    set(b, kCacheHeaderCrcOffset, crc);
+}
+
+struct RawSection {
+    uint32_t type, flags;
+    std::vector<uint8_t> data;
+};
+
+std::vector<RawSection> splitSections(const std::vector<uint8_t>& b) {
+    std::vector<RawSection> out;
+    const uint32_t count = get<uint32_t>(b, 28);
+    for (uint32_t i = 0; i < count; ++i) {
+        const size_t e = kCacheHeaderSize + i * kCacheSectionEntrySize;
+        const uint64_t offset = get<uint64_t>(b, e + 8), length = get<uint64_t>(b, e + 16);
+        out.push_back({get<uint32_t>(b, e), get<uint32_t>(b, e + 4),
+                       std::vector<uint8_t>(b.begin() + long(offset), b.begin() + long(offset + length))});
+    }
+    return out;
+}
+
+/// Lays sections out exactly as SPEC §F.4 requires, with valid checksums.
+std::vector<uint8_t> assemble(uint16_t major, uint16_t minor, const std::vector<RawSection>& sections) {
+    std::vector<uint8_t> b(kCacheHeaderSize + sections.size() * kCacheSectionEntrySize, 0);
+    std::memcpy(b.data(), kCacheIdentifier, 16);
+    set(b, 16, major);
+    set(b, 18, minor);
+    set(b, 20, kCacheHeaderSize);
+    set(b, 28, uint32_t(sections.size()));
+    set(b, 32, uint64_t(kCacheHeaderSize));
+    set(b, 48, kCacheSectionEntrySize);
+    for (size_t i = 0; i < sections.size(); ++i) {
+        b.resize((b.size() + 7) & ~size_t(7), 0);
+        const size_t e = kCacheHeaderSize + i * kCacheSectionEntrySize;
+        set(b, e, sections[i].type);
+        set(b, e + 4, sections[i].flags);
+        set(b, e + 8, uint64_t(b.size()));
+        set(b, e + 16, uint64_t(sections[i].data.size()));
+        set(b, e + 24, cacheCrc32(sections[i].data.data(), sections[i].data.size()));
+        b.insert(b.end(), sections[i].data.begin(), sections[i].data.end());
+    }
+    b.resize((b.size() + 7) & ~size_t(7), 0);
+    set(b, 40, uint64_t(b.size()));
+    fixHeaderCrc(b);
+    return b;
+}
+
+Float3 normalFromBits(uint32_t bits) {
+    return Float3{(bits & 1) ? -1.0f : 1.0f, (bits & 2) ? -1.0f : 1.0f, (bits & 4) ? -1.0f : 1.0f};
+}
+
+/// A camera whose distance to `p` gives level `level` (b = 2, beta = 0: L = floor(log2 d)).
+Float3 cameraForLevel(const Float3& p, uint32_t level) {
+    return Float3{p.x - 1.5f * std::ldexp(1.0f, int(level)), p.y, p.z};
+}
+
+// ------------------------------------------------------------------------------------------------
+// Round trip and golden file
+// ------------------------------------------------------------------------------------------------
+
+TEST(CacheFile, RoundTripThroughDisk) {
+    const CacheData data = goldenData();
+    ASSERT_GT(data.voxels.size(), 30u);
+    const std::string path = tempPath("roundtrip.sharc");
+    std::string message;
+    ASSERT_EQ(writeCacheFile(path, data, &message), CacheFileStatus::kOk) << message;
+    CacheData back;
+    ASSERT_EQ(readCacheFile(path, &back, &message), CacheFileStatus::kOk) << message;
+    EXPECT_EQ(back.version_major, kCacheVersionMajor);
+    EXPECT_EQ(back.version_minor, kCacheVersionMinor);
+    EXPECT_EQ(back.logarithm_base, data.logarithm_base);
+    EXPECT_EQ(back.scene_scale, data.scene_scale);
+    EXPECT_EQ(back.level_bias, data.level_bias);
+    EXPECT_EQ(back.bucket_size, data.bucket_size);
+    EXPECT_EQ(back.bake_capacity, data.bake_capacity);
+    ASSERT_EQ(back.voxels.size(), data.voxels.size());
+    for (size_t i = 0; i < data.voxels.size(); ++i) {
+        EXPECT_EQ(back.voxels[i].key, data.voxels[i].key);
+        EXPECT_EQ(std::memcmp(back.voxels[i].radiance, data.voxels[i].radiance, 12), 0);
+        EXPECT_EQ(back.voxels[i].sample_weight, data.voxels[i].sample_weight);
+    }
+    EXPECT_EQ(back.metadata, data.metadata);
+    uint64_t level_total = 0;
+    for (const CacheLevel& l : back.levels) level_total += l.voxel_count;
+    EXPECT_EQ(level_total, data.voxels.size());
+    EXPECT_GE(back.levels.size(), 4u);
+    // Deterministic: the same data gives the same bytes; at most 32 bytes per voxel plus overhead.
+    const std::vector<uint8_t> on_disk = readBytes(path);
+    EXPECT_EQ(on_disk, encode(data));
+    EXPECT_LE(on_disk.size(), 512 + 24 * data.voxels.size() + 8 * back.levels.size());
+    std::remove(path.c_str());
+}
+
+TEST(CacheFile, EmptyCacheRoundTrips) {
+    CacheData data;
+    data.bake_capacity = 16;
+    const std::vector<uint8_t> bytes = encode(data);
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(openBytes(bytes, &error, &view), CacheFileStatus::kOk) << error.message;
+    EXPECT_EQ(view.voxelCount(), 0u);
+    EXPECT_TRUE(view.levels().empty());
+    Float3 r;
+    EXPECT_FALSE(view.lookup({1, 2, 3}, {0, 1, 0}, {0, 0, 0}, &r));
+    EXPECT_FALSE(view.lookupNearestLevel({1, 2, 3}, {0, 1, 0}, {0, 0, 0}, &r));
+}
+
+// Writes the golden when SHARCBAKE_UPDATE_GOLDENS is set; otherwise the writer must reproduce it.
+TEST(CacheFileGolden, WriterReproducesGolden) {
+    const std::vector<uint8_t> bytes = encode(goldenData());
+    if (std::getenv("SHARCBAKE_UPDATE_GOLDENS")) {
+        std::ofstream out(kGoldenPath, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+        ASSERT_TRUE(out.good());
+    }
+    const std::vector<uint8_t> golden = readBytes(kGoldenPath);
+    ASSERT_FALSE(golden.empty()) << kGoldenPath << " is missing; run with SHARCBAKE_UPDATE_GOLDENS=1";
+    EXPECT_EQ(bytes, golden) << "the writer no longer reproduces " << kGoldenPath
+                             << ". If the change is intended, add a new golden for the new format version "
+                                "(goldens are kept forever) and verify, then regenerate with SHARCBAKE_UPDATE_GOLDENS=1";
+}
+
+TEST(CacheFileGolden, GoldenReadsBack) {
+    CacheData back;
+    std::string message;
+    ASSERT_EQ(readCacheFile(kGoldenPath, &back, &message), CacheFileStatus::kOk) << message;
+    EXPECT_EQ(back.version_major, 1);
+    EXPECT_EQ(back.version_minor, 0);
+    const CacheData expected = goldenData();
+    ASSERT_EQ(back.voxels.size(), expected.voxels.size());
+    for (size_t i = 0; i < expected.voxels.size(); ++i) {
+        EXPECT_EQ(back.voxels[i].key, expected.voxels[i].key);
+        EXPECT_EQ(back.voxels[i].radiance[0], expected.voxels[i].radiance[0]);
+        EXPECT_EQ(back.voxels[i].sample_weight, expected.voxels[i].sample_weight);
+    }
+    EXPECT_EQ(back.metadata, expected.metadata);
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(CacheView::openFile(kGoldenPath, &view, &error, CacheView::FileMode::kMap), CacheFileStatus::kOk)
+        << error.message;
+    EXPECT_EQ(view.sections().size(), 5u);
+    EXPECT_EQ(view.metadata("seed"), "7");
+}
+
+// ------------------------------------------------------------------------------------------------
+// Reject tests (SPEC §F.10)
+// ------------------------------------------------------------------------------------------------
+
+TEST(CacheFileReject, EveryPrefixIsRejected) {
+    const std::vector<uint8_t> bytes = encode(goldenData());
+    for (size_t n = 0; n < bytes.size(); ++n) {
+        const std::vector<uint8_t> prefix(bytes.begin(), bytes.begin() + long(n));
+        CacheError error;
+        const CacheFileStatus status = openBytes(prefix, &error);
+        EXPECT_NE(status, CacheFileStatus::kOk) << "prefix of " << n << " bytes accepted";
+        if (n >= kCacheHeaderSize) {
+            EXPECT_EQ(status, CacheFileStatus::kTruncated) << n << ": " << error.message;
+        }
+    }
+}
+
+TEST(CacheFileReject, EveryFlippedByteIsRejected) {
+    const std::vector<uint8_t> bytes = encode(goldenData());
+    ASSERT_EQ(openBytes(bytes), CacheFileStatus::kOk);
+    for (size_t i = 0; i < bytes.size(); ++i) {
+        for (uint8_t mask : {uint8_t(0x01), uint8_t(0x80), uint8_t(0xFF)}) {
+            std::vector<uint8_t> bad = bytes;
+            bad[i] ^= mask;
+            CacheError error;
+            EXPECT_NE(openBytes(bad, &error), CacheFileStatus::kOk) << "byte " << i << " ^ " << int(mask) << " accepted";
+            EXPECT_FALSE(error.message.empty());
+        }
+    }
+}
+
+TEST(CacheFileReject, FlippedBytesNameTheRightRule) {
+    const std::vector<uint8_t> bytes = encode(goldenData());
+    const std::vector<RawSection> sections = splitSections(bytes);
+    // Header and table bytes: checksum rule V6 (or an earlier structural rule).
+    {
+        std::vector<uint8_t> bad = bytes;
+        bad[kCacheHeaderSize + 4] ^= 0x10;  // first table entry's flags
+        CacheError error;
+        EXPECT_EQ(openBytes(bad, &error), CacheFileStatus::kChecksumMismatch);
+        EXPECT_EQ(error.rule, 6u);
+    }
+    // One byte in the middle of each section: V9 names the section.
+    for (uint32_t i = 0; i < sections.size(); ++i) {
+        const size_t e = kCacheHeaderSize + i * kCacheSectionEntrySize;
+        std::vector<uint8_t> bad = bytes;
+        bad[get<uint64_t>(bytes, e + 8) + get<uint64_t>(bytes, e + 16) / 2] ^= 0x04;
+        CacheError error;
+        EXPECT_EQ(openBytes(bad, &error), CacheFileStatus::kChecksumMismatch) << i;
+        EXPECT_EQ(error.rule, 9u) << error.message;
+    }
+}
+
+TEST(CacheFileReject, WrongMagic) {
+    std::vector<uint8_t> bytes = encode(goldenData());
+    bytes[1] = 'X';
+    CacheError error;
+    EXPECT_EQ(openBytes(bytes, &error), CacheFileStatus::kBadMagic);
+    EXPECT_EQ(error.rule, 1u);
+    std::vector<uint8_t> text = {'h', 'e', 'l', 'l', 'o'};
+    EXPECT_EQ(openBytes(text), CacheFileStatus::kBadMagic);
+    std::vector<uint8_t> interim = {'S', 'H', 'R', 'C', 'B', 'A', 'K', 'E', 0, 0, 1, 0};
+    EXPECT_EQ(openBytes(interim), CacheFileStatus::kUnsupportedVersion);
+}
+
+TEST(CacheFileReject, NewerMajorIsRejectedNewerMinorRead) {
+    std::vector<uint8_t> bytes = encode(goldenData());
+    std::vector<uint8_t> major = bytes;
+    set(major, 16, uint16_t(2));
+    fixHeaderCrc(major);
+    CacheError error;
+    EXPECT_EQ(openBytes(major, &error), CacheFileStatus::kUnsupportedVersion);
+    EXPECT_EQ(error.rule, 3u);
+    std::vector<uint8_t> zero = bytes;
+    set(zero, 16, uint16_t(0));
+    fixHeaderCrc(zero);
+    EXPECT_EQ(openBytes(zero), CacheFileStatus::kUnsupportedVersion);
+    std::vector<uint8_t> minor = bytes;
+    set(minor, 18, uint16_t(7));
+    fixHeaderCrc(minor);
+    CacheView view;
+    ASSERT_EQ(openBytes(minor, &error, &view), CacheFileStatus::kOk) << error.message;
+    EXPECT_EQ(view.versionMinor(), 7);
+}
+
+TEST(CacheFileReject, UnknownSections) {
+    const std::vector<uint8_t> bytes = encode(goldenData());
+    std::vector<RawSection> sections = splitSections(bytes);
+    ASSERT_EQ(assemble(1, 0, sections), bytes);  // the test's layout is the writer's
+    sections.insert(sections.begin() + 2, RawSection{cacheFourCC('X', 'T', 'R', 'A'), 0, {1, 2, 3, 4, 5}});
+    CacheView view;
+    CacheError error;
+    // Unknown optional section (a later minor's addition): skipped.
+    ASSERT_EQ(openBytes(assemble(1, 1, sections), &error, &view), CacheFileStatus::kOk) << error.message;
+    EXPECT_EQ(view.voxelCount(), goldenData().voxels.size());
+    EXPECT_EQ(view.sections().size(), 6u);
+    EXPECT_FALSE(view.sections()[2].known);
+    // Unknown REQUIRED section: rejected.
+    sections[2].flags = kCacheSectionRequired;
+    EXPECT_EQ(openBytes(assemble(1, 1, sections), &error), CacheFileStatus::kUnsupportedFeature);
+    EXPECT_EQ(error.rule, 10u);
+    // Duplicate and missing known sections.
+    std::vector<RawSection> dup = splitSections(bytes);
+    dup.push_back(dup[0]);
+    EXPECT_EQ(openBytes(assemble(1, 0, dup), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 10u);
+    std::vector<RawSection> missing = splitSections(bytes);
+    missing.erase(missing.begin() + 3);  // LEVL
+    EXPECT_EQ(openBytes(assemble(1, 0, missing), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 11u);
+    std::vector<RawSection> no_meta = splitSections(bytes);
+    no_meta.pop_back();  // META is optional
+    EXPECT_EQ(openBytes(assemble(1, 0, no_meta), &error), CacheFileStatus::kOk) << error.message;
+}
+
+TEST(CacheFileReject, TrailingBytes) {
+    std::vector<uint8_t> bytes = encode(goldenData());
+    for (size_t extra : {1, 8, 100}) {
+        std::vector<uint8_t> bad = bytes;
+        bad.resize(bytes.size() + extra, 0);
+        CacheError error;
+        EXPECT_EQ(openBytes(bad, &error), CacheFileStatus::kTrailingBytes);
+        EXPECT_EQ(error.rule, 4u);
+    }
+}
+
+TEST(CacheFileReject, SemanticRulesWithValidChecksums) {
+    const std::vector<uint8_t> bytes = encode(goldenData());
+    auto mutate = [&](uint32_t section, size_t at, auto value) {
+        std::vector<RawSection> s = splitSections(bytes);
+        set(s[section].data, at, value);
+        return assemble(1, 0, s);
+    };
+    CacheError error;
+    EXPECT_EQ(openBytes(mutate(0, 0, uint32_t(16)), &error), CacheFileStatus::kUnsupportedFeature);  // 16 bits
+    EXPECT_EQ(error.rule, 12u);
+    EXPECT_EQ(openBytes(mutate(0, 16, uint32_t(2)), &error), CacheFileStatus::kUnsupportedFeature);  // hash id
+    EXPECT_EQ(openBytes(mutate(0, 24, 1.0f), &error), CacheFileStatus::kCorrupt);  // log base 1
+    EXPECT_EQ(error.rule, 13u);
+    EXPECT_EQ(openBytes(mutate(0, 28, std::numeric_limits<float>::quiet_NaN()), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(openBytes(mutate(0, 48, uint64_t(1) << 60), &error), CacheFileStatus::kCorrupt);  // voxel count
+    EXPECT_EQ(error.rule, 14u);
+    // Keys out of order.
+    {
+        std::vector<RawSection> s = splitSections(bytes);
+        std::swap_ranges(s[1].data.begin(), s[1].data.begin() + 8, s[1].data.begin() + 8);
+        EXPECT_EQ(openBytes(assemble(1, 0, s), &error), CacheFileStatus::kCorrupt);
+        EXPECT_EQ(error.rule, 15u);
+    }
+    EXPECT_EQ(openBytes(mutate(2, 4, -1.0f), &error), CacheFileStatus::kCorrupt);  // negative radiance
+    EXPECT_EQ(error.rule, 16u);
+    EXPECT_EQ(openBytes(mutate(2, 12, 0.0f), &error), CacheFileStatus::kCorrupt);  // weight 0
+    EXPECT_EQ(openBytes(mutate(2, 0, std::numeric_limits<float>::infinity()), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(openBytes(mutate(3, 4, uint32_t(1)), &error), CacheFileStatus::kCorrupt);  // level count wrong
+    EXPECT_EQ(error.rule, 17u);
+    EXPECT_EQ(openBytes(mutate(4, 0, uint32_t(1000)), &error), CacheFileStatus::kCorrupt);  // metadata count
+    EXPECT_EQ(error.rule, 18u);
+    EXPECT_EQ(openBytes(mutate(4, 16, uint8_t(0xFF)), &error), CacheFileStatus::kCorrupt);  // bad UTF-8
+    EXPECT_EQ(error.rule, 18u);
+    // Header fields under a valid checksum.
+    std::vector<uint8_t> flags = bytes;
+    set(flags, 24, uint32_t(1));
+    fixHeaderCrc(flags);
+    EXPECT_EQ(openBytes(flags, &error), CacheFileStatus::kUnsupportedFeature);
+    EXPECT_EQ(error.rule, 7u);
+    std::vector<uint8_t> count = bytes;
+    set(count, 28, uint32_t(0));
+    fixHeaderCrc(count);
+    EXPECT_EQ(openBytes(count, &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 5u);
+}
+
+TEST(CacheFile, WriterRefusesInvalidData) {
+    std::vector<uint8_t> bytes;
+    std::string message;
+    CacheData unsorted = goldenData();
+    std::swap(unsorted.voxels[0], unsorted.voxels[1]);
+    EXPECT_EQ(encodeCacheFile(unsorted, &bytes, &message), CacheFileStatus::kInvalidData);
+    CacheData zero = goldenData();
+    zero.voxels[0].key = 0;
+    EXPECT_EQ(encodeCacheFile(zero, &bytes, &message), CacheFileStatus::kInvalidData);
+    CacheData nan = goldenData();
+    nan.voxels[3].radiance[1] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_EQ(encodeCacheFile(nan, &bytes, &message), CacheFileStatus::kInvalidData);
+    CacheData dead = goldenData();
+    dead.voxels[3].sample_weight = 0.0f;
+    EXPECT_EQ(encodeCacheFile(dead, &bytes, &message), CacheFileStatus::kInvalidData);
+    CacheData dup = goldenData();
+    dup.metadata.push_back(dup.metadata[0]);
+    EXPECT_EQ(encodeCacheFile(dup, &bytes, &message), CacheFileStatus::kInvalidData);
+    CacheData utf = goldenData();
+    utf.metadata.push_back({"bad", "\xC3"});
+    EXPECT_EQ(encodeCacheFile(utf, &bytes, &message), CacheFileStatus::kInvalidData);
+    CacheData grid = goldenData();
+    grid.scene_scale = -1.0f;
+    EXPECT_EQ(encodeCacheFile(grid, &bytes, &message), CacheFileStatus::kInvalidData);
+}
+
+TEST(CacheFile, IoErrors) {
+    CacheView view;
+    CacheError error;
+    EXPECT_EQ(CacheView::openFile("/nonexistent/x.sharc", &view, &error), CacheFileStatus::kIoError);
+    EXPECT_EQ(CacheView::openFile("/tmp", &view, &error), CacheFileStatus::kIoError);
+    std::string message;
+    EXPECT_EQ(writeCacheFile("/nonexistent/dir/x.sharc", goldenData(), &message), CacheFileStatus::kIoError);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Runtime
+// ------------------------------------------------------------------------------------------------
+
+TEST(Runtime, LookupReturnsEachVoxelAtItsCentre) {
+    const CacheData data = goldenData();
+    const std::vector<uint8_t> bytes = encode(data);
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(openBytes(bytes, &error, &view), CacheFileStatus::kOk) << error.message;
+    for (const CacheVoxel& v : data.voxels) {
+        const HashGridCell cell = decodeHashGridKey(v.key);
+        const Float3 centre = voxelCenter(v.key, view.gridParameters());
+        const Float3 camera = cameraForLevel(centre, cell.level);
+        const Float3 normal = normalFromBits(cell.normal_bits);
+        ASSERT_EQ(hashGridKey(centre, normal, view.gridParameters(camera)), v.key);
+        Float3 r{-1, -1, -1};
+        ASSERT_TRUE(view.lookup(centre, normal, camera, &r));
+        EXPECT_EQ(r.x, v.radiance[0]);
+        EXPECT_EQ(r.y, v.radiance[1]);
+        EXPECT_EQ(r.z, v.radiance[2]);
+        uint32_t level = 0;
+        ASSERT_TRUE(view.lookupNearestLevel(centre, normal, camera, &r, &level));
+        EXPECT_EQ(level, cell.level);
+        EXPECT_EQ(r.x, v.radiance[0]);
+        // Opposite normal octant: a different key, a miss unless that voxel exists too.
+        const uint64_t other = packHashGridKey(cell.grid, cell.level, cell.normal_bits ^ 7u);
+        EXPECT_EQ(view.lookup(centre, normalFromBits(cell.normal_bits ^ 7u), camera, &r), view.findKey(other) != view.voxelCount());
+    }
+    EXPECT_EQ(view.findKey(1), view.voxelCount());
+}
+
+TEST(Runtime, NearestLevelFallsBackWhenTheLevelIsMissing) {
+    const CacheData data = goldenData();
+    CacheView view;
+    const std::vector<uint8_t> bytes = encode(data);
+    ASSERT_EQ(openBytes(bytes, nullptr, &view), CacheFileStatus::kOk);
+    const uint32_t top = view.levels().back().level;
+    const CacheVoxel& v = *std::find_if(data.voxels.begin(), data.voxels.end(), [&](const CacheVoxel& x) {
+        return decodeHashGridKey(x.key).level == top;
+    });
+    const HashGridCell cell = decodeHashGridKey(v.key);
+    const Float3 centre = voxelCenter(v.key, view.gridParameters());
+    const Float3 normal = normalFromBits(cell.normal_bits);
+    const Float3 far_camera = cameraForLevel(centre, top + 3);  // a level no voxel has
+    Float3 r;
+    EXPECT_FALSE(view.lookup(centre, normal, far_camera, &r));
+    uint32_t level = 0;
+    ASSERT_TRUE(view.lookupNearestLevel(centre, normal, far_camera, &r, &level));
+    EXPECT_EQ(level, top);
+    EXPECT_EQ(r.x, v.radiance[0]);
+    // Batched lookups agree with single ones.
+    std::vector<Float3> positions, normals;
+    for (const CacheVoxel& x : data.voxels) {
+        positions.push_back(voxelCenter(x.key, view.gridParameters()));
+        normals.push_back(normalFromBits(decodeHashGridKey(x.key).normal_bits));
+    }
+    std::vector<Float3> out(positions.size());
+    std::vector<uint8_t> hits(positions.size());
+    const size_t hit_count = view.lookupBatch(positions.size(), positions.data(), normals.data(), {0, 0, 0},
+                                              out.data(), hits.data(), true);
+    EXPECT_EQ(hit_count, positions.size());  // nearest level always finds the voxel itself or a neighbour
+    for (size_t i = 0; i < positions.size(); ++i) {
+        Float3 single{0, 0, 0};
+        EXPECT_EQ(view.lookupNearestLevel(positions[i], normals[i], {0, 0, 0}, &single), hits[i] != 0);
+        EXPECT_EQ(single.x, out[i].x);
+    }
+}
+
+TEST(Runtime, StatsAndIteration) {
+    const CacheData data = goldenData();
+    CacheView view;
+    const std::vector<uint8_t> bytes = encode(data);
+    ASSERT_EQ(openBytes(bytes, nullptr, &view), CacheFileStatus::kOk);
+    const CacheStats s = view.stats();
+    EXPECT_EQ(s.voxels, data.voxels.size());
+    EXPECT_EQ(s.levels, view.levels().size());
+    EXPECT_EQ(s.radiance_min[0], 0.0f);
+    EXPECT_EQ(s.weight_min, 1.0f);
+    EXPECT_LE(s.bytes_per_voxel, 32.0 + 600.0 / double(data.voxels.size()));
+    for (uint64_t i = 0; i < view.voxelCount(); ++i) EXPECT_EQ(view.voxel(i).key, data.voxels[i].key);
+}
+
+TEST(Runtime, GpuBuffersPlaceEveryKeyFindably) {
+    const CacheData data = goldenData();
+    CacheView view;
+    const std::vector<uint8_t> bytes = encode(data);
+    ASSERT_EQ(openBytes(bytes, nullptr, &view), CacheFileStatus::kOk);
+    for (uint32_t capacity : {4096u, 64u, 40u, 16u, 5u}) {
+        GpuBufferOptions options;
+        options.capacity = capacity;
+        options.accumulated_frame_num = 3;
+        GpuBuffers buffers;
+        ASSERT_EQ(view.gpuBuffers(options, &buffers), CacheFileStatus::kOk);
+        ASSERT_EQ(buffers.hash_entries.size(), capacity);
+        ASSERT_EQ(buffers.resolved.size(), capacity);
+        EXPECT_EQ(buffers.inserted + buffers.failed_inserts, data.voxels.size());
+        if (capacity >= 4096) {
+            EXPECT_EQ(buffers.failed_inserts, 0u);
+        }
+        // The same insertion order into the CPU table gives the same slots.
+        HashGridTable table;
+        ASSERT_EQ(HashGridTable::create(capacity, &table), HashGridStatus::kOk);
+        for (const CacheVoxel& v : data.voxels) table.insert(v.key);
+        uint64_t found = 0;
+        for (const CacheVoxel& v : data.voxels) {
+            // HashGridTable-style find on the exported buffer.
+            const uint32_t base = bucketBase(hashGridHash(v.key), capacity);
+            uint32_t slot = kHashGridInvalidIndex;
+            for (uint32_t p = 0; p < bucketProbeCount(capacity); ++p) {
+                if (buffers.hash_entries[base + p] == v.key) {
+                    slot = base + p;
+                    break;
+                }
+            }
+            const std::optional<uint32_t> cpu = table.find(v.key);
+            ASSERT_EQ(cpu.has_value(), slot != kHashGridInvalidIndex);
+            if (slot == kHashGridInvalidIndex) continue;
+            ++found;
+            EXPECT_EQ(*cpu, slot);
+            const SharcPackedData& p = buffers.resolved[slot];
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(halfToFloat(p.radiance[c]), v.radiance[c], 1e-3f * std::max(1.0f, v.radiance[c]));
+            }
+            EXPECT_NEAR(halfToFloat(p.radiance[3]), v.sample_weight, 1e-3f * v.sample_weight);
+            EXPECT_EQ(p.sample_data, 3u);
+        }
+        EXPECT_EQ(found, buffers.inserted);
+        for (uint32_t i = 0; i < capacity; ++i) {
+            if (buffers.hash_entries[i] == 0) {
+                EXPECT_EQ(buffers.resolved[i].radiance[3], 0);
+            }
+        }
+    }
+    GpuBufferOptions zero;
+    zero.capacity = 0;
+    GpuBuffers buffers;
+    EXPECT_EQ(view.gpuBuffers(zero, &buffers), CacheFileStatus::kInvalidArgument);
+}
+
+TEST(Runtime, HalfConversion) {
+    EXPECT_EQ(floatToHalf(0.0f), 0x0000);
+    EXPECT_EQ(floatToHalf(-0.0f), 0x8000);
+    EXPECT_EQ(floatToHalf(1.0f), 0x3C00);
+    EXPECT_EQ(floatToHalf(65504.0f), 0x7BFF);
+    EXPECT_EQ(floatToHalf(65520.0f), 0x7C00);
+    EXPECT_EQ(floatToHalf(1e9f), 0x7C00);
+    EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -24)), 0x0001);
+    EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -26)), 0x0000);
+    EXPECT_EQ(floatToHalf(1.0f + std::ldexp(1.0f, -11)), 0x3C00);  // tie -> even
+    EXPECT_EQ(floatToHalf(1.0f + 3 * std::ldexp(1.0f, -11)), 0x3C02);
+    for (uint32_t h = 0; h < 0x7C00; ++h) EXPECT_EQ(floatToHalf(halfToFloat(uint16_t(h))), h);
+}
+
+TEST(Runtime, MemoryAndMappedViewsAgree) {
+    const std::string path = tempPath("mapped.sharc");
+    std::string message;
+    ASSERT_EQ(writeCacheFile(path, goldenData(), &message), CacheFileStatus::kOk) << message;
+    CacheView a, b;
+    ASSERT_EQ(CacheView::openFile(path, &a, nullptr, CacheView::FileMode::kMap), CacheFileStatus::kOk);
+    ASSERT_EQ(CacheView::openFile(path, &b, nullptr, CacheView::FileMode::kRead), CacheFileStatus::kOk);
+    CacheView moved(std::move(b));
+    ASSERT_EQ(a.voxelCount(), moved.voxelCount());
+    for (uint64_t i = 0; i < a.voxelCount(); ++i) EXPECT_EQ(a.voxel(i).key, moved.voxel(i).key);
+    EXPECT_EQ(moved.metadata("iterations"), "16");
+    std::remove(path.c_str());
+}
+
+TEST(RuntimeC, OpenLookupGpuBuffers) {
+    const CacheData data = goldenData();
+    const std::vector<uint8_t> bytes = encode(data);
+    sharcbake_cache* cache = nullptr;
+    char message[256];
+    uint32_t rule = 99;
+    ASSERT_EQ(sharcbake_cache_open_memory(bytes.data(), bytes.size(), &cache, &rule, message, sizeof message),
+              SHARCBAKE_OK);
+    EXPECT_EQ(rule, 0u);
+    EXPECT_EQ(sharcbake_cache_voxel_count(cache), data.voxels.size());
+    const CacheVoxel& v = data.voxels[5];
+    const HashGridCell cell = decodeHashGridKey(v.key);
+    HashGridParameters params = data.gridParameters();
+    const Float3 c = voxelCenter(v.key, params);
+    const Float3 cam = cameraForLevel(c, cell.level);
+    const Float3 n = normalFromBits(cell.normal_bits);
+    const float pos[3] = {c.x, c.y, c.z}, nrm[3] = {n.x, n.y, n.z}, camera[3] = {cam.x, cam.y, cam.z};
+    float r[3];
+    ASSERT_EQ(sharcbake_cache_lookup(cache, pos, nrm, camera, r), 1);
+    EXPECT_EQ(r[0], v.radiance[0]);
+    char value[32];
+    EXPECT_EQ(sharcbake_cache_metadata(cache, "seed", value, sizeof value), 1);
+    EXPECT_STREQ(value, "7");
+    std::vector<uint64_t> keys(256);
+    std::vector<sharcbake_packed_data> resolved(256);
+    uint64_t failed = 99;
+    EXPECT_EQ(sharcbake_cache_gpu_buffers(cache, 256, 1, keys.data(), resolved.data(), &failed), SHARCBAKE_OK);
+    EXPECT_EQ(failed, 0u);
+    sharcbake_cache_close(cache);
+
+    std::vector<uint8_t> bad = bytes;
+    bad[100] ^= 1;
+    cache = reinterpret_cast<sharcbake_cache*>(1);
+    EXPECT_EQ(sharcbake_cache_open_memory(bad.data(), bad.size(), &cache, &rule, message, sizeof message),
+              SHARCBAKE_CHECKSUM_MISMATCH);
+    EXPECT_EQ(cache, nullptr);
+    EXPECT_EQ(rule, 6u);
+    EXPECT_EQ(std::string(message).substr(0, 3), "V6:");
+    EXPECT_EQ(sharcbake_cache_open_file("/nonexistent.sharc", 0, &cache, &rule, message, sizeof message),
+              SHARCBAKE_IO_ERROR);
+}
+
+}  // namespace
+}  // namespace sharcbake
