@@ -34,7 +34,7 @@ struct BakeOptions {
     float scene_scale = kHashGridDefaultSceneScale;
     float log_base = kHashGridDefaultLogarithmBase;
     float level_bias = kHashGridDefaultLevelBias;
-    uint32_t capacity = 1u << 20;
+    uint32_t capacity = 1u << 22;  // the SDK default
     uint32_t update_stride = 5;
     std::string resolution = "1280x720";
     uint32_t max_bounces = 8;

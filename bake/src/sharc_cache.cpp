@@ -62,17 +62,19 @@ bool HistorySchedule::parse(const std::string& text, HistorySchedule& out) {
 }
 
 double SharcCache::chooseRadianceScale(double max_radiance) {
-    // 63 usable bits = 24 bits of deposits headroom + the value's own magnitude + fraction bits.
-    const double magnitude = std::max(1.0, std::isfinite(max_radiance) ? max_radiance : 1.0);
-    const int exponent = std::clamp(39 - int(std::ceil(std::log2(magnitude))), 0, 48);
+    // The brightest radiance maps to 2^30: 30 bits of precision below it, 2^26 times above it
+    // for one deposit (multi-bounce radiance exceeds emission: L = Le/(1-rho) in a furnace) and
+    // 2^33 times for a voxel's sum in one iteration before the 63-bit ceiling.
+    const double magnitude = (std::isfinite(max_radiance) && max_radiance > 0.0) ? max_radiance : 1.0;
+    const int exponent = std::clamp(30 - int(std::ceil(std::log2(magnitude))), -60, 90);
     return std::ldexp(1.0, exponent);
 }
 
 SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
     : settings_(settings),
       radiance_scale_(radiance_scale),
-      // One deposit may use at most 1/2^20 of a sum's range, so ~a million of them never wrap.
-      max_fixed_deposit_(uint64_t(1) << 43),
+      // One deposit may use at most 1/128 of a sum's range (see chooseRadianceScale).
+      max_fixed_deposit_(uint64_t(1) << 56),
       accumulation_(settings.capacity),
       resolved_(settings.capacity),
       touched_flags_(settings.capacity, 0) {

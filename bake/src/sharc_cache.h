@@ -122,8 +122,8 @@ public:
     const HashGridTable& table() const { return table_; }
     const std::vector<ResolvedEntry>& resolved() const { return resolved_; }
 
-    /// A power-of-two scale so that radiance up to `max_radiance` leaves 2^24 deposits of
-    /// headroom in a 63-bit sum, and small values keep ~40 bits of precision.
+    /// The power-of-two fixed-point scale that maps `max_radiance` (the brightest emission or
+    /// sky in the scene) to 2^30.
     static double chooseRadianceScale(double max_radiance);
 
 private:
