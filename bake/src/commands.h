@@ -10,5 +10,6 @@ namespace sharcbake {
 void registerRenderCommand(CLI::App& app);
 void registerBakeCommand(CLI::App& app);
 void registerInfoCommand(CLI::App& app);  ///< `info` and `validate` (info_command.cpp)
+void registerCompareCommand(CLI::App& app);
 
 }  // namespace sharcbake

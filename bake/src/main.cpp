@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     registerRenderCommand(app);
     registerBakeCommand(app);
     registerInfoCommand(app);
+    registerCompareCommand(app);
 
     try {
         app.parse(argc, argv);

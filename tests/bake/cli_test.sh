@@ -70,5 +70,22 @@ for view in cache hash levels occupancy bounces; do
         { echo "FAIL: debug_$view.exr lacks the sharcbake:debug_view attribute"; failures=$((failures + 1)); }
 done
 
+# Cornell box: a cached render against a converged reference of the same camera.
+# Tolerances: |bias of the image mean| < 2%, mean relative error < 6% (measured 0.13% and 3.3%).
+cornell="$scenes/cornell_box/cornell_box.gltf"
+expect 0 "cornell bake" "$sharcbake" bake "$cornell" -o "$work/cb.sharc" --iterations 100 --resolution 320x180 -q
+expect 0 "cornell reference" "$sharcbake" render "$cornell" -o "$work/ref48.exr" --resolution 48 --spp 1024 -q --no-png
+expect 0 "cornell cached" "$sharcbake" render "$cornell" -o "$work/cached48.exr" --resolution 48 --spp 64 --cache "$work/cb.sharc" -q --no-png
+expect 0 "compare" "$sharcbake" compare "$work/cached48.exr" "$work/ref48.exr" --json
+python3 - "$work/out.txt" <<'PY' || failures=$((failures + 1))
+import json, sys
+m = json.load(open(sys.argv[1]))
+ok = abs(m["relative_bias"]) < 0.02 and m["mean_relative_error"] < 0.06 and m["non_finite_pixels"] == 0
+print(("ok" if ok else "FAIL") + ": cornell cached vs reference:", m)
+sys.exit(0 if ok else 1)
+PY
+expect 2 "compare with a missing image" "$sharcbake" compare "$work/nothing.exr" "$work/ref48.exr"
+expect 3 "compare different sizes" "$sharcbake" compare "$work/cornell.exr" "$work/ref48.exr"
+
 [ "$failures" -eq 0 ] && echo "all CLI checks passed"
 exit "$failures"
