@@ -207,6 +207,8 @@ void runBake(const BakeOptions& o) {
     const CoverageReport coverage = measureCoverage(scene, cache, o.coverage_points);
     const std::vector<uint32_t> levels = levelsPresent(cache);
     CacheData data = toCacheData(cache);
+    // Everything that reproduces the bake, and nothing that varies between runs (timings go to
+    // --stats-json): the same scene, settings and seed give the same file byte for byte.
     data.metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", o.scene_path},
@@ -218,7 +220,11 @@ void runBake(const BakeOptions& o) {
         {"max_bounces", std::to_string(o.max_bounces)},
         {"camera", camera_description},
         {"radiance_scale", std::to_string(cache.radianceScale())},
-        {"bake_seconds", std::to_string(bake_seconds)},
+        {"scene_scale", std::to_string(o.scene_scale)},
+        {"log_base", std::to_string(o.log_base)},
+        {"level_bias", std::to_string(o.level_bias)},
+        {"capacity", std::to_string(o.capacity)},
+        {"stop_reason", stop_reason},
     };
     std::string message;
     const CacheFileStatus status = writeCacheFile(o.output_path, data, &message);

@@ -70,6 +70,17 @@ for view in cache hash levels occupancy bounces; do
         { echo "FAIL: debug_$view.exr lacks the sharcbake:debug_view attribute"; failures=$((failures + 1)); }
 done
 
+# Determinism: the same bake with 1 and 2 threads, and run twice, gives identical files.
+for run in a b; do
+    for threads in 1 2; do
+        expect 0 "bake with $threads threads ($run)" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" \
+            -o "$work/det_${threads}_$run.sharc" --iterations 6 --resolution 160x90 --threads "$threads" -q
+    done
+done
+for f in det_2_a det_1_b det_2_b; do
+    cmp -s "$work/det_1_a.sharc" "$work/$f.sharc" || { echo "FAIL: $f.sharc differs from det_1_a.sharc"; failures=$((failures + 1)); }
+done
+
 # Cornell box: a cached render against a converged reference of the same camera.
 # Tolerances: |bias of the image mean| < 2%, mean relative error < 6% (measured 0.13% and 3.3%).
 cornell="$scenes/cornell_box/cornell_box.gltf"
