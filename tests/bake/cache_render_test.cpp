@@ -170,7 +170,8 @@ TEST_F(FurnaceCache, CachedRenderMeanIsLeOverOneMinusRho) {
     glm::dvec3 mean(0.0);
     for (const glm::vec3& p : image.pixels) mean += glm::dvec3(p);
     mean /= double(image.pixels.size());
-    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(mean[ch], 10.0, 0.3) << "channel " << ch;
+    // Issue bar: the cached render within 2% of the analytic radiance Le / (1 - rho) = 10.
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(mean[ch], 10.0, 0.2) << "channel " << ch;
     std::printf("cached furnace: mean %.4f, %zu voxels, %llu hits, %llu misses, %llu refused\n", mean.x,
                 data_->voxels.size(), (unsigned long long)cache.hits(), (unsigned long long)cache.misses(),
                 (unsigned long long)cache.refused());
