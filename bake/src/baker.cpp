@@ -111,9 +111,9 @@ void Baker::runIteration() {
     }
     seconds_.update += secondsSince(start);
 
-    // Commit in chunk order: the same slot assignment and sums on every run.
+    // Commit: new keys inserted in chunk order, so the same slots and sums on every run.
     start = std::chrono::steady_clock::now();
-    for (const std::vector<Deposit>& deposits : chunk_deposits_) cache_.commit(deposits);
+    cache_.commitChunks(chunk_deposits_);
     seconds_.commit += secondsSince(start);
 
     start = std::chrono::steady_clock::now();

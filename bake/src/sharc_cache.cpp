@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc_cache.h"
 
+#include "sampling.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -75,9 +77,8 @@ SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
       radiance_scale_(radiance_scale),
       // One deposit may use at most 1/128 of a sum's range (see chooseRadianceScale).
       max_fixed_deposit_(uint64_t(1) << 56),
-      accumulation_(settings.capacity),
-      resolved_(settings.capacity),
-      touched_flags_(settings.capacity, 0) {
+      accumulation_(std::make_unique<AccumulationEntry[]>(settings.capacity)),
+      resolved_(settings.capacity) {
     const HashGridStatus status = HashGridTable::create(settings.capacity, &table_);
     if (status != HashGridStatus::kOk) {
         throw std::invalid_argument(std::string("hash grid: ") + toString(status));
@@ -90,66 +91,126 @@ const ResolvedEntry* SharcCache::findResolved(uint64_t key) const {
 }
 
 void SharcCache::commit(const std::vector<Deposit>& deposits) {
-    for (const Deposit& d : deposits) {
-        ++numerics_.deposits;
-        if (!std::isfinite(d.radiance.x) || !std::isfinite(d.radiance.y) || !std::isfinite(d.radiance.z)) {
-            ++numerics_.non_finite_deposits;
-            continue;
-        }
-        const std::optional<uint32_t> inserted = table_.insert(d.key);
-        if (!inserted) {
-            ++numerics_.failed_inserts;
-            numerics_.failed_insert_energy += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
-            continue;
-        }
-        const uint32_t slot = *inserted;
-        AccumulationEntry& entry = accumulation_[slot];
-        if (!touched_flags_[slot]) {
-            touched_flags_[slot] = 1;
-            touched_.push_back(slot);
-        }
-        bool negative = false, clamped = false;
-        for (int c = 0; c < 3; ++c) {
-            double value = double(d.radiance[c]);
-            if (value < 0.0) {
-                negative = true;
-                value = 0.0;
-            }
-            // Round to nearest: truncation would bias dim light low (sharc_algorithm.md 10.2).
-            double fixed = std::nearbyint(value * radiance_scale_);
-            if (fixed > double(max_fixed_deposit_)) {
-                clamped = true;
-                numerics_.clamped_energy[c] += (fixed - double(max_fixed_deposit_)) / radiance_scale_;
-                fixed = double(max_fixed_deposit_);
-            }
-            const uint64_t add = uint64_t(fixed);
-            if (entry.sums[c] > std::numeric_limits<uint64_t>::max() / 2 - add) {
-                ++numerics_.saturated_sums;  // 2^63 ceiling: keep the sum, drop the excess
+    commitChunks(std::vector<std::vector<Deposit>>{deposits});
+}
+
+void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
+    constexpr uint32_t kMissing = kHashGridInvalidIndex;      // key not in the table yet
+    constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;  // non-finite or failed insert
+    chunk_slots_.resize(chunks.size());
+
+    // 1. Parallel: look every key up (the table is read-only here).
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
+        const std::vector<Deposit>& deposits = chunks[chunk];
+        std::vector<uint32_t>& slots = chunk_slots_[chunk];
+        slots.resize(deposits.size());
+        for (size_t i = 0; i < deposits.size(); ++i) {
+            const Deposit& d = deposits[i];
+            if (!isFiniteColor(d.radiance)) {
+                slots[i] = kDropped;
                 continue;
             }
-            entry.sums[c] += add;
+            slots[i] = table_.find(d.key).value_or(kMissing);
         }
-        numerics_.negative_deposits += negative;
-        numerics_.clamped_deposits += clamped;
-        entry.samples += d.samples;
+    });
+
+    // 2. Serial, in chunk (= path) order: insert the new keys. Slot assignment is therefore the
+    //    same on every run, whatever thread traced which path.
+    for (size_t chunk = 0; chunk < chunks.size(); ++chunk) {
+        const std::vector<Deposit>& deposits = chunks[chunk];
+        std::vector<uint32_t>& slots = chunk_slots_[chunk];
+        for (size_t i = 0; i < deposits.size(); ++i) {
+            const Deposit& d = deposits[i];
+            ++numerics_.deposits;
+            if (slots[i] == kDropped) {
+                ++numerics_.non_finite_deposits;
+                continue;
+            }
+            if (slots[i] != kMissing) continue;
+            const std::optional<uint32_t> inserted = table_.insert(d.key);
+            if (inserted) {
+                slots[i] = *inserted;
+            } else {
+                slots[i] = kDropped;
+                ++numerics_.failed_inserts;
+                numerics_.failed_insert_energy += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
+            }
+        }
+    }
+
+    // 3. Parallel: fixed-point conversion and integer atomic adds, which commute, so the sums
+    //    do not depend on the order either.
+    struct ChunkNumerics {
+        uint64_t negative = 0, clamped = 0;
+        glm::dvec3 clamped_energy{0.0};
+        std::vector<uint32_t> touched;
+    };
+    std::vector<ChunkNumerics> chunk_numerics(chunks.size());
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
+        const std::vector<Deposit>& deposits = chunks[chunk];
+        const std::vector<uint32_t>& slots = chunk_slots_[chunk];
+        ChunkNumerics& numerics = chunk_numerics[chunk];
+        for (size_t i = 0; i < deposits.size(); ++i) {
+            if (slots[i] >= kDropped) continue;
+            const Deposit& d = deposits[i];
+            AccumulationEntry& entry = accumulation_[slots[i]];
+            if (entry.touched.exchange(1, std::memory_order_relaxed) == 0) numerics.touched.push_back(slots[i]);
+            bool negative = false, clamped = false;
+            for (int c = 0; c < 3; ++c) {
+                double value = double(d.radiance[c]);
+                if (value < 0.0) {
+                    negative = true;
+                    value = 0.0;
+                }
+                // Round to nearest: truncation would bias dim light low (sharc_algorithm.md 10.2).
+                double fixed = std::nearbyint(value * radiance_scale_);
+                if (fixed > double(max_fixed_deposit_)) {
+                    clamped = true;
+                    numerics.clamped_energy[c] += (fixed - double(max_fixed_deposit_)) / radiance_scale_;
+                    fixed = double(max_fixed_deposit_);
+                }
+                // At most 2^56 per deposit: the sum passes 2^63 long before it could wrap 2^64,
+                // and resolve clamps (and counts) sums above 2^63.
+                if (fixed > 0.0) entry.sums[c].fetch_add(uint64_t(fixed), std::memory_order_relaxed);
+            }
+            numerics.negative += negative;
+            numerics.clamped += clamped;
+            if (d.samples) entry.samples.fetch_add(d.samples, std::memory_order_relaxed);
+        }
+    });
+    for (const ChunkNumerics& n : chunk_numerics) {
+        numerics_.negative_deposits += n.negative;
+        numerics_.clamped_deposits += n.clamped;
+        numerics_.clamped_energy += n.clamped_energy;
+        touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
     }
 }
 
 void SharcCache::resolve(uint32_t iteration) {
+    constexpr uint64_t kSumCeiling = uint64_t(1) << 63;
     const double inverse_scale = 1.0 / radiance_scale_;
-    std::vector<uint8_t> orphan(touched_.size(), 0);
+    std::vector<uint8_t> orphan(touched_.size(), 0), saturated(touched_.size(), 0);
     tbb::parallel_for(size_t(0), touched_.size(), [&](size_t i) {
         const uint32_t slot = touched_[i];
         AccumulationEntry& acc = accumulation_[slot];
         ResolvedEntry& r = resolved_[slot];
-        if (acc.samples == 0) {
+        const uint32_t samples = acc.samples.load(std::memory_order_relaxed);
+        if (samples == 0) {
             // Radiance arrived without a sample of its own (cannot happen with the update pass
             // as written; counted so a regression shows up in the stats).
             orphan[i] = 1;
         } else {
-            const double n = double(acc.samples);
-            const glm::dvec3 mean_new = glm::dvec3(double(acc.sums[0]), double(acc.sums[1]), double(acc.sums[2])) *
-                                        (inverse_scale / n);
+            double sums[3];
+            for (int c = 0; c < 3; ++c) {
+                uint64_t sum = acc.sums[c].load(std::memory_order_relaxed);
+                if (sum > kSumCeiling) {
+                    sum = kSumCeiling;
+                    saturated[i] = 1;
+                }
+                sums[c] = double(sum);
+            }
+            const double n = double(samples);
+            const glm::dvec3 mean_new = glm::dvec3(sums[0], sums[1], sums[2]) * (inverse_scale / n);
             r.frames += 1;
             const double history = r.weight * settings_.history.historyFactor(r.frames);
             const double total = history + n;
@@ -157,12 +218,16 @@ void SharcCache::resolve(uint32_t iteration) {
             r.mean = glm::vec3(mean);
             r.weight = total;
             r.last_iteration = iteration;
-            r.total_samples = acc.samples > ~r.total_samples ? ~0u : r.total_samples + acc.samples;
+            r.total_samples = samples > ~r.total_samples ? ~0u : r.total_samples + samples;
         }
-        acc = AccumulationEntry{};
-        touched_flags_[slot] = 0;
+        for (auto& sum : acc.sums) sum.store(0, std::memory_order_relaxed);
+        acc.samples.store(0, std::memory_order_relaxed);
+        acc.touched.store(0, std::memory_order_relaxed);
     });
-    for (uint8_t o : orphan) numerics_.orphan_sums += o;
+    for (size_t i = 0; i < touched_.size(); ++i) {
+        numerics_.orphan_sums += orphan[i];
+        numerics_.saturated_sums += saturated[i];
+    }
     touched_.clear();
 }
 

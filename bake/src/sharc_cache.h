@@ -16,6 +16,8 @@
 #include <glm/glm.hpp>
 
 #include <array>
+#include <atomic>
+#include <memory>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -58,9 +60,11 @@ struct SharcSettings {
 };
 
 /// Per-slot accumulation of one iteration: fixed-point radiance sums and the sample count.
+/// Integer atomic adds commute, so the sums do not depend on which thread adds first.
 struct AccumulationEntry {
-    std::array<uint64_t, 3> sums{0, 0, 0};
-    uint32_t samples = 0;
+    std::array<std::atomic<uint64_t>, 3> sums{};
+    std::atomic<uint32_t> samples{0};
+    std::atomic<uint8_t> touched{0};  ///< already listed for this iteration's resolve
 };
 
 /// Per-slot resolved state: what queries and cache resampling read.
@@ -106,8 +110,11 @@ public:
     /// threads while no commit or resolve runs.
     const ResolvedEntry* findResolved(uint64_t key) const;
 
-    /// Adds deposits in the given order: inserts their keys (so slot assignment is the same
-    /// on every run) and adds their fixed-point radiance. Single-threaded by design.
+    /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,
+    /// inserts the new ones serially in chunk order (so slot assignment is the same on every
+    /// run), then adds the fixed-point radiance in parallel with integer atomics.
+    void commitChunks(const std::vector<std::vector<Deposit>>& chunks);
+    /// One chunk (tests).
     void commit(const std::vector<Deposit>& deposits);
 
     /// Folds this iteration's accumulation into the resolved entries with the history schedule
@@ -131,10 +138,10 @@ private:
     HashGridTable table_;
     double radiance_scale_;
     uint64_t max_fixed_deposit_;
-    std::vector<AccumulationEntry> accumulation_;
+    std::unique_ptr<AccumulationEntry[]> accumulation_;
     std::vector<ResolvedEntry> resolved_;
-    std::vector<uint32_t> touched_;        ///< slots with accumulation this iteration, in commit order
-    std::vector<uint8_t> touched_flags_;   ///< per slot: already in touched_
+    std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
+    std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     NumericsCounters numerics_;
 };
 
