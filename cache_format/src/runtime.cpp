@@ -54,7 +54,13 @@ CacheFileStatus fail(CacheError* error, CacheFileStatus status, uint32_t rule, c
     if (error) {
         error->status = status;
         error->rule = rule;
-        error->message = rule ? "V" + std::to_string(rule) + ": " + message : message;
+        error->message.clear();
+        if (rule) {  // (built step by step: GCC 12 warns falsely (-Wrestrict) on "V" + to_string)
+            error->message += 'V';
+            error->message += std::to_string(rule);
+            error->message += ": ";
+        }
+        error->message += message;
     }
     return status;
 }
@@ -93,6 +99,8 @@ bool validUtf8(const uint8_t* s, size_t n) {
 }
 
 bool finiteNonNegative(float v) { return std::isfinite(v) && v >= 0.0f; }
+
+constexpr uint64_t kIndexMultiplier = 0x9E3779B97F4A7C15ull;  // 2^64 / golden ratio (lookup index)
 
 }  // namespace
 
@@ -166,6 +174,10 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     voxels_ = other.voxels_;
     levels_ = std::move(other.levels_);
     metadata_ = std::move(other.metadata_);
+    log2_base_ = other.log2_base_;
+    voxel_size_ = std::move(other.voxel_size_);
+    index_ = std::move(other.index_);
+    index_shift_ = other.index_shift_;
     other.data_ = nullptr;
     other.mapping_ = nullptr;
     other.mapping_size_ = 0;
@@ -188,6 +200,10 @@ void CacheView::reset() {
     keys_ = voxels_ = nullptr;
     levels_.clear();
     metadata_.clear();
+    voxel_size_.clear();
+    index_.clear();
+    index_.shrink_to_fit();
+    index_shift_ = 64;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -563,6 +579,11 @@ CacheFileStatus CacheView::parse(CacheError* error) {
         }
         if (at != n) return fail(error, S::kCorrupt, 18, "META: bytes after the last entry");
     }
+    // Query acceleration (not validation): log2(b) and the voxel size of every level.
+    log2_base_ = float(std::log2(double(logarithm_base_)));
+    const HashGridParameters params = gridParameters();
+    voxel_size_.resize(kHashGridLevelMax + 1);
+    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) voxel_size_[level] = voxelSize(level, params);
     return S::kOk;
 }
 
@@ -591,7 +612,53 @@ CacheVoxel CacheView::voxel(uint64_t index) const {
     return v;
 }
 
+CacheFileStatus CacheView::buildLookupIndex() {
+    if (!data_ || voxel_count_ >= 0xFFFFFFFFu) return CacheFileStatus::kInvalidArgument;
+    uint32_t bits = 4;
+    while ((uint64_t(1) << bits) < 2 * voxel_count_ && bits < 40) ++bits;  // load factor <= 1/2
+    try {
+        index_.assign(size_t(1) << bits, 0u);
+    } catch (const std::bad_alloc&) {
+        index_.clear();
+        return CacheFileStatus::kIoError;
+    }
+    index_shift_ = 64 - bits;
+    const size_t mask = index_.size() - 1;
+    for (uint64_t i = 0; i < voxel_count_; ++i) {
+        size_t slot = size_t((key(i) * kIndexMultiplier) >> index_shift_);
+        while (index_[slot] != 0) slot = (slot + 1) & mask;
+        index_[slot] = uint32_t(i + 1);  // voxel_count <= file size / 24 < 2^32 - 1 for files < 96 GiB
+    }
+    return CacheFileStatus::kOk;
+}
+
+uint64_t CacheView::keyFor(const Float3& p, const Float3& n, const Float3& c) const {
+    // SPEC §H.2 - §H.6, the same binary32 operations in the same order as hash_grid.cpp
+    // (this file is compiled without FMA contraction too); cross-checked in cache_file_test.
+    const Float3 b{p.x + kHashGridPositionBias, p.y + kHashGridPositionBias, p.z + kHashGridPositionBias};
+    const float dx = c.x - b.x, dy = c.y - b.y, dz = c.z - b.z;
+    float d2 = dx * dx;
+    d2 = d2 + dy * dy;
+    d2 = d2 + dz * dz;
+    d2 = (std::isnan(d2) || d2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : d2;
+    const float ratio = float(std::log2(double(d2))) / log2_base_;
+    float level = 0.5f * ratio + level_bias_;
+    level = std::isnan(level) || level < 1.0f ? 1.0f : level;
+    level = level > 511.0f ? 511.0f : level;
+    const uint32_t l = uint32_t(level);
+    const float size = voxel_size_.empty() ? voxelSize(l, gridParameters(c)) : voxel_size_[l];
+    return packHashGridKey(quantisePosition(b, size), l, normalBits(n));
+}
+
 uint64_t CacheView::findKey(uint64_t k) const {
+    if (!index_.empty()) {
+        const size_t mask = index_.size() - 1;
+        size_t slot = size_t((k * kIndexMultiplier) >> index_shift_);
+        for (uint32_t e; (e = index_[slot]) != 0; slot = (slot + 1) & mask) {
+            if (load<uint64_t>(keys_ + uint64_t(e - 1) * 8) == k) return e - 1;
+        }
+        return voxel_count_;
+    }
     uint64_t lo = 0, n = voxel_count_;
     while (n > 0) {  // lower_bound, branch-light
         const uint64_t half = n / 2;
@@ -649,7 +716,7 @@ CacheStats CacheView::stats() const {
 bool CacheView::lookup(const Float3& position, const Float3& normal, const Float3& camera_position,
                        Float3* radiance) const {
     if (!data_) return false;
-    const uint64_t index = findKey(hashGridKey(position, normal, gridParameters(camera_position)));
+    const uint64_t index = findKey(keyFor(position, normal, camera_position));
     if (index == voxel_count_) return false;
     if (radiance) std::memcpy(radiance, voxels_ + index * 16, 12);
     return true;
@@ -682,7 +749,7 @@ bool CacheView::lookupNearestLevel(const Float3& position, const Float3& normal,
             pick = down--;  // finer level on ties
         }
         const uint32_t level = levels_[size_t(pick)].level;
-        const Int3 grid = quantisePosition(biased, voxelSize(level, params));
+        const Int3 grid = quantisePosition(biased, voxel_size_[level]);
         const uint64_t index = findKey(packHashGridKey(grid, level, bits));
         if (index != voxel_count_) {
             if (radiance) std::memcpy(radiance, voxels_ + index * 16, 12);
@@ -698,6 +765,47 @@ size_t CacheView::lookupBatch(size_t count, const Float3* positions, const Float
                               bool nearest_level) const {
     if (!positions || !normals || !radiance) return 0;
     size_t hit_count = 0;
+    if (!nearest_level && !index_.empty()) {
+        // Software-pipelined exact lookups: keys and index slots for a block first (prefetching
+        // the slots), then the first probe (prefetching key and voxel), then the compare. Keeps
+        // many cache misses in flight instead of one.
+        constexpr size_t kBlock = 32;
+        const size_t mask = index_.size() - 1;
+        uint64_t keys[kBlock];
+        size_t slots[kBlock];
+        for (size_t start = 0; start < count; start += kBlock) {
+            const size_t n = std::min(kBlock, count - start);
+            for (size_t j = 0; j < n; ++j) {
+                keys[j] = keyFor(positions[start + j], normals[start + j], camera_position);
+                slots[j] = size_t((keys[j] * kIndexMultiplier) >> index_shift_);
+                __builtin_prefetch(&index_[slots[j]]);
+            }
+            for (size_t j = 0; j < n; ++j) {
+                const uint32_t e = index_[slots[j]];
+                if (e != 0) {
+                    __builtin_prefetch(keys_ + uint64_t(e - 1) * 8);
+                    __builtin_prefetch(voxels_ + uint64_t(e - 1) * 16);
+                }
+            }
+            for (size_t j = 0; j < n; ++j) {
+                size_t slot = slots[j];
+                uint64_t found = voxel_count_;
+                for (uint32_t e; (e = index_[slot]) != 0; slot = (slot + 1) & mask) {
+                    if (load<uint64_t>(keys_ + uint64_t(e - 1) * 8) == keys[j]) {
+                        found = e - 1;
+                        break;
+                    }
+                }
+                const bool hit = found != voxel_count_;
+                Float3 value{0.0f, 0.0f, 0.0f};
+                if (hit) std::memcpy(&value, voxels_ + found * 16, 12);
+                radiance[start + j] = value;
+                if (hits) hits[start + j] = hit ? 1 : 0;
+                hit_count += hit ? 1 : 0;
+            }
+        }
+        return hit_count;
+    }
     for (size_t i = 0; i < count; ++i) {
         Float3 value{0.0f, 0.0f, 0.0f};
         const bool hit = nearest_level ? lookupNearestLevel(positions[i], normals[i], camera_position, &value)

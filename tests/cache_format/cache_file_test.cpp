@@ -18,6 +18,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -482,6 +483,89 @@ TEST(Runtime, LookupReturnsEachVoxelAtItsCentre) {
         EXPECT_EQ(view.lookup(centre, normalFromBits(cell.normal_bits ^ 7u), camera, &r), view.findKey(other) != view.voxelCount());
     }
     EXPECT_EQ(view.findKey(1), view.voxelCount());
+}
+
+TEST(Runtime, KeyForMatchesHashGridKey) {
+    const float params[][3] = {{2.0f, 50.0f, 0.0f}, {3.0f, 50.0f, 0.0f}, {4.0f, 10.0f, 1.5f}, {1.01f, 50.0f, -5.0f}};
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> small(-5.0f, 5.0f), wide(-3000.0f, 3000.0f);
+    const float specials[] = {0.0f, -0.0f, 1e-4f, -1e-4f, 3.9999f, 4.0f, 1e30f, -1e30f,
+                              std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()};
+    for (const auto& q : params) {
+        CacheData data;
+        data.logarithm_base = q[0];
+        data.scene_scale = q[1];
+        data.level_bias = q[2];
+        data.bake_capacity = 16;
+        const std::vector<uint8_t> bytes = encode(data);
+        CacheView view;
+        ASSERT_EQ(openBytes(bytes, nullptr, &view), CacheFileStatus::kOk);
+        for (int i = 0; i < 20000; ++i) {
+            auto r = [&](int k) {
+                if (i % 7 == 0 && k == 0) return specials[size_t(i / 7) % 10];
+                return (i & 1) ? wide(rng) : small(rng);
+            };
+            const Float3 p{r(0), r(1), r(2)}, n{small(rng), small(rng), small(rng)}, c{r(3), r(4), r(5)};
+            ASSERT_EQ(view.keyFor(p, n, c), hashGridKey(p, n, view.gridParameters(c)))
+                << p.x << " " << p.y << " " << p.z << " camera " << c.x << " " << c.y << " " << c.z;
+        }
+    }
+}
+
+TEST(Runtime, LookupIndexGivesTheSameAnswers) {
+    const CacheData data = goldenData();
+    const std::vector<uint8_t> bytes = encode(data);
+    CacheView plain, indexed;
+    ASSERT_EQ(openBytes(bytes, nullptr, &plain), CacheFileStatus::kOk);
+    ASSERT_EQ(openBytes(bytes, nullptr, &indexed), CacheFileStatus::kOk);
+    ASSERT_EQ(indexed.buildLookupIndex(), CacheFileStatus::kOk);
+    EXPECT_TRUE(indexed.hasLookupIndex());
+    for (size_t i = 0; i < data.voxels.size(); ++i) {
+        EXPECT_EQ(indexed.findKey(data.voxels[i].key), i);
+        EXPECT_EQ(indexed.findKey(data.voxels[i].key + 1), plain.findKey(data.voxels[i].key + 1));
+    }
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> coord(-30.0f, 30.0f);
+    for (int i = 0; i < 5000; ++i) {
+        const Float3 p{coord(rng), coord(rng), coord(rng)}, n{coord(rng), coord(rng), coord(rng)};
+        Float3 a{0, 0, 0}, b{0, 0, 0};
+        uint32_t la = 0, lb = 0;
+        EXPECT_EQ(plain.lookupNearestLevel(p, n, {0, 0, 0}, &a, &la), indexed.lookupNearestLevel(p, n, {0, 0, 0}, &b, &lb));
+        EXPECT_EQ(la, lb);
+        EXPECT_EQ(a.x, b.x);
+    }
+    // The pipelined batch path (index built, exact lookups) agrees with single plain lookups,
+    // for hits (voxel centres) and misses (random points).
+    std::vector<Float3> positions, normals;
+    for (const CacheVoxel& v : data.voxels) {
+        const HashGridCell cell = decodeHashGridKey(v.key);
+        const Float3 centre = voxelCenter(v.key, plain.gridParameters());
+        positions.push_back(centre);
+        normals.push_back(normalFromBits(cell.normal_bits));
+    }
+    for (int i = 0; i < 100; ++i) {
+        positions.push_back({coord(rng), coord(rng), coord(rng)});
+        normals.push_back({coord(rng), coord(rng), coord(rng)});
+    }
+    const Float3 camera{0.3f, -0.2f, 0.1f};
+    std::vector<Float3> out(positions.size());
+    std::vector<uint8_t> hit(positions.size());
+    const size_t count = indexed.lookupBatch(positions.size(), positions.data(), normals.data(), camera, out.data(),
+                                             hit.data());
+    size_t expected = 0;
+    for (size_t i = 0; i < positions.size(); ++i) {
+        Float3 r{0, 0, 0};
+        const bool h = plain.lookup(positions[i], normals[i], camera, &r);
+        expected += h ? 1 : 0;
+        EXPECT_EQ(hit[i] != 0, h) << i;
+        EXPECT_EQ(out[i].x, r.x);
+        EXPECT_EQ(out[i].z, r.z);
+    }
+    EXPECT_EQ(count, expected);
+    EXPECT_GT(count, 0u);
+    CacheView moved(std::move(indexed));
+    EXPECT_TRUE(moved.hasLookupIndex());
+    EXPECT_EQ(moved.findKey(data.voxels[3].key), 3u);
 }
 
 TEST(Runtime, NearestLevelFallsBackWhenTheLevelIsMissing) {

@@ -125,8 +125,17 @@ public:
     uint64_t voxelCount() const { return voxel_count_; }
     uint64_t key(uint64_t index) const;         ///< index < voxelCount()
     CacheVoxel voxel(uint64_t index) const;     ///< index < voxelCount()
-    /// Index of `key`, or voxelCount() when absent (binary search).
+    /// Index of `key`, or voxelCount() when absent (hash index if built, else binary search).
     uint64_t findKey(uint64_t key) const;
+    /// The SHaRC key of (position, normal) for a camera: identical to hashGridKey() with this
+    /// cache's parameters, with the per-level voxel sizes precomputed at open.
+    uint64_t keyFor(const Float3& position, const Float3& normal, const Float3& camera_position) const;
+
+    /// @brief Builds an in-memory hash index over the keys (4 bytes x 2..4 per voxel, the file
+    /// stays uncopied) so lookups cost O(1) instead of a binary search. Call once before sharing
+    /// the view between threads. kIoError if the allocation fails (lookups then keep working).
+    CacheFileStatus buildLookupIndex();
+    bool hasLookupIndex() const { return !index_.empty(); }
     CacheStats stats() const;
 
     // Levels -------------------------------------------------------------------------------------
@@ -186,6 +195,10 @@ private:
     const uint8_t* voxels_ = nullptr;  ///< voxel_count_ records of 16 bytes
     std::vector<CacheLevel> levels_;
     std::vector<std::pair<std::string_view, std::string_view>> metadata_;
+    float log2_base_ = 1.0f;                ///< log2(logarithm_base) rounded to float (SPEC §H.3)
+    std::vector<float> voxel_size_;         ///< voxelSize(L) for L = 0..511
+    std::vector<uint32_t> index_;           ///< open addressing: voxel index + 1, 0 = empty
+    uint32_t index_shift_ = 64;             ///< slot = (key * golden) >> shift
 };
 
 }  // namespace sharcbake
