@@ -10,7 +10,8 @@ SHARCBAKE  := $(BUILD_DIR)/bin/sharcbake
 # Debian packages the build, the demo and the tests need.
 DEB_PACKAGES := build-essential cmake pkg-config python3 \
     libembree-dev libtbb-dev libopenvdb-dev libopenexr-dev libglm-dev libcli11-dev \
-    libtinygltf-dev nlohmann-json3-dev libstb-dev libboost-iostreams-dev libgtest-dev libbenchmark-dev
+    libtinygltf-dev nlohmann-json3-dev libstb-dev libboost-iostreams-dev libgtest-dev libbenchmark-dev \
+    libopenvdb-tools
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

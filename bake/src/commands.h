@@ -11,5 +11,6 @@ void registerRenderCommand(CLI::App& app);
 void registerBakeCommand(CLI::App& app);
 void registerInfoCommand(CLI::App& app);  ///< `info` and `validate` (info_command.cpp)
 void registerCompareCommand(CLI::App& app);
+void registerExportVdbCommand(CLI::App& app);  ///< export_vdb_command.cpp
 
 }  // namespace sharcbake

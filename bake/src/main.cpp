@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
     registerBakeCommand(app);
     registerInfoCommand(app);
     registerCompareCommand(app);
+    registerExportVdbCommand(app);
 
     try {
         app.parse(argc, argv);

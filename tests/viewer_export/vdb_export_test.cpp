@@ -1,0 +1,238 @@
+// SPDX-License-Identifier: Apache-2.0
+// sharcbake_vdb: a cache with known voxels on two levels, exported and read back with OpenVDB.
+#include "sharcbake/cache_file.h"
+#include "sharcbake/hash_grid.h"
+#include "sharcbake/runtime.h"
+#include "sharcbake/vdb_export.h"
+
+#include <gtest/gtest.h>
+#include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
+#include <openvdb/openvdb.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+namespace {
+
+namespace fs = std::filesystem;
+
+CacheVoxel makeVoxel(Int3 g, uint32_t level, uint32_t normal_bits, float r, float gr, float b, float w) {
+    CacheVoxel v;
+    v.key = packHashGridKey(g, level, normal_bits);
+    v.radiance[0] = r;
+    v.radiance[1] = gr;
+    v.radiance[2] = b;
+    v.sample_weight = w;
+    return v;
+}
+
+class VdbExportTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        openvdb::initialize();
+        dir_ = fs::temp_directory_path() /
+               ("sharcbake_vdb_" + std::to_string(getpid()) + "_" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir_);
+        CacheData data;
+        data.bake_capacity = 1024;
+        // Level 3: one cell seen from two normal octants, one cell seen from one.
+        data.voxels.push_back(makeVoxel({1, 2, -3}, 3, 0, 1.0f, 0.0f, 0.0f, 3.0f));
+        data.voxels.push_back(makeVoxel({1, 2, -3}, 3, 5, 0.0f, 1.0f, 0.0f, 1.0f));
+        data.voxels.push_back(makeVoxel({-5, 0, 7}, 3, 2, 0.5f, 0.5f, 0.5f, 0.5f));
+        // Level 5: a cell at the origin and one at the most negative 17-bit coordinate.
+        data.voxels.push_back(makeVoxel({0, 0, 0}, 5, 1, 2.0f, 4.0f, 8.0f, 10.0f));
+        data.voxels.push_back(makeVoxel({-65536, 3, 100}, 5, 7, 1.0f, 1.0f, 1.0f, 2.0f));
+        sortVoxels(data.voxels);
+        data.metadata = {{"scene", "test_scene.gltf"}, {"iterations", "4"}};
+        cache_path_ = (dir_ / "test.sharc").string();
+        std::string message;
+        ASSERT_EQ(writeCacheFile(cache_path_, data, &message), CacheFileStatus::kOk) << message;
+        CacheError error;
+        ASSERT_EQ(CacheView::openFile(cache_path_, &view_, &error), CacheFileStatus::kOk) << error.message;
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::vector<openvdb::GridBase::Ptr> exportAndRead(const VdbExportOptions& options, openvdb::MetaMap::Ptr* meta = nullptr,
+                                                      std::vector<VdbGridInfo>* info = nullptr) {
+        const std::string out = (dir_ / "out.vdb").string();
+        std::string message;
+        EXPECT_EQ(exportCacheToVdb(view_, out, options, info, &message), VdbExportStatus::kOk) << message;
+                std::ifstream in(out, std::ios::binary);
+        openvdb::io::Stream stream(in);
+        openvdb::GridPtrVecPtr grids = stream.getGrids();
+        if (meta) *meta = stream.getMetadata();
+        return std::vector<openvdb::GridBase::Ptr>(grids->begin(), grids->end());
+    }
+
+    static std::vector<std::string> names(const std::vector<openvdb::GridBase::Ptr>& grids) {
+        std::vector<std::string> n;
+        for (const auto& g : grids) n.push_back(g->getName());
+        return n;
+    }
+
+    static openvdb::GridBase::Ptr find(const std::vector<openvdb::GridBase::Ptr>& grids, const std::string& name) {
+        for (const auto& g : grids) {
+            if (g->getName() == name) return g;
+        }
+        ADD_FAILURE() << "no grid " << name;
+        return nullptr;
+    }
+
+    fs::path dir_;
+    std::string cache_path_;
+    CacheView view_;
+};
+
+TEST_F(VdbExportTest, GridNamesOrderAndCounts) {
+    VdbExportOptions options;
+    std::vector<VdbGridInfo> info;
+    const auto grids = exportAndRead(options, nullptr, &info);
+    const std::vector<std::string> expected = {
+        "density",         "color",          "level3_density", "level3_color",    "level3_radiance",
+        "level3_samples",  "level5_density", "level5_color",   "level5_radiance", "level5_samples"};
+    // Written in this order (the exporter's summary); OpenVDB's readers return them by name.
+    std::vector<std::string> written;
+    for (const VdbGridInfo& g : info) written.push_back(g.name);
+    EXPECT_EQ(written, expected);
+    std::vector<std::string> sorted = expected;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(names(grids), sorted);
+    // The first grid written is a float grid (vdb_render renders the first float grid).
+    EXPECT_TRUE(openvdb::gridPtrCast<openvdb::FloatGrid>(find(grids, written[0])) != nullptr);
+    EXPECT_TRUE(openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "color")) != nullptr);
+    // io::File (vdb_print, vdb_render) lists grids by name: the first float grid is still density.
+    openvdb::io::File file((dir_ / "out.vdb").string());
+    file.open();
+    std::string first_float;
+    const openvdb::GridPtrVecPtr by_name = file.getGrids();
+    for (const auto& g : *by_name) {
+        if (first_float.empty() && g->isType<openvdb::FloatGrid>()) first_float = g->getName();
+    }
+    file.close();
+    EXPECT_EQ(first_float, "density");
+    for (const auto& g : grids) {
+        EXPECT_EQ(g->activeVoxelCount(), 2u) << g->getName();  // octants merged: 2 cells per level
+        const int level = g->metaValue<int32_t>("sharcbake_level");
+        EXPECT_EQ(level, g->getName().rfind("level5", 0) == 0 ? 5 : 3) << g->getName();
+    }
+}
+
+TEST_F(VdbExportTest, TransformsPutVoxelCentresWhereTheCacheHasThem) {
+    const auto grids = exportAndRead(VdbExportOptions{});
+    const HashGridParameters params = view_.gridParameters();
+    for (uint64_t i = 0; i < view_.voxelCount(); ++i) {
+        const HashGridCell c = decodeHashGridKey(view_.key(i));
+        const Float3 centre = voxelCenter(view_.key(i), params);
+        const auto grid = find(grids, "level" + std::to_string(c.level) + "_radiance");
+        ASSERT_TRUE(grid);
+        EXPECT_NEAR(grid->voxelSize()[0], voxelSize(c.level, params), 1e-7);
+        const openvdb::Vec3d world = grid->indexToWorld(openvdb::Coord(c.grid.x, c.grid.y, c.grid.z));
+        const float expected[3] = {centre.x, centre.y, centre.z};
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(world[k], expected[k], 1e-6 * std::max(1.0, std::abs(double(expected[k])))) << i << " " << k;
+        }
+        EXPECT_TRUE(grid->transform().isLinear());
+    }
+}
+
+TEST_F(VdbExportTest, ValuesAndOctantMerging) {
+    VdbExportOptions options;
+    options.scale = 2.0f;
+    const auto grids = exportAndRead(options);
+    auto rad = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_radiance"));
+    auto col = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_color"));
+    auto den = openvdb::gridPtrCast<openvdb::FloatGrid>(find(grids, "level3_density"));
+    auto smp = openvdb::gridPtrCast<openvdb::FloatGrid>(find(grids, "level3_samples"));
+    ASSERT_TRUE(rad && col && den && smp);
+    const openvdb::Coord merged(1, 2, -3);
+    // Sample-weighted mean: (3·(1,0,0) + 1·(0,1,0)) / 4.
+    EXPECT_TRUE(rad->tree().isValueOn(merged));
+    EXPECT_NEAR(rad->tree().getValue(merged)[0], 0.75f, 1e-6f);
+    EXPECT_NEAR(rad->tree().getValue(merged)[1], 0.25f, 1e-6f);
+    EXPECT_NEAR(rad->tree().getValue(merged)[2], 0.0f, 1e-6f);
+    EXPECT_NEAR(col->tree().getValue(merged)[0], 1.5f, 1e-6f);
+    EXPECT_NEAR(smp->tree().getValue(merged), 4.0f, 1e-6f);
+    EXPECT_NEAR(den->tree().getValue(merged), 2.0f * (0.2126f * 0.75f + 0.7152f * 0.25f), 1e-6f);
+    // A single entry passes through unchanged.
+    const openvdb::Coord single(-5, 0, 7);
+    EXPECT_TRUE(smp->tree().isValueOn(single));
+    EXPECT_NEAR(smp->tree().getValue(single), 0.5f, 1e-6f);
+    EXPECT_NEAR(rad->tree().getValue(single)[1], 0.5f, 1e-6f);
+    // Empty space is inactive background.
+    EXPECT_FALSE(rad->tree().isValueOn(openvdb::Coord(0, 0, 0)));
+    // Level 5, including the sign-extended coordinate.
+    auto rad5 = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level5_radiance"));
+    ASSERT_TRUE(rad5);
+    EXPECT_NEAR(rad5->tree().getValue(openvdb::Coord(0, 0, 0))[2], 8.0f, 1e-6f);
+    EXPECT_TRUE(rad5->tree().isValueOn(openvdb::Coord(-65536, 3, 100)));
+    // The aliases are the finest level (3).
+    auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(find(grids, "density"));
+    ASSERT_TRUE(density);
+    EXPECT_EQ(density->tree().getValue(merged), den->tree().getValue(merged));
+    EXPECT_EQ(density->voxelSize(), den->voxelSize());
+    EXPECT_FLOAT_EQ(density->metaValue<float>("sharcbake_scale"), 2.0f);
+}
+
+TEST_F(VdbExportTest, SplitNormalsWritesOneGridSetPerOctant) {
+    VdbExportOptions options;
+    options.split_normals = true;
+    const auto grids = exportAndRead(options);
+    EXPECT_EQ(grids.size(), 2u + 5u * 4u);  // aliases + (3 octants on level 3, 2 on level 5) × 4
+    EXPECT_EQ(find(grids, "density")->activeVoxelCount(), 2u);  // aliases stay merged
+    auto a = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_n+x+y+z_radiance"));
+    auto b = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_n-x+y-z_radiance"));
+    ASSERT_TRUE(a && b);
+    EXPECT_EQ(a->activeVoxelCount(), 1u);
+    EXPECT_NEAR(a->tree().getValue(openvdb::Coord(1, 2, -3))[0], 1.0f, 1e-6f);
+    EXPECT_NEAR(b->tree().getValue(openvdb::Coord(1, 2, -3))[1], 1.0f, 1e-6f);
+    EXPECT_TRUE(find(grids, "level3_n+x-y+z_samples"));
+    EXPECT_TRUE(find(grids, "level5_n-x-y-z_density"));
+}
+
+TEST_F(VdbExportTest, LevelsAndChannelsSelectGrids) {
+    VdbExportOptions options;
+    options.levels = {5};
+    options.color = options.radiance = options.samples = false;
+    const auto grids = exportAndRead(options);
+    EXPECT_EQ(names(grids), (std::vector<std::string>{"color", "density", "level5_density"}));
+    EXPECT_EQ(find(grids, "density")->metaValue<int32_t>("sharcbake_level"), 5);
+}
+
+TEST_F(VdbExportTest, FileMetadataRecordsTheBake) {
+    VdbExportOptions options;
+    options.source_path = cache_path_;
+    options.writer = "test writer";
+    openvdb::MetaMap::Ptr meta;
+    exportAndRead(options, &meta);
+    ASSERT_TRUE(meta);
+    EXPECT_EQ(meta->metaValue<std::string>("sharcbake_source"), cache_path_);
+    EXPECT_EQ(meta->metaValue<std::string>("sharcbake_writer"), "test writer");
+    EXPECT_EQ(meta->metaValue<std::string>("units"), "glTF metres, +Y up");
+    EXPECT_EQ(meta->metaValue<std::string>("sharcbake_bake_scene"), "test_scene.gltf");
+    EXPECT_EQ(meta->metaValue<std::string>("sharcbake_format_version"),
+              std::to_string(view_.versionMajor()) + "." + std::to_string(view_.versionMinor()));
+}
+
+TEST_F(VdbExportTest, Errors) {
+    std::string message;
+    VdbExportOptions options;
+    options.levels = {4};
+    EXPECT_EQ(exportCacheToVdb(view_, (dir_ / "x.vdb").string(), options, nullptr, &message),
+              VdbExportStatus::kInvalidArgument);
+    EXPECT_NE(message.find("levels present: 3,5"), std::string::npos) << message;
+    EXPECT_EQ(exportCacheToVdb(view_, (dir_ / "missing_dir" / "x.vdb").string(), VdbExportOptions{}, nullptr, &message),
+              VdbExportStatus::kIoError);
+}
+
+}  // namespace
+}  // namespace sharcbake

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file vdb_export.h
+/// @brief A baked .sharc cache as OpenVDB grids, for vdb_view / vdb_render, Houdini and Blender.
+///
+/// The cache is read only through the runtime library (CacheView). Grid layout (DESIGN.md §4):
+///
+///  * One grid set per SHaRC level present, each with its own transform: a linear transform of
+///    voxel size s = voxelSize(level) translated by 0.5·s, so VDB index g (the key's grid
+///    coordinate) has its centre at world (g + 0.5)·s, the centre of the cache voxel
+///    [g·s, (g+1)·s). World units are the scene's glTF units (metres, +Y up), unchanged.
+///  * Per level L the grids `levelL_density` (float, luminance of radiance × scale; fog volume),
+///    `levelL_color` (Vec3S, radiance × scale), `levelL_radiance` (Vec3S, unscaled mean radiance)
+///    and `levelL_samples` (float, effective sample count), as chosen by the channels.
+///  * First in the file, always: `density` (float) and `color` (Vec3S), the merged finest level
+///    exported. vdb_render renders the first float grid; Blender's importer looks for these names.
+///  * Normal octants: SHaRC keeps up to 8 entries per cell and level (one per sign octant of the
+///    surface normal). By default they are merged into one VDB voxel: radiance is the
+///    sample-weighted mean Σ wᵢ·rᵢ / Σ wᵢ (plain mean when every weight is 0) and samples is
+///    Σ wᵢ. With split_normals each octant present gets its own grid set instead, named
+///    `levelL_n<sx>x<sy>y<sz>z_<channel>`, e.g. `level3_n+x-y+z_density` (a sign is '-' when
+///    that normal component is negative: key normal bit set).
+///  * Only non-empty grids are written. Every stored cache entry is an active voxel (even a black
+///    one); inactive voxels have the background value 0.
+#pragma once
+
+#include "sharcbake/runtime.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+struct VdbExportOptions {
+    std::vector<uint32_t> levels;  ///< levels to export; empty = every level present
+    bool density = true;           ///< levelL_density
+    bool color = true;             ///< levelL_color
+    bool radiance = true;          ///< levelL_radiance
+    bool samples = true;           ///< levelL_samples
+    float scale = 1.0f;            ///< display scale applied to density and color
+    bool split_normals = false;    ///< one grid set per normal octant instead of merging
+    std::string source_path;       ///< recorded in the file metadata
+    std::string writer = "sharcbake";  ///< recorded in the file metadata
+};
+
+/// One grid written, in file order.
+struct VdbGridInfo {
+    std::string name;
+    uint32_t level = 0;
+    int32_t octant = -1;  ///< normal bits 0..7, or -1 when octants are merged
+    uint64_t active_voxels = 0;
+    float voxel_size = 0.0f;
+};
+
+enum class VdbExportStatus { kOk, kInvalidArgument, kIoError };
+
+/// @brief Writes the grids of `cache` to `out_path` (.vdb). kInvalidArgument: a requested level
+/// is not in the cache, the scale is not finite, or nothing would be written; kIoError: the file
+/// could not be written. `grids` (optional) receives what was written; `message` the reason.
+VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_path, const VdbExportOptions& options,
+                                 std::vector<VdbGridInfo>* grids, std::string* message);
+
+/// Luminance used for the density grids (Rec. 709 / sRGB primaries).
+inline float radianceLuminance(const float rgb[3]) { return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2]; }
+
+}  // namespace sharcbake
