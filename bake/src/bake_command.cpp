@@ -52,6 +52,21 @@ struct BakeOptions {
 std::atomic<bool> g_interrupted{false};
 extern "C" void onInterrupt(int) { g_interrupted.store(true); }
 
+/// FNV-1a (64-bit) of the scene file's bytes, so a cache records which scene it was baked from.
+std::string sceneFileHash(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    uint64_t hash = 0xcbf29ce484222325ull;
+    char buffer[1 << 16];
+    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+        for (std::streamsize i = 0; i < in.gcount(); ++i) {
+            hash = (hash ^ uint8_t(buffer[i])) * 0x100000001b3ull;
+        }
+    }
+    char text[32];
+    std::snprintf(text, sizeof text, "fnv1a64:%016llx", (unsigned long long)hash);
+    return text;
+}
+
 double secondsSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -106,31 +121,6 @@ CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer
     description = "exploration (" + std::to_string(poses.size()) + " reachable free-space points of " +
                   std::to_string(explored.candidates) + " tried)";
     return CameraPath(std::move(poses), true, 1, 0.0f, o.seed);
-}
-
-CacheData toCacheData(const SharcCache& cache) {
-    CacheData data;
-    const SharcSettings& s = cache.settings();
-    data.logarithm_base = s.grid.logarithm_base;
-    data.scene_scale = s.grid.scene_scale;
-    data.level_bias = s.grid.level_bias;
-    data.bucket_size = s.grid.bucket_size;
-    data.bake_capacity = cache.capacity();
-    const HashGridTable& table = cache.table();
-    for (uint32_t slot = 0; slot < table.capacity(); ++slot) {
-        const uint64_t key = table.keyAt(slot);
-        const ResolvedEntry& r = cache.resolved()[slot];
-        if (key == kHashGridInvalidKey || !(r.weight > 0.0)) continue;
-        CacheVoxel v;
-        v.key = key;
-        v.radiance[0] = r.mean.x;
-        v.radiance[1] = r.mean.y;
-        v.radiance[2] = r.mean.z;
-        v.sample_weight = float(r.weight);
-        data.voxels.push_back(v);
-    }
-    sortVoxels(data.voxels);
-    return data;
 }
 
 void runBake(const BakeOptions& o) {
@@ -212,6 +202,7 @@ void runBake(const BakeOptions& o) {
     data.metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", o.scene_path},
+        {"scene_hash", sceneFileHash(o.scene_path)},
         {"iterations", std::to_string(baker.iterationsDone())},
         {"seed", std::to_string(o.seed)},
         {"history", settings.sharc.history.describe()},

@@ -231,4 +231,29 @@ void SharcCache::resolve(uint32_t iteration) {
     touched_.clear();
 }
 
+CacheData toCacheData(const SharcCache& cache) {
+    CacheData data;
+    const SharcSettings& s = cache.settings();
+    data.logarithm_base = s.grid.logarithm_base;
+    data.scene_scale = s.grid.scene_scale;
+    data.level_bias = s.grid.level_bias;
+    data.bucket_size = s.grid.bucket_size;
+    data.bake_capacity = cache.capacity();
+    const HashGridTable& table = cache.table();
+    for (uint32_t slot = 0; slot < table.capacity(); ++slot) {
+        const uint64_t key = table.keyAt(slot);
+        const ResolvedEntry& r = cache.resolved()[slot];
+        if (key == kHashGridInvalidKey || !(r.weight > 0.0)) continue;
+        CacheVoxel v;
+        v.key = key;
+        v.radiance[0] = r.mean.x;
+        v.radiance[1] = r.mean.y;
+        v.radiance[2] = r.mean.z;
+        v.sample_weight = float(r.weight);
+        data.voxels.push_back(v);
+    }
+    sortVoxels(data.voxels);
+    return data;
+}
+
 }  // namespace sharcbake

@@ -11,6 +11,7 @@
 /// - The history schedule is a choice (HistorySchedule); the SDK's fixed window is one option.
 #pragma once
 
+#include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 
 #include <glm/glm.hpp>
@@ -144,5 +145,9 @@ private:
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     NumericsCounters numerics_;
 };
+
+/// The cache as file data: live voxels with samples, in canonical (key) order, and the grid
+/// parameters. What `bake` writes.
+CacheData toCacheData(const SharcCache& cache);
 
 }  // namespace sharcbake

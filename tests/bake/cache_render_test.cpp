@@ -114,24 +114,7 @@ protected:
         for (uint32_t i = 0; i < 2048; ++i) baker.runIteration();
 
         const SharcCache& cache = baker.cache();
-        CacheData data;
-        data.logarithm_base = settings.sharc.grid.logarithm_base;
-        data.scene_scale = settings.sharc.grid.scene_scale;
-        data.level_bias = settings.sharc.grid.level_bias;
-        data.bucket_size = settings.sharc.grid.bucket_size;
-        data.bake_capacity = cache.capacity();
-        for (uint32_t slot = 0; slot < cache.capacity(); ++slot) {
-            const ResolvedEntry& r = cache.resolved()[slot];
-            if (cache.table().keyAt(slot) == 0 || !(r.weight > 0.0)) continue;
-            CacheVoxel v;
-            v.key = cache.table().keyAt(slot);
-            v.radiance[0] = r.mean.x;
-            v.radiance[1] = r.mean.y;
-            v.radiance[2] = r.mean.z;
-            v.sample_weight = float(r.weight);
-            data.voxels.push_back(v);
-        }
-        sortVoxels(data.voxels);
+        CacheData data = toCacheData(cache);
         const std::string file =
             (std::filesystem::temp_directory_path() / "sharcbake_cache_render_test.sharc").string();
         std::string message;
