@@ -38,6 +38,17 @@ vdb_render "$work/cornell.vdb" "$work/cornell.ppm" -res 64x64 -translate 0,0.5,2
     >"$work/render.txt" 2>&1 || { cat "$work/render.txt"; fail "vdb_render"; }
 [ -s "$work/cornell.ppm" ] || fail "vdb_render wrote no image"
 
+# Python: Debian's pyopenvdb (python3-openvdb, for Debian's own /usr/bin/python3) opens it.
+/usr/bin/python3 - "$work/cornell.vdb" <<'PY' || fail "pyopenvdb could not read the export"
+import sys
+import pyopenvdb as vdb
+names = [grid.name for grid in vdb.readAllGridMetadata(sys.argv[1])]
+assert "density" in names and "color" in names, names
+density = vdb.read(sys.argv[1], "density")
+assert density.activeVoxelCount() > 0, "density grid is empty"
+print("ok: pyopenvdb reads", len(names), "grids;", density.activeVoxelCount(), "active density voxels")
+PY
+
 # Bad input: a level the cache lacks is a usage error (1), a missing cache an I/O error (2).
 "$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/x.vdb" --levels 511 >/dev/null 2>&1
 [ $? -eq 1 ] || fail "--levels 511 should exit 1"
