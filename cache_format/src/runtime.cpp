@@ -304,7 +304,8 @@ CacheFileStatus CacheView::parse(CacheError* error) {
 
     // V1: identifier.
     const size_t id_bytes = size_t(std::min<uint64_t>(size, sizeof kCacheIdentifier));
-    if (std::memcmp(d, kCacheIdentifier, id_bytes) != 0) {
+    // id_bytes == 0 (openMemory(nullptr, 0)): memcmp on a null pointer is UB even for 0 bytes.
+    if (id_bytes > 0 && std::memcmp(d, kCacheIdentifier, id_bytes) != 0) {
         if (size >= 8 && std::memcmp(d, "SHRCBAKE", 8) == 0) {
             return fail(error, S::kUnsupportedVersion, 1,
                         "interim format 0.1 (before the versioned layout) is not readable; re-bake the cache");

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# The runtime library under ASan + UBSan, then fuzzed (ctest: cache_format.sanitized_and_fuzzed).
+#   (a) a separate runtime-only build (SHARCBAKE_BUILD_TOOLS=OFF, SHARCBAKE_SANITIZE=ON, Debug)
+#       of the cache_format tests, run with ctest (round trip, golden, reject tests, lookups...);
+#   (b) with clang++: tests/cache_format/fuzz_cache_file.cpp + cache_format/src/*.cpp under
+#       -fsanitize=fuzzer,address,undefined, run for FUZZ_SECONDS (default 60) on a copy of the
+#       golden seed corpus; any crash, leak, sanitizer report or timeout fails the test.
+# Without clang++ (b) is skipped: exit 77 (ctest SKIP_RETURN_CODE).
+# Usage: sanitized_runtime_test.sh SOURCE_DIR WORK_DIR
+set -euo pipefail
+SRC=$(cd "$1" && pwd)
+WORK=$2
+FUZZ_SECONDS=${FUZZ_SECONDS:-60}
+JOBS=$(nproc 2>/dev/null || echo 2)
+mkdir -p "$WORK"
+WORK=$(cd "$WORK" && pwd)
+
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+
+echo "== (a) sanitized runtime build + cache_format tests in $WORK/build"
+cmake -S "$SRC" -B "$WORK/build" -DSHARCBAKE_BUILD_TOOLS=OFF -DSHARCBAKE_SANITIZE=ON \
+    -DCMAKE_BUILD_TYPE=Debug >"$WORK/configure.log" 2>&1 || { cat "$WORK/configure.log"; exit 1; }
+cmake --build "$WORK/build" -j "$JOBS" --target cache_file_tests hash_grid_tests hash_grid_vector_dump
+# install_consumer needs a full build to install; the generator check is not runtime code.
+(cd "$WORK/build" && ctest --output-on-failure -j "$JOBS" \
+    -E 'install_consumer|scenes\.generator_check|sanitized_and_fuzzed')
+
+echo "== (b) libFuzzer harness"
+CXX_FUZZ=${CLANGXX:-$(command -v clang++ || true)}
+if [ -z "$CXX_FUZZ" ]; then
+    echo "SKIP: clang++ not found; the sanitized tests passed, the fuzzer did not run (apt-get install clang libclang-rt-14-dev)"
+    exit 77
+fi
+rm -rf "$WORK/fuzz" && mkdir -p "$WORK/fuzz/corpus" "$WORK/fuzz/artifacts"
+"$CXX_FUZZ" -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+    -ffp-contract=off -I"$SRC/cache_format/include" \
+    "$SRC/tests/cache_format/fuzz_cache_file.cpp" "$SRC"/cache_format/src/*.cpp -o "$WORK/fuzz/fuzz_cache_file"
+cp "$SRC"/tests/cache_format/golden/*.sharc "$WORK/fuzz/corpus/"
+# Every seed first (as a plain regression run), then the bounded fuzzing run.
+"$WORK/fuzz/fuzz_cache_file" -runs=0 "$WORK/fuzz/corpus"
+set +e
+"$WORK/fuzz/fuzz_cache_file" "$WORK/fuzz/corpus" -max_total_time="$FUZZ_SECONDS" -timeout=10 \
+    -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 -artifact_prefix="$WORK/fuzz/artifacts/" \
+    >"$WORK/fuzz/fuzz.log" 2>&1
+rc=$?
+set -e
+grep -E '^(stat::|Done )' "$WORK/fuzz/fuzz.log" || true
+if [ $rc -ne 0 ] || ls "$WORK/fuzz/artifacts/" | grep -q .; then
+    tail -n 60 "$WORK/fuzz/fuzz.log"
+    echo "FAIL: the fuzzer found a problem (exit $rc); reproducer(s) in $WORK/fuzz/artifacts/:"
+    ls -l "$WORK/fuzz/artifacts/"
+    exit 1
+fi
+echo "OK: sanitized tests passed; fuzzed ${FUZZ_SECONDS}s without a finding"
