@@ -128,6 +128,8 @@ void runBake(const BakeOptions& o) {
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
+    checkOutputPath(o.output_path, "cache");
+    if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
     BakeSettings settings;
     parseSize(o.resolution, "--resolution", settings.width, settings.height);
     settings.update_stride = o.update_stride;

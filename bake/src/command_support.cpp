@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace sharcbake {
 
 const char* const kExitCodeHelp =
@@ -29,6 +31,22 @@ glm::vec3 parseVec3(const std::string& text, const std::string& option_name) {
                                            text + "\"");
     }
     return v;
+}
+
+void checkOutputPath(const std::string& path, const std::string& what) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    const fs::path target(path);
+    if (fs::is_directory(target, error)) throw CommandError(kExitIo, path + ": the " + what + " is a directory");
+    const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    if (!fs::is_directory(folder, error)) {
+        throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
+                                        " does not exist");
+    }
+    if (::access(folder.c_str(), W_OK) != 0) {
+        throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
+                                        " is not writable");
+    }
 }
 
 void addSkyOptions(CLI::App& command, SkyOptions& options) {

@@ -41,6 +41,10 @@ private:
 /// Parses "x,y,z" into a vector; throws CommandError(kExitUsage) naming the option.
 glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
 
+/// Fails early (kExitIo) when `path` cannot be written: its folder is missing or not writable,
+/// or it names a folder. Called before long work so that nothing is lost at the end.
+void checkOutputPath(const std::string& path, const std::string& what);
+
 /// Options that choose the sky, shared by render and bake.
 struct SkyOptions {
     std::string uniform;  ///< "r,g,b" or empty

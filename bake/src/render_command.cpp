@@ -208,6 +208,8 @@ ToneMap parseToneMap(const std::string& name) {
 }
 
 void runRender(const RenderOptions& o) {
+    checkOutputPath(o.output_path, "image");
+    if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
     const auto start = std::chrono::steady_clock::now();
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));

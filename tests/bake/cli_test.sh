@@ -32,6 +32,8 @@ printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri":
 expect 3 "malformed scene" "$sharcbake" render "$work/bad.gltf" -o "$work/a.exr"
 grep -q "bad.gltf" "$work/err.txt" || { echo "FAIL: the error does not name the file"; failures=$((failures + 1)); }
 expect 2 "unwritable output" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/no/such/dir/a.exr" --resolution 8 --spp 1 -q
+expect 2 "bake into a missing folder fails before baking" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/no/such/dir/a.sharc"
+grep -q "does not exist" "$work/err.txt" || { echo "FAIL: no clear message for a missing output folder"; failures=$((failures + 1)); }
 expect 1 "bad history" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --history ramp:x
 expect 3 "bad camera path" sh -c "echo '1 2 3' > '$work/path.txt' && '$sharcbake' bake '$scenes/cornell_box/cornell_box.gltf' -o '$work/a.sharc' --camera-path '$work/path.txt'"
 
