@@ -7,6 +7,7 @@
 #include "lights.h"
 #include "path_tracer.h"
 #include "render.h"
+#include "sharcbake/runtime.h"
 #include "sharcbake/scene_loader.h"
 #include "tracer.h"
 
@@ -14,6 +15,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 namespace sharcbake {
@@ -132,6 +134,52 @@ TEST(FurnaceBake, EveryVoxelConvergesToTheAnalyticRadiance) {
     EXPECT_EQ(within, live) << "worst relative error " << worst;
     EXPECT_EQ(cache.numerics().failed_inserts, 0u);
     EXPECT_EQ(cache.numerics().non_finite_deposits, 0u);
+}
+
+/// Bake -> file -> runtime: every live voxel of the bake is in the file with its value, and the
+/// runtime's SHaRC lookup at a point inside it (seen from a camera that gives its level) finds it.
+TEST(FurnaceBake, RuntimeLookupReturnsEveryBakedVoxel) {
+    const SmallBake bake("furnace_rho050", 64, HistorySchedule{});
+    const SharcCache& cache = bake.baker->cache();
+    const CacheData data = toCacheData(cache);
+    const std::string file = (std::filesystem::temp_directory_path() / "sharcbake_round_trip.sharc").string();
+    std::string message;
+    ASSERT_EQ(writeCacheFile(file, data, &message), CacheFileStatus::kOk) << message;
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(CacheView::openFile(file, &view, &error), CacheFileStatus::kOk);
+    ASSERT_EQ(view.voxelCount(), data.voxels.size());
+    uint64_t checked = 0, looked_up = 0;
+    for (uint32_t slot = 0; slot < cache.capacity(); ++slot) {
+        const uint64_t key = cache.table().keyAt(slot);
+        const ResolvedEntry& r = cache.resolved()[slot];
+        if (key == 0 || !(r.weight > 0.0)) continue;
+        const uint64_t index = view.findKey(key);
+        ASSERT_LT(index, view.voxelCount());
+        const CacheVoxel v = view.voxel(index);
+        EXPECT_EQ(v.radiance[0], r.mean.x);
+        EXPECT_EQ(v.radiance[1], r.mean.y);
+        EXPECT_EQ(v.radiance[2], r.mean.z);
+        ++checked;
+        // A point inside the voxel, its normal's octant, and a camera at the voxel's level
+        // distance (d = b^L for b = 2, bias 0, along +Y from the voxel centre).
+        const HashGridCell cell = decodeHashGridKey(key);
+        const HashGridParameters grid = view.gridParameters();
+        const Float3 centre = voxelCenter(key, grid);
+        const Float3 normal{(cell.normal_bits & 1u) ? -1.0f : 1.0f, (cell.normal_bits & 2u) ? -1.0f : 1.0f,
+                            (cell.normal_bits & 4u) ? -1.0f : 1.0f};
+        const float distance = std::ldexp(1.5f, int(cell.level));
+        const Float3 camera{centre.x, centre.y + distance, centre.z};
+        Float3 radiance{};
+        if (view.keyFor(centre, normal, camera) == key) {
+            ASSERT_TRUE(view.lookup(centre, normal, camera, &radiance));
+            EXPECT_EQ(radiance.x, r.mean.x);
+            ++looked_up;
+        }
+    }
+    EXPECT_EQ(checked, view.voxelCount());
+    EXPECT_GT(looked_up, checked * 9 / 10);
+    std::filesystem::remove(file);
 }
 
 TEST(Determinism, BakeIsIdenticalForAnyThreadCount) {
