@@ -40,10 +40,17 @@ demo: build
 	@mkdir -p $(OUT_DIR)
 	$(SHARCBAKE) bake scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box.sharc \
 	    --stats-json $(OUT_DIR)/cornell_box_bake.json
+	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_cached.exr \
+	    --resolution 256x256 --spp 64 --cache $(OUT_DIR)/cornell_box.sharc
+	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_cache_view.exr \
+	    --resolution 256x256 --spp 4 --cache $(OUT_DIR)/cornell_box.sharc --debug-view cache -q
 	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_reference.exr \
-	    --resolution 256x256 --spp 64
+	    --resolution 256x256 --spp 256
+	$(SHARCBAKE) compare $(OUT_DIR)/cornell_box_cached.exr $(OUT_DIR)/cornell_box_reference.exr
 	@echo "Demo outputs are in $(OUT_DIR)/: cornell_box.sharc (the baked cache), cornell_box_bake.json"
-	@echo "(bake statistics), cornell_box_reference.exr/.png (a reference path-traced image)."
+	@echo "(bake statistics), cornell_box_cached.exr/.png (paths ending on the cache),"
+	@echo "cornell_box_cache_view.exr/.png (the cache seen from the camera) and"
+	@echo "cornell_box_reference.exr/.png (plain path tracing, 256 spp; the error above is against it)."
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
