@@ -196,8 +196,8 @@ void runBake(const BakeOptions& o) {
 
     const auto finish_start = std::chrono::steady_clock::now();
     const SharcCache& cache = baker.cache();
-    const CoverageReport coverage = measureCoverage(scene, cache, o.coverage_points);
     const std::vector<uint32_t> levels = levelsPresent(cache);
+    const CoverageReport coverage = measureCoverage(scene, cache, levels, o.coverage_points);
     CacheData data = toCacheData(cache);
     // Everything that reproduces the bake, and nothing that varies between runs (timings go to
     // --stats-json): the same scene, settings and seed give the same file byte for byte.

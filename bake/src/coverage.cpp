@@ -9,13 +9,6 @@
 
 namespace sharcbake {
 
-uint64_t voxelKeyAtLevel(glm::vec3 position, glm::vec3 normal, uint32_t level, const HashGridParameters& grid) {
-    const Float3 biased{position.x + kHashGridPositionBias, position.y + kHashGridPositionBias,
-                        position.z + kHashGridPositionBias};
-    return packHashGridKey(quantisePosition(biased, voxelSize(level, grid)), level,
-                           normalBits(Float3{normal.x, normal.y, normal.z}));
-}
-
 std::vector<uint32_t> levelsPresent(const SharcCache& cache) {
     std::set<uint32_t> levels;
     const HashGridTable& table = cache.table();
@@ -26,7 +19,8 @@ std::vector<uint32_t> levelsPresent(const SharcCache& cache) {
     return {levels.begin(), levels.end()};
 }
 
-CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, uint32_t points) {
+CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, const std::vector<uint32_t>& levels,
+                               uint32_t points) {
     CoverageReport report;
     if (scene.empty() || points == 0) return report;
     std::vector<float> areas(scene.triangles.size());
@@ -37,12 +31,12 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, uint
         report.total_area += double(areas[t]);
     }
     const Distribution1D by_area(areas);
-    const std::vector<uint32_t> levels = levelsPresent(cache);
     const HashGridParameters& grid = cache.settings().grid;
 
     auto reached = [&](glm::vec3 p, glm::vec3 n) {
         for (uint32_t level : levels) {
-            const ResolvedEntry* e = cache.findResolved(voxelKeyAtLevel(p, n, level, grid));
+            const ResolvedEntry* e =
+                cache.findResolved(hashGridKeyAtLevel(Float3{p.x, p.y, p.z}, Float3{n.x, n.y, n.z}, level, grid));
             if (e && e->weight > 0.0) return true;
         }
         return false;

@@ -12,10 +12,6 @@
 
 namespace sharcbake {
 
-/// The SHaRC key of a point at an explicit level (what hashGridKey builds after choosing the
-/// level from the camera distance).
-uint64_t voxelKeyAtLevel(glm::vec3 position, glm::vec3 normal, uint32_t level, const HashGridParameters& grid);
-
 /// Levels that occur among the cache's live keys, ascending.
 std::vector<uint32_t> levelsPresent(const SharcCache& cache);
 
@@ -26,7 +22,9 @@ struct CoverageReport {
 };
 
 /// Tests `points` surface points, distributed by area (deterministic), on the sides a camera
-/// can see (the front; both sides for double-sided materials).
-CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, uint32_t points);
+/// can see (the front; both sides for double-sided materials), at each of `levels` (the cache's,
+/// from levelsPresent()).
+CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, const std::vector<uint32_t>& levels,
+                               uint32_t points);
 
 }  // namespace sharcbake

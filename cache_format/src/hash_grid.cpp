@@ -165,6 +165,13 @@ uint64_t hashGridKey(const Float3& position, const Float3& normal,
     return packHashGridKey(cell.grid, cell.level, normalBits(normal), false);
 }
 
+uint64_t hashGridKeyAtLevel(const Float3& position, const Float3& normal, uint32_t level,
+                            const HashGridParameters& params) {
+    const Float3 biased{position.x + kHashGridPositionBias, position.y + kHashGridPositionBias,
+                        position.z + kHashGridPositionBias};
+    return packHashGridKey(quantisePosition(biased, voxelSize(level, params)), level, normalBits(normal), false);
+}
+
 HashGridCell decodeHashGridKey(uint64_t key) {
     HashGridCell cell;
     cell.grid.x = signExtend17(static_cast<uint32_t>(key));

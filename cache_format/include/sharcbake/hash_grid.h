@@ -141,6 +141,12 @@ uint64_t packHashGridKey(const Int3& grid, uint32_t level, uint32_t normal_bits,
 uint64_t hashGridKey(const Float3& position, const Float3& normal,
                      const HashGridParameters& params);
 
+/// @brief The key the point would have at an explicit `level` (hashGridKey() with the level
+/// chosen by the caller instead of by the camera distance): bias, voxelSize(level), quantise,
+/// normal bits, pack. For lookups at levels other than the camera's (coverage, fallbacks).
+uint64_t hashGridKeyAtLevel(const Float3& position, const Float3& normal, uint32_t level,
+                            const HashGridParameters& params);
+
 /// @brief Decodes a key: grid coordinates sign-extended from 17 bits, level, normal bits and the
 /// user bit. Exact inverse of packHashGridKey() for coordinates in [-65536, 65535].
 HashGridCell decodeHashGridKey(uint64_t key);
