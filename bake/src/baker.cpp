@@ -63,13 +63,6 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
     chunk_deposits_.resize((pathsPerIteration() + kPathsPerChunk - 1) / kPathsPerChunk);
 }
 
-HashGridParameters Baker::gridForIteration(uint32_t iteration) const {
-    HashGridParameters grid = settings_.sharc.grid;
-    const glm::vec3 c = camera_path_.poseAt(iteration).position;
-    grid.camera_position = Float3{c.x, c.y, c.z};
-    return grid;
-}
-
 void Baker::runIteration() {
     const uint32_t iteration = iteration_;
     const CameraPose pose = camera_path_.poseAt(iteration);

@@ -46,9 +46,6 @@ public:
     uint32_t pathsPerIteration() const { return blocks_x_ * blocks_y_; }
     const BakeSettings& settings() const { return settings_; }
 
-    /// The grid parameters with the camera position of `iteration`.
-    HashGridParameters gridForIteration(uint32_t iteration) const;
-
 private:
     const Tracer& tracer_;
     const LightSampler& lights_;
