@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Unit tests for cache_format's hash grid (SPEC.md "Hash grid" and "Test vectors").
+#include "float_bits.h"
 #include "sharcbake/hash_grid.h"
 
 #include <gtest/gtest.h>
@@ -15,17 +16,6 @@
 
 namespace sharcbake {
 namespace {
-
-float fromBits(uint32_t u) {
-    float f;
-    std::memcpy(&f, &u, sizeof f);
-    return f;
-}
-uint32_t toBits(float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, sizeof u);
-    return u;
-}
 
 struct HashGridVector {
     const char* name;
@@ -145,6 +135,25 @@ TEST(HashGridKey, NeverZeroAndNoUserBit) {
         ASSERT_GE(cell.level, kHashGridLevelMin);
         ASSERT_LE(cell.level, kHashGridLevelMax);
         ASSERT_FALSE(cell.user_bit);
+    }
+}
+
+/// The explicit-level key is the camera key when given the camera's level, and otherwise
+/// differs only in the level field and the cell (quantised at that level's voxel size).
+TEST(HashGridKey, KeyAtLevelMatchesCameraKey) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> coord(-200.0f, 200.0f), unit(-1.0f, 1.0f);
+    for (int i = 0; i < 20000; ++i) {
+        HashGridParameters params;
+        params.camera_position = Float3{coord(rng), coord(rng), coord(rng)};
+        const Float3 p{coord(rng), coord(rng), coord(rng)};
+        const Float3 n{unit(rng), unit(rng), unit(rng)};
+        const Float3 biased{p.x + kHashGridPositionBias, p.y + kHashGridPositionBias, p.z + kHashGridPositionBias};
+        const uint32_t level = gridLevel(biased, params);
+        ASSERT_EQ(hashGridKeyAtLevel(p, n, level, params), hashGridKey(p, n, params)) << "case " << i;
+        const HashGridCell other = decodeHashGridKey(hashGridKeyAtLevel(p, n, level + 1, params));
+        EXPECT_EQ(other.level, level + 1);
+        EXPECT_EQ(other.normal_bits, normalBits(n));
     }
 }
 

@@ -8,20 +8,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "float_bits.h"
 #include "sharcbake/hash_grid.h"
-
-namespace {
-float fromBits(uint32_t u) {
-    float f;
-    std::memcpy(&f, &u, sizeof f);
-    return f;
-}
-uint32_t toBits(float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, sizeof u);
-    return u;
-}
-}  // namespace
 
 int main() {
     using namespace sharcbake;
