@@ -45,6 +45,16 @@ expect 0 "bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$wo
     --resolution 64x64 --stats-json "$work/bake.json"
 [ -s "$work/cornell.sharc" ] || { echo "FAIL: bake did not write the cache"; failures=$((failures + 1)); }
 grep -q '"live_voxels"' "$work/bake.json" || { echo "FAIL: bake stats JSON lacks live_voxels"; failures=$((failures + 1)); }
+# The cache records which scene it came from: FNV-1a 64 of the glTF file's bytes.
+expected_hash=$(python3 -c "
+import sys
+h = 0xcbf29ce484222325
+for b in open(sys.argv[1], 'rb').read():
+    h = ((h ^ b) * 0x100000001b3) % (1 << 64)
+print('fnv1a64:%016x' % h)" "$scenes/cornell_box/cornell_box.gltf")
+expect 0 "info --json" "$sharcbake" info "$work/cornell.sharc" --json
+grep -q "\"scene_hash\": \"$expected_hash\"" "$work/out.txt" ||
+    { echo "FAIL: the cache does not record scene_hash $expected_hash"; failures=$((failures + 1)); }
 
 # render --cache and --debug-view (a tiny furnace bake; only exit codes and outputs are checked here,
 # the values are tested in cache_render_test.cpp).
