@@ -43,6 +43,9 @@ public:
     bool occluded(const Ray& ray) const;
 
     const Scene& scene() const { return scene_; }
+    /// The committed Embree scene, for code that calls Embree's packet or stream APIs directly
+    /// (the ray-limit benchmark); read-only use only.
+    RTCScene embreeScene() const { return rtc_scene_; }
 
 private:
     const Scene& scene_;

@@ -1,0 +1,210 @@
+// SPDX-License-Identifier: Apache-2.0
+// Whole-bake benchmark: the bake's path segments per second against the raw Embree ray limit
+// (closest-hit + shadow ray pairs per second) on the same scene, with the same threads, in the
+// same run; thread scaling; bake cost as the scene and the capacity grow; peak memory per
+// capacity entry and file bytes per live voxel. One JSON object per line on stdout.
+// BENCHMARKS.md lists the commands and the figures they produced.
+#include "bench_support.h"
+
+#include "sharcbake/scene_loader.h"
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace sharcbake;
+using namespace sharcbake::bench;
+
+namespace {
+
+struct Options {
+    std::string scene_path;         ///< glTF scene; empty = generated room
+    uint32_t triangles = 20000;     ///< generated room's size when no scene is given
+    std::string resolution = "1280x720";
+    uint32_t iterations = 16;
+    uint32_t capacity = 1u << 22;
+    uint32_t pairs = 1u << 19;
+    int repetitions = 3;
+    unsigned threads = 0;           ///< 0 = all cores
+    std::vector<unsigned> thread_list{1, 2, 4, 8, 16};
+    std::vector<uint32_t> triangle_list{1000, 10000, 100000, 1000000};
+    std::vector<uint32_t> capacity_list{1u << 16, 1u << 18, 1u << 20, 1u << 22, 1u << 24};
+};
+
+void parseResolution(const std::string& text, int& width, int& height) {
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> width >> x >> height) || x != 'x' || width <= 0 || height <= 0) {
+        throw CLI::ValidationError("--resolution", "expected WxH, got " + text);
+    }
+}
+
+std::unique_ptr<BakeScene> loadBakeScene(const Options& o, uint32_t triangles) {
+    if (!o.scene_path.empty()) return std::make_unique<BakeScene>(loadGltf(o.scene_path));
+    return std::make_unique<BakeScene>(makeRoomScene(triangles));
+}
+
+std::string sceneName(const Options& o, const BakeScene& s) {
+    return o.scene_path.empty() ? "room" + std::to_string(s.scene.triangles.size()) : o.scene_path;
+}
+
+/// The ray limit (every API, best taken), the bake, then the best API again: the limit is the
+/// better of the two passes around the bake, so a noisy neighbour cannot flatter the ratio.
+void measureLimitAndBake(const Options& o, const BakeScene& s, const char* series, unsigned threads,
+                         uint32_t capacity) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    const std::vector<RayPair> pairs = makeRayPairs(s.tracer, s.lights, s.camera_path, o.pairs, 11);
+    std::string per_api;
+    double best = 0.0;
+    RayApi best_api = RayApi::Single;
+    for (RayApi api : kAllRayApis) {
+        const double rate = measurePairsPerSecond(s.tracer, pairs, api, o.repetitions);
+        char text[64];
+        std::snprintf(text, sizeof text, "%s\"%s\": %.4g", per_api.empty() ? "" : ", ", toString(api), rate);
+        per_api += text;
+        if (rate > best) {
+            best = rate;
+            best_api = api;
+        }
+    }
+    int width = 0, height = 0;
+    parseResolution(o.resolution, width, height);
+    const BakeRun bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations);
+    const double after = measurePairsPerSecond(s.tracer, pairs, best_api, o.repetitions);
+    const double ray_limit = std::max(best, after);
+    const double rate = bake.segmentsPerSecond();
+    std::printf("{\"series\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"threads\": %u, \"capacity\": %u, "
+                "\"ray_pairs_per_second\": {%s, \"%s_after_bake\": %.4g}, \"ray_limit\": %.4g, \"ray_limit_api\": \"%s\", "
+                "\"bake_segments_per_second\": %.4g, \"ratio\": %.3f, \"iterations\": %u, \"paths\": %llu, "
+                "\"segments\": %llu, \"shadow_rays\": %llu, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
+                "\"resolve\": %.4f, \"other\": %.4f, \"bake\": %.4f, \"setup\": %.4f}, \"live_voxels\": %llu, "
+                "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f}\n",
+                series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, capacity, per_api.c_str(),
+                toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit, bake.iterations,
+                (unsigned long long)bake.paths, (unsigned long long)bake.segments,
+                (unsigned long long)bake.shadow_rays, bake.update_seconds, bake.commit_seconds, bake.resolve_seconds,
+                bake.wall_seconds - bake.bakeSeconds(), bake.wall_seconds, bake.setup_seconds,
+                (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
+                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0);
+    std::fflush(stdout);
+}
+
+/// One bake in this process, for the capacity series: its peak memory is this process's.
+void measureOneBake(const Options& o) {
+    const uint64_t before = peakResidentBytes();
+    const std::unique_ptr<BakeScene> s = loadBakeScene(o, o.triangles);
+    const uint64_t scene_peak = peakResidentBytes();
+    int width = 0, height = 0;
+    parseResolution(o.resolution, width, height);
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                              o.threads ? o.threads : unsigned(tbb::info::default_concurrency()));
+    const BakeRun bake = runBake(*s, benchBakeSettings(width, height, o.capacity), o.iterations);
+    const uint64_t peak = peakResidentBytes();
+    std::printf("{\"series\": \"capacity\", \"scene\": \"%s\", \"capacity\": %u, \"iterations\": %u, "
+                "\"bake_segments_per_second\": %.4g, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
+                "\"resolve\": %.4f, \"bake\": %.4f, \"setup\": %.4f}, \"seconds_per_iteration\": %.4f, "
+                "\"peak_rss_bytes\": %llu, \"peak_rss_before_bake_bytes\": %llu, \"peak_rss_at_start_bytes\": %llu, "
+                "\"live_voxels\": %llu, \"file_bytes_per_live_voxel\": %.2f}\n",
+                sceneName(o, *s).c_str(), o.capacity, bake.iterations, bake.segmentsPerSecond(),
+                bake.update_seconds, bake.commit_seconds, bake.resolve_seconds, bake.wall_seconds, bake.setup_seconds,
+                bake.wall_seconds / bake.iterations, (unsigned long long)peak, (unsigned long long)scene_peak,
+                (unsigned long long)before, (unsigned long long)bake.live_voxels,
+                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0);
+    std::fflush(stdout);
+}
+
+/// Runs `one-bake` in a fresh process per capacity, so each peak-memory figure is its own.
+int runCapacitySeries(const Options& o, const std::string& self) {
+    for (uint32_t capacity : o.capacity_list) {
+        std::string command = "'" + self + "' one-bake --capacity " + std::to_string(capacity) +
+                              " --iterations " + std::to_string(o.iterations) + " --resolution " + o.resolution +
+                              " --threads " + std::to_string(o.threads);
+        command += o.scene_path.empty() ? " --triangles " + std::to_string(o.triangles) : " --scene '" + o.scene_path + "'";
+        std::fflush(stdout);
+        if (std::system(command.c_str()) != 0) {
+            std::fprintf(stderr, "bake_bench: %s failed\n", command.c_str());
+            return 1;
+        }
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "Whole-bake benchmark: bake throughput against the raw Embree ray limit, thread scaling, scene size\n"
+        "and capacity series. Prints one JSON object per measurement.\n\n"
+        "Examples:\n"
+        "  bake_bench limit --scene scenes/cornell_box/cornell_box.gltf\n"
+        "  bake_bench scaling --threads-list 1,2,4,8,16\n"
+        "  bake_bench scene-size --triangles-list 1000,10000,100000,1000000\n"
+        "  bake_bench capacity --capacity-list 65536,1048576,16777216"};
+    app.require_subcommand(1);
+    Options o;
+    auto common = [&o](CLI::App* cmd) {
+        cmd->add_option("--scene", o.scene_path, "glTF scene (default: a generated room)");
+        cmd->add_option("--triangles", o.triangles, "Triangles of the generated room")->capture_default_str();
+        cmd->add_option("--resolution", o.resolution, "Virtual camera size WxH (one path per 5x5 block)")
+            ->capture_default_str();
+        cmd->add_option("--iterations", o.iterations, "Timed bake iterations (after 2 untimed)")->capture_default_str();
+        cmd->add_option("--capacity", o.capacity, "Cache capacity (slots)")->capture_default_str();
+        cmd->add_option("--pairs", o.pairs, "Ray pairs in the ray-limit pool")->capture_default_str();
+        cmd->add_option("--repetitions", o.repetitions, "Ray-limit passes; the best counts")->capture_default_str();
+        cmd->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    };
+    CLI::App* limit = app.add_subcommand("limit", "Ray limit and bake throughput at one thread count");
+    common(limit);
+    CLI::App* scaling = app.add_subcommand("scaling", "Ray limit and bake throughput per thread count");
+    common(scaling);
+    scaling->add_option("--threads-list", o.thread_list, "Thread counts")->delimiter(',');
+    CLI::App* scene_size = app.add_subcommand("scene-size", "Ray limit and bake throughput as the room grows");
+    common(scene_size);
+    scene_size->add_option("--triangles-list", o.triangle_list, "Room sizes (triangles)")->delimiter(',');
+    CLI::App* capacity = app.add_subcommand("capacity", "Bake cost and peak memory per capacity (one process each)");
+    common(capacity);
+    capacity->add_option("--capacity-list", o.capacity_list, "Capacities (slots)")->delimiter(',');
+    CLI::App* one_bake = app.add_subcommand("one-bake", "One bake with its peak memory (used by `capacity`)");
+    common(one_bake);
+    CLI11_PARSE(app, argc, argv);
+
+    try {
+        const unsigned all = unsigned(tbb::info::default_concurrency());
+        const unsigned threads = o.threads ? o.threads : all;
+        if (limit->parsed()) {
+            const std::unique_ptr<BakeScene> s = loadBakeScene(o, o.triangles);
+            measureLimitAndBake(o, *s, "limit", threads, o.capacity);
+        } else if (scaling->parsed()) {
+            const std::unique_ptr<BakeScene> s = loadBakeScene(o, o.triangles);
+            for (unsigned t : o.thread_list) {
+                if (t > all) {
+                    std::printf("{\"series\": \"scaling\", \"threads\": %u, \"skipped\": \"only %u hardware threads\"}\n", t, all);
+                    continue;
+                }
+                measureLimitAndBake(o, *s, "scaling", t, o.capacity);
+            }
+        } else if (scene_size->parsed()) {
+            for (uint32_t triangles : o.triangle_list) {
+                const BakeScene s(makeRoomScene(triangles));
+                measureLimitAndBake(o, s, "scene-size", threads, o.capacity);
+            }
+        } else if (capacity->parsed()) {
+            return runCapacitySeries(o, std::filesystem::read_symlink("/proc/self/exe").string());
+        } else if (one_bake->parsed()) {
+            measureOneBake(o);
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bake_bench: %s\n", e.what());
+        return 2;
+    }
+    return 0;
+}
