@@ -4,6 +4,8 @@
 // checking it against the bytes that hold it.
 #include "sharcbake/runtime.h"
 
+#include "utf8.h"
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -63,39 +65,6 @@ CacheFileStatus fail(CacheError* error, CacheFileStatus status, uint32_t rule, c
         error->message += message;
     }
     return status;
-}
-
-bool validUtf8(const uint8_t* s, size_t n) {
-    size_t i = 0;
-    while (i < n) {
-        const uint8_t c = s[i];
-        size_t extra;
-        uint32_t cp;
-        if (c < 0x80) {
-            ++i;
-            continue;
-        } else if ((c & 0xE0) == 0xC0) {
-            extra = 1;
-            cp = c & 0x1Fu;
-        } else if ((c & 0xF0) == 0xE0) {
-            extra = 2;
-            cp = c & 0x0Fu;
-        } else if ((c & 0xF8) == 0xF0) {
-            extra = 3;
-            cp = c & 0x07u;
-        } else {
-            return false;
-        }
-        if (n - i <= extra) return false;
-        for (size_t k = 1; k <= extra; ++k) {
-            if ((s[i + k] & 0xC0) != 0x80) return false;
-            cp = cp << 6 | (s[i + k] & 0x3Fu);
-        }
-        static const uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
-        if (cp < kMin[extra] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
-        i += extra + 1;
-    }
-    return true;
 }
 
 bool finiteNonNegative(float v) { return std::isfinite(v) && v >= 0.0f; }
@@ -565,7 +534,7 @@ CacheFileStatus CacheView::parse(CacheError* error) {
             if (klen == 0 || klen > n - at || vlen > n - at - klen) {
                 return fail(error, S::kCorrupt, 18, "META: entry " + std::to_string(i) + " has a bad length");
             }
-            if (!validUtf8(m + at, klen) || !validUtf8(m + at + klen, vlen)) {
+            if (!isValidUtf8(m + at, klen) || !isValidUtf8(m + at + klen, vlen)) {
                 return fail(error, S::kCorrupt, 18, "META: entry " + std::to_string(i) + " is not valid UTF-8");
             }
             std::string_view key(reinterpret_cast<const char*>(m + at), klen);
