@@ -2,6 +2,7 @@
 // `sharcbake bake`: the SHaRC bake from a roaming virtual camera into a .sharc cache file.
 #include "baker.h"
 #include "camera_path.h"
+#include "checkpoint.h"
 #include "command_support.h"
 #include "commands.h"
 #include "coverage.h"
@@ -46,6 +47,10 @@ struct BakeOptions {
     uint32_t coverage_points = 20000;
     SkyOptions sky;
     std::string stats_json;
+    std::string checkpoint_path;
+    uint32_t checkpoint_interval = 32;
+    std::string resume_path;
+    std::string shard = "0/1";
     bool quiet = false;
 };
 
@@ -78,6 +83,18 @@ void parseSize(const std::string& text, const char* option, int& width, int& hei
         int64_t(width) * height > (int64_t(1) << 26)) {
         throw CommandError(kExitUsage, std::string(option) + ": expected WxH with positive integers, got \"" + text + "\"");
     }
+}
+
+/// Parses --shard "i/N" (0 <= i < N).
+void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
+    char slash = 0;
+    long long i = -1, n = -1;
+    std::istringstream in(text);
+    if (!(in >> i >> slash >> n) || slash != '/' || !(in >> std::ws).eof() || n < 1 || n > (1 << 16) || i < 0 || i >= n) {
+        throw CommandError(kExitUsage, "--shard: expected \"i/N\" with 0 <= i < N <= 65536, got \"" + text + "\"");
+    }
+    index = uint32_t(i);
+    count = uint32_t(n);
 }
 
 /// The roaming camera the options ask for.
@@ -129,11 +146,15 @@ void runBake(const BakeOptions& o) {
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
     checkOutputPath(o.output_path, "cache");
+    // --resume keeps checkpointing into the file it resumed from unless told otherwise.
+    const std::string checkpoint_path = !o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path;
+    if (!checkpoint_path.empty()) checkOutputPath(checkpoint_path, "checkpoint");
     if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
     BakeSettings settings;
     parseSize(o.resolution, "--resolution", settings.width, settings.height);
     settings.update_stride = o.update_stride;
     settings.seed = o.seed;
+    parseShard(o.shard, settings.shard_index, settings.shard_count);
     settings.path.max_bounces = o.max_bounces;
     settings.sharc.capacity = o.capacity;
     settings.sharc.grid.scene_scale = o.scene_scale;
@@ -162,8 +183,49 @@ void runBake(const BakeOptions& o) {
     const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
     const double max_radiance = estimateMaxRadiance(scene);
     Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
+    // Everything that reproduces the bake, and nothing that varies between runs (timings go to
+    // --stats-json): the same scene, settings and seed give the same file byte for byte.
+    std::vector<std::pair<std::string, std::string>> metadata = {
+        {"writer", "sharcbake " SHARCBAKE_VERSION},
+        {"scene", o.scene_path},
+        {"scene_hash", sceneFileHash(o.scene_path)},
+        {"iterations", ""},  // filled in after the bake
+        {"seed", std::to_string(o.seed)},
+        {"history", settings.sharc.history.describe()},
+        {"resolution", o.resolution},
+        {"update_stride", std::to_string(o.update_stride)},
+        {"max_bounces", std::to_string(o.max_bounces)},
+        {"camera", camera_description},
+        {"radiance_scale", std::to_string(baker.cache().radianceScale())},
+        {"scene_scale", std::to_string(o.scene_scale)},
+        {"log_base", std::to_string(o.log_base)},
+        {"level_bias", std::to_string(o.level_bias)},
+        {"capacity", std::to_string(o.capacity)},
+    };
+    if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
+    // What a resume must match: the metadata without the scene's path (the hash names the
+    // scene) and the iteration count, plus the options that change the work but are not
+    // recorded in the cache.
+    BakeSettingsText resume_settings;
+    for (const auto& entry : metadata) {
+        if (entry.first != "scene" && entry.first != "iterations") resume_settings.push_back(entry);
+    }
+    resume_settings.emplace_back("shard", o.shard);
+    resume_settings.emplace_back("sky", o.sky.uniform + "|" + o.sky.exr_path + "|" + std::to_string(o.sky.scale));
+    resume_settings.emplace_back("camera_options", o.camera_source + "|" + o.camera_path + "|" +
+                                                       std::to_string(o.explore_points) + "|" +
+                                                       std::to_string(o.iterations_per_leg));
+    if (!o.resume_path.empty()) resumeFromCheckpoint(o.resume_path, resume_settings, baker);
+    const uint32_t first_iteration = baker.iterationsDone();
     const double setup_seconds = secondsSince(setup_start);
     if (!o.quiet) {
+        if (settings.shard_count > 1) {
+            std::printf("Shard %u of %u: iterations k*%u + %u of the unsharded bake\n", settings.shard_index,
+                        settings.shard_count, settings.shard_count, settings.shard_index);
+        }
+        if (!o.resume_path.empty()) {
+            std::printf("Resumed from %s after %u iterations\n", o.resume_path.c_str(), first_iteration);
+        }
         std::printf("Camera: %s\n", camera_description.c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
                     baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, o.capacity,
@@ -176,7 +238,8 @@ void runBake(const BakeOptions& o) {
     const auto bake_start = std::chrono::steady_clock::now();
     const char* stop_reason = "iterations";
     {
-        Progress progress("Baking", o.iterations, !o.quiet && Progress::isTerminal());
+        Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
+                          !o.quiet && Progress::isTerminal());
         while (baker.iterationsDone() < o.iterations) {
             if (g_interrupted) {
                 stop_reason = "interrupted";
@@ -188,9 +251,15 @@ void runBake(const BakeOptions& o) {
             }
             baker.runIteration();
             progress.advance();
+            if (!checkpoint_path.empty() && baker.iterationsDone() % o.checkpoint_interval == 0) {
+                saveCheckpoint(checkpoint_path, baker, resume_settings);
+            }
         }
         progress.finish();
     }
+    // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
+    // from here, a finished one can be extended with a larger --iterations.
+    if (!checkpoint_path.empty()) saveCheckpoint(checkpoint_path, baker, resume_settings);
     std::signal(SIGINT, previous_handler);
     const double bake_seconds = secondsSince(bake_start);
 
@@ -199,26 +268,11 @@ void runBake(const BakeOptions& o) {
     const std::vector<uint32_t> levels = levelsPresent(cache);
     const CoverageReport coverage = measureCoverage(scene, cache, levels, o.coverage_points);
     CacheData data = toCacheData(cache);
-    // Everything that reproduces the bake, and nothing that varies between runs (timings go to
-    // --stats-json): the same scene, settings and seed give the same file byte for byte.
-    data.metadata = {
-        {"writer", "sharcbake " SHARCBAKE_VERSION},
-        {"scene", o.scene_path},
-        {"scene_hash", sceneFileHash(o.scene_path)},
-        {"iterations", std::to_string(baker.iterationsDone())},
-        {"seed", std::to_string(o.seed)},
-        {"history", settings.sharc.history.describe()},
-        {"resolution", o.resolution},
-        {"update_stride", std::to_string(o.update_stride)},
-        {"max_bounces", std::to_string(o.max_bounces)},
-        {"camera", camera_description},
-        {"radiance_scale", std::to_string(cache.radianceScale())},
-        {"scene_scale", std::to_string(o.scene_scale)},
-        {"log_base", std::to_string(o.log_base)},
-        {"level_bias", std::to_string(o.level_bias)},
-        {"capacity", std::to_string(o.capacity)},
-        {"stop_reason", stop_reason},
-    };
+    for (auto& entry : metadata) {
+        if (entry.first == "iterations") entry.second = std::to_string(baker.iterationsDone());
+    }
+    metadata.emplace_back("stop_reason", stop_reason);
+    data.metadata = std::move(metadata);
     std::string message;
     const CacheFileStatus status = writeCacheFile(o.output_path, data, &message);
     if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
@@ -332,6 +386,22 @@ void registerBakeCommand(CLI::App& app) {
         ->capture_default_str();
     addSkyOptions(*cmd, o->sky);
     cmd->add_option("--stats-json", o->stats_json, "Write the bake statistics as JSON");
+    cmd->add_option("--checkpoint", o->checkpoint_path,
+                    "Save the bake state to this file every --checkpoint-interval iterations and at the end "
+                    "(atomic: temporary file, then rename), so a killed bake can --resume");
+    cmd->add_option("--checkpoint-interval", o->checkpoint_interval,
+                    "Iterations between checkpoints (counted in iterations, not seconds, so the files are "
+                    "reproducible)")
+        ->capture_default_str()->check(CLI::Range(1u, 1u << 30));
+    cmd->add_option("--resume", o->resume_path,
+                    "Continue the bake saved in this checkpoint. Give the same scene and options as the "
+                    "first run (--iterations may grow): the cache is byte-identical to an uninterrupted bake. "
+                    "Checkpoints keep going to this file unless --checkpoint names another");
+    cmd->add_option("--shard", o->shard,
+                    "Bake share i of N (0 <= i < N) of the work of one bake of N x --iterations: iteration k "
+                    "does iteration k*N+i of that bake (its camera pose and samples). Combine the N caches "
+                    "with 'sharcbake merge'")
+        ->capture_default_str();
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
     cmd->callback([o] { runBake(*o); });
 }

@@ -65,7 +65,8 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
 
 void Baker::runIteration() {
     const uint32_t iteration = iteration_;
-    const CameraPose pose = camera_path_.poseAt(iteration);
+    const uint32_t work_iteration = workIteration(iteration);
+    const CameraPose pose = camera_path_.poseAt(work_iteration);
     const CameraRays camera(cameraFromPose(pose), settings_.width, settings_.height);
     HashGridParameters grid = settings_.sharc.grid;
     grid.camera_position = Float3{pose.position.x, pose.position.y, pose.position.z};
@@ -84,7 +85,7 @@ void Baker::runIteration() {
             const uint32_t last = std::min(paths, first + kPathsPerChunk);
             for (uint32_t block = first; block < last; ++block) {
                 // One random pixel (and sub-pixel position) per block, new every iteration.
-                PixelSampler sampler(settings_.seed, block, iteration);
+                PixelSampler sampler(settings_.seed, block, work_iteration);
                 const glm::vec2 u = sampler.next2D() * float(stride);
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));

@@ -20,6 +20,11 @@ struct BakeSettings {
     int height = 720;
     uint32_t update_stride = 5;  ///< one random pixel per stride x stride block, per iteration
     uint32_t seed = 0;
+    /// Shard `shard_index` of `shard_count` (--shard i/N): this bake's k-th iteration does the
+    /// work of iteration k*N + i of the unsharded bake (its camera pose and its samples), so N
+    /// shards of K iterations together trace exactly the paths of one bake of N*K iterations.
+    uint32_t shard_index = 0;
+    uint32_t shard_count = 1;
     UpdatePathSettings path;
     SharcSettings sharc;
 };
@@ -38,6 +43,20 @@ public:
 
     /// Runs one update + resolve iteration.
     void runIteration();
+
+    /// Continues a bake from a checkpoint: `iterations_done` iterations already ran and their
+    /// counters are `counters` (the cache state is restored through mutableCache()).
+    void resumeAt(uint32_t iterations_done, const UpdateCounters& counters) {
+        iteration_ = iterations_done;
+        counters_ = counters;
+    }
+    SharcCache& mutableCache() { return cache_; }
+
+    /// The unsharded iteration whose camera pose and samples this bake's iteration `iteration`
+    /// uses (the identity without --shard).
+    uint32_t workIteration(uint32_t iteration) const {
+        return iteration * settings_.shard_count + settings_.shard_index;
+    }
 
     uint32_t iterationsDone() const { return iteration_; }
     const SharcCache& cache() const { return cache_; }

@@ -12,5 +12,6 @@ void registerBakeCommand(CLI::App& app);
 void registerInfoCommand(CLI::App& app);  ///< `info` and `validate` (info_command.cpp)
 void registerCompareCommand(CLI::App& app);
 void registerExportVdbCommand(CLI::App& app);  ///< export_vdb_command.cpp
+void registerMergeCommand(CLI::App& app);      ///< merge_command.cpp
 
 }  // namespace sharcbake

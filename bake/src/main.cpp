@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
     registerInfoCommand(app);
     registerCompareCommand(app);
     registerExportVdbCommand(app);
+    registerMergeCommand(app);
 
     try {
         app.parse(argc, argv);

@@ -231,6 +231,17 @@ void SharcCache::resolve(uint32_t iteration) {
     touched_.clear();
 }
 
+bool SharcCache::restoreSlot(uint32_t slot, uint64_t key, const ResolvedEntry& resolved) {
+    if (slot >= table_.capacity() || table_.keyAt(slot) != kHashGridInvalidKey || table_.find(key)) return false;
+    const std::optional<uint32_t> inserted = table_.insert(key);
+    if (!inserted || *inserted != slot) {
+        if (inserted) table_.clearSlot(*inserted);
+        return false;
+    }
+    resolved_[slot] = resolved;
+    return true;
+}
+
 CacheData toCacheData(const SharcCache& cache) {
     CacheData data;
     const SharcSettings& s = cache.settings();

@@ -130,6 +130,15 @@ public:
     const HashGridTable& table() const { return table_; }
     const std::vector<ResolvedEntry>& resolved() const { return resolved_; }
 
+    /// Puts `key` back into `slot` with its resolved state, on a cache fresh from the
+    /// constructor, for a resumed bake. Call in increasing slot order: a key then lands where it
+    /// landed first (no key is ever removed, so the slots it skipped are taken again). Returns
+    /// false, changing nothing, if the key would land in another slot (the state is not one this
+    /// table produced).
+    bool restoreSlot(uint32_t slot, uint64_t key, const ResolvedEntry& resolved);
+    /// Replaces the numerics counters (a resumed bake carries them over).
+    void restoreNumerics(const NumericsCounters& numerics) { numerics_ = numerics; }
+
     /// The power-of-two fixed-point scale that maps `max_radiance` (the brightest emission or
     /// sky in the scene) to 2^30.
     static double chooseRadianceScale(double max_radiance);

@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file checkpoint.h
+/// @brief Saving a bake's state between iterations and continuing from it (--checkpoint,
+/// --resume). The bytes are cache_format's (checkpoint_file.h); this maps a Baker onto them.
+#pragma once
+
+#include "baker.h"
+#include "sharcbake/checkpoint_file.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace sharcbake {
+
+using BakeSettingsText = std::vector<std::pair<std::string, std::string>>;
+
+/// The baker's state after its last iteration, with the settings a resume must match.
+CheckpointData captureCheckpoint(const Baker& baker, const BakeSettingsText& settings);
+
+/// Writes captureCheckpoint(baker, settings) to `path` atomically; throws CommandError(kExitIo).
+void saveCheckpoint(const std::string& path, const Baker& baker, const BakeSettingsText& settings);
+
+/// Reads `path` and puts its state into `baker`, which must be fresh (no iteration run).
+/// Throws CommandError: kExitIo if the file cannot be read, kExitInvalidInput if it is not a
+/// valid checkpoint or was written with other settings (the message lists each difference).
+void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& settings, Baker& baker);
+
+}  // namespace sharcbake

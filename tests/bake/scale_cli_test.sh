@@ -1,0 +1,103 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# Bake at scale from the command line: a bake killed (SIGKILL, SIGINT) and resumed from its
+# checkpoint gives the uninterrupted bake's cache byte for byte; damaged or mismatched checkpoints
+# are refused; shards merge in any order to the same file; merge refuses mismatched inputs.
+# Usage: scale_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+rm -rf "$work" && mkdir -p "$work"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+expect() {  # expect CODE DESCRIPTION COMMAND...
+    code=$1; what=$2; shift 2
+    "$@" >"$work/out.txt" 2>"$work/err.txt"
+    got=$?
+    if [ "$got" -ne "$code" ]; then
+        fail "$what: exit $got, expected $code"; cat "$work/err.txt"
+    else
+        echo "ok: $what (exit $got)"
+    fi
+}
+
+cornell="$scenes/cornell_box/cornell_box.gltf"
+furnace="$scenes/furnace_rho050/furnace_rho050.gltf"
+bake_args="--iterations 60 --resolution 320x180 --capacity 65536"
+expect 0 "uninterrupted bake" "$sharcbake" bake "$cornell" -o "$work/full.sharc" $bake_args -q
+
+# Starts the bake with a checkpoint every 2 iterations, waits for the first checkpoint, then
+# sends SIGNAL after a random delay (0-0.4 s) so the kill lands at a different moment each run.
+interrupt() {  # interrupt SIGNAL NAME
+    signal=$1; name=$2
+    rm -f "$work/$name.ckpt"
+    "$sharcbake" bake "$cornell" -o "$work/$name.sharc" $bake_args -q --checkpoint "$work/$name.ckpt" \
+        --checkpoint-interval 2 >"$work/$name.out" 2>&1 &
+    pid=$!
+    tries=0
+    while [ ! -f "$work/$name.ckpt" ] && [ "$tries" -lt 600 ]; do sleep 0.05; tries=$((tries + 1)); done
+    sleep "$(awk 'BEGIN { srand(); printf "%.2f", rand() * 0.4 }')"
+    kill "-$signal" "$pid" 2>/dev/null || echo "note: the $name bake finished before the signal"
+    wait "$pid"
+    interrupted_code=$?
+    [ -f "$work/$name.ckpt" ] || fail "$name: no checkpoint written"
+}
+
+interrupt KILL killed
+expect 0 "resume after SIGKILL" "$sharcbake" bake "$cornell" -o "$work/killed.sharc" $bake_args -q --resume "$work/killed.ckpt"
+cmp -s "$work/full.sharc" "$work/killed.sharc" || fail "the bake resumed after SIGKILL differs from the uninterrupted one"
+
+interrupt INT interrupted
+[ "$interrupted_code" -eq 130 ] || [ "$interrupted_code" -eq 0 ] || fail "SIGINT: exit $interrupted_code, expected 130"
+if [ "$interrupted_code" -eq 130 ]; then
+    expect 0 "the cache written on SIGINT is valid" "$sharcbake" validate "$work/interrupted.sharc"
+    grep -q "stop_reason: interrupted" "$work/out.txt" || "$sharcbake" info "$work/interrupted.sharc" | grep -q "stop_reason: interrupted" ||
+        fail "the SIGINT cache does not record stop_reason interrupted"
+fi
+expect 0 "resume after SIGINT" "$sharcbake" bake "$cornell" -o "$work/interrupted.sharc" $bake_args -q --resume "$work/interrupted.ckpt"
+cmp -s "$work/full.sharc" "$work/interrupted.sharc" || fail "the bake resumed after SIGINT differs from the uninterrupted one"
+
+# A finished bake's checkpoint extends it: 40 + 20 iterations == 60 iterations.
+expect 0 "bake 40 with a checkpoint" "$sharcbake" bake "$cornell" -o "$work/short.sharc" --iterations 40 --resolution 320x180 --capacity 65536 -q \
+    --checkpoint "$work/short.ckpt"
+expect 0 "extend it to 60" "$sharcbake" bake "$cornell" -o "$work/extended.sharc" $bake_args -q --resume "$work/short.ckpt"
+cmp -s "$work/full.sharc" "$work/extended.sharc" || fail "40 + 20 iterations differ from 60"
+
+# Refusals: other settings, a damaged checkpoint, a cache given as a checkpoint, a missing file.
+expect 3 "resume with another seed" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args --seed 7 -q --resume "$work/short.ckpt"
+grep -q 'seed: checkpoint "0", this bake "7"' "$work/err.txt" || fail "the mismatch message does not name the setting"
+expect 3 "resume on another scene" "$sharcbake" bake "$furnace" -o "$work/x.sharc" $bake_args -q --resume "$work/short.ckpt"
+cp "$work/short.ckpt" "$work/damaged.ckpt"
+printf '\377' | dd of="$work/damaged.ckpt" bs=1 seek=200 conv=notrunc 2>/dev/null
+expect 3 "resume from a damaged checkpoint" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args -q --resume "$work/damaged.ckpt"
+grep -q "checksum" "$work/err.txt" || fail "the damaged checkpoint's message does not say checksum"
+expect 3 "resume from a cache file" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args -q --resume "$work/full.sharc"
+expect 2 "resume from a missing file" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args -q --resume "$work/none.ckpt"
+
+# Shards: four shares of the furnace, merged in two orders to the same bytes.
+expect 1 "bad shard" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --shard 4/4
+expect 1 "bad shard syntax" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --shard 1of4
+for i in 0 1 2 3; do
+    expect 0 "shard $i/4" "$sharcbake" bake "$furnace" -o "$work/shard$i.sharc" --iterations 8 --resolution 96x96 -q --shard "$i/4"
+done
+expect 0 "merge" "$sharcbake" merge "$work/shard0.sharc" "$work/shard1.sharc" "$work/shard2.sharc" "$work/shard3.sharc" -o "$work/merged.sharc"
+expect 0 "merge in another order" "$sharcbake" merge "$work/shard2.sharc" "$work/shard0.sharc" "$work/shard3.sharc" "$work/shard1.sharc" -o "$work/merged2.sharc" -q
+cmp -s "$work/merged.sharc" "$work/merged2.sharc" || fail "the merge depends on the order of its inputs"
+expect 0 "info on the merge" "$sharcbake" info "$work/merged.sharc"
+grep -q "merged_shards: 0/4,1/4,2/4,3/4" "$work/out.txt" || fail "the merged cache does not list its shards"
+grep -q "iterations: 32" "$work/out.txt" || fail "the merged cache does not sum the iterations"
+
+# Merge refusals: another scene, other grid parameters, the same shard twice, not a cache.
+expect 3 "merge different scenes" "$sharcbake" merge "$work/shard0.sharc" "$work/full.sharc" -o "$work/x.sharc"
+grep -q "scene_hash" "$work/err.txt" || fail "the scene mismatch message does not name scene_hash"
+expect 0 "shard with another scene scale" "$sharcbake" bake "$furnace" -o "$work/coarse.sharc" --iterations 2 --resolution 64x64 -q --shard 1/4 --scene-scale 10
+expect 3 "merge different grids" "$sharcbake" merge "$work/shard0.sharc" "$work/coarse.sharc" -o "$work/x.sharc"
+grep -q "scene scale" "$work/err.txt" || fail "the grid mismatch message does not name the parameter"
+expect 3 "merge the same shard twice" "$sharcbake" merge "$work/shard0.sharc" "$work/shard0.sharc" -o "$work/x.sharc"
+expect 3 "merge a checkpoint" "$sharcbake" merge "$work/shard0.sharc" "$work/short.ckpt" -o "$work/x.sharc"
+expect 1 "merge a missing file" "$sharcbake" merge "$work/shard0.sharc" "$work/none.sharc" -o "$work/x.sharc"
+
+[ "$failures" -eq 0 ] && echo "all scale checks passed"
+exit "$failures"
