@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <new>
 
@@ -70,6 +71,28 @@ CacheFileStatus fail(CacheError* error, CacheFileStatus status, uint32_t rule, c
 bool finiteNonNegative(float v) { return std::isfinite(v) && v >= 0.0f; }
 
 constexpr uint64_t kIndexMultiplier = 0x9E3779B97F4A7C15ull;  // 2^64 / golden ratio (lookup index)
+
+uint32_t floatBits(float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    return bits;
+}
+float bitsFloat(uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+}
+
+/// SPEC §H.3 steps 2-4 from the squared distance, in binary32 as in hash_grid.cpp: the
+/// reference that CacheView's level thresholds are computed from.
+uint32_t levelFromDistance2(float d2, float log2_base, float level_bias) {
+    d2 = (std::isnan(d2) || d2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : d2;
+    const float ratio = float(std::log2(double(d2))) / log2_base;
+    float level = 0.5f * ratio + level_bias;
+    level = std::isnan(level) || level < 1.0f ? 1.0f : level;
+    level = level > 511.0f ? 511.0f : level;
+    return uint32_t(level);
+}
 
 }  // namespace
 
@@ -145,7 +168,9 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     metadata_ = std::move(other.metadata_);
     log2_base_ = other.log2_base_;
     voxel_size_ = std::move(other.voxel_size_);
+    level_start_ = std::move(other.level_start_);
     index_ = std::move(other.index_);
+    index_slots_ = other.index_slots_;
     index_shift_ = other.index_shift_;
     other.data_ = nullptr;
     other.mapping_ = nullptr;
@@ -170,8 +195,9 @@ void CacheView::reset() {
     levels_.clear();
     metadata_.clear();
     voxel_size_.clear();
-    index_.clear();
-    index_.shrink_to_fit();
+    level_start_.clear();
+    index_.reset();
+    index_slots_ = 0;
     index_shift_ = 64;
 }
 
@@ -554,6 +580,23 @@ CacheFileStatus CacheView::parse(CacheError* error) {
     const HashGridParameters params = gridParameters();
     voxel_size_.resize(kHashGridLevelMax + 1);
     for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) voxel_size_[level] = voxelSize(level, params);
+    // Where each level starts, found by bisection over the bit patterns of the clamped squared
+    // distance (positive floats order like their bits; +Inf is the largest).
+    level_start_.assign(kHashGridLevelMax + 2, 0xFFFFFFFFu);
+    const uint32_t lowest = floatBits(kHashGridMinDistance2), highest = floatBits(INFINITY);
+    const uint32_t top = levelFromDistance2(INFINITY, log2_base_, level_bias_);
+    for (uint32_t level = 0; level <= top; ++level) {
+        uint32_t lo = lowest, hi = highest;  // invariant: levelFromDistance2(hi) >= level
+        while (lo < hi) {
+            const uint32_t mid = lo + (hi - lo) / 2;
+            if (levelFromDistance2(bitsFloat(mid), log2_base_, level_bias_) >= level) {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        level_start_[level] = lo;
+    }
     return S::kOk;
 }
 
@@ -582,24 +625,66 @@ CacheVoxel CacheView::voxel(uint64_t index) const {
     return v;
 }
 
+void CacheView::FreeDeleter::operator()(IndexSlot* p) const { std::free(p); }
+
 CacheFileStatus CacheView::buildLookupIndex() {
     if (!data_ || voxel_count_ >= 0xFFFFFFFFu) return CacheFileStatus::kInvalidArgument;
+    index_.reset();
+    index_slots_ = 0;
     uint32_t bits = 4;
-    while ((uint64_t(1) << bits) < 2 * voxel_count_ && bits < 40) ++bits;  // load factor <= 1/2
-    try {
-        index_.assign(size_t(1) << bits, 0u);
-    } catch (const std::bad_alloc&) {
-        index_.clear();
-        return CacheFileStatus::kIoError;
-    }
+    while ((uint64_t(1) << bits) < voxel_count_ + voxel_count_ / 2 && bits < 40) ++bits;  // load <= 2/3
+    const size_t slots = size_t(1) << bits;
+    // Random lookups into tens of MiB miss the TLB as well as the caches: large tables go on
+    // 2 MiB-aligned memory and ask Linux for transparent huge pages (advice only).
+    constexpr size_t kHugePage = size_t(2) << 20;
+    const size_t bytes = slots * sizeof(IndexSlot);
+    const size_t alignment = bytes >= kHugePage ? kHugePage : 64;
+    const size_t rounded = (bytes + alignment - 1) / alignment * alignment;
+    void* memory = std::aligned_alloc(alignment, rounded);
+    if (!memory) return CacheFileStatus::kIoError;
+#ifdef MADV_HUGEPAGE
+    if (alignment == kHugePage) ::madvise(memory, rounded, MADV_HUGEPAGE);
+#endif
+    std::memset(memory, 0, rounded);
+    index_.reset(static_cast<IndexSlot*>(memory));
+    index_slots_ = slots;
     index_shift_ = 64 - bits;
-    const size_t mask = index_.size() - 1;
+    const size_t mask = slots - 1;
     for (uint64_t i = 0; i < voxel_count_; ++i) {
-        size_t slot = size_t((key(i) * kIndexMultiplier) >> index_shift_);
-        while (index_[slot] != 0) slot = (slot + 1) & mask;
-        index_[slot] = uint32_t(i + 1);  // voxel_count <= file size / 24 < 2^32 - 1 for files < 96 GiB
+        const uint64_t k = key(i);
+        size_t slot = size_t((k * kIndexMultiplier) >> index_shift_);
+        while (index_[slot].key != 0) slot = (slot + 1) & mask;
+        IndexSlot& s = index_[slot];
+        s.key = k;
+        std::memcpy(s.radiance, voxels_ + i * 16, 12);
+        s.voxel = uint32_t(i);  // voxel_count <= file size / 24 < 2^32 - 1 for files < 96 GiB
     }
     return CacheFileStatus::kOk;
+}
+
+const CacheView::IndexSlot* CacheView::findSlot(uint64_t k) const {
+    // Linear probing ends at the key or at an empty slot; the load factor (<= 2/3) keeps one.
+    const size_t mask = index_slots_ - 1;
+    for (size_t slot = size_t((k * kIndexMultiplier) >> index_shift_);; slot = (slot + 1) & mask) {
+        const IndexSlot& s = index_[slot];
+        if (s.key == k) return &s;
+        if (s.key == 0) return nullptr;
+    }
+}
+
+uint32_t CacheView::levelOf(float d2) const {
+    d2 = (std::isnan(d2) || d2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : d2;
+    if (level_start_.empty()) return levelFromDistance2(d2, log2_base_, level_bias_);
+    const uint32_t bits = floatBits(d2);
+    // A first guess from the float's exponent and mantissa (log2 to within 0.09), then steps
+    // to the exact level along the thresholds.
+    const float approximate_log2 = float(int32_t(bits >> 23) - 127) + float(bits & 0x7FFFFFu) * 0x1p-23f;
+    float guess = 0.5f * approximate_log2 / log2_base_ + level_bias_;
+    guess = std::isnan(guess) || guess < 1.0f ? 1.0f : (guess > 511.0f ? 511.0f : guess);
+    uint32_t level = uint32_t(guess);
+    while (level < kHashGridLevelMax && bits >= level_start_[level + 1]) ++level;
+    while (level > kHashGridLevelMin && bits < level_start_[level]) --level;
+    return level;
 }
 
 uint64_t CacheView::keyFor(const Float3& p, const Float3& n, const Float3& c) const {
@@ -610,24 +695,15 @@ uint64_t CacheView::keyFor(const Float3& p, const Float3& n, const Float3& c) co
     float d2 = dx * dx;
     d2 = d2 + dy * dy;
     d2 = d2 + dz * dz;
-    d2 = (std::isnan(d2) || d2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : d2;
-    const float ratio = float(std::log2(double(d2))) / log2_base_;
-    float level = 0.5f * ratio + level_bias_;
-    level = std::isnan(level) || level < 1.0f ? 1.0f : level;
-    level = level > 511.0f ? 511.0f : level;
-    const uint32_t l = uint32_t(level);
+    const uint32_t l = levelOf(d2);
     const float size = voxel_size_.empty() ? voxelSize(l, gridParameters(c)) : voxel_size_[l];
     return packHashGridKey(quantisePosition(b, size), l, normalBits(n));
 }
 
 uint64_t CacheView::findKey(uint64_t k) const {
-    if (!index_.empty()) {
-        const size_t mask = index_.size() - 1;
-        size_t slot = size_t((k * kIndexMultiplier) >> index_shift_);
-        for (uint32_t e; (e = index_[slot]) != 0; slot = (slot + 1) & mask) {
-            if (load<uint64_t>(keys_ + uint64_t(e - 1) * 8) == k) return e - 1;
-        }
-        return voxel_count_;
+    if (index_slots_ != 0) {
+        const IndexSlot* s = findSlot(k);
+        return s ? s->voxel : voxel_count_;
     }
     uint64_t lo = 0, n = voxel_count_;
     while (n > 0) {  // lower_bound, branch-light
@@ -686,7 +762,13 @@ CacheStats CacheView::stats() const {
 bool CacheView::lookup(const Float3& position, const Float3& normal, const Float3& camera_position,
                        Float3* radiance) const {
     if (!data_) return false;
-    const uint64_t index = findKey(keyFor(position, normal, camera_position));
+    const uint64_t k = keyFor(position, normal, camera_position);
+    if (index_slots_ != 0) {
+        const IndexSlot* s = findSlot(k);
+        if (s && radiance) std::memcpy(radiance, s->radiance, 12);
+        return s != nullptr;
+    }
+    const uint64_t index = findKey(k);
     if (index == voxel_count_) return false;
     if (radiance) std::memcpy(radiance, voxels_ + index * 16, 12);
     return true;
@@ -735,44 +817,31 @@ size_t CacheView::lookupBatch(size_t count, const Float3* positions, const Float
                               bool nearest_level) const {
     if (!positions || !normals || !radiance) return 0;
     size_t hit_count = 0;
-    if (!nearest_level && !index_.empty()) {
-        // Software-pipelined exact lookups: keys and index slots for a block first (prefetching
-        // the slots), then the first probe (prefetching key and voxel), then the compare. Keeps
-        // many cache misses in flight instead of one.
-        constexpr size_t kBlock = 32;
-        const size_t mask = index_.size() - 1;
-        uint64_t keys[kBlock];
-        size_t slots[kBlock];
-        for (size_t start = 0; start < count; start += kBlock) {
-            const size_t n = std::min(kBlock, count - start);
-            for (size_t j = 0; j < n; ++j) {
-                keys[j] = keyFor(positions[start + j], normals[start + j], camera_position);
-                slots[j] = size_t((keys[j] * kIndexMultiplier) >> index_shift_);
-                __builtin_prefetch(&index_[slots[j]]);
-            }
-            for (size_t j = 0; j < n; ++j) {
-                const uint32_t e = index_[slots[j]];
-                if (e != 0) {
-                    __builtin_prefetch(keys_ + uint64_t(e - 1) * 8);
-                    __builtin_prefetch(voxels_ + uint64_t(e - 1) * 16);
-                }
-            }
-            for (size_t j = 0; j < n; ++j) {
-                size_t slot = slots[j];
-                uint64_t found = voxel_count_;
-                for (uint32_t e; (e = index_[slot]) != 0; slot = (slot + 1) & mask) {
-                    if (load<uint64_t>(keys_ + uint64_t(e - 1) * 8) == keys[j]) {
-                        found = e - 1;
-                        break;
-                    }
-                }
-                const bool hit = found != voxel_count_;
-                Float3 value{0.0f, 0.0f, 0.0f};
-                if (hit) std::memcpy(&value, voxels_ + found * 16, 12);
-                radiance[start + j] = value;
-                if (hits) hits[start + j] = hit ? 1 : 0;
-                hit_count += hit ? 1 : 0;
-            }
+    if (!nearest_level && index_slots_ != 0) {
+        // Software-pipelined exact lookups: the key of query i + kAhead is computed, and the
+        // cache lines of its home slot prefetched, before query i is probed, so about kAhead
+        // misses stay in flight at a steady rate (a burst would fill the line-fill buffers).
+        // A hit reads only the index, never the file.
+        constexpr size_t kAhead = 16;
+        uint64_t ahead[kAhead];
+        auto computeAndPrefetch = [&](size_t i) {
+            const uint64_t k = keyFor(positions[i], normals[i], camera_position);
+            const uintptr_t home = reinterpret_cast<uintptr_t>(&index_[size_t((k * kIndexMultiplier) >> index_shift_)]);
+            __builtin_prefetch(reinterpret_cast<const void*>(home));
+            if ((home & 63u) + sizeof(IndexSlot) > 64u) __builtin_prefetch(reinterpret_cast<const void*>(home + sizeof(IndexSlot) - 1));
+            ahead[i % kAhead] = k;
+        };
+        for (size_t i = 0; i < std::min(kAhead, count); ++i) computeAndPrefetch(i);
+        for (size_t i = 0; i < count; ++i) {
+            const uint64_t k = ahead[i % kAhead];
+            if (i + kAhead < count) computeAndPrefetch(i + kAhead);
+            const IndexSlot* s = findSlot(k);
+            const bool hit = s != nullptr;
+            Float3 value{0.0f, 0.0f, 0.0f};
+            if (hit) std::memcpy(&value, s->radiance, 12);
+            radiance[i] = value;
+            if (hits) hits[i] = hit ? 1 : 0;
+            hit_count += hit ? 1 : 0;
         }
         return hit_count;
     }

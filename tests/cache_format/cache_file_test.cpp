@@ -509,6 +509,21 @@ TEST(Runtime, KeyForMatchesHashGridKey) {
             ASSERT_EQ(view.keyFor(p, n, c), hashGridKey(p, n, view.gridParameters(c)))
                 << p.x << " " << p.y << " " << p.z << " camera " << c.x << " " << c.y << " " << c.z;
         }
+        // keyFor finds the level from precomputed distance thresholds: sweep a few ULPs across
+        // every level boundary within 1e6 of the camera.
+        const Float3 camera{0.0f, 0.0f, 0.0f}, normal{0.0f, 1.0f, 0.0f};
+        for (uint32_t level = 1; level <= 511; ++level) {
+            const double boundary = std::pow(double(q[0]), double(level) - double(q[2]));
+            if (boundary > 1e6) break;
+            float x = float(boundary) - kHashGridPositionBias;
+            for (int step = 0; step < 8; ++step) x = std::nextafter(x, 0.0f);
+            for (int step = 0; step < 16; ++step, x = std::nextafter(x, INFINITY)) {
+                for (const Float3& p : {Float3{x, 0.0f, 0.0f}, Float3{0.0f, -x, 0.0f}, Float3{x * 0.6f, 0.0f, x * 0.8f}}) {
+                    ASSERT_EQ(view.keyFor(p, normal, camera), hashGridKey(p, normal, view.gridParameters(camera)))
+                        << "base " << q[0] << " bias " << q[2] << " level " << level << " x " << x;
+                }
+            }
+        }
     }
 }
 

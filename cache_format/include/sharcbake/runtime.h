@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -128,14 +129,17 @@ public:
     /// Index of `key`, or voxelCount() when absent (hash index if built, else binary search).
     uint64_t findKey(uint64_t key) const;
     /// The SHaRC key of (position, normal) for a camera: identical to hashGridKey() with this
-    /// cache's parameters, with the per-level voxel sizes precomputed at open.
+    /// cache's parameters, with the per-level voxel sizes and the squared distances where each
+    /// level starts precomputed at open (no logarithm per query).
     uint64_t keyFor(const Float3& position, const Float3& normal, const Float3& camera_position) const;
 
-    /// @brief Builds an in-memory hash index over the keys (4 bytes x 2..4 per voxel, the file
-    /// stays uncopied) so lookups cost O(1) instead of a binary search. Call once before sharing
-    /// the view between threads. kIoError if the allocation fails (lookups then keep working).
+    /// @brief Builds an in-memory hash index so lookups cost O(1) instead of a binary search:
+    /// open addressing with each key stored next to its radiance, so a hit reads one cache line
+    /// and not the file (24 bytes x 1.5..3 per voxel; huge pages where Linux offers them). Call
+    /// once before sharing the view between threads. kIoError if the allocation fails (lookups
+    /// then keep working).
     CacheFileStatus buildLookupIndex();
-    bool hasLookupIndex() const { return !index_.empty(); }
+    bool hasLookupIndex() const { return index_slots_ != 0; }
     CacheStats stats() const;
 
     // Levels -------------------------------------------------------------------------------------
@@ -197,8 +201,27 @@ private:
     std::vector<std::pair<std::string_view, std::string_view>> metadata_;
     float log2_base_ = 1.0f;                ///< log2(logarithm_base) rounded to float (SPEC §H.3)
     std::vector<float> voxel_size_;         ///< voxelSize(L) for L = 0..511
-    std::vector<uint32_t> index_;           ///< open addressing: voxel index + 1, 0 = empty
+    /// level_start_[L]: bits of the smallest clamped squared distance whose level is >= L
+    /// (L = 1..512; 0xFFFFFFFF when no float reaches L). The level is monotonic in the
+    /// distance, so these thresholds give exactly the SPEC §H.3 level without a logarithm.
+    std::vector<uint32_t> level_start_;
+
+    /// A lookup-index slot: key, radiance and voxel index side by side (key 0 = empty; KEYS
+    /// never holds 0, rule V15).
+    struct IndexSlot {
+        uint64_t key;
+        float radiance[3];
+        uint32_t voxel;
+    };
+    struct FreeDeleter {
+        void operator()(IndexSlot* p) const;
+    };
+    std::unique_ptr<IndexSlot[], FreeDeleter> index_;
+    size_t index_slots_ = 0;                ///< a power of two, or 0 without an index
     uint32_t index_shift_ = 64;             ///< slot = (key * golden) >> shift
+
+    uint32_t levelOf(float distance2) const;
+    const IndexSlot* findSlot(uint64_t key) const;  ///< nullptr when absent; needs the index
 };
 
 }  // namespace sharcbake
