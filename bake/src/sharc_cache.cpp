@@ -99,34 +99,54 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
     constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;  // non-finite or failed insert
     chunk_slots_.resize(chunks.size());
 
-    // 1. Parallel: look every key up (the table is read-only here).
+    // 1. Parallel: look every key up (the table is read-only here). A path deposits into its own
+    //    voxel and then into the same voxels again as later vertices propagate back, so the
+    //    last few keys are remembered; each chunk lists the deposits whose key is new.
+    chunk_missing_.resize(chunks.size());
+    std::vector<uint64_t> chunk_non_finite(chunks.size(), 0);
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         const std::vector<Deposit>& deposits = chunks[chunk];
         std::vector<uint32_t>& slots = chunk_slots_[chunk];
+        std::vector<uint32_t>& missing = chunk_missing_[chunk];
         slots.resize(deposits.size());
+        missing.clear();
+        constexpr size_t kRecent = 4;
+        uint64_t recent_keys[kRecent] = {};  // key 0 never occurs
+        uint32_t recent_slots[kRecent] = {};
+        size_t next_recent = 0;
         for (size_t i = 0; i < deposits.size(); ++i) {
             const Deposit& d = deposits[i];
             if (!isFiniteColor(d.radiance)) {
                 slots[i] = kDropped;
+                ++chunk_non_finite[chunk];
                 continue;
             }
-            slots[i] = table_.find(d.key).value_or(kMissing);
+            size_t r = 0;
+            while (r < kRecent && recent_keys[r] != d.key) ++r;
+            if (r < kRecent) {
+                slots[i] = recent_slots[r];
+            } else {
+                slots[i] = table_.find(d.key).value_or(kMissing);
+                recent_keys[next_recent] = d.key;
+                recent_slots[next_recent] = slots[i];
+                next_recent = (next_recent + 1) % kRecent;
+            }
+            if (slots[i] == kMissing) missing.push_back(uint32_t(i));
         }
     });
 
     // 2. Serial, in chunk (= path) order: insert the new keys. Slot assignment is therefore the
-    //    same on every run, whatever thread traced which path.
+    //    same on every run, whatever thread traced which path. Only the deposits listed as new
+    //    are visited, so this serial step shrinks to almost nothing once the cache is warm.
     for (size_t chunk = 0; chunk < chunks.size(); ++chunk) {
         const std::vector<Deposit>& deposits = chunks[chunk];
         std::vector<uint32_t>& slots = chunk_slots_[chunk];
-        for (size_t i = 0; i < deposits.size(); ++i) {
+        numerics_.deposits += deposits.size();
+        numerics_.non_finite_deposits += chunk_non_finite[chunk];
+        for (const uint32_t i : chunk_missing_[chunk]) {
             const Deposit& d = deposits[i];
-            ++numerics_.deposits;
-            if (slots[i] == kDropped) {
-                ++numerics_.non_finite_deposits;
-                continue;
-            }
-            if (slots[i] != kMissing) continue;
+            // A key new to this iteration comes back here once per deposit: the first inserts
+            // it, the later ones find it.
             const std::optional<uint32_t> inserted = table_.insert(d.key);
             if (inserted) {
                 slots[i] = *inserted;

@@ -152,6 +152,7 @@ private:
     std::vector<ResolvedEntry> resolved_;
     std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
+    std::vector<std::vector<uint32_t>> chunk_missing_;  ///< commit scratch: deposits with a new key
     NumericsCounters numerics_;
 };
 
