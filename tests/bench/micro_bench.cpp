@@ -3,6 +3,7 @@
 // runtime lookups (single, batched, binary search) on a 2^22-capacity cache with 1 M live
 // voxels next to a raw random-memory-access baseline of the same footprint, open + validate.
 // `--smoke` shrinks every data set so the whole binary runs in about a second (ctest).
+// SHARCBAKE_SCENES_DIR overrides the scenes folder compiled in.
 // Figures and commands: BENCHMARKS.md.
 #include "bench_support.h"
 
@@ -11,6 +12,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <numeric>
@@ -31,7 +33,11 @@ struct RayFixture {
     static RayFixture& get() {
         static RayFixture fixture = [] {
             RayFixture f;
-            f.scene = std::make_unique<BakeScene>(loadGltf(SHARCBAKE_SCENES_DIR "/cornell_box/cornell_box.gltf"));
+            // The scenes folder of the build, unless SHARCBAKE_SCENES_DIR names another (a
+            // binary copied to a machine without the source tree).
+            const char* scenes = std::getenv("SHARCBAKE_SCENES_DIR");
+            f.scene = std::make_unique<BakeScene>(
+                loadGltf(std::string(scenes ? scenes : SHARCBAKE_SCENES_DIR) + "/cornell_box/cornell_box.gltf"));
             f.pairs = makeRayPairs(f.scene->tracer, f.scene->lights, f.scene->camera_path, g_smoke ? 2048 : 1u << 17, 11);
             return f;
         }();
