@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "coverage.h"
 #include "progress.h"
+#include "stability_report.h"
 #include "sharcbake/cache_file.h"
 #include "tracer.h"
 
@@ -279,7 +280,7 @@ void runBake(const BakeOptions& o) {
     const double finish_seconds = secondsSince(finish_start);
 
     const UpdateCounters& c = baker.counters();
-    const NumericsCounters& n = cache.numerics();
+    const StabilityReport stability = makeStabilityReport(cache, c, scene.bounds_min, scene.bounds_max, levels);
     const StageSeconds& stage = baker.seconds();
     const double rays_per_second = double(c.segments + c.shadow_rays) / std::max(stage.update, 1e-9);
     const uint64_t live = data.voxels.size();
@@ -298,11 +299,7 @@ void runBake(const BakeOptions& o) {
                     100.0 * occupancy, cache.capacity(), level_list.c_str());
         std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
                     100.0 * coverage.unreached_area, coverage.points);
-        std::printf("  numerics: failed inserts %llu, non-finite dropped %llu, clamped deposits %llu, "
-                    "saturated sums %llu, negative clamped %llu\n",
-                    (unsigned long long)n.failed_inserts, (unsigned long long)(n.non_finite_deposits + c.non_finite),
-                    (unsigned long long)n.clamped_deposits, (unsigned long long)n.saturated_sums,
-                    (unsigned long long)n.negative_deposits);
+        printStabilitySection(stdout, stability);
         std::printf("Wrote %s (%llu voxels)\n", o.output_path.c_str(), (unsigned long long)live);
     }
     if (!o.stats_json.empty()) {
@@ -321,14 +318,7 @@ void runBake(const BakeOptions& o) {
              << "  \"occupancy\": " << occupancy << ",\n  \"levels\": [" << level_list << "],\n"
              << "  \"coverage\": {\"points\": " << coverage.points << ", \"unreached_area_fraction\": "
              << coverage.unreached_area << "},\n"
-             << "  \"numerics\": {\"deposits\": " << n.deposits << ", \"failed_inserts\": " << n.failed_inserts
-             << ", \"failed_insert_energy\": " << (n.failed_insert_energy.x + n.failed_insert_energy.y + n.failed_insert_energy.z)
-             << ", \"non_finite_dropped\": " << (n.non_finite_deposits + c.non_finite)
-             << ", \"clamped_deposits\": " << n.clamped_deposits
-             << ", \"clamped_energy\": " << (n.clamped_energy.x + n.clamped_energy.y + n.clamped_energy.z)
-             << ", \"saturated_sums\": " << n.saturated_sums << ", \"negative_clamped\": " << n.negative_deposits
-             << ", \"resample_emission_clamped\": " << c.clamped_propagation
-             << ", \"radiance_scale\": " << cache.radianceScale() << "}\n"
+             << "  \"stability\": " << stabilityJson(stability) << "\n"
              << "}\n";
         if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
     }

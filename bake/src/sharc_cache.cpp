@@ -104,6 +104,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
     //    last few keys are remembered; each chunk lists the deposits whose key is new.
     chunk_missing_.resize(chunks.size());
     std::vector<uint64_t> chunk_non_finite(chunks.size(), 0);
+    std::vector<glm::dvec3> chunk_deposited(chunks.size(), glm::dvec3(0.0));
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         const std::vector<Deposit>& deposits = chunks[chunk];
         std::vector<uint32_t>& slots = chunk_slots_[chunk];
@@ -121,6 +122,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
                 ++chunk_non_finite[chunk];
                 continue;
             }
+            chunk_deposited[chunk] += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
             size_t r = 0;
             while (r < kRecent && recent_keys[r] != d.key) ++r;
             if (r < kRecent) {
@@ -143,6 +145,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
         std::vector<uint32_t>& slots = chunk_slots_[chunk];
         numerics_.deposits += deposits.size();
         numerics_.non_finite_deposits += chunk_non_finite[chunk];
+        numerics_.deposited_energy += chunk_deposited[chunk];
         for (const uint32_t i : chunk_missing_[chunk]) {
             const Deposit& d = deposits[i];
             // A key new to this iteration comes back here once per deposit: the first inserts

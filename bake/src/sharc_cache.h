@@ -88,6 +88,7 @@ struct Deposit {
 /// What happened numerically in the accumulation; everything that was changed is counted.
 struct NumericsCounters {
     uint64_t deposits = 0;
+    glm::dvec3 deposited_energy{0.0};      ///< radiance x weight of every finite deposit, before any change
     uint64_t failed_inserts = 0;           ///< deposits dropped because the bucket was full
     glm::dvec3 failed_insert_energy{0.0};  ///< radiance x samples those deposits carried
     uint64_t non_finite_deposits = 0;      ///< NaN/Inf deposits dropped
