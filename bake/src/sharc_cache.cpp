@@ -63,20 +63,49 @@ bool HistorySchedule::parse(const std::string& text, HistorySchedule& out) {
     return false;
 }
 
+namespace {
+
+/// One deposit may add at most 2^62 (22 bits above the brightest emission at 2^40); a voxel's
+/// sum saturates at 255 wraps of 2^64, i.e. after at least 2^10 maximal deposits in one iteration.
+constexpr uint64_t kMaxFixedDeposit = uint64_t(1) << 62;
+constexpr uint8_t kMaxCarries = 255;
+
+/// A deterministic dither in [0, 1) for one channel of one deposit: keyed by the commit, the
+/// chunk and the deposit's place in it, all independent of the thread count.
+double roundingDither(uint32_t commit, size_t chunk, size_t index, int channel) {
+    const uint32_t h = hashCombine(hashCombine(hashCombine(hashUint32(commit), uint32_t(chunk)), uint32_t(index)),
+                                   uint32_t(channel));
+    return double(h) * 0x1p-32;
+}
+
+/// Adds `low + carries x 2^64` to a 72-bit sum; false when its carry count saturated (the sum
+/// then reads as its ceiling).
+bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, uint64_t low, uint32_t carries) {
+    const uint64_t before = word.fetch_add(low, std::memory_order_relaxed);
+    carries += before + low < before;  // this add wrapped the word
+    if (carries == 0) return true;
+    uint8_t count = word_carries.load(std::memory_order_relaxed);
+    do {
+        if (count == kMaxCarries) return false;
+    } while (!word_carries.compare_exchange_weak(
+        count, uint8_t(std::min<uint32_t>(kMaxCarries, count + carries)), std::memory_order_relaxed));
+    return count + carries <= kMaxCarries;
+}
+
+}  // namespace
+
 double SharcCache::chooseRadianceScale(double max_radiance) {
-    // The brightest radiance maps to 2^30: 30 bits of precision below it, 2^26 times above it
-    // for one deposit (multi-bounce radiance exceeds emission: L = Le/(1-rho) in a furnace) and
-    // 2^33 times for a voxel's sum in one iteration before the 63-bit ceiling.
+    // The brightest radiance maps to 2^40: 40 bits of precision below it (and dithered rounding
+    // beyond that), 2^22 times above it for one deposit (multi-bounce radiance exceeds emission:
+    // L = Le/(1-rho) in a furnace), and 2^32 deposits that bright in a voxel's 72-bit sum.
     const double magnitude = (std::isfinite(max_radiance) && max_radiance > 0.0) ? max_radiance : 1.0;
-    const int exponent = std::clamp(30 - int(std::ceil(std::log2(magnitude))), -60, 90);
+    const int exponent = std::clamp(40 - int(std::ceil(std::log2(magnitude))), -60, 100);
     return std::ldexp(1.0, exponent);
 }
 
 SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
     : settings_(settings),
       radiance_scale_(radiance_scale),
-      // One deposit may use at most 1/128 of a sum's range (see chooseRadianceScale).
-      max_fixed_deposit_(uint64_t(1) << 56),
       accumulation_(std::make_unique<AccumulationEntry[]>(settings.capacity)),
       resolved_(settings.capacity) {
     const HashGridStatus status = HashGridTable::create(settings.capacity, &table_);
@@ -165,10 +194,10 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
     //    do not depend on the order either. A chunk gathers its deposits in a few pending
     //    per-slot sums first: a path deposits into the same voxels several times, and the
     //    bright voxels are shared by every thread, so one atomic add per slot and chunk instead
-    //    of one per deposit cuts the contention. Integer addition is associative (mod 2^64), so
-    //    the sums are bit-identical however they are grouped.
+    //    of one per deposit cuts the contention. Integer addition with carries is associative,
+    //    so the 72-bit sums are bit-identical however they are grouped.
     struct ChunkNumerics {
-        uint64_t negative = 0, clamped = 0;
+        uint64_t negative = 0, clamped = 0, saturated = 0;
         glm::dvec3 clamped_energy{0.0};
         std::vector<uint32_t> touched;
     };
@@ -176,8 +205,10 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
         uint32_t slot = 0;
         uint32_t samples = 0;
         uint64_t sums[3] = {0, 0, 0};
+        uint32_t carries[3] = {0, 0, 0};  ///< wraps of sums[c]: the pending sum is 96 bits wide
     };
     std::vector<ChunkNumerics> chunk_numerics(chunks.size());
+    const uint32_t commit = commits_++;
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         const std::vector<Deposit>& deposits = chunks[chunk];
         const std::vector<uint32_t>& slots = chunk_slots_[chunk];
@@ -189,7 +220,9 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
             AccumulationEntry& entry = accumulation_[p.slot];
             if (entry.touched.exchange(1, std::memory_order_relaxed) == 0) numerics.touched.push_back(p.slot);
             for (int c = 0; c < 3; ++c) {
-                if (p.sums[c]) entry.sums[c].fetch_add(p.sums[c], std::memory_order_relaxed);
+                if ((p.sums[c] || p.carries[c]) && !addToSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
+                    ++numerics.saturated;
+                }
             }
             if (p.samples) entry.samples.fetch_add(p.samples, std::memory_order_relaxed);
         };
@@ -216,16 +249,20 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
                     negative = true;
                     value = 0.0;
                 }
-                // Round to nearest: truncation would bias dim light low (sharc_algorithm.md 10.2).
-                double fixed = std::nearbyint(value * radiance_scale_);
-                if (fixed > double(max_fixed_deposit_)) {
+                // Dithered rounding: the expected fixed-point value is exactly value x scale, so
+                // light below one step is kept on average; truncation would drop it for good
+                // (sharc_algorithm.md 10.2). Integers (exact values) are unchanged.
+                double fixed = std::floor(value * radiance_scale_ + roundingDither(commit, chunk, i, c));
+                if (fixed > double(kMaxFixedDeposit)) {
                     clamped = true;
-                    numerics.clamped_energy[c] += (fixed - double(max_fixed_deposit_)) / radiance_scale_;
-                    fixed = double(max_fixed_deposit_);
+                    numerics.clamped_energy[c] += (fixed - double(kMaxFixedDeposit)) / radiance_scale_;
+                    fixed = double(kMaxFixedDeposit);
                 }
-                // At most 2^56 per deposit: the sum passes 2^63 long before it could wrap 2^64,
-                // and resolve clamps (and counts) sums above 2^63.
-                if (fixed > 0.0) sum.sums[c] += uint64_t(fixed);
+                if (fixed > 0.0) {
+                    const uint64_t before = sum.sums[c];
+                    sum.sums[c] += uint64_t(fixed);
+                    sum.carries[c] += sum.sums[c] < before;  // at most 2^62 per add: wraps once at most
+                }
             }
             numerics.negative += negative;
             numerics.clamped += clamped;
@@ -237,14 +274,23 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
         numerics_.negative_deposits += n.negative;
         numerics_.clamped_deposits += n.clamped;
         numerics_.clamped_energy += n.clamped_energy;
+        numerics_.saturated_sums += n.saturated;
         touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
     }
 }
 
+glm::dvec3 SharcCache::feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const {
+    const uint32_t window = settings_.feedback_window;
+    if (window == 0) return mean;
+    // An exponential window of `window` sampled iterations (a plain average before that): the
+    // newest estimate weighs at least 1/window.
+    const double newest_weight = 1.0 / double(std::min(r.frames, window));
+    return glm::dvec3(r.feedback) + (newest - glm::dvec3(r.feedback)) * newest_weight;
+}
+
 void SharcCache::resolve(uint32_t iteration) {
-    constexpr uint64_t kSumCeiling = uint64_t(1) << 63;
     const double inverse_scale = 1.0 / radiance_scale_;
-    std::vector<uint8_t> orphan(touched_.size(), 0), saturated(touched_.size(), 0);
+    std::vector<uint8_t> orphan(touched_.size(), 0);
     tbb::parallel_for(size_t(0), touched_.size(), [&](size_t i) {
         const uint32_t slot = touched_[i];
         AccumulationEntry& acc = accumulation_[slot];
@@ -257,12 +303,11 @@ void SharcCache::resolve(uint32_t iteration) {
         } else {
             double sums[3];
             for (int c = 0; c < 3; ++c) {
-                uint64_t sum = acc.sums[c].load(std::memory_order_relaxed);
-                if (sum > kSumCeiling) {
-                    sum = kSumCeiling;
-                    saturated[i] = 1;
-                }
-                sums[c] = double(sum);
+                // A saturated sum's low word may have wrapped once more: read it as the ceiling.
+                const uint8_t carries = acc.carries[c].load(std::memory_order_relaxed);
+                sums[c] = carries == kMaxCarries ? 0x1p72
+                                                 : double(acc.sums[c].load(std::memory_order_relaxed)) +
+                                                       std::ldexp(double(carries), 64);
             }
             const double n = double(samples);
             const glm::dvec3 mean_new = glm::dvec3(sums[0], sums[1], sums[2]) * (inverse_scale / n);
@@ -271,18 +316,17 @@ void SharcCache::resolve(uint32_t iteration) {
             const double total = history + n;
             const glm::dvec3 mean = (glm::dvec3(r.mean) * history + mean_new * n) / total;
             r.mean = glm::vec3(mean);
+            r.feedback = glm::vec3(feedbackMean(r, mean_new, mean));
             r.weight = total;
             r.last_iteration = iteration;
             r.total_samples = samples > ~r.total_samples ? ~0u : r.total_samples + samples;
         }
         for (auto& sum : acc.sums) sum.store(0, std::memory_order_relaxed);
+        for (auto& carry : acc.carries) carry.store(0, std::memory_order_relaxed);
         acc.samples.store(0, std::memory_order_relaxed);
         acc.touched.store(0, std::memory_order_relaxed);
     });
-    for (size_t i = 0; i < touched_.size(); ++i) {
-        numerics_.orphan_sums += orphan[i];
-        numerics_.saturated_sums += saturated[i];
-    }
+    for (size_t i = 0; i < touched_.size(); ++i) numerics_.orphan_sums += orphan[i];
     touched_.clear();
 }
 

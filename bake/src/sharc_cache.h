@@ -4,8 +4,10 @@
 /// accumulation entry and a resolved entry.
 ///
 /// Offline differences from the real-time SDK (see DESIGN.md section 3), each for a reason:
-/// - Sums are 64-bit fixed point, added in a fixed order, so a bake is bit-identical for any
-///   thread count and cannot wrap (the SDK's 32-bit sums can, sharc_algorithm.md 10.1).
+/// - Sums are 72-bit fixed point (64-bit atomics plus a carry count), added in a fixed order, so
+///   a bake is bit-identical for any thread count and cannot wrap (the SDK's 32-bit sums can,
+///   sharc_algorithm.md 10.1). Rounding to fixed point is dithered, so radiance far below one
+///   fixed-point step is kept on average instead of truncated to 0 (10.2).
 /// - Resolved means are float32 and weights double: no fp16 dead zone or saturation (10.5).
 /// - Voxels are never evicted: a static bake keeps everything it has seen.
 /// - The history schedule is a choice (HistorySchedule); the SDK's fixed window is one option.
@@ -58,19 +60,32 @@ struct SharcSettings {
     bool cache_resampling = true;
     /// Roughness is raised to at least this in the update pass, so highlights are not cached.
     float update_roughness_clamp = 0.4f;
+    /// Window, in sampled iterations, of the short mean that cache resampling reads
+    /// (ResolvedEntry::feedback). Every iteration's paths read the previous state, so light
+    /// gains about one bounce per feedback step; the history schedule's long memory (ramp:8
+    /// weighs the last ~F/9 of F iterations) would make that step grow with F and stiff
+    /// transport (furnace rho = 0.99) would never converge. 0 = read the output mean (the SDK).
+    uint32_t feedback_window = 1;
 };
 
 /// Per-slot accumulation of one iteration: fixed-point radiance sums and the sample count.
 /// Integer atomic adds commute, so the sums do not depend on which thread adds first.
+/// Each sum is 72 bits wide: a 64-bit word plus a count of its wraps (which also commutes: the
+/// number of wraps is floor(total / 2^64) whatever the order), saturating at 255.
 struct AccumulationEntry {
     std::array<std::atomic<uint64_t>, 3> sums{};
+    std::array<std::atomic<uint8_t>, 3> carries{};
     std::atomic<uint32_t> samples{0};
     std::atomic<uint8_t> touched{0};  ///< already listed for this iteration's resolve
 };
 
 /// Per-slot resolved state: what queries and cache resampling read.
 struct ResolvedEntry {
-    glm::vec3 mean{0.0f};     ///< mean outgoing radiance (emission included)
+    glm::vec3 mean{0.0f};     ///< mean outgoing radiance (emission included): what the file holds
+    /// The same radiance over a short window (SharcSettings::feedback_window): what cache
+    /// resampling reads. Noisier than `mean` but only a few iterations behind it, so bounces
+    /// accumulate at a fixed rate per iteration; its noise averages out in `mean`.
+    glm::vec3 feedback{0.0f};
     uint32_t frames = 0;      ///< iterations in which the voxel received samples
     double weight = 0.0;      ///< effective sample count of the history (0 = no data yet)
     uint32_t last_iteration = 0;  ///< iteration of the newest samples
@@ -95,7 +110,7 @@ struct NumericsCounters {
     uint64_t negative_deposits = 0;        ///< negative channel values clamped to 0
     uint64_t clamped_deposits = 0;         ///< single deposits above the fixed-point ceiling
     glm::dvec3 clamped_energy{0.0};        ///< energy removed by that ceiling
-    uint64_t saturated_sums = 0;           ///< 64-bit sums that would have overflowed
+    uint64_t saturated_sums = 0;           ///< times a voxel sum reached its 72-bit ceiling
     uint64_t orphan_sums = 0;              ///< radiance without a sample (dropped at resolve)
 };
 
@@ -141,19 +156,22 @@ public:
     void restoreNumerics(const NumericsCounters& numerics) { numerics_ = numerics; }
 
     /// The power-of-two fixed-point scale that maps `max_radiance` (the brightest emission or
-    /// sky in the scene) to 2^30.
+    /// sky in the scene) to 2^40.
     static double chooseRadianceScale(double max_radiance);
 
 private:
+    /// The voxel's new short-window feedback value (r.frames already counts this iteration).
+    glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
+
     SharcSettings settings_;
     HashGridTable table_;
     double radiance_scale_;
-    uint64_t max_fixed_deposit_;
     std::unique_ptr<AccumulationEntry[]> accumulation_;
     std::vector<ResolvedEntry> resolved_;
     std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<uint32_t>> chunk_missing_;  ///< commit scratch: deposits with a new key
+    uint32_t commits_ = 0;  ///< commitChunks calls so far: varies the rounding dither per iteration
     NumericsCounters numerics_;
 };
 

@@ -111,7 +111,7 @@ void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const
                 if (entry && entry->weight > 0.0) {
                     // The cached mean holds this voxel's full emission, but the previous vertex's
                     // light sampling already counted the emission's light-sampled share.
-                    glm::vec3 value = entry->mean - emitted * (1.0f - emission_weight);
+                    glm::vec3 value = entry->feedback - emitted * (1.0f - emission_weight);
                     if (value.x < 0.0f || value.y < 0.0f || value.z < 0.0f) {
                         ++counters.clamped_propagation;
                         value = glm::max(value, glm::vec3(0.0f));

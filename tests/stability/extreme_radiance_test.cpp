@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: Apache-2.0
+// Extreme radiance: emitters from 1e-6 to 1e7, and a tiny, very bright emitter beside a dim,
+// large one. No integer wrap, no fp saturation, energy conserved, every clamp counted.
+#include "stability_support.h"
+
+#include <gtest/gtest.h>
+
+namespace sharcbake::stability {
+namespace {
+
+/// Furnace rho = 0.5 (L = 2 Le) at emission levels 13 decades apart: the fixed-point scale
+/// follows the brightest emission, so every level must give the same relative answer.
+class EmissionSweep : public ::testing::TestWithParam<float> {};
+
+TEST_P(EmissionSweep, FurnaceGivesTwiceTheEmissionAtAnyMagnitude) {
+    const float emission = GetParam();
+    Scene scene = loadGltf(scenePath("furnace_rho050"));
+    makeFurnace(scene, 0.5f, emission);
+    BakeConfig config;
+    config.iterations = 128;
+    SmallBake bake(std::move(scene), config);
+    bake.run();
+    const double expected = 2.0 * double(emission);
+    const double measured = sampleWeightedMean(bake.cache());
+    constexpr double kTolerance = 0.01;
+    std::printf("[stability] furnace rho=0.5 Le=%g: expected %g, measured %g (tolerance %g%%), scale %g\n",
+                double(emission), expected, measured, 100.0 * kTolerance, bake.cache().radianceScale());
+    EXPECT_NEAR(measured, expected, kTolerance * expected);
+    const StabilityReport report = bake.report();
+    EXPECT_EQ(report.clamped_deposits, 0u);
+    EXPECT_EQ(report.saturated_sums, 0u);
+    EXPECT_EQ(report.non_finite_dropped, 0u);
+    EXPECT_TRUE(cacheIsFinite(bake.cache()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Extreme, EmissionSweep, ::testing::Values(1e-6f, 1e-3f, 1.0f, 1e3f, 1e7f),
+                         [](const auto& info) {
+                             const int decade = int(std::lround(std::log10(double(info.param))));
+                             return std::string("Le_1e") + (decade < 0 ? "m" : "") + std::to_string(std::abs(decade));
+                         });
+
+/// Appends a single-sided square emitter (facing -Y, side `side`, radiance `emission`, albedo
+/// `rho`) with its corner at `corner`.
+void addCeilingEmitter(Scene& scene, glm::vec3 corner, float side, float emission, float rho) {
+    Material m;
+    m.name = "tiny_bright";
+    m.base_color = glm::vec3(rho);
+    m.metallic = 0.0f;
+    m.specular = 0.0f;
+    m.emissive = glm::vec3(1.0f);
+    m.emissive_strength = emission;
+    const uint32_t material = uint32_t(scene.materials.size());
+    scene.materials.push_back(m);
+    const uint32_t base = uint32_t(scene.positions.size());
+    for (glm::vec2 d : {glm::vec2(0, 0), glm::vec2(0, 1), glm::vec2(1, 0), glm::vec2(1, 1)}) {
+        scene.positions.push_back(corner + glm::vec3(d.x * side, 0.0f, d.y * side));
+        if (!scene.normals.empty()) scene.normals.push_back(glm::vec3(0.0f, -1.0f, 0.0f));
+        if (!scene.texcoords0.empty()) scene.texcoords0.push_back(glm::vec2(0.0f));
+        if (!scene.texcoords1.empty()) scene.texcoords1.push_back(glm::vec2(0.0f));
+    }
+    // Counter-clockwise seen from below: the front faces -Y.
+    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 1));
+    scene.triangles.push_back(glm::uvec3(base + 2, base + 3, base + 1));
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, material);
+}
+
+/// A 0.1 mm emitter of radiance 1e7 just below the ceiling of a closed room whose walls all
+/// emit 1e-3: ten decades apart, about equal power. Albedo 0.5 everywhere, so energy
+/// conservation gives the area mean of the outgoing radiance over all surfaces but the emitter:
+/// sum(Le A) / ((1 - rho) A) - Le_bright A_bright / A. Before dithered rounding and the 2^40
+/// fixed-point scale, every deposit in the room (about 0.1 fixed-point step) rounded to 0.
+TEST(Fireflies, TinyBrightEmitterBesideADimLargeOneConservesEnergy) {
+    constexpr float kRho = 0.5f, kDim = 1e-3f, kBright = 1e7f, kSide = 1e-4f;
+    Scene scene = loadGltf(scenePath("furnace_rho050"));
+    makeFurnace(scene, kRho, kDim);
+    addCeilingEmitter(scene, glm::vec3(-1.0f, 2.99f, 1.0f), kSide, kBright, kRho);
+    const auto [area, emission] = areaAndEmission(scene);
+    const double bright_emission = double(kBright) * double(kSide) * double(kSide);
+    const double expected = emission.x / ((1.0 - double(kRho)) * area) - bright_emission / area;
+    BakeConfig config;
+    config.iterations = 256;
+    config.resolution = 64;
+    SmallBake bake(std::move(scene), config);
+    bake.run();
+    const AreaMean mean = areaMeanRadiance(bake.scene, bake.cache(), 8000);
+    constexpr double kTolerance = 0.05;
+    const StabilityReport report = bake.report();
+    std::printf("[stability] fireflies: expected %g, measured %g (tolerance %g%%); clamped %llu deposits (%.3g%% of "
+                "the energy), saturated %llu\n",
+                expected, mean.radiance.x, 100.0 * kTolerance, (unsigned long long)report.clamped_deposits,
+                100.0 * report.share(report.clamped_energy), (unsigned long long)report.saturated_sums);
+    EXPECT_NEAR(mean.radiance.x, expected, kTolerance * expected);
+    EXPECT_GT(mean.reached, 0.95);
+    EXPECT_EQ(report.clamped_deposits, 0u);
+    EXPECT_EQ(report.saturated_sums, 0u);
+    EXPECT_TRUE(cacheIsFinite(bake.cache()));
+}
+
+// The accumulation itself, one voxel at a time.
+
+SharcSettings oneVoxelSettings() {
+    SharcSettings s;
+    s.capacity = s.grid.capacity = 64;
+    s.history = {HistorySchedule::Kind::Average, 0.0f};
+    return s;
+}
+
+constexpr uint64_t kKey = 0x0000000000010001ull | (uint64_t(3) << kHashGridLevelOffset);
+
+/// Radiance 1e-13 of the brightest is 0.1 fixed-point step: truncation or round-to-nearest
+/// stores 0 for ever; dithered rounding keeps it on average.
+TEST(FixedPoint, RadianceFarBelowOneStepIsKeptOnAverage) {
+    const double scale = SharcCache::chooseRadianceScale(1e7);
+    SharcCache cache(oneVoxelSettings(), scale);
+    const float tiny = float(0.1 / scale);
+    constexpr int kDeposits = 100000;
+    cache.commit(std::vector<Deposit>(kDeposits, Deposit{kKey, glm::vec3(tiny), 1}));
+    cache.resolve(0);
+    const ResolvedEntry* e = cache.findResolved(kKey);
+    ASSERT_NE(e, nullptr);
+    // Binomial(1e5, 0.1) / 1e5 has a relative standard deviation of 0.95%: 5% is > 5 sigma.
+    EXPECT_NEAR(e->mean.x, tiny, 0.05 * tiny);
+}
+
+/// 1024 deposits of 2^52 fixed-point units (2^12 times the brightest emission) sum to 2^62;
+/// 2^12 deposits of 2^62 sum to 2^74, past the 64-bit word: the carry keeps it exact up to 2^72.
+TEST(FixedPoint, SumsPastSixtyFourBitsCarryInsteadOfWrapping) {
+    const double scale = SharcCache::chooseRadianceScale(1.0);
+    SharcCache cache(oneVoxelSettings(), scale);
+    const float bright = float(std::ldexp(1.0, 61) / scale);  // 2^61 units, below the 2^62 ceiling
+    constexpr int kDeposits = 100;                             // 100 x 2^61 = 2^67.6
+    cache.commit(std::vector<Deposit>(kDeposits, Deposit{kKey, glm::vec3(bright), 1}));
+    cache.resolve(0);
+    const ResolvedEntry* e = cache.findResolved(kKey);
+    ASSERT_NE(e, nullptr);
+    EXPECT_FLOAT_EQ(e->mean.x, bright);
+    EXPECT_EQ(cache.numerics().saturated_sums, 0u);
+    EXPECT_EQ(cache.numerics().clamped_deposits, 0u);
+}
+
+/// Past 2^72 the sum saturates (counted) instead of wrapping to a small value.
+TEST(FixedPoint, SumBeyondItsCeilingSaturatesAndIsCounted) {
+    const double scale = SharcCache::chooseRadianceScale(1.0);
+    SharcCache cache(oneVoxelSettings(), scale);
+    const float ceiling_deposit = float(std::ldexp(1.0, 62) / scale);
+    constexpr int kDeposits = 2000;  // 2000 x 2^62 > 2^72
+    cache.commit(std::vector<Deposit>(kDeposits, Deposit{kKey, glm::vec3(ceiling_deposit), 1}));
+    cache.resolve(0);
+    const ResolvedEntry* e = cache.findResolved(kKey);
+    ASSERT_NE(e, nullptr);
+    EXPECT_GT(cache.numerics().saturated_sums, 0u);
+    EXPECT_TRUE(std::isfinite(e->mean.x));
+    // The ceiling (2^72 units over 2000 samples), never a wrapped, small value.
+    EXPECT_NEAR(e->mean.x, std::ldexp(1.0, 72) / scale / kDeposits, 1e-6 * e->mean.x);
+}
+
+}  // namespace
+}  // namespace sharcbake::stability
