@@ -17,7 +17,17 @@ glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, 
     if (maxComponent(e.f_cos) <= 0.0f) return glm::vec3(0.0f);
 
     Ray shadow{offsetRayOrigin(hit.position, hit.geometric_normal), light.wi, light.distance};
-    if (std::isfinite(light.distance)) shadow.t_max = light.distance * (1.0f - 1e-4f);
+    if (std::isfinite(light.distance)) {
+        // Aim from the offset origin at the light point itself. Going `distance` along wi from
+        // the offset origin would end up to one offset beyond the light and hit the emitter,
+        // wherever the offset is not small against the distance: near the light, and
+        // everywhere in a scene modelled at millimetre scale (the offset is absolute there).
+        const glm::vec3 to_light = hit.position + light.wi * light.distance - shadow.origin;
+        const float length = glm::length(to_light);
+        if (!(length > 0.0f)) return glm::vec3(0.0f);
+        shadow.direction = to_light / length;
+        shadow.t_max = length * (1.0f - 1e-4f);
+    }
     counters.shadow_rays.fetch_add(1, std::memory_order_relaxed);
     if (tracer.occluded(shadow)) return glm::vec3(0.0f);
 

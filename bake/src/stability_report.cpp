@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "stability_report.h"
 
+#include "tracer.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -38,8 +40,8 @@ void addWarnings(StabilityReport& r) {
                                     double(r.clamped_deposits), 100.0 * r.share(r.clamped_energy)));
     }
     if (r.saturated_sums > 0) {
-        r.warnings.push_back(format("%.0f voxel sums reached their ceiling in one iteration and were clamped; "
-                                    "those voxels are darker than they should be",
+        r.warnings.push_back(format("%.0f deposits met a voxel sum already at its 72-bit ceiling (2^72 fixed-point "
+                                    "units in one iteration); those voxels are darker than they should be",
                                     double(r.saturated_sums)));
     }
     if (r.non_finite_dropped > 0) {
@@ -58,6 +60,19 @@ void addWarnings(StabilityReport& r) {
                                     "keys (export-vdb, info) wrap; move the scene towards the origin or lower "
                                     "--scene-scale",
                                     double(r.max_grid_coordinate), double(r.finest_level)));
+    }
+    if (r.finest_voxel_size > 0.0 && r.ray_offset > r.finest_voxel_size) {
+        r.warnings.push_back(format("the tracer moves ray origins %.3g off surfaces at the scene's far corner (256 "
+                                    "float32 steps there, its self-intersection guard), more than the finest voxel "
+                                    "(%.3g): light leaks through walls thinner than that; move the scene towards "
+                                    "the origin",
+                                    r.ray_offset, r.finest_voxel_size));
+    }
+    if (r.float_spacing > kPositionBiasWarningFactor * double(kHashGridPositionBias)) {
+        r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g) is %.0f times SHaRC's position "
+                                    "bias (1e-4): surfaces lying on voxel boundaries split between two voxels, which "
+                                    "then average light from both sides; move the scene towards the origin",
+                                    r.float_spacing, r.float_spacing / double(kHashGridPositionBias)));
     }
     if (r.precisionShare() > kPrecisionWarningShare) {
         r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g from the origin) is %.3g, "
@@ -93,6 +108,8 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
     const glm::vec3 extent = glm::max(glm::abs(bounds_min), glm::abs(bounds_max));
     r.far_corner_distance = double(std::max({extent.x, extent.y, extent.z}));
     r.float_spacing = floatSpacing(r.far_corner_distance);
+    const glm::vec3 corner(float(r.far_corner_distance));
+    r.ray_offset = double(glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner));
     const HashGridParameters& grid = cache.settings().grid;
     for (uint32_t level : levels) {
         const double size = double(voxelSize(level, grid));
@@ -128,9 +145,9 @@ void printStabilitySection(std::FILE* out, const StabilityReport& r) {
                  (unsigned long long)r.resample_emission_clamped, (unsigned long long)r.orphan_sums);
     if (r.finest_level > 0) {
         std::fprintf(out, "  coordinates: far corner %.6g, float32 spacing %.3g = %.3g%% of the finest voxel "
-                          "(%.3g, level %u); grid cells up to %lld of +-65536\n",
+                          "(%.3g, level %u), ray offset %.3g; grid cells up to %lld of +-65536\n",
                      r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(), r.finest_voxel_size,
-                     r.finest_level, (long long)r.max_grid_coordinate);
+                     r.finest_level, r.ray_offset, (long long)r.max_grid_coordinate);
     }
     for (const std::string& w : r.warnings) std::fprintf(out, "  warning: %s\n", w.c_str());
     if (r.warnings.empty()) std::fprintf(out, "  no problems found\n");
@@ -151,6 +168,7 @@ std::string stabilityJson(const StabilityReport& r) {
          << ", \"occupied_slots\": " << r.occupied_slots
          << ", \"capacity_power_of_two\": " << (r.capacity_power_of_two ? "true" : "false")
          << ", \"far_corner_distance\": " << r.far_corner_distance << ", \"float_spacing\": " << r.float_spacing
+         << ", \"ray_offset\": " << r.ray_offset
          << ", \"finest_level\": " << r.finest_level << ", \"finest_voxel_size\": " << r.finest_voxel_size
          << ", \"float_spacing_share_of_finest_voxel\": " << r.precisionShare()
          << ", \"max_grid_coordinate\": " << r.max_grid_coordinate

@@ -23,13 +23,18 @@ namespace sharcbake {
 /// points jitter between voxels (sharc_algorithm.md 10.9: about 20 % at 1e5 units, S = 50).
 inline constexpr double kPrecisionWarningShare = 0.05;
 
+/// Float32 spacing above this multiple of SHaRC's 1e-4 position bias (beyond ~16k units from
+/// the origin) no longer keeps surfaces that lie on voxel boundaries on one side of them
+/// (sharc_algorithm.md 10.9); the bias is part of the bit-exact key and cannot follow the scene.
+inline constexpr double kPositionBiasWarningFactor = 16.0;
+
 struct StabilityReport {
     // Energy (radiance x weight summed over deposits, all channels).
     uint64_t deposits = 0;
     double deposited_energy = 0.0;     ///< every finite deposit, before any change
     uint64_t clamped_deposits = 0;     ///< single deposits above the fixed-point ceiling
     double clamped_energy = 0.0;       ///< removed by that ceiling
-    uint64_t saturated_sums = 0;       ///< per-iteration voxel sums that reached their ceiling
+    uint64_t saturated_sums = 0;       ///< deposits into a voxel sum already at its ceiling
     uint64_t failed_inserts = 0;       ///< deposits dropped because their bucket was full
     double failed_insert_energy = 0.0;
     // Values replaced or dropped.
@@ -47,6 +52,7 @@ struct StabilityReport {
     // Coordinates, for the levels present in the cache.
     double far_corner_distance = 0.0;  ///< largest |coordinate| of the scene bounds
     double float_spacing = 0.0;        ///< float32 spacing (ulp) at that coordinate
+    double ray_offset = 0.0;           ///< how far the tracer moves ray origins off a surface there
     uint32_t finest_level = 0;         ///< 0 when the cache is empty
     double finest_voxel_size = 0.0;
     int64_t max_grid_coordinate = 0;   ///< largest |cell index| the scene reaches, at any level present
