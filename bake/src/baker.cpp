@@ -107,7 +107,7 @@ void Baker::runIteration() {
 
     // Commit: new keys inserted in chunk order, so the same slots and sums on every run.
     start = std::chrono::steady_clock::now();
-    cache_.commitChunks(chunk_deposits_);
+    cache_.commitChunks(chunk_deposits_, work_iteration);
     seconds_.commit += secondsSince(start);
 
     start = std::chrono::steady_clock::now();

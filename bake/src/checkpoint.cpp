@@ -41,6 +41,7 @@ struct NamedEnergy {
 constexpr NamedEnergy kNumericsEnergies[] = {
     {"failed_insert_energy", &NumericsCounters::failed_insert_energy},
     {"clamped_energy", &NumericsCounters::clamped_energy},
+    {"deposited_energy", &NumericsCounters::deposited_energy},
 };
 constexpr const char* kChannels[3] = {".r", ".g", ".b"};
 
@@ -90,6 +91,9 @@ CheckpointData captureCheckpoint(const Baker& baker, const BakeSettingsText& set
         s.mean[0] = r.mean.x;
         s.mean[1] = r.mean.y;
         s.mean[2] = r.mean.z;
+        s.feedback[0] = r.feedback.x;
+        s.feedback[1] = r.feedback.y;
+        s.feedback[2] = r.feedback.z;
         s.frames = r.frames;
         s.weight = r.weight;
         s.last_iteration = r.last_iteration;
@@ -139,6 +143,7 @@ void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& setti
     for (const CheckpointSlot& s : data.slots) {
         ResolvedEntry r;
         r.mean = glm::vec3(s.mean[0], s.mean[1], s.mean[2]);
+        r.feedback = glm::vec3(s.feedback[0], s.feedback[1], s.feedback[2]);
         r.frames = s.frames;
         r.weight = s.weight;
         r.last_iteration = s.last_iteration;

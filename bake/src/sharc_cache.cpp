@@ -70,10 +70,10 @@ namespace {
 constexpr uint64_t kMaxFixedDeposit = uint64_t(1) << 62;
 constexpr uint8_t kMaxCarries = 255;
 
-/// A deterministic dither in [0, 1) for one channel of one deposit: keyed by the commit, the
+/// A deterministic dither in [0, 1) for one channel of one deposit: keyed by the iteration, the
 /// chunk and the deposit's place in it, all independent of the thread count.
-double roundingDither(uint32_t commit, size_t chunk, size_t index, int channel) {
-    const uint32_t h = hashCombine(hashCombine(hashCombine(hashUint32(commit), uint32_t(chunk)), uint32_t(index)),
+double roundingDither(uint32_t iteration, size_t chunk, size_t index, int channel) {
+    const uint32_t h = hashCombine(hashCombine(hashCombine(hashUint32(iteration), uint32_t(chunk)), uint32_t(index)),
                                    uint32_t(channel));
     return double(h) * 0x1p-32;
 }
@@ -119,11 +119,11 @@ const ResolvedEntry* SharcCache::findResolved(uint64_t key) const {
     return slot ? &resolved_[*slot] : nullptr;
 }
 
-void SharcCache::commit(const std::vector<Deposit>& deposits) {
-    commitChunks(std::vector<std::vector<Deposit>>{deposits});
+void SharcCache::commit(const std::vector<Deposit>& deposits, uint32_t iteration) {
+    commitChunks(std::vector<std::vector<Deposit>>{deposits}, iteration);
 }
 
-void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
+void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration) {
     constexpr uint32_t kMissing = kHashGridInvalidIndex;      // key not in the table yet
     constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;  // non-finite or failed insert
     chunk_slots_.resize(chunks.size());
@@ -208,7 +208,6 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
         uint32_t carries[3] = {0, 0, 0};  ///< wraps of sums[c]: the pending sum is 96 bits wide
     };
     std::vector<ChunkNumerics> chunk_numerics(chunks.size());
-    const uint32_t commit = commits_++;
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         const std::vector<Deposit>& deposits = chunks[chunk];
         const std::vector<uint32_t>& slots = chunk_slots_[chunk];
@@ -252,7 +251,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks) {
                 // Dithered rounding: the expected fixed-point value is exactly value x scale, so
                 // light below one step is kept on average; truncation would drop it for good
                 // (sharc_algorithm.md 10.2). Integers (exact values) are unchanged.
-                double fixed = std::floor(value * radiance_scale_ + roundingDither(commit, chunk, i, c));
+                double fixed = std::floor(value * radiance_scale_ + roundingDither(iteration, chunk, i, c));
                 if (fixed > double(kMaxFixedDeposit)) {
                     clamped = true;
                     numerics.clamped_energy[c] += (fixed - double(kMaxFixedDeposit)) / radiance_scale_;

@@ -130,9 +130,11 @@ public:
     /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,
     /// inserts the new ones serially in chunk order (so slot assignment is the same on every
     /// run), then adds the fixed-point radiance in parallel with integer atomics.
-    void commitChunks(const std::vector<std::vector<Deposit>>& chunks);
+    /// `iteration` keys the rounding dither (with the chunk and the deposit's place in it), so
+    /// the sums do not depend on the thread count, a resumed bake or a shard.
+    void commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration);
     /// One chunk (tests).
-    void commit(const std::vector<Deposit>& deposits);
+    void commit(const std::vector<Deposit>& deposits, uint32_t iteration = 0);
 
     /// Folds this iteration's accumulation into the resolved entries with the history schedule
     /// and clears it. Each slot reads and writes only itself, so the result does not depend on
@@ -171,7 +173,6 @@ private:
     std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<uint32_t>> chunk_missing_;  ///< commit scratch: deposits with a new key
-    uint32_t commits_ = 0;  ///< commitChunks calls so far: varies the rounding dither per iteration
     NumericsCounters numerics_;
 };
 

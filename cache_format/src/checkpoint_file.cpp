@@ -22,7 +22,7 @@ namespace {
 /// «SHARCCKPT» with the bytes around it of the cache identifier (SPEC §C.1).
 constexpr uint8_t kCheckpointIdentifier[16] = {0xAB, 'S', 'H', 'A', 'R', 'C', 'C', 'K',
                                                'P',  'T', 0xBB, '\r', '\n', 0x1A, '\n', 0x00};
-constexpr uint16_t kCheckpointVersionMajor = 1;
+constexpr uint16_t kCheckpointVersionMajor = 2;
 constexpr uint16_t kCheckpointVersionMinor = 0;
 
 constexpr uint32_t kSectionState = cacheFourCC('S', 'T', 'A', 'T');
@@ -32,7 +32,7 @@ constexpr uint32_t kSectionCounters = cacheFourCC('C', 'N', 'T', 'R');
 constexpr uint32_t kSectionOrder[4] = {kSectionState, kSectionSlots, kSectionSettings, kSectionCounters};
 
 constexpr uint32_t kStateSize = 32;
-constexpr uint32_t kSlotRecordSize = 48;
+constexpr uint32_t kSlotRecordSize = 64;
 constexpr uint32_t kCounterUnsigned = 1;
 constexpr uint32_t kCounterReal = 2;
 
@@ -160,6 +160,12 @@ bool validateContent(const CheckpointData& data, std::string* problem) {
                 return false;
             }
         }
+        for (float c : s.feedback) {
+            if (!std::isfinite(c) || c < 0.0f) {
+                *problem = name + ": feedback radiance must be finite and >= 0";
+                return false;
+            }
+        }
         if (!std::isfinite(s.weight) || s.weight < 0.0) {
             *problem = name + ": weight must be finite and >= 0";
             return false;
@@ -231,7 +237,10 @@ CacheFileStatus encodeCheckpoint(const CheckpointData& data, std::vector<uint8_t
                     w.put(s.last_iteration);
                     w.put(s.weight);
                     w.put(s.total_samples);
-                    w.put(uint32_t(0));
+                    w.put(s.feedback[0]);
+                    w.put(s.feedback[1]);
+                    w.put(s.feedback[2]);
+                    w.put(uint64_t(0));
                 }
                 break;
             case kSectionSettings:
@@ -385,7 +394,8 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
         s.last_iteration = slots.get<uint32_t>();
         s.weight = slots.get<double>();
         s.total_samples = slots.get<uint32_t>();
-        if (slots.get<uint32_t>() != 0) return fail(S::kCorrupt, message, "C9: slot record reserved field is not zero");
+        for (float& c : s.feedback) c = slots.get<float>();
+        if (slots.get<uint64_t>() != 0) return fail(S::kCorrupt, message, "C9: slot record reserved field is not zero");
     }
     // C10: SETT; C11: CNTR. Both must fill their section exactly.
     ByteReader settings{found[2], found_length[2]};

@@ -29,6 +29,9 @@ CheckpointData smallCheckpoint() {
     a.weight = 123.5;
     a.last_iteration = 6;
     a.total_samples = 140;
+    a.feedback[0] = 1.25f;
+    a.feedback[1] = 0.5f;
+    a.feedback[2] = 3.0f;
     CheckpointSlot b = a;
     b.slot = 40;
     b.key = 0x0000223456789ABDull;
@@ -54,6 +57,7 @@ void expectEqual(const CheckpointData& a, const CheckpointData& b) {
         EXPECT_EQ(a.slots[i].weight, b.slots[i].weight);
         EXPECT_EQ(a.slots[i].last_iteration, b.slots[i].last_iteration);
         EXPECT_EQ(a.slots[i].total_samples, b.slots[i].total_samples);
+        EXPECT_EQ(0, std::memcmp(a.slots[i].feedback, b.slots[i].feedback, sizeof a.slots[i].feedback));
     }
     EXPECT_EQ(a.settings, b.settings);
     EXPECT_EQ(a.counts, b.counts);
@@ -95,6 +99,9 @@ TEST(CheckpointFile, WriterRefusesStateAReaderWouldReject) {
     EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
     data = smallCheckpoint();
     data.slots[0].mean[1] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
+    data = smallCheckpoint();
+    data.slots[0].feedback[2] = std::numeric_limits<float>::infinity();
     EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
     data = smallCheckpoint();
     data.settings.push_back(data.settings[0]);  // duplicate key

@@ -57,6 +57,8 @@ struct ScaleCase {
     bool precision_lost;  ///< the bake must warn (and may differ)
 };
 
+void PrintTo(const ScaleCase& c, std::ostream* out) { *out << c.name; }
+
 class ExtremeScale : public ::testing::TestWithParam<ScaleCase> {};
 
 TEST_P(ExtremeScale, SameAnswerAsTheUnitSceneOrAWarning) {

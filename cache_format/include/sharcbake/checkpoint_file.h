@@ -27,6 +27,7 @@ struct CheckpointSlot {
     double weight = 0.0;                  ///< effective sample count of the history, finite, >= 0
     uint32_t last_iteration = 0;
     uint32_t total_samples = 0;
+    float feedback[3] = {0.0f, 0.0f, 0.0f};  ///< short-window mean cache resampling reads, finite, >= 0
 };
 
 /// Everything a bake needs to continue exactly where it stopped. The per-iteration
