@@ -60,26 +60,24 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
     const uint32_t stride = std::max(1u, settings_.update_stride);
     blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
     blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
-    chunk_deposits_.resize((pathsPerIteration() + kPathsPerChunk - 1) / kPathsPerChunk);
 }
 
-void Baker::runIteration() {
-    const uint32_t iteration = iteration_;
-    const uint32_t work_iteration = workIteration(iteration);
+void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<Deposit>>& chunk_deposits,
+                             UpdateCounters& counters) const {
     const CameraPose pose = camera_path_.poseAt(work_iteration);
     const CameraRays camera(cameraFromPose(pose), settings_.width, settings_.height);
     HashGridParameters grid = settings_.sharc.grid;
     grid.camera_position = Float3{pose.position.x, pose.position.y, pose.position.z};
     const uint32_t stride = std::max(1u, settings_.update_stride);
     const uint32_t paths = pathsPerIteration();
+    chunk_deposits.resize((paths + kPathsPerChunk - 1) / kPathsPerChunk);
 
-    // Update: every chunk of paths traced by one task into its own deposit list.
-    auto start = std::chrono::steady_clock::now();
+    // Every chunk of paths traced by one task into its own deposit list.
     tbb::enumerable_thread_specific<UpdateCounters> thread_counters;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk_deposits_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-        UpdateCounters& counters = thread_counters.local();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk_deposits.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        UpdateCounters& local = thread_counters.local();
         for (size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
-            std::vector<Deposit>& deposits = chunk_deposits_[chunk];
+            std::vector<Deposit>& deposits = chunk_deposits[chunk];
             deposits.clear();
             const uint32_t first = uint32_t(chunk) * kPathsPerChunk;
             const uint32_t last = std::min(paths, first + kPathsPerChunk);
@@ -90,19 +88,25 @@ void Baker::runIteration() {
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
                 const Ray ray = camera.generate(x, y, glm::fract(u));
-                update_.trace(ray, sampler, grid, deposits, counters);
+                update_.trace(ray, sampler, grid, deposits, local);
             }
         }
     });
     for (const UpdateCounters& c : thread_counters) {
-        counters_.paths += c.paths;
-        counters_.segments += c.segments;
-        counters_.shadow_rays += c.shadow_rays;
-        counters_.resampled += c.resampled;
-        counters_.sky_misses += c.sky_misses;
-        counters_.non_finite += c.non_finite;
-        counters_.clamped_propagation += c.clamped_propagation;
+        counters.paths += c.paths;
+        counters.segments += c.segments;
+        counters.shadow_rays += c.shadow_rays;
+        counters.resampled += c.resampled;
+        counters.sky_misses += c.sky_misses;
+        counters.non_finite += c.non_finite;
+        counters.clamped_propagation += c.clamped_propagation;
     }
+}
+
+void Baker::runIteration() {
+    const uint32_t iteration = iteration_;
+    auto start = std::chrono::steady_clock::now();
+    traceUpdatePaths(workIteration(iteration), chunk_deposits_, counters_);
     seconds_.update += secondsSince(start);
 
     // Commit: new keys inserted in chunk order, so the same slots and sums on every run.
@@ -112,6 +116,13 @@ void Baker::runIteration() {
 
     start = std::chrono::steady_clock::now();
     cache_.resolve(iteration);
+    if (settings_.sharc.grow_when_loaded) {
+        uint64_t capacity = cache_.capacity();
+        while (double(cache_.occupiedSlots()) > kGrowAtLoad * double(capacity) && capacity < kMaxCacheCapacity) {
+            capacity *= 2;
+        }
+        if (capacity > cache_.capacity()) cache_.grow(uint32_t(std::min<uint64_t>(capacity, kMaxCacheCapacity)));
+    }
     seconds_.resolve += secondsSince(start);
     ++iteration_;
 }

@@ -44,6 +44,12 @@ public:
     /// Runs one update + resolve iteration.
     void runIteration();
 
+    /// Traces the update paths of unsharded iteration `work_iteration` against the current cache
+    /// into one deposit list per fixed chunk of paths, without committing them (runIteration's
+    /// first stage; also the capacity pre-pass).
+    void traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<Deposit>>& chunk_deposits,
+                          UpdateCounters& counters) const;
+
     /// Continues a bake from a checkpoint: `iterations_done` iterations already ran and their
     /// counters are `counters` (the cache state is restored through mutableCache()).
     void resumeAt(uint32_t iterations_done, const UpdateCounters& counters) {

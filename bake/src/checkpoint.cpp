@@ -133,6 +133,10 @@ void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& setti
                                                   "change):" + differences);
     }
     SharcCache& cache = baker.mutableCache();
+    // A growing table (--capacity auto) may have grown before the checkpoint.
+    if (cache.settings().grow_when_loaded && data.capacity > cache.capacity() && baker.iterationsDone() == 0) {
+        cache.grow(data.capacity);
+    }
     if (baker.iterationsDone() != 0 || data.capacity != cache.capacity() ||
         data.bucket_size != cache.table().bucketSize() || data.radiance_scale != cache.radianceScale()) {
         throw CommandError(kExitInvalidInput, "--resume: " + path + ": the table (capacity " +

@@ -179,9 +179,11 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
             const Deposit& d = deposits[i];
             // A key new to this iteration comes back here once per deposit: the first inserts
             // it, the later ones find it.
+            const bool fresh = !table_.find(d.key);
             const std::optional<uint32_t> inserted = table_.insert(d.key);
             if (inserted) {
                 slots[i] = *inserted;
+                occupied_ += fresh;
             } else {
                 slots[i] = kDropped;
                 ++numerics_.failed_inserts;
@@ -337,7 +339,33 @@ bool SharcCache::restoreSlot(uint32_t slot, uint64_t key, const ResolvedEntry& r
         return false;
     }
     resolved_[slot] = resolved;
+    ++occupied_;
     return true;
+}
+
+void SharcCache::grow(uint32_t capacity) {
+    if (capacity <= table_.capacity()) return;
+    HashGridTable table;
+    const HashGridStatus status = HashGridTable::create(capacity, &table);
+    if (status != HashGridStatus::kOk) throw std::invalid_argument(std::string("hash grid: ") + toString(status));
+    std::vector<ResolvedEntry> resolved(capacity);
+    uint64_t occupied = 0;
+    for (uint32_t slot = 0; slot < table_.capacity(); ++slot) {
+        const uint64_t key = table_.keyAt(slot);
+        if (key == kHashGridInvalidKey) continue;
+        const std::optional<uint32_t> moved = table.insert(key);
+        if (!moved) {  // a full bucket in a table at most an eighth full: counted, never silent
+            ++numerics_.failed_inserts;
+            continue;
+        }
+        resolved[*moved] = resolved_[slot];
+        ++occupied;
+    }
+    table_ = std::move(table);
+    resolved_ = std::move(resolved);
+    accumulation_ = std::make_unique<AccumulationEntry[]>(capacity);
+    occupied_ = occupied;
+    settings_.capacity = settings_.grid.capacity = capacity;
 }
 
 CacheData toCacheData(const SharcCache& cache) {

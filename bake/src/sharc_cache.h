@@ -66,7 +66,16 @@ struct SharcSettings {
     /// weighs the last ~F/9 of F iterations) would make that step grow with F and stiff
     /// transport (furnace rho = 0.99) would never converge. 0 = read the output mean (the SDK).
     uint32_t feedback_window = 1;
+    /// Double the table between iterations whenever more than kGrowAtLoad of it is occupied
+    /// (--capacity auto), so no insert fails whatever the initial estimate.
+    bool grow_when_loaded = false;
 };
+
+/// The load above which a growing table doubles. 16-slot buckets start failing inserts near 40%
+/// load (measured); one iteration rarely adds more than a few percent of the table.
+inline constexpr double kGrowAtLoad = 0.25;
+/// The largest table (--capacity's upper bound, 2^28 slots, about 19 GiB of bake state).
+inline constexpr uint32_t kMaxCacheCapacity = 1u << 28;
 
 /// Per-slot accumulation of one iteration: fixed-point radiance sums and the sample count.
 /// Integer atomic adds commute, so the sums do not depend on which thread adds first.
@@ -144,6 +153,13 @@ public:
     const NumericsCounters& numerics() const { return numerics_; }
     /// Slots holding a key (O(capacity)).
     uint64_t liveEntries() const { return table_.occupiedSlots(); }
+    /// Slots holding a key, counted as keys are inserted (O(1)).
+    uint64_t occupiedSlots() const { return occupied_; }
+
+    /// Moves every key and its resolved state into a new table of `capacity` slots (larger than
+    /// the current one), re-inserted in increasing old-slot order so the result is the same on
+    /// every run. Between iterations only: the accumulation must be empty.
+    void grow(uint32_t capacity);
 
     const HashGridTable& table() const { return table_; }
     const std::vector<ResolvedEntry>& resolved() const { return resolved_; }
@@ -174,6 +190,7 @@ private:
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<uint32_t>> chunk_missing_;  ///< commit scratch: deposits with a new key
     NumericsCounters numerics_;
+    uint64_t occupied_ = 0;
 };
 
 /// The cache as file data: live voxels with samples, in canonical (key) order, and the grid

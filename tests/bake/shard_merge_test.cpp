@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
-// Sharded bakes (BakeSettings::shard_index/shard_count) merged with mergeCaches estimate what one
-// bake of the same total work does: on the furnace against the analytic radiance, on the
-// Cornell box against the single bake. And a bake resumed from a checkpoint is the
-// uninterrupted bake, byte for byte.
+// Bake at scale. Sharded bakes (BakeSettings::shard_index/shard_count) merged with mergeCaches
+// estimate what one bake of the same total work does: on the furnace against the analytic
+// radiance, on the Cornell box against the single bake. A bake resumed from a checkpoint is the
+// uninterrupted bake, byte for byte. A growing table (--capacity auto) bakes the same voxels as
+// a large fixed one, and resumes across its growth.
 #include "baker.h"
+#include "capacity.h"
 #include "camera_path.h"
 #include "checkpoint.h"
 #include "command_support.h"
@@ -45,12 +47,14 @@ struct BakeScene {
         for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
         path = std::make_unique<CameraPath>(poses, true, 1, 0.0f, 3);
     }
-    std::unique_ptr<Baker> baker(uint32_t shard_index, uint32_t shard_count) const {
+    std::unique_ptr<Baker> baker(uint32_t shard_index, uint32_t shard_count, uint32_t capacity = 1u << 16,
+                                 bool grow = false) const {
         BakeSettings settings;
         settings.width = settings.height = 96;
         settings.shard_index = shard_index;
         settings.shard_count = shard_count;
-        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 16;
+        settings.sharc.capacity = settings.sharc.grid.capacity = capacity;
+        settings.sharc.grow_when_loaded = grow;
         settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
         return std::make_unique<Baker>(*tracer, *lights, *path, settings,
                                        SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
@@ -176,6 +180,70 @@ TEST(Checkpoint, ResumedBakeIsTheUninterruptedBake) {
     EXPECT_THROW(resumeFromCheckpoint(file, {{"scene_hash", "test"}, {"seed", "1"}}, *other), CommandError);
     EXPECT_THROW(resumeFromCheckpoint(file, settings, *uninterrupted), CommandError);
     std::filesystem::remove(file);
+}
+
+std::vector<uint8_t> voxelBytes(const SharcCache& cache) {
+    CacheData data = toCacheData(cache);
+    data.bake_capacity = 1;  // informative only; everything else must be identical
+    std::vector<uint8_t> bytes;
+    EXPECT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
+    return bytes;
+}
+
+TEST(GrowingTable, BakesTheSameVoxelsAsALargeFixedTable) {
+    const BakeScene cornell("cornell_box");
+    std::unique_ptr<Baker> growing = cornell.baker(0, 1, 64, true);
+    std::unique_ptr<Baker> fixed = cornell.baker(0, 1, 1u << 16, false);
+    for (int i = 0; i < 12; ++i) {
+        growing->runIteration();
+        fixed->runIteration();
+    }
+    // 64 slots for ~80 voxels: the table doubled several times, and stays at most a quarter full.
+    EXPECT_GE(growing->cache().capacity(), 256u);
+    EXPECT_LE(double(growing->cache().occupiedSlots()), kGrowAtLoad * growing->cache().capacity());
+    EXPECT_EQ(growing->cache().occupiedSlots(), growing->cache().liveEntries());
+    EXPECT_EQ(growing->cache().numerics().failed_inserts, 0u);
+    EXPECT_EQ(voxelBytes(growing->cache()), voxelBytes(fixed->cache()));
+}
+
+TEST(GrowingTable, ResumesAcrossGrowth) {
+    const BakeScene cornell("cornell_box");
+    const BakeSettingsText settings = {{"capacity", "64"}};
+    const std::string file = (std::filesystem::temp_directory_path() / "sharcbake_growth_test.ckpt").string();
+    std::unique_ptr<Baker> first = cornell.baker(0, 1, 64, true);
+    for (int i = 0; i < 4; ++i) first->runIteration();
+    ASSERT_GT(first->cache().capacity(), 64u);
+    saveCheckpoint(file, *first, settings);
+    std::unique_ptr<Baker> resumed = cornell.baker(0, 1, 64, true);
+    resumeFromCheckpoint(file, settings, *resumed);
+    std::unique_ptr<Baker> uninterrupted = cornell.baker(0, 1, 64, true);
+    for (int i = 0; i < 10; ++i) uninterrupted->runIteration();
+    for (int i = 0; i < 6; ++i) resumed->runIteration();
+    EXPECT_EQ(resumed->cache().capacity(), uninterrupted->cache().capacity());
+    std::vector<uint8_t> a, b;
+    ASSERT_EQ(encodeCacheFile(toCacheData(resumed->cache()), &a, nullptr), CacheFileStatus::kOk);
+    ASSERT_EQ(encodeCacheFile(toCacheData(uninterrupted->cache()), &b, nullptr), CacheFileStatus::kOk);
+    EXPECT_EQ(a, b);
+    std::filesystem::remove(file);
+}
+
+TEST(AutoCapacity, SizesTheTableFromWhatSampledIterationsReach) {
+    const BakeScene cornell("cornell_box");
+    std::unique_ptr<Baker> probe = cornell.baker(0, 1);
+    const CapacityChoice choice = chooseCapacity(*cornell.tracer, *cornell.lights, *cornell.path, probe->settings(), 64);
+    EXPECT_EQ(choice.sampled_iterations, kCapacitySampleIterations);
+    EXPECT_GT(choice.sampled_voxels, 0u);
+    EXPECT_EQ(choice.capacity & (choice.capacity - 1), 0u) << "a power of two";
+    EXPECT_GE(choice.capacity, kCapacityHeadroom * choice.sampled_voxels);
+    EXPECT_LT(choice.capacity, 2 * kCapacityHeadroom * choice.sampled_voxels + kCapacityMinimum);
+    // Deterministic, and enough for the bake it was chosen for: no growth, no failed insert.
+    const CapacityChoice again = chooseCapacity(*cornell.tracer, *cornell.lights, *cornell.path, probe->settings(), 64);
+    EXPECT_EQ(again.capacity, choice.capacity);
+    EXPECT_EQ(again.sampled_voxels, choice.sampled_voxels);
+    std::unique_ptr<Baker> baker = cornell.baker(0, 1, choice.capacity, true);
+    for (int i = 0; i < 64; ++i) baker->runIteration();
+    EXPECT_EQ(baker->cache().capacity(), choice.capacity);
+    EXPECT_EQ(baker->cache().numerics().failed_inserts, 0u);
 }
 
 }  // namespace
