@@ -2,6 +2,7 @@
 // `sharcbake bake`: the SHaRC bake from a roaming virtual camera into a .sharc cache file.
 #include "baker.h"
 #include "camera_path.h"
+#include "capacity.h"
 #include "checkpoint.h"
 #include "command_support.h"
 #include "commands.h"
@@ -36,7 +37,7 @@ struct BakeOptions {
     float scene_scale = kHashGridDefaultSceneScale;
     float log_base = kHashGridDefaultLogarithmBase;
     float level_bias = kHashGridDefaultLevelBias;
-    uint32_t capacity = 1u << 22;  // the SDK default
+    std::string capacity = "4194304";  // the SDK default, or "auto"
     uint32_t update_stride = 5;
     std::string resolution = "1280x720";
     uint32_t max_bounces = 8;
@@ -84,6 +85,31 @@ void parseSize(const std::string& text, const char* option, int& width, int& hei
         int64_t(width) * height > (int64_t(1) << 26)) {
         throw CommandError(kExitUsage, std::string(option) + ": expected WxH with positive integers, got \"" + text + "\"");
     }
+}
+
+/// Parses a --capacity number (16 .. 2^28).
+uint32_t parseCapacity(const std::string& text) {
+    std::istringstream in(text);
+    long long value = 0;
+    if (!(in >> value) || !(in >> std::ws).eof() || value < 16 || value > (1ll << 28)) {
+        throw CommandError(kExitUsage, "--capacity: expected \"auto\" or a slot count in [16, 268435456], got \"" +
+                                           text + "\"");
+    }
+    return uint32_t(value);
+}
+
+/// What the tracer skips because the scene has no use for it, "; "-separated (cache metadata
+/// "left_out", printed by `info`).
+std::string workLeftOut(const Scene& scene, const LightSampler& lights) {
+    std::string list;
+    auto add = [&](const char* item) { list += (list.empty() ? "" : "; ") + std::string(item); };
+    if (!lights.hasLights()) {
+        add("light sampling and shadow rays (no lights, no emissive surfaces, black sky)");
+    } else if (!lights.hasSky()) {
+        add("sky lookups and sky sampling (black sky)");
+    }
+    if (scene.textures.empty()) add("texture fetches and UV interpolation (no textures)");
+    return list.empty() ? "nothing" : list;
 }
 
 /// Parses --shard "i/N" (0 <= i < N).
@@ -157,11 +183,14 @@ void runBake(const BakeOptions& o) {
     settings.seed = o.seed;
     parseShard(o.shard, settings.shard_index, settings.shard_count);
     settings.path.max_bounces = o.max_bounces;
-    settings.sharc.capacity = o.capacity;
+    uint32_t capacity = 1u << 22;
+    const bool auto_capacity = o.capacity == "auto";
+    if (!auto_capacity) capacity = parseCapacity(o.capacity);
+    settings.sharc.capacity = capacity;
     settings.sharc.grid.scene_scale = o.scene_scale;
     settings.sharc.grid.logarithm_base = o.log_base;
     settings.sharc.grid.level_bias = o.level_bias;
-    settings.sharc.grid.capacity = o.capacity;
+    settings.sharc.grid.capacity = capacity;
     if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
         throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
                                            o.history + "\"");
@@ -182,6 +211,13 @@ void runBake(const BakeOptions& o) {
     }
     std::string camera_description;
     const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
+    CapacityChoice capacity_choice;
+    if (auto_capacity) {
+        capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
+        capacity = capacity_choice.capacity;
+        settings.sharc.capacity = settings.sharc.grid.capacity = capacity;
+        settings.sharc.grow_when_loaded = true;
+    }
     const double max_radiance = estimateMaxRadiance(scene);
     Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
     // Everything that reproduces the bake, and nothing that varies between runs (timings go to
@@ -201,8 +237,10 @@ void runBake(const BakeOptions& o) {
         {"scene_scale", std::to_string(o.scene_scale)},
         {"log_base", std::to_string(o.log_base)},
         {"level_bias", std::to_string(o.level_bias)},
-        {"capacity", std::to_string(o.capacity)},
+        {"capacity", std::to_string(capacity)},
+        {"left_out", workLeftOut(scene, lights)},
     };
+    if (auto_capacity) metadata.emplace_back("capacity_choice", capacity_choice.describe());
     if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
     // What a resume must match: the metadata without the scene's path (the hash names the
     // scene) and the iteration count, plus the options that change the work but are not
@@ -228,8 +266,12 @@ void runBake(const BakeOptions& o) {
             std::printf("Resumed from %s after %u iterations\n", o.resume_path.c_str(), first_iteration);
         }
         std::printf("Camera: %s\n", camera_description.c_str());
+        if (auto_capacity) {
+            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice.describe().c_str(), capacity_choice.seconds);
+        }
+        std::printf("Left out: %s\n", workLeftOut(scene, lights).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
-                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, o.capacity,
+                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, capacity,
                     settings.sharc.history.describe().c_str(), threads);
         std::fflush(stdout);
     }
@@ -271,6 +313,7 @@ void runBake(const BakeOptions& o) {
     CacheData data = toCacheData(cache);
     for (auto& entry : metadata) {
         if (entry.first == "iterations") entry.second = std::to_string(baker.iterationsDone());
+        if (entry.first == "capacity") entry.second = std::to_string(cache.capacity());  // grown?
     }
     metadata.emplace_back("stop_reason", stop_reason);
     data.metadata = std::move(metadata);
@@ -322,6 +365,13 @@ void runBake(const BakeOptions& o) {
              << "}\n";
         if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
     }
+    if (auto_capacity && n.failed_inserts > 0) {
+        // The table doubles between iterations; one iteration filled it faster than that.
+        std::fprintf(stderr,
+                     "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no slot "
+                     "within an iteration; bake with a fixed --capacity %llu\n",
+                     capacity, cache.capacity(), (unsigned long long)n.failed_inserts, 2ull * cache.capacity());
+    }
     if (g_interrupted) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
 }
 
@@ -350,8 +400,10 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--log-base", o->log_base, "SHaRC level logarithm base b (> 1)")->capture_default_str();
     cmd->add_option("--level-bias", o->level_bias, "SHaRC level bias (positive = finer levels near the camera)")
         ->capture_default_str();
-    cmd->add_option("--capacity", o->capacity, "Hash table slots (>= 16; a power of two is SDK-friendly)")
-        ->capture_default_str()->check(CLI::Range(16u, 1u << 28));
+    cmd->add_option("--capacity", o->capacity,
+                    "Hash table slots (>= 16; a power of two is SDK-friendly), or \"auto\": sized from the scene "
+                    "to start by a short pre-pass (4x the voxels that 16 sampled iterations reach, next power of two), doubled between iterations whenever a quarter is occupied")
+        ->capture_default_str();
     cmd->add_option("--update-stride", o->update_stride, "One update path per NxN pixel block")
         ->capture_default_str()->check(CLI::Range(1u, 64u));
     cmd->add_option("--resolution", o->resolution, "Virtual camera image size WxH")->capture_default_str();

@@ -99,6 +99,15 @@ void printText(const std::string& path, const CacheView& v) {
         std::printf("  level %3u  voxel size %-10g  %10u voxels\n", l.level, double(voxelSize(l.level, p)),
                     l.voxel_count);
     }
+    // What the bake left out because the scene had no use for it (bake's "left_out" metadata),
+    // next to what the file leaves out by design (empty slots, absent levels, above).
+    for (size_t i = 0; i < v.metadataCount(); ++i) {
+        if (v.metadataKey(i) == "left_out") {
+            std::printf("Left out by the bake: %.*s\n", int(v.metadataValue(i).size()), v.metadataValue(i).data());
+        } else if (v.metadataKey(i) == "capacity_choice") {
+            std::printf("Table capacity %.*s\n", int(v.metadataValue(i).size()), v.metadataValue(i).data());
+        }
+    }
     std::printf("Metadata (%zu):\n", v.metadataCount());
     for (size_t i = 0; i < v.metadataCount(); ++i) {
         std::printf("  %.*s: %.*s\n", int(v.metadataKey(i).size()), v.metadataKey(i).data(),

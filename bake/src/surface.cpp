@@ -27,11 +27,13 @@ SurfaceHit interpolate(const Scene& scene, uint32_t triangle, float b1, float b2
         const float length = glm::length(n);
         if (length > 1e-8f && std::isfinite(length)) s.shading_normal = n / length;
     }
-    if (!scene.texcoords0.empty()) {
+    // UVs only feed texture fetches: a scene without textures leaves them out.
+    const bool textured = !scene.textures.empty();
+    if (textured && !scene.texcoords0.empty()) {
         s.uv0 = b0 * scene.texcoords0[tri.x] + b1 * scene.texcoords0[tri.y] +
                 b2 * scene.texcoords0[tri.z];
     }
-    if (!scene.texcoords1.empty()) {
+    if (textured && !scene.texcoords1.empty()) {
         s.uv1 = b0 * scene.texcoords1[tri.x] + b1 * scene.texcoords1[tri.y] +
                 b2 * scene.texcoords1[tri.z];
     }
