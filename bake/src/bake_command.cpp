@@ -365,12 +365,12 @@ void runBake(const BakeOptions& o) {
              << "}\n";
         if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
     }
-    if (auto_capacity && n.failed_inserts > 0) {
+    if (auto_capacity && cache.numerics().failed_inserts > 0) {
         // The table doubles between iterations; one iteration filled it faster than that.
         std::fprintf(stderr,
                      "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no slot "
                      "within an iteration; bake with a fixed --capacity %llu\n",
-                     capacity, cache.capacity(), (unsigned long long)n.failed_inserts, 2ull * cache.capacity());
+                     capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts, 2ull * cache.capacity());
     }
     if (g_interrupted) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
 }

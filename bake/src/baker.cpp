@@ -105,8 +105,9 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
 
 void Baker::runIteration() {
     const uint32_t iteration = iteration_;
+    const uint32_t work_iteration = workIteration(iteration);
     auto start = std::chrono::steady_clock::now();
-    traceUpdatePaths(workIteration(iteration), chunk_deposits_, counters_);
+    traceUpdatePaths(work_iteration, chunk_deposits_, counters_);
     seconds_.update += secondsSince(start);
 
     // Commit: new keys inserted in chunk order, so the same slots and sums on every run.

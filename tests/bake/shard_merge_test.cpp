@@ -99,8 +99,10 @@ TEST(ShardMerge, FurnaceShardsMergedMatchTheAnalyticRadianceLikeOneBake) {
     const BakeScene furnace("furnace_rho050");
     const double single = weightedRelativeError(furnace.bake(256), 2.0);
     const double merged = weightedRelativeError(furnace.bakeShardsAndMerge(64, 4), 2.0);
+    std::printf("furnace rho 0.5, mean voxel error: 1 x 256 %.2f%%, 4 shards x 64 merged %.2f%%\n", 100.0 * single,
+                100.0 * merged);
     // Tolerances: both within 1.5% of the analytic value, and the merge no worse than the single
-    // bake by more than 0.3 points (measured: single 0.68%, 4 shards merged 0.69%).
+    // bake by more than 0.3 points (measured: single 0.71%, 4 shards merged 0.71%).
     EXPECT_LT(single, 0.015);
     EXPECT_LT(merged, 0.015);
     EXPECT_LT(merged, single + 0.003);
@@ -144,7 +146,7 @@ TEST(ShardMerge, CornellShardsMergedAgreeWithOneBakeOfTheSameWork) {
                 "1 x 256 vs 1 x 1024:               mean |difference| %.2f%%, brightness %+.2f%%\n",
                 100.0 * sharded.mean_relative_difference, 100.0 * (sharded.energy_ratio - 1.0),
                 100.0 * shorter.mean_relative_difference, 100.0 * (shorter.energy_ratio - 1.0));
-    // Tolerances (measured: merged 4.5% and +2.7%; 256-iteration bake 10.2% and +9.9%): the merge
+    // Tolerances (measured: merged 10.1% and +5.2%; 256-iteration bake 23.6% and +18.4%): the merge
     // is less noisy than a shard and no more biased than one, plus half a point of noise.
     EXPECT_LT(sharded.mean_relative_difference, shorter.mean_relative_difference);
     EXPECT_LT(std::abs(sharded.energy_ratio - 1.0), std::abs(shorter.energy_ratio - 1.0) + 0.005);
