@@ -15,6 +15,10 @@
 #include <cstring>
 #include <new>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -700,6 +704,75 @@ uint64_t CacheView::keyFor(const Float3& p, const Float3& n, const Float3& c) co
     return packHashGridKey(quantisePosition(b, size), l, normalBits(n));
 }
 
+void CacheView::keysFor(size_t count, const Float3* positions, const Float3* normals, const Float3& c,
+                        uint64_t* keys) const {
+    size_t i = 0;
+#if defined(__SSE2__)
+    // SPEC §H.2 - §H.6 on four points per step. Every SSE operation below is the IEEE binary32
+    // operation keyFor() performs, lane by lane and in the same order, so the keys are the same.
+    if (!voxel_size_.empty() && !level_start_.empty()) {
+        const __m128 bias = _mm_set1_ps(kHashGridPositionBias);
+        const __m128 min_distance2 = _mm_set1_ps(kHashGridMinDistance2);
+        const __m128 normal_bias = _mm_set1_ps(kHashGridNormalBias);
+        const __m128 zero = _mm_setzero_ps();
+        const __m128 two31 = _mm_set1_ps(2147483648.0f);
+        const __m128 minus_two31 = _mm_set1_ps(-2147483648.0f);
+        const __m128i int_max = _mm_set1_epi32(INT32_MAX);
+        const __m128i int_min = _mm_set1_epi32(INT32_MIN);
+        // floor(q), then saturation to int32 with NaN -> 0 (saturateToInt32 in hash_grid.cpp).
+        auto floorToInt = [&](__m128 q) {
+            __m128i t = _mm_cvttps_epi32(q);  // truncation; out of range or NaN gives INT32_MIN
+            t = _mm_add_epi32(t, _mm_castps_si128(_mm_cmpgt_ps(_mm_cvtepi32_ps(t), q)));  // -1 below
+            const __m128i high = _mm_castps_si128(_mm_cmpge_ps(q, two31));
+            const __m128i low = _mm_castps_si128(_mm_cmple_ps(q, minus_two31));
+            const __m128i nan = _mm_castps_si128(_mm_cmpunord_ps(q, q));
+            t = _mm_or_si128(_mm_andnot_si128(high, t), _mm_and_si128(high, int_max));
+            t = _mm_or_si128(_mm_andnot_si128(low, t), _mm_and_si128(low, int_min));
+            return _mm_andnot_si128(nan, t);
+        };
+        for (; i + 4 <= count; i += 4) {
+            const Float3* p = positions + i;
+            const Float3* n = normals + i;
+            const __m128 bx = _mm_add_ps(_mm_setr_ps(p[0].x, p[1].x, p[2].x, p[3].x), bias);
+            const __m128 by = _mm_add_ps(_mm_setr_ps(p[0].y, p[1].y, p[2].y, p[3].y), bias);
+            const __m128 bz = _mm_add_ps(_mm_setr_ps(p[0].z, p[1].z, p[2].z, p[3].z), bias);
+            const __m128 dx = _mm_sub_ps(_mm_set1_ps(c.x), bx);
+            const __m128 dy = _mm_sub_ps(_mm_set1_ps(c.y), by);
+            const __m128 dz = _mm_sub_ps(_mm_set1_ps(c.z), bz);
+            __m128 d2 = _mm_mul_ps(dx, dx);
+            d2 = _mm_add_ps(d2, _mm_mul_ps(dy, dy));
+            d2 = _mm_add_ps(d2, _mm_mul_ps(dz, dz));
+            const __m128 keep = _mm_cmpge_ps(d2, min_distance2);  // false for NaN
+            d2 = _mm_or_ps(_mm_and_ps(keep, d2), _mm_andnot_ps(keep, min_distance2));
+            alignas(16) float distance2[4], size[4];
+            alignas(16) int32_t gx[4], gy[4], gz[4];
+            uint32_t level[4];
+            _mm_store_ps(distance2, d2);
+            for (int j = 0; j < 4; ++j) {
+                level[j] = levelOf(distance2[j]);
+                size[j] = voxel_size_[level[j]];
+            }
+            const __m128 s = _mm_load_ps(size);
+            _mm_store_si128(reinterpret_cast<__m128i*>(gx), floorToInt(_mm_div_ps(bx, s)));
+            _mm_store_si128(reinterpret_cast<__m128i*>(gy), floorToInt(_mm_div_ps(by, s)));
+            _mm_store_si128(reinterpret_cast<__m128i*>(gz), floorToInt(_mm_div_ps(bz, s)));
+            // Normal bit set unless (n + 1e-3) >= 0 (so NaN sets it).
+            auto negative = [&](__m128 v) {
+                return ~unsigned(_mm_movemask_ps(_mm_cmpge_ps(_mm_add_ps(v, normal_bias), zero)));
+            };
+            const unsigned nx = negative(_mm_setr_ps(n[0].x, n[1].x, n[2].x, n[3].x));
+            const unsigned ny = negative(_mm_setr_ps(n[0].y, n[1].y, n[2].y, n[3].y));
+            const unsigned nz = negative(_mm_setr_ps(n[0].z, n[1].z, n[2].z, n[3].z));
+            for (int j = 0; j < 4; ++j) {
+                const uint32_t bits = ((nx >> j) & 1u) | ((ny >> j) & 1u) << 1 | ((nz >> j) & 1u) << 2;
+                keys[i + size_t(j)] = packHashGridKey(Int3{gx[j], gy[j], gz[j]}, level[j], bits);
+            }
+        }
+    }
+#endif
+    for (; i < count; ++i) keys[i] = keyFor(positions[i], normals[i], c);
+}
+
 uint64_t CacheView::findKey(uint64_t k) const {
     if (index_slots_ != 0) {
         const IndexSlot* s = findSlot(k);
@@ -818,23 +891,28 @@ size_t CacheView::lookupBatch(size_t count, const Float3* positions, const Float
     if (!positions || !normals || !radiance) return 0;
     size_t hit_count = 0;
     if (!nearest_level && index_slots_ != 0) {
-        // Software-pipelined exact lookups: the key of query i + kAhead is computed, and the
-        // cache lines of its home slot prefetched, before query i is probed, so about kAhead
-        // misses stay in flight at a steady rate (a burst would fill the line-fill buffers).
+        // Software-pipelined exact lookups: the keys of the next block of queries are computed
+        // (keysFor, SIMD) and the cache lines of their home slots prefetched before the current
+        // block is probed, so a block's misses are in flight while the other block works.
         // A hit reads only the index, never the file.
-        constexpr size_t kAhead = 16;
-        uint64_t ahead[kAhead];
-        auto computeAndPrefetch = [&](size_t i) {
-            const uint64_t k = keyFor(positions[i], normals[i], camera_position);
-            const uintptr_t home = reinterpret_cast<uintptr_t>(&index_[size_t((k * kIndexMultiplier) >> index_shift_)]);
-            __builtin_prefetch(reinterpret_cast<const void*>(home));
-            if ((home & 63u) + sizeof(IndexSlot) > 64u) __builtin_prefetch(reinterpret_cast<const void*>(home + sizeof(IndexSlot) - 1));
-            ahead[i % kAhead] = k;
+        constexpr size_t kBlock = 16;
+        uint64_t block_keys[2][kBlock];
+        auto prepare = [&](size_t start, uint64_t* keys) {
+            const size_t n = std::min(kBlock, count - start);
+            keysFor(n, positions + start, normals + start, camera_position, keys);
+            for (size_t j = 0; j < n; ++j) {
+                const uintptr_t home = reinterpret_cast<uintptr_t>(&index_[size_t((keys[j] * kIndexMultiplier) >> index_shift_)]);
+                __builtin_prefetch(reinterpret_cast<const void*>(home));
+                if ((home & 63u) + sizeof(IndexSlot) > 64u) {
+                    __builtin_prefetch(reinterpret_cast<const void*>(home + sizeof(IndexSlot) - 1));
+                }
+            }
         };
-        for (size_t i = 0; i < std::min(kAhead, count); ++i) computeAndPrefetch(i);
+        if (count > 0) prepare(0, block_keys[0]);
         for (size_t i = 0; i < count; ++i) {
-            const uint64_t k = ahead[i % kAhead];
-            if (i + kAhead < count) computeAndPrefetch(i + kAhead);
+            const size_t block = (i / kBlock) & 1u;
+            if (i % kBlock == 0 && i + kBlock < count) prepare(i + kBlock, block_keys[block ^ 1u]);
+            const uint64_t k = block_keys[block][i % kBlock];
             const IndexSlot* s = findSlot(k);
             const bool hit = s != nullptr;
             Float3 value{0.0f, 0.0f, 0.0f};

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// Micro-benchmarks (Google Benchmark): Embree ray pairs per API, key and hash functions,
-// runtime lookups (single, batched, binary search) on a 2^22-capacity cache with 1 M live
-// voxels next to a raw random-memory-access baseline of the same footprint, open + validate.
+// Micro-benchmarks (Google Benchmark): Embree ray pairs per API, key and hash functions (one at a
+// time and in SIMD batches), runtime lookups (single, batched, binary search) on a
+// 2^22-capacity cache with 1 M live voxels next to a raw random-memory-access baseline of the
+// same footprint, open + validate.
 // `--smoke` shrinks every data set so the whole binary runs in about a second (ctest).
 // SHARCBAKE_SCENES_DIR overrides the scenes folder compiled in.
 // Figures and commands: BENCHMARKS.md.
@@ -120,6 +121,21 @@ void BM_CacheViewKeyFor(benchmark::State& state) {
     state.SetItemsProcessed(int64_t(state.iterations()));
 }
 BENCHMARK(BM_CacheViewKeyFor);
+
+void BM_CacheViewKeysFor(benchmark::State& state) {
+    CacheFixture& f = CacheFixture::get();
+    constexpr size_t kBatch = 1024;
+    std::vector<uint64_t> keys(kBatch);
+    size_t at = 0;
+    for (auto _ : state) {
+        if (at + kBatch > f.positions.size()) at = 0;
+        f.view.keysFor(kBatch, f.positions.data() + at, f.normals.data() + at, kCamera, keys.data());
+        benchmark::DoNotOptimize(keys.data());
+        at += kBatch;
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(kBatch));
+}
+BENCHMARK(BM_CacheViewKeysFor);
 
 void BM_HashGridHash(benchmark::State& state) {
     uint64_t key = 0x0123456789ABCDEFull;

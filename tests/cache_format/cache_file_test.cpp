@@ -162,6 +162,28 @@ Float3 cameraForLevel(const Float3& p, uint32_t level) {
 // Round trip and golden file
 // ------------------------------------------------------------------------------------------------
 
+TEST(CacheFile, Crc32MatchesTheBitwiseDefinition) {
+    // The table-driven CRC (16, 8 and 1 bytes per step) against the polynomial bit by bit, for
+    // every length and split point that reaches each path; plus the standard check value.
+    auto bitwise = [](const uint8_t* p, size_t n, uint32_t crc) {
+        crc = ~crc;
+        for (size_t i = 0; i < n; ++i) {
+            crc ^= p[i];
+            for (int k = 0; k < 8; ++k) crc = (crc & 1u) ? 0xEDB88320u ^ (crc >> 1) : crc >> 1;
+        }
+        return ~crc;
+    };
+    EXPECT_EQ(cacheCrc32("123456789", 9), 0xCBF43926u);
+    std::vector<uint8_t> bytes(100);
+    std::mt19937 rng(3);
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    for (size_t n = 0; n <= bytes.size(); ++n) {
+        ASSERT_EQ(cacheCrc32(bytes.data(), n), bitwise(bytes.data(), n, 0)) << n;
+        const size_t split = n / 3;
+        ASSERT_EQ(cacheCrc32(bytes.data() + split, n - split, cacheCrc32(bytes.data(), split)), bitwise(bytes.data(), n, 0));
+    }
+}
+
 TEST(CacheFile, RoundTripThroughDisk) {
     const CacheData data = goldenData();
     ASSERT_GT(data.voxels.size(), 30u);
@@ -509,6 +531,26 @@ TEST(Runtime, KeyForMatchesHashGridKey) {
             ASSERT_EQ(view.keyFor(p, n, c), hashGridKey(p, n, view.gridParameters(c)))
                 << p.x << " " << p.y << " " << p.z << " camera " << c.x << " " << c.y << " " << c.z;
         }
+        // keysFor (four lanes at a time, then a scalar tail) gives the same keys, specials too.
+        for (int round = 0; round < 4; ++round) {
+            const Float3 camera = round == 0 ? Float3{0, 0, 0} : Float3{small(rng), wide(rng), small(rng)};
+            std::vector<Float3> positions, normals;
+            for (int i = 0; i < 4001; ++i) {
+                auto r = [&](int k) {
+                    if (i % 5 == 0 && k == i % 3) return specials[size_t(i / 5) % 10];
+                    return (i & 1) ? wide(rng) : small(rng);
+                };
+                positions.push_back({r(0), r(1), r(2)});
+                normals.push_back(i % 11 == 0 ? Float3{specials[size_t(i) % 10], -0.001f, 0.0f}
+                                              : Float3{small(rng), small(rng), small(rng)});
+            }
+            std::vector<uint64_t> keys(positions.size());
+            view.keysFor(positions.size(), positions.data(), normals.data(), camera, keys.data());
+            for (size_t i = 0; i < positions.size(); ++i) {
+                ASSERT_EQ(keys[i], hashGridKey(positions[i], normals[i], view.gridParameters(camera)))
+                    << i << ": " << positions[i].x << " " << positions[i].y << " " << positions[i].z;
+            }
+        }
         // keyFor finds the level from precomputed distance thresholds: sweep a few ULPs across
         // every level boundary within 1e6 of the camera.
         const Float3 camera{0.0f, 0.0f, 0.0f}, normal{0.0f, 1.0f, 0.0f};
@@ -518,9 +560,15 @@ TEST(Runtime, KeyForMatchesHashGridKey) {
             float x = float(boundary) - kHashGridPositionBias;
             for (int step = 0; step < 8; ++step) x = std::nextafter(x, 0.0f);
             for (int step = 0; step < 16; ++step, x = std::nextafter(x, INFINITY)) {
-                for (const Float3& p : {Float3{x, 0.0f, 0.0f}, Float3{0.0f, -x, 0.0f}, Float3{x * 0.6f, 0.0f, x * 0.8f}}) {
-                    ASSERT_EQ(view.keyFor(p, normal, camera), hashGridKey(p, normal, view.gridParameters(camera)))
+                const Float3 points[4] = {{x, 0.0f, 0.0f}, {0.0f, -x, 0.0f}, {x * 0.6f, 0.0f, x * 0.8f}, {-x, 0.0f, 0.0f}};
+                const Float3 normals[4] = {normal, normal, normal, normal};
+                uint64_t keys[4];
+                view.keysFor(4, points, normals, camera, keys);
+                for (int k = 0; k < 4; ++k) {
+                    const uint64_t expected = hashGridKey(points[k], normal, view.gridParameters(camera));
+                    ASSERT_EQ(view.keyFor(points[k], normal, camera), expected)
                         << "base " << q[0] << " bias " << q[2] << " level " << level << " x " << x;
+                    ASSERT_EQ(keys[k], expected) << "keysFor, base " << q[0] << " level " << level << " x " << x;
                 }
             }
         }
