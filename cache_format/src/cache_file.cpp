@@ -47,9 +47,9 @@ CacheFileStatus fail(CacheFileStatus status, std::string* message, const std::st
     return status;
 }
 
-/// CRC-32 tables for slicing-by-8 (8 KiB, built once).
+/// CRC-32 tables for slicing-by-16 (16 KiB, built once): opening a cache is mostly this CRC.
 struct Crc32Tables {
-    uint32_t t[8][256];
+    uint32_t t[16][256];
     Crc32Tables() {
         for (uint32_t i = 0; i < 256; ++i) {
             uint32_t c = i;
@@ -57,7 +57,7 @@ struct Crc32Tables {
             t[0][i] = c;
         }
         for (uint32_t i = 0; i < 256; ++i) {
-            for (int s = 1; s < 8; ++s) t[s][i] = (t[s - 1][i] >> 8) ^ t[0][t[s - 1][i] & 0xFFu];
+            for (int s = 1; s < 16; ++s) t[s][i] = (t[s - 1][i] >> 8) ^ t[0][t[s - 1][i] & 0xFFu];
         }
     }
 };
@@ -69,6 +69,20 @@ uint32_t cacheCrc32(const void* data, size_t size, uint32_t crc) {
     const auto& t = tables.t;
     const uint8_t* p = static_cast<const uint8_t*>(data);
     crc = ~crc;
+    while (size >= 16) {  // little-endian slicing-by-16: 16 independent lookups per step
+        uint32_t w0, w1, w2, w3;
+        std::memcpy(&w0, p, 4);
+        std::memcpy(&w1, p + 4, 4);
+        std::memcpy(&w2, p + 8, 4);
+        std::memcpy(&w3, p + 12, 4);
+        w0 ^= crc;
+        crc = t[15][w0 & 0xFFu] ^ t[14][(w0 >> 8) & 0xFFu] ^ t[13][(w0 >> 16) & 0xFFu] ^ t[12][w0 >> 24] ^
+              t[11][w1 & 0xFFu] ^ t[10][(w1 >> 8) & 0xFFu] ^ t[9][(w1 >> 16) & 0xFFu] ^ t[8][w1 >> 24] ^
+              t[7][w2 & 0xFFu] ^ t[6][(w2 >> 8) & 0xFFu] ^ t[5][(w2 >> 16) & 0xFFu] ^ t[4][w2 >> 24] ^
+              t[3][w3 & 0xFFu] ^ t[2][(w3 >> 8) & 0xFFu] ^ t[1][(w3 >> 16) & 0xFFu] ^ t[0][w3 >> 24];
+        p += 16;
+        size -= 16;
+    }
     while (size >= 8) {  // little-endian slicing-by-8
         uint32_t lo, hi;
         std::memcpy(&lo, p, 4);
