@@ -56,8 +56,10 @@ struct BakeOptions {
     bool quiet = false;
 };
 
-std::atomic<bool> g_interrupted{false};
-extern "C" void onInterrupt(int) { g_interrupted.store(true); }
+/// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
+/// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs.
+std::atomic<int> g_stop_signal{0};
+extern "C" void onStopSignal(int signal) { g_stop_signal.store(signal); }
 
 /// FNV-1a (64-bit) of the scene file's bytes, so a cache records which scene it was baked from.
 std::string sceneFileHash(const std::string& path) {
@@ -276,16 +278,17 @@ void runBake(const BakeOptions& o) {
         std::fflush(stdout);
     }
 
-    g_interrupted = false;
-    auto previous_handler = std::signal(SIGINT, onInterrupt);
+    g_stop_signal = 0;
+    auto previous_interrupt_handler = std::signal(SIGINT, onStopSignal);
+    auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
     const auto bake_start = std::chrono::steady_clock::now();
     const char* stop_reason = "iterations";
     {
         Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
                           !o.quiet && Progress::isTerminal());
         while (baker.iterationsDone() < o.iterations) {
-            if (g_interrupted) {
-                stop_reason = "interrupted";
+            if (g_stop_signal != 0) {
+                stop_reason = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
                 break;
             }
             if (o.time_budget > 0.0 && secondsSince(bake_start) >= o.time_budget) {
@@ -303,7 +306,8 @@ void runBake(const BakeOptions& o) {
     // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
     // from here, a finished one can be extended with a larger --iterations.
     if (!checkpoint_path.empty()) saveCheckpoint(checkpoint_path, baker, resume_settings);
-    std::signal(SIGINT, previous_handler);
+    std::signal(SIGINT, previous_interrupt_handler);
+    std::signal(SIGTERM, previous_terminate_handler);
     const double bake_seconds = secondsSince(bake_start);
 
     const auto finish_start = std::chrono::steady_clock::now();
@@ -372,7 +376,10 @@ void runBake(const BakeOptions& o) {
                      "within an iteration; bake with a fixed --capacity %llu\n",
                      capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts, 2ull * cache.capacity());
     }
-    if (g_interrupted) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
+    if (g_stop_signal == SIGTERM) {
+        throw CommandError(kExitTerminated, "terminated (SIGTERM); the cache and checkpoint written hold the iterations done");
+    }
+    if (g_stop_signal != 0) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
 }
 
 }  // namespace

@@ -19,7 +19,8 @@ const char* const kExitCodeHelp =
     "  2    I/O error (a file could not be read or written)\n"
     "  3    invalid input (a scene or cache file is malformed)\n"
     "  4    runtime failure\n"
-    "  130  interrupted (SIGINT)\n";
+    "  130  interrupted (SIGINT)\n"
+    "  143  terminated (SIGTERM)\n";
 
 glm::vec3 parseVec3(const std::string& text, const std::string& option_name) {
     std::istringstream in(text);

@@ -21,7 +21,8 @@ enum ExitCode : int {
     kExitIo = 2,            ///< a file could not be read or written
     kExitInvalidInput = 3,  ///< a scene or cache file is malformed
     kExitRuntime = 4,       ///< the work itself failed
-    kExitInterrupted = 130  ///< stopped by SIGINT (128 + 2, as shells report it)
+    kExitInterrupted = 130,  ///< stopped by SIGINT (128 + 2, as shells report it)
+    kExitTerminated = 143    ///< stopped by SIGTERM (128 + 15), e.g. a scheduler's time limit
 };
 
 /// The text appended to the top-level --help.

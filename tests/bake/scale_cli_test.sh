@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# Bake at scale from the command line: a bake killed (SIGKILL, SIGINT) and resumed from its
+# Bake at scale from the command line: a bake killed (SIGKILL, SIGINT, SIGTERM) and resumed from its
 # checkpoint gives the uninterrupted bake's cache byte for byte; damaged or mismatched checkpoints
 # are refused; shards merge in any order to the same file; merge refuses mismatched inputs.
 # Usage: scale_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
@@ -29,7 +29,7 @@ bake_args="--iterations 60 --resolution 320x180 --capacity 65536"
 expect 0 "uninterrupted bake" "$sharcbake" bake "$cornell" -o "$work/full.sharc" $bake_args -q
 
 # Starts the bake with a checkpoint every 2 iterations, waits for the first checkpoint, then
-# sends SIGNAL after a random delay (0-0.4 s) so the kill lands at a different moment each run.
+# sends SIGNAL after a random delay (0-0.15 s) so the kill lands at a different moment each run.
 interrupt() {  # interrupt SIGNAL NAME
     signal=$1; name=$2
     rm -f "$work/$name.ckpt"
@@ -38,7 +38,7 @@ interrupt() {  # interrupt SIGNAL NAME
     pid=$!
     tries=0
     while [ ! -f "$work/$name.ckpt" ] && [ "$tries" -lt 600 ]; do sleep 0.05; tries=$((tries + 1)); done
-    sleep "$(awk 'BEGIN { srand(); printf "%.2f", rand() * 0.4 }')"
+    sleep "$(awk 'BEGIN { srand(); printf "%.2f", rand() * 0.15 }')"
     kill "-$signal" "$pid" 2>/dev/null || echo "note: the $name bake finished before the signal"
     wait "$pid"
     interrupted_code=$?
@@ -61,6 +61,12 @@ if [ "$interrupted_code" -eq 130 ]; then
 fi
 expect 0 "resume after SIGINT" "$sharcbake" bake "$cornell" -o "$work/interrupted.sharc" $bake_args -q --resume "$work/interrupted.ckpt"
 cmp -s "$work/full.sharc" "$work/interrupted.sharc" || fail "the bake resumed after SIGINT differs from the uninterrupted one"
+
+# SIGTERM (a scheduler's time limit or preemption): the same, with exit 143.
+interrupt TERM terminated
+[ "$interrupted_code" -eq 143 ] || [ "$interrupted_code" -eq 0 ] || fail "SIGTERM: exit $interrupted_code, expected 143"
+expect 0 "resume after SIGTERM" "$sharcbake" bake "$cornell" -o "$work/terminated.sharc" $bake_args -q --resume "$work/terminated.ckpt"
+cmp -s "$work/full.sharc" "$work/terminated.sharc" || fail "the bake resumed after SIGTERM differs from the uninterrupted one"
 
 # A finished bake's checkpoint extends it: 40 + 20 iterations == 60 iterations.
 expect 0 "bake 40 with a checkpoint" "$sharcbake" bake "$cornell" -o "$work/short.sharc" --iterations 40 --resolution 320x180 --capacity 65536 -q \
