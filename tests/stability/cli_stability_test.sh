@@ -1,0 +1,91 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# Degenerate input through the command line: a clear message and the documented exit code for an
+# empty scene, a sky-only scene, a NaN vertex, a closed scene with no light and capacities out of
+# range; the Stability section and the stability object of --stats-json for a table far too
+# small and for a healthy bake.
+# Usage: cli_stability_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+rm -rf "$work" && mkdir -p "$work"
+failures=0
+
+expect() {  # expect CODE DESCRIPTION COMMAND...
+    code=$1; what=$2; shift 2
+    "$@" >"$work/out.txt" 2>"$work/err.txt"
+    got=$?
+    if [ "$got" -ne "$code" ]; then
+        echo "FAIL: $what: exit $got, expected $code"; cat "$work/err.txt"; failures=$((failures + 1))
+    else
+        echo "ok: $what (exit $got)"
+    fi
+}
+says() {  # says FILE TEXT DESCRIPTION
+    if grep -q -- "$2" "$1"; then echo "ok: $3"; else echo "FAIL: $3: no \"$2\" in:"; cat "$1"; failures=$((failures + 1)); fi
+}
+
+# Small glTF files: no meshes at all; one triangle with a NaN vertex; a closed tetrahedron with
+# no emission, no lights and no sky.
+python3 - "$work" <<'PY'
+import base64, json, struct, sys
+work = sys.argv[1]
+def write(name, positions, indices):
+    doc = {"asset": {"version": "2.0"}, "scenes": [{"nodes": []}], "scene": 0}
+    if positions:
+        data = struct.pack("<%df" % len(positions), *positions)
+        offset = len(data)
+        data += struct.pack("<%dH" % len(indices), *indices)
+        finite = [p for p in positions if p == p and abs(p) != float("inf")]
+        doc["buffers"] = [{"byteLength": len(data),
+                           "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}]
+        doc["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": offset},
+                              {"buffer": 0, "byteOffset": offset, "byteLength": len(indices) * 2}]
+        doc["accessors"] = [{"bufferView": 0, "componentType": 5126, "count": len(positions) // 3, "type": "VEC3",
+                             "min": [min(finite)] * 3, "max": [max(finite)] * 3},
+                            {"bufferView": 1, "componentType": 5123, "count": len(indices), "type": "SCALAR"}]
+        doc["materials"] = [{"doubleSided": True}]
+        doc["meshes"] = [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}]
+        doc["nodes"] = [{"mesh": 0}]
+        doc["scenes"] = [{"nodes": [0]}]
+    open(work + "/" + name, "w").write(json.dumps(doc))
+write("empty.gltf", [], [])
+write("nan_vertex.gltf", [0, 0, 0, 1, 0, 0, 0, float("nan"), 0], [0, 1, 2])
+write("dark.gltf", [0, 0, 0, 2, 0, 0, 0, 2, 0, 0, 0, 2], [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])
+PY
+
+expect 3 "empty scene" "$sharcbake" bake "$work/empty.gltf" -o "$work/a.sharc"
+says "$work/err.txt" "no triangles to bake" "empty scene: clear message"
+expect 3 "sky-only scene" "$sharcbake" bake "$work/empty.gltf" -o "$work/a.sharc" --sky 1,1,1
+says "$work/err.txt" "no triangles to bake" "sky-only scene: clear message"
+expect 3 "NaN vertex" "$sharcbake" bake "$work/nan_vertex.gltf" -o "$work/a.sharc"
+says "$work/err.txt" "vertex 2 is NaN or infinite" "NaN vertex: names the vertex"
+expect 1 "capacity 0" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --capacity 0
+expect 1 "capacity below one bucket" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --capacity 15
+
+# A closed scene without light: baked, black, and said so.
+expect 0 "closed scene with no light" "$sharcbake" bake "$work/dark.gltf" -o "$work/dark.sharc" --iterations 4 \
+    --resolution 32x32 --stats-json "$work/dark.json"
+says "$work/err.txt" "the cache will be black" "dark scene: warned"
+says "$work/dark.json" '"non_finite_dropped": 0' "dark scene: no NaN/Inf"
+
+# A table far too small, and not a power of two: every failed insert counted, the lost energy stated.
+expect 0 "bake with 1000 slots" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/small.sharc" \
+    --iterations 8 --resolution 96x96 --capacity 1000 --stats-json "$work/small.json"
+says "$work/out.txt" "^Stability:" "summary has a Stability section"
+says "$work/out.txt" "warning: .* deposits found their hash bucket full .* raise --capacity" "table pressure: warning line"
+says "$work/out.txt" "not a power of two" "capacity not a power of two: noted"
+says "$work/small.json" '"failed_insert_energy_share": 0\.[0-9]' "stats JSON: lost energy share"
+says "$work/small.json" '"warnings": \["' "stats JSON: warnings"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['stability']; assert s['failed_inserts'] > 0 and s['capacity'] == 1000, s" \
+    "$work/small.json" && echo "ok: stats JSON parses, failed inserts counted" ||
+    { echo "FAIL: stats JSON"; failures=$((failures + 1)); }
+
+# A healthy bake: the section says so.
+expect 0 "healthy bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/ok.sharc" \
+    --iterations 4 --resolution 64x64
+says "$work/out.txt" "no problems found" "healthy bake: no warnings"
+
+echo "$failures failure(s)"
+[ "$failures" -eq 0 ]
