@@ -70,12 +70,14 @@ namespace {
 constexpr uint64_t kMaxFixedDeposit = uint64_t(1) << 62;
 constexpr uint8_t kMaxCarries = 255;
 
-/// A deterministic dither in [0, 1) for one channel of one deposit: keyed by the iteration, the
-/// chunk and the deposit's place in it, all independent of the thread count.
-double roundingDither(uint32_t iteration, size_t chunk, size_t index, int channel) {
-    const uint32_t h = hashCombine(hashCombine(hashCombine(hashUint32(iteration), uint32_t(chunk)), uint32_t(index)),
-                                   uint32_t(channel));
-    return double(h) * 0x1p-32;
+/// Deterministic dithers in [0, 1) for the three channels of one deposit, 16 bits each: keyed
+/// by the iteration, the chunk and the deposit's place in it, all independent of the thread
+/// count. Four hashes per deposit; 16 bits leave a rounding bias below 2^-17 of a step.
+std::array<double, 3> roundingDither(uint32_t iteration, size_t chunk, size_t index) {
+    const uint32_t a = hashCombine(hashCombine(hashUint32(iteration), uint32_t(chunk)), uint32_t(index));
+    const uint32_t b = hashUint32(a);
+    constexpr double kUnit = 0x1p-16;
+    return {double(a & 0xFFFFu) * kUnit, double(a >> 16) * kUnit, double(b & 0xFFFFu) * kUnit};
 }
 
 /// Adds `low + carries x 2^64` to a 72-bit sum; false when its carry count saturated (the sum
@@ -244,6 +246,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
             }
             PendingSum& sum = pending[at];
             bool negative = false, clamped = false;
+            const std::array<double, 3> dither = roundingDither(iteration, chunk, i);
             for (int c = 0; c < 3; ++c) {
                 double value = double(d.radiance[c]);
                 if (value < 0.0) {
@@ -253,7 +256,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
                 // Dithered rounding: the expected fixed-point value is exactly value x scale, so
                 // light below one step is kept on average; truncation would drop it for good
                 // (sharc_algorithm.md 10.2). Integers (exact values) are unchanged.
-                double fixed = std::floor(value * radiance_scale_ + roundingDither(iteration, chunk, i, c));
+                double fixed = std::floor(value * radiance_scale_ + dither[c]);
                 if (fixed > double(kMaxFixedDeposit)) {
                     clamped = true;
                     numerics.clamped_energy[c] += (fixed - double(kMaxFixedDeposit)) / radiance_scale_;
