@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
+#include <set>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +67,31 @@ std::vector<std::pair<std::string, std::string>> mergedMetadata(const std::vecto
     return metadata;
 }
 
+/// A job array whose task failed leaves a shard out: the merge is still valid (fewer samples),
+/// but say so, once per shard count, naming the missing shards.
+void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
+    std::map<uint32_t, std::set<uint32_t>> present;  // shard count -> indices given
+    for (const CacheData& d : inputs) {
+        const std::string* shard = findMetadata(d, "shard");
+        unsigned index = 0, count = 0;
+        if (shard && std::sscanf(shard->c_str(), "%u/%u", &index, &count) == 2 && index < count) {
+            present[count].insert(index);
+        }
+    }
+    for (const auto& [count, indices] : present) {
+        std::string missing;
+        uint32_t missing_count = 0;
+        for (uint32_t i = 0; i < count; ++i) {
+            if (indices.count(i)) continue;
+            if (++missing_count <= 8) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
+        }
+        if (missing_count > 0) {
+            std::fprintf(stderr, "warning: %u of %u shards missing (%s%s); the merge holds the work of the others\n",
+                         missing_count, count, missing.c_str(), missing_count > 8 ? ", ..." : "");
+        }
+    }
+}
+
 void runMerge(const MergeOptions& o) {
     checkOutputPath(o.output_path, "merged cache");
     std::vector<CacheData> inputs(o.inputs.size());
@@ -110,6 +137,7 @@ void runMerge(const MergeOptions& o) {
         throw CommandError(kExitInvalidInput, "cannot merge: " + message);
     }
     merged.metadata = mergedMetadata(sorted);
+    warnAboutMissingShards(sorted);
     const CacheFileStatus status = writeCacheFile(o.output_path, merged, &message);
     if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
     if (!o.quiet) {

@@ -98,6 +98,9 @@ expect 0 "info on the merge" "$sharcbake" info "$work/merged.sharc"
 grep -q "merged_shards: 0/4,1/4,2/4,3/4" "$work/out.txt" || fail "the merged cache does not list its shards"
 grep -q "iterations: 32" "$work/out.txt" || fail "the merged cache does not sum the iterations"
 
+expect 0 "merge with a shard missing" "$sharcbake" merge "$work/shard0.sharc" "$work/shard1.sharc" "$work/shard3.sharc" -o "$work/partial.sharc"
+grep -q "1 of 4 shards missing (2/4)" "$work/err.txt" || fail "merge does not warn about the missing shard 2/4"
+
 # Merge refusals: another scene, other grid parameters, the same shard twice, not a cache.
 expect 3 "merge different scenes" "$sharcbake" merge "$work/shard0.sharc" "$work/full.sharc" -o "$work/x.sharc"
 grep -q "scene_hash" "$work/err.txt" || fail "the scene mismatch message does not name scene_hash"
