@@ -69,6 +69,8 @@ namespace {
 /// sum saturates at 255 wraps of 2^64, i.e. after at least 2^10 maximal deposits in one iteration.
 constexpr uint64_t kMaxFixedDeposit = uint64_t(1) << 62;
 constexpr uint8_t kMaxCarries = 255;
+/// Deposits below this many fixed-point steps are rounded with a dither, larger ones to nearest.
+constexpr double kDitherBelow = 0x1p20;
 
 /// Deterministic dithers in [0, 1) for the three channels of one deposit, 16 bits each: keyed
 /// by the iteration, the chunk and the deposit's place in it, all independent of the thread
@@ -246,17 +248,29 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
             }
             PendingSum& sum = pending[at];
             bool negative = false, clamped = false;
-            const std::array<double, 3> dither = roundingDither(iteration, chunk, i);
+            std::array<double, 3> dither{};
+            bool dither_ready = false;
             for (int c = 0; c < 3; ++c) {
                 double value = double(d.radiance[c]);
                 if (value < 0.0) {
                     negative = true;
                     value = 0.0;
                 }
-                // Dithered rounding: the expected fixed-point value is exactly value x scale, so
-                // light below one step is kept on average; truncation would drop it for good
-                // (sharc_algorithm.md 10.2). Integers (exact values) are unchanged.
-                double fixed = std::floor(value * radiance_scale_ + dither[c]);
+                // Dithered rounding where it matters: the expected fixed-point value is exactly
+                // value x scale, so light below one step is kept on average; truncation would
+                // drop it for good (sharc_algorithm.md 10.2). Above 2^20 steps, rounding to
+                // nearest is off by at most 2^-21 and the hash is not worth its time.
+                const double scaled = value * radiance_scale_;
+                double fixed;
+                if (scaled >= kDitherBelow) {
+                    fixed = std::nearbyint(scaled);
+                } else {
+                    if (!dither_ready) {
+                        dither = roundingDither(iteration, chunk, i);
+                        dither_ready = true;
+                    }
+                    fixed = std::floor(scaled + dither[c]);
+                }
                 if (fixed > double(kMaxFixedDeposit)) {
                     clamped = true;
                     numerics.clamped_energy[c] += (fixed - double(kMaxFixedDeposit)) / radiance_scale_;
