@@ -169,6 +169,7 @@ public:
         warnAboutIgnoredExtensions();
         convertMaterials();
         readSky();
+        readKnownRadiance();
         for (int root : rootNodes()) visitNode(root, glm::dmat4(1.0));
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
         computeBounds();
@@ -917,6 +918,21 @@ private:
         if (!sky || !isFinite(*sky) || sky->x < 0.0f || sky->y < 0.0f || sky->z < 0.0f)
             fail("extras.sharcbake.sky_radiance must be an array of 3 finite, non-negative numbers");
         scene_.sky.uniform = *sky;
+    }
+
+    /// Root extras {"sharcbake": {"expected_radiance": L or [r, g, b]}}: the radiance every
+    /// surface has (scenes/README.md, furnace rooms), so error can be measured exactly.
+    void readKnownRadiance() {
+        if (!model_.extras.IsObject() || !model_.extras.Has("sharcbake")) return;
+        const tinygltf::Value& ours = model_.extras.Get("sharcbake");
+        if (!ours.IsObject() || !ours.Has("expected_radiance")) return;
+        std::optional<glm::vec3> known = vec3Value(ours, "expected_radiance");
+        if (!known) {
+            if (const std::optional<double> scalar = number(ours, "expected_radiance")) known = glm::vec3(float(*scalar));
+        }
+        if (!known || !isFinite(*known) || known->x <= 0.0f || known->y <= 0.0f || known->z <= 0.0f)
+            fail("extras.sharcbake.expected_radiance must be a positive finite number or an array of 3");
+        scene_.known_radiance = *known;
     }
 };
 

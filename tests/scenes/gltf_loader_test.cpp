@@ -711,5 +711,32 @@ TEST(GltfLoaderSky, UniformRadianceFromRootExtras) {
     EXPECT_NE(msg.find("sky_radiance"), std::string::npos) << msg;
 }
 
+TEST(GltfLoaderKnownAnswer, ExpectedRadianceFromRootExtras) {
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({});
+    EXPECT_FALSE(loadGltf(b.writeEmbedded(dir, "none.gltf")).known_radiance.has_value());
+
+    b.doc["extras"] = {{"sharcbake", {{"expected_radiance", 10.0}}}};
+    const Scene scalar = loadGltf(b.writeEmbedded(dir, "scalar.gltf"));
+    ASSERT_TRUE(scalar.known_radiance.has_value());
+    expectVec3Near(*scalar.known_radiance, {10.0f, 10.0f, 10.0f});
+
+    b.doc["extras"] = {{"sharcbake", {{"expected_radiance", {1.0, 2.0, 3.0}}}}};
+    const Scene rgb = loadGltf(b.writeEmbedded(dir, "rgb.gltf"));
+    ASSERT_TRUE(rgb.known_radiance.has_value());
+    expectVec3Near(*rgb.known_radiance, {1.0f, 2.0f, 3.0f});
+
+    b.doc["extras"] = {{"sharcbake", {{"expected_radiance", -1.0}}}};
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "bad.gltf")); });
+    EXPECT_NE(msg.find("expected_radiance"), std::string::npos) << msg;
+}
+
+TEST(GltfLoaderKnownAnswer, FurnaceScenesCarryTheirAnswer) {
+    const Scene furnace = loadGltf(std::string(SHARCBAKE_SCENES_DIR) + "/furnace_rho090/furnace_rho090.gltf");
+    ASSERT_TRUE(furnace.known_radiance.has_value());
+    expectVec3Near(*furnace.known_radiance, {10.0f, 10.0f, 10.0f});
+}
+
 }  // namespace
 }  // namespace sharcbake

@@ -140,6 +140,11 @@ struct Scene {
     Sky sky;
     LoadStats stats;
 
+    /// The outgoing radiance of every surface when the scene says it is known (a furnace room:
+    /// root extras {"sharcbake": {"expected_radiance": L or [r, g, b]}}). Convergence reports
+    /// measure the cache against it.
+    std::optional<glm::vec3> known_radiance;
+
     /// Axis-aligned bounds of all triangles (min, max). Both zero for an empty scene.
     glm::vec3 bounds_min{0.0f};
     glm::vec3 bounds_max{0.0f};
