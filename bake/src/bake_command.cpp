@@ -6,6 +6,7 @@
 #include "checkpoint.h"
 #include "command_support.h"
 #include "commands.h"
+#include "convergence_report.h"
 #include "coverage.h"
 #include "progress.h"
 #include "stability_report.h"
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -54,6 +56,13 @@ struct BakeOptions {
     std::string resume_path;
     std::string shard = "0/1";
     bool quiet = false;
+    // Error against run time (convergence_report.h).
+    std::string report_dir;
+    std::string reference_path;
+    std::string report_camera;
+    std::string report_resolution;
+    uint32_t report_spp = 16;
+    double target_error = 0.0;
 };
 
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
@@ -169,6 +178,60 @@ CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer
     return CameraPath(std::move(poses), true, 1, 0.0f, o.seed);
 }
 
+/// The evaluator --report and --target-error need, or none when neither is asked for.
+std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const Scene& scene, const Tracer& tracer,
+                                                    const LightSampler& lights, std::string& reference_description) {
+    if (o.report_dir.empty() && o.target_error <= 0.0) return nullptr;
+    if (o.reference_path.empty() && !scene.known_radiance) {
+        throw CommandError(kExitUsage, std::string(o.report_dir.empty() ? "--target-error" : "--report") +
+                                           ": nothing to measure the error against: give --reference EXR (a converged "
+                                           "render of the evaluation camera), or bake a scene with a known radiance "
+                                           "(extras.sharcbake.expected_radiance, like the furnace rooms)");
+    }
+    EvaluationView view;
+    view.camera = sceneCamera(scene, o.report_camera, "--report-camera", 45.0f);
+    view.samples_per_pixel = o.report_spp;
+    std::optional<Image> reference;
+    if (!o.reference_path.empty()) {
+        try {
+            reference = readExr(o.reference_path);
+        } catch (const ImageError& e) {
+            throw CommandError(kExitIo, std::string("--reference: ") + e.what());
+        }
+        view.width = reference->width;
+        view.height = reference->height;
+        if (!o.report_resolution.empty()) {
+            int width = 0, height = 0;
+            parseImageSize(o.report_resolution, "--report-resolution", view.camera.aspect_ratio, width, height);
+            if (width != view.width || height != view.height) {
+                throw CommandError(kExitUsage, "--report-resolution " + o.report_resolution + " differs from the " +
+                                                   std::to_string(view.width) + "x" + std::to_string(view.height) +
+                                                   " reference " + o.reference_path);
+            }
+        }
+        reference_description = o.reference_path;
+    } else {
+        parseImageSize(o.report_resolution.empty() ? "128" : o.report_resolution, "--report-resolution",
+                       view.camera.aspect_ratio, view.width, view.height);
+        reference_description = "known radiance";
+    }
+    return std::make_unique<ConvergenceEvaluator>(scene, tracer, lights, view, std::move(reference));
+}
+
+std::string percent(std::optional<double> value) {
+    if (!value) return "-";
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g%%", 100.0 * *value);
+    return text;
+}
+
+std::string general(std::optional<double> value) {
+    if (!value) return "-";
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", *value);
+    return text;
+}
+
 void runBake(const BakeOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
@@ -179,6 +242,11 @@ void runBake(const BakeOptions& o) {
     const std::string checkpoint_path = !o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path;
     if (!checkpoint_path.empty()) checkOutputPath(checkpoint_path, "checkpoint");
     if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
+    if (!o.report_dir.empty()) {
+        std::error_code error;
+        std::filesystem::create_directories(o.report_dir, error);
+        checkOutputPath(o.report_dir + "/convergence.csv", "report");
+    }
     BakeSettings settings;
     parseSize(o.resolution, "--resolution", settings.width, settings.height);
     settings.update_stride = o.update_stride;
@@ -258,6 +326,11 @@ void runBake(const BakeOptions& o) {
                                                        std::to_string(o.iterations_per_leg));
     if (!o.resume_path.empty()) resumeFromCheckpoint(o.resume_path, resume_settings, baker);
     const uint32_t first_iteration = baker.iterationsDone();
+    ConvergenceReport report;
+    report.scene = o.scene_path;
+    if (o.target_error > 0.0) report.target_error = o.target_error;
+    const std::unique_ptr<ConvergenceEvaluator> evaluator = makeEvaluator(o, scene, tracer, lights, report.reference);
+    if (evaluator) report.view = evaluator->view();
     const double setup_seconds = secondsSince(setup_start);
     if (!o.quiet) {
         if (settings.shard_count > 1) {
@@ -282,16 +355,32 @@ void runBake(const BakeOptions& o) {
     auto previous_interrupt_handler = std::signal(SIGINT, onStopSignal);
     auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
     const auto bake_start = std::chrono::steady_clock::now();
+    // Evaluation pauses the bake; its time is kept out of the bake's time and time budget.
+    double evaluation_seconds = 0.0;
+    const auto bakeSeconds = [&] { return secondsSince(bake_start) - evaluation_seconds; };
+    const auto evaluate = [&] {
+        const double bake_time = bakeSeconds();
+        const auto evaluation_start = std::chrono::steady_clock::now();
+        ConvergenceRow row = evaluator->evaluate(baker.cache());
+        row.iteration = baker.iterationsDone();
+        row.bake_seconds = bake_time;
+        row.rays = baker.counters().segments + baker.counters().shadow_rays;
+        evaluation_seconds += secondsSince(evaluation_start);
+        report.rows.push_back(row);
+        return row;
+    };
     const char* stop_reason = "iterations";
     {
         Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
                           !o.quiet && Progress::isTerminal());
+        uint32_t next_checkpoint = nextReportCheckpoint(0);
+        while (next_checkpoint <= first_iteration) next_checkpoint = nextReportCheckpoint(next_checkpoint);
         while (baker.iterationsDone() < o.iterations) {
             if (g_stop_signal != 0) {
                 stop_reason = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
                 break;
             }
-            if (o.time_budget > 0.0 && secondsSince(bake_start) >= o.time_budget) {
+            if (o.time_budget > 0.0 && bakeSeconds() >= o.time_budget) {
                 stop_reason = "time budget";
                 break;
             }
@@ -300,15 +389,25 @@ void runBake(const BakeOptions& o) {
             if (!checkpoint_path.empty() && baker.iterationsDone() % o.checkpoint_interval == 0) {
                 saveCheckpoint(checkpoint_path, baker, resume_settings);
             }
+            if (evaluator && baker.iterationsDone() == next_checkpoint) {
+                next_checkpoint = nextReportCheckpoint(next_checkpoint);
+                const std::optional<double> error = evaluate().primaryError();
+                if (o.target_error > 0.0 && error && *error <= o.target_error) {
+                    stop_reason = "target error";
+                    break;
+                }
+            }
         }
         progress.finish();
     }
+    // The end point of every curve is the cache that is written.
+    if (evaluator && (report.rows.empty() || report.rows.back().iteration != baker.iterationsDone())) evaluate();
     // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
     // from here, a finished one can be extended with a larger --iterations.
     if (!checkpoint_path.empty()) saveCheckpoint(checkpoint_path, baker, resume_settings);
     std::signal(SIGINT, previous_interrupt_handler);
     std::signal(SIGTERM, previous_terminate_handler);
-    const double bake_seconds = secondsSince(bake_start);
+    const double bake_seconds = bakeSeconds();
 
     const auto finish_start = std::chrono::steady_clock::now();
     const SharcCache& cache = baker.cache();
@@ -349,6 +448,51 @@ void runBake(const BakeOptions& o) {
         printStabilitySection(stdout, stability);
         std::printf("Wrote %s (%llu voxels)\n", o.output_path.c_str(), (unsigned long long)live);
     }
+    if (evaluator) {
+        if (!o.report_dir.empty() && evaluator->measuresImage()) {
+            // Plain path tracing of the same view for as long as the bake plus its last render took.
+            const ConvergenceRow& last = report.rows.back();
+            const auto plain_start = std::chrono::steady_clock::now();
+            report.plain = evaluator->plainPathTracing(last.bake_seconds + last.render_seconds, 1u << 16);
+            evaluation_seconds += secondsSince(plain_start);
+        }
+        report.evaluation_seconds = evaluation_seconds;
+        if (!o.quiet) {
+            std::printf("Convergence (%s; evaluation %.2f s, not counted in the bake):\n", report.reference.c_str(),
+                        evaluation_seconds);
+            std::printf("  %10s %10s %12s %14s %12s %12s\n", "iteration", "bake s", "live voxels", "voxel error",
+                        "image error", "image relMSE");
+            for (const ConvergenceRow& r : report.rows) {
+                std::printf("  %10u %10.3f %12llu %14s %12s %12s\n", r.iteration, r.bake_seconds,
+                            (unsigned long long)r.live_voxels,
+                            percent(r.voxel ? std::optional<double>(r.voxel->mean_relative) : std::nullopt).c_str(),
+                            percent(r.image ? std::optional<double>(r.image->mean_relative_error) : std::nullopt).c_str(),
+                            general(r.image ? std::optional<double>(r.image->relative_mse) : std::nullopt).c_str());
+            }
+            if (!report.plain.empty()) {
+                const ConvergenceRow& last = report.rows.back();
+                const double total = last.bake_seconds + last.render_seconds;
+                const std::optional<double> plain = plainErrorAt(report.plain, total);
+                std::printf("  at %.2f s (bake + render through the cache): cache %s, plain path tracing %s "
+                            "(%u spp took %.2f s)\n",
+                            total, percent(last.image->mean_relative_error).c_str(), percent(plain).c_str(),
+                            report.plain.back().samples_per_pixel, report.plain.back().seconds);
+            }
+        }
+        if (!o.report_dir.empty()) {
+            try {
+                writeConvergenceTables(o.report_dir, report);
+            } catch (const std::runtime_error& e) {
+                throw CommandError(kExitIo, e.what());
+            }
+            const std::string plot_problem = plotConvergence(o.report_dir, report);
+            if (!plot_problem.empty()) std::fprintf(stderr, "warning: no convergence plot: %s\n", plot_problem.c_str());
+            if (!o.quiet) {
+                std::printf("Wrote %s/convergence.csv, plain_path_tracing.csv, convergence.json%s\n",
+                            o.report_dir.c_str(), plot_problem.empty() ? ", convergence.png" : "");
+            }
+        }
+    }
     if (!o.stats_json.empty()) {
         std::ofstream json(o.stats_json);
         json << "{\n"
@@ -357,7 +501,8 @@ void runBake(const BakeOptions& o) {
              << "  \"threads\": " << threads << ",\n"
              << "  \"seconds\": {\"total\": " << secondsSince(start) << ", \"setup\": " << setup_seconds
              << ", \"bake\": " << bake_seconds << ", \"update\": " << stage.update << ", \"commit\": " << stage.commit
-             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds << "},\n"
+             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds
+             << ", \"evaluation\": " << evaluation_seconds << "},\n"
              << "  \"paths\": " << c.paths << ",\n  \"segments\": " << c.segments << ",\n"
              << "  \"shadow_rays\": " << c.shadow_rays << ",\n  \"rays_per_second\": " << rays_per_second << ",\n"
              << "  \"resampled_paths\": " << c.resampled << ",\n"
@@ -451,6 +596,25 @@ void registerBakeCommand(CLI::App& app) {
                     "does iteration k*N+i of that bake (its camera pose and samples). Combine the N caches "
                     "with 'sharcbake merge'")
         ->capture_default_str();
+    cmd->add_option("--report", o->report_dir,
+                    "Measure error against run time: at checkpoints 1, 2, 3, 4, 6, 8, 11, 16, ... iterations (two "
+                    "per octave), measure the cache, then plain path tracing of the same view; write "
+                    "DIR/convergence.csv, plain_path_tracing.csv, convergence.json and convergence.png "
+                    "(gnuplot). Evaluation time is not counted in the bake's time. Needs --reference or a scene "
+                    "with a known radiance");
+    cmd->add_option("--reference", o->reference_path,
+                    "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
+                    "the image error is a render through the cache against it; its size is the evaluation size");
+    cmd->add_option("--report-camera", o->report_camera, "Evaluation camera: glTF camera name or index (default: the first)");
+    cmd->add_option("--report-resolution", o->report_resolution,
+                    "Evaluation image size \"W\" or \"WxH\" when there is no --reference (default 128 wide)");
+    cmd->add_option("--report-spp", o->report_spp, "Samples per pixel of the evaluation render through the cache")
+        ->capture_default_str()->check(CLI::Range(1u, 1u << 16));
+    cmd->add_option("--target-error", o->target_error,
+                    "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
+                    "mean relative error against the known radiance where the scene has one, else the image's mean "
+                    "relative error against --reference")
+        ->check(CLI::PositiveNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
     cmd->callback([o] { runBake(*o); });
 }

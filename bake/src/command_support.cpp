@@ -50,6 +50,49 @@ void checkOutputPath(const std::string& path, const std::string& what) {
     }
 }
 
+Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
+                   float fov_degrees) {
+    if (!selector.empty()) {
+        for (const Camera& c : scene.cameras) {
+            if (c.name == selector) return c;
+        }
+        char* end = nullptr;
+        const unsigned long index = std::strtoul(selector.c_str(), &end, 10);
+        if (end && *end == '\0' && index < scene.cameras.size()) return scene.cameras[index];
+        std::string names;
+        for (size_t i = 0; i < scene.cameras.size(); ++i) {
+            names += (i ? ", " : "") + std::to_string(i) + " '" + scene.cameras[i].name + "'";
+        }
+        throw CommandError(kExitUsage, option_name + " " + selector + ": no such camera in the scene (" +
+                                           (names.empty() ? "it has none" : "it has " + names) + ")");
+    }
+    if (!scene.cameras.empty()) return scene.cameras.front();
+    // Frame the bounding sphere with the given field of view, looking down -Z.
+    Camera c;
+    c.name = "automatic";
+    c.yfov = glm::radians(fov_degrees);
+    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
+    const float radius = std::max(0.5f * glm::length(scene.bounds_max - scene.bounds_min), 1e-3f);
+    c.position = center + glm::vec3(0.0f, 0.0f, 1.1f * radius / std::sin(0.5f * c.yfov));
+    return c;
+}
+
+void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
+                    int& width, int& height) {
+    width = 0;
+    height = 0;
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> width) || width <= 0 || (in >> x && (x != 'x' || !(in >> height) || height <= 0)) ||
+        !(in >> std::ws).eof()) {
+        throw CommandError(kExitUsage, option_name + ": expected W or WxH with positive integers, got \"" + text + "\"");
+    }
+    if (height == 0) height = std::max(1, int(std::lround(float(width) / aspect.value_or(1.0f))));
+    if (int64_t(width) * int64_t(height) > (int64_t(1) << 28)) {
+        throw CommandError(kExitUsage, option_name + ": image too large");
+    }
+}
+
 void addSkyOptions(CLI::App& command, SkyOptions& options) {
     command.add_option("--sky", options.uniform,
                        "Uniform sky radiance \"r,g,b\" (linear), replacing the scene's sky "

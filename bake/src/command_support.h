@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <glm/glm.hpp>
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -45,6 +46,17 @@ glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
 /// Fails early (kExitIo) when `path` cannot be written: its folder is missing or not writable,
 /// or it names a folder. Called before long work so that nothing is lost at the end.
 void checkOutputPath(const std::string& path, const std::string& what);
+
+/// A glTF camera of the scene by name or index, or the first when `selector` is empty; when the
+/// scene has none, one that frames its bounds from +Z with `fov_degrees`. Throws
+/// CommandError(kExitUsage) naming `option_name` and the cameras there are.
+Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
+                   float fov_degrees);
+
+/// Parses an image size "W" or "WxH"; "W" takes the height from `aspect` (width / height, 1 if
+/// unknown). Throws CommandError(kExitUsage) naming the option.
+void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
+                    int& width, int& height);
 
 /// Options that choose the sky, shared by render and bake.
 struct SkyOptions {

@@ -155,50 +155,11 @@ Camera chooseCamera(const Scene& scene, const RenderOptions& o) {
         c.yfov = glm::radians(o.fov_degrees);
         return c;
     }
-    if (!o.camera.empty()) {
-        for (const Camera& c : scene.cameras) {
-            if (c.name == o.camera) return c;
-        }
-        char* end = nullptr;
-        const unsigned long index = std::strtoul(o.camera.c_str(), &end, 10);
-        if (end && *end == '\0' && index < scene.cameras.size()) return scene.cameras[index];
-        std::string names;
-        for (size_t i = 0; i < scene.cameras.size(); ++i) {
-            names += (i ? ", " : "") + std::to_string(i) + " '" + scene.cameras[i].name + "'";
-        }
-        throw CommandError(kExitUsage, "--camera " + o.camera + ": no such camera in the scene (" +
-                                           (names.empty() ? "it has none" : "it has " + names) + ")");
-    }
-    if (!scene.cameras.empty()) return scene.cameras.front();
-    // Frame the bounding sphere with the default field of view, looking down -Z.
-    Camera c;
-    c.name = "automatic";
-    c.yfov = glm::radians(o.fov_degrees);
-    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
-    const float radius = std::max(0.5f * glm::length(scene.bounds_max - scene.bounds_min), 1e-3f);
-    c.position = center + glm::vec3(0.0f, 0.0f, 1.1f * radius / std::sin(0.5f * c.yfov));
-    return c;
+    return sceneCamera(scene, o.camera, "--camera", o.fov_degrees);
 }
 
 void parseResolution(const RenderOptions& o, const Camera& camera, int& width, int& height) {
-    width = 512;
-    height = 0;
-    if (!o.resolution.empty()) {
-        char x = 0;
-        std::istringstream in(o.resolution);
-        if (!(in >> width) || width <= 0 || (in >> x && (x != 'x' || !(in >> height) || height <= 0)) ||
-            !(in >> std::ws).eof()) {
-            throw CommandError(kExitUsage, "--resolution: expected W or WxH with positive integers, got \"" +
-                                               o.resolution + "\"");
-        }
-    }
-    if (height == 0) {
-        const float aspect = camera.aspect_ratio.value_or(1.0f);
-        height = std::max(1, int(std::lround(float(width) / aspect)));
-    }
-    if (int64_t(width) * int64_t(height) > (int64_t(1) << 28)) {
-        throw CommandError(kExitUsage, "--resolution: image too large");
-    }
+    parseImageSize(o.resolution.empty() ? "512" : o.resolution, "--resolution", camera.aspect_ratio, width, height);
 }
 
 ToneMap parseToneMap(const std::string& name) {

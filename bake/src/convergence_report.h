@@ -1,0 +1,127 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file convergence_report.h
+/// @brief Error against run time during a bake (`bake --report`, `--target-error`).
+///
+/// At checkpoints spaced logarithmically in iterations the bake is paused and measured:
+/// - voxel error: every live voxel against the scene's known radiance (furnace rooms);
+/// - image error: a render through the cache as it stands (what `render --cache` would give
+///   with a cache file written now) against a reference image of the same camera;
+/// and, once the bake is over, plain path tracing of the same view at growing sample counts,
+/// so both can be compared at equal time. Evaluation time is kept out of the bake's time.
+#pragma once
+
+#include "image_error.h"
+#include "lights.h"
+#include "path_tracer.h"
+#include "sharc_cache.h"
+#include "sharcbake/image.h"
+#include "sharcbake/scene.h"
+#include "tracer.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// The next checkpoint after `done` iterations: round(2^(k/2)) for k = 0, 1, 2, ... (two per
+/// octave: 1, 2, 3, 4, 6, 8, 11, 16, 23, 32, ...), so a long bake costs few evaluations.
+uint32_t nextReportCheckpoint(uint32_t done);
+
+/// Error of every live voxel (one with samples) against a known radiance, per voxel the mean
+/// over channels of |L - L_known| / L_known.
+struct VoxelError {
+    uint64_t voxels = 0;
+    double mean_relative = 0.0;
+    double rms_relative = 0.0;
+    double max_relative = 0.0;
+    double within_1_percent = 0.0;  ///< share of voxels with relative error <= 0.01
+};
+VoxelError measureVoxelError(const CacheData& cache, glm::vec3 known_radiance);
+
+/// One evaluation during the bake.
+struct ConvergenceRow {
+    uint32_t iteration = 0;
+    double bake_seconds = 0.0;    ///< bake time so far, evaluation excluded
+    double render_seconds = 0.0;  ///< time of the evaluation render through the cache (0 without one)
+    uint64_t rays = 0;            ///< bake rays so far (path segments + shadow rays)
+    uint64_t live_voxels = 0;
+    std::optional<VoxelError> voxel;
+    std::optional<ImageComparison> image;
+
+    /// The error --target-error compares: the voxel mean relative error where the scene has a
+    /// known radiance, else the image's mean relative error.
+    std::optional<double> primaryError() const;
+};
+
+/// Plain path tracing of the evaluation view with `samples_per_pixel` samples.
+struct PlainPathTracingRow {
+    uint32_t samples_per_pixel = 0;
+    double seconds = 0.0;
+    uint64_t rays = 0;
+    ImageComparison image;
+};
+
+/// The view every evaluation renders.
+struct EvaluationView {
+    Camera camera;
+    int width = 128;
+    int height = 128;
+    uint32_t samples_per_pixel = 16;  ///< for the render through the cache
+    /// As `sharcbake render`: Russian roulette ends paths, the cap only bounds the worst case
+    /// (a low cap would bias plain path tracing in a furnace).
+    uint32_t max_bounces = PathTracerSettings{}.max_bounces;
+};
+
+class ConvergenceEvaluator {
+public:
+    /// @param reference the image to compare with (same size as the view), or none: then the
+    ///        image measure uses the scene's known radiance in every pixel, or is left out.
+    ConvergenceEvaluator(const Scene& scene, const Tracer& tracer, const LightSampler& lights, EvaluationView view,
+                         std::optional<Image> reference);
+
+    bool measuresVoxels() const { return known_radiance_.has_value(); }
+    bool measuresImage() const { return reference_.has_value(); }
+    const EvaluationView& view() const { return view_; }
+
+    /// Measures the cache as it stands (the row's iteration, time, rays and voxel count are
+    /// the caller's to fill).
+    ConvergenceRow evaluate(const SharcCache& cache) const;
+
+    /// Plain path tracing of the view at 1, 2, 4, ... samples per pixel, each level adding
+    /// samples to the last, until it has run `until_seconds` or reached `max_samples_per_pixel`.
+    std::vector<PlainPathTracingRow> plainPathTracing(double until_seconds, uint32_t max_samples_per_pixel) const;
+
+private:
+    const Tracer& tracer_;
+    const LightSampler& lights_;
+    EvaluationView view_;
+    std::optional<glm::vec3> known_radiance_;
+    std::optional<Image> reference_;
+};
+
+/// Everything `--report DIR` writes.
+struct ConvergenceReport {
+    std::string scene;
+    std::string reference;  ///< path, "known radiance" or "" (no image measure)
+    EvaluationView view;
+    std::vector<ConvergenceRow> rows;
+    std::vector<PlainPathTracingRow> plain;
+    double evaluation_seconds = 0.0;  ///< all evaluation time, kept out of the bake's
+    std::optional<double> target_error;
+};
+
+/// The plain path tracing error at `seconds`, interpolated log-log between its rows (none
+/// outside their range).
+std::optional<double> plainErrorAt(const std::vector<PlainPathTracingRow>& plain, double seconds);
+
+/// Writes DIR/convergence.csv, DIR/plain_path_tracing.csv and DIR/convergence.json. Throws
+/// std::runtime_error naming the file that could not be written.
+void writeConvergenceTables(const std::string& dir, const ConvergenceReport& report);
+
+/// Writes DIR/convergence.gp and runs gnuplot on it to draw DIR/convergence.png. Returns an
+/// empty string, or why there is no plot (gnuplot missing or failing); the tables stand alone.
+std::string plotConvergence(const std::string& dir, const ConvergenceReport& report);
+
+}  // namespace sharcbake

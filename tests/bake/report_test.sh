@@ -1,0 +1,108 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# `bake --report` and `--target-error`: the tables have the documented columns, error falls
+# during a Cornell box bake, the rho = 0.9 furnace ends under 2% against its analytic radiance,
+# and --target-error stops early with the target met.
+# Usage: report_test.sh SHARCBAKE SCENES_DIR WORK_DIR PYTHON
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+python=$4
+rm -rf "$work" && mkdir -p "$work"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+expect() {  # expect CODE DESCRIPTION COMMAND...
+    code=$1; what=$2; shift 2
+    "$@" >"$work/out.txt" 2>"$work/err.txt"
+    got=$?
+    if [ "$got" -ne "$code" ]; then
+        fail "$what: exit $got, expected $code"; cat "$work/out.txt" "$work/err.txt"
+    else
+        echo "ok: $what (exit $got)"
+    fi
+}
+
+# Checks a report folder with Python (stdlib only): columns, JSON, PNG, and a condition on the
+# rows, given as a Python expression over `rows` (convergence.csv as dicts of floats or None),
+# `plain` (plain_path_tracing.csv) and `report` (convergence.json).
+check_report() {  # check_report DIR DESCRIPTION EXPRESSION
+    "$python" - "$1" "$3" <<'EOF' || fail "$2"
+import csv, json, sys
+folder, condition = sys.argv[1], sys.argv[2]
+columns = ["iteration", "bake_seconds", "render_seconds", "total_seconds", "rays", "live_voxels",
+           "voxel_mean_relative_error", "voxel_rms_relative_error", "voxel_max_relative_error",
+           "voxel_within_1_percent", "image_relative_mse", "image_mean_relative_error", "image_relative_bias"]
+plain_columns = ["samples_per_pixel", "seconds", "rays", "image_relative_mse", "image_mean_relative_error",
+                 "image_relative_bias"]
+def read(name, expected):
+    with open(folder + "/" + name) as f:
+        reader = csv.DictReader(f)
+        assert reader.fieldnames == expected, "%s columns %s" % (name, reader.fieldnames)
+        return [{k: (float(v) if v != "" else None) for k, v in row.items()} for row in reader]
+rows = read("convergence.csv", columns)
+plain = read("plain_path_tracing.csv", plain_columns)
+report = json.load(open(folder + "/convergence.json"))
+assert len(report["checkpoints"]) == len(rows) and len(report["plain_path_tracing"]) == len(plain)
+assert open(folder + "/convergence.png", "rb").read(8) == b"\x89PNG\r\n\x1a\n", "convergence.png is not a PNG"
+iterations = [r["iteration"] for r in rows]
+assert iterations == sorted(set(iterations)) and iterations[0] == 1, iterations
+assert all(r["bake_seconds"] >= 0 and r["rays"] > 0 for r in rows) and rows[-1]["live_voxels"] > 0
+ok = eval("(" + condition + ")")
+print("rows:", [(int(r["iteration"]), r["voxel_mean_relative_error"], r["image_mean_relative_error"]) for r in rows])
+print("plain:", [(int(p["samples_per_pixel"]), p["seconds"], p["image_mean_relative_error"]) for p in plain])
+sys.exit(0 if ok else 1)
+EOF
+}
+
+furnace="$scenes/furnace_rho090/furnace_rho090.gltf"
+cornell="$scenes/cornell_box/cornell_box.gltf"
+small="--resolution 160x160 --scene-scale 5 --capacity 262144 --report-resolution 48"
+
+# Usage errors come before any work.
+expect 1 "--report without anything to measure against" \
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/none"
+grep -q "reference" "$work/err.txt" || fail "the message does not say to give --reference"
+expect 1 "--target-error without anything to measure against" \
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --target-error 0.1
+expect 2 "missing --reference" \
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/r" --reference "$work/none.exr"
+expect 1 "--report-resolution different from the reference" sh -c \
+    "'$sharcbake' render '$cornell' -o '$work/tiny.exr' --resolution 8x8 --spp 1 -q &&
+     '$sharcbake' bake '$cornell' -o '$work/c.sharc' --iterations 2 --report '$work/r' --reference '$work/tiny.exr' --report-resolution 16x16"
+
+# Furnace, rho = 0.9: every surface has radiance 10; the voxels end under 2% mean relative error.
+expect 0 "furnace bake with --report" \
+    "$sharcbake" bake "$furnace" -o "$work/furnace.sharc" --iterations 1024 $small --report "$work/furnace"
+check_report "$work/furnace" "furnace: voxel error under 2% at the end, falling, and a plain path tracing curve" \
+    'rows[-1]["voxel_mean_relative_error"] < 0.02 and rows[-1]["iteration"] == 1024 and
+     rows[0]["voxel_mean_relative_error"] > 4 * rows[-1]["voxel_mean_relative_error"] and
+     rows[-1]["image_mean_relative_error"] < 0.03 and len(plain) >= 2 and
+     plain[-1]["seconds"] >= rows[-1]["total_seconds"] and report["reference"] == "known radiance"'
+
+# --target-error stops at the first checkpoint that meets it, and that checkpoint meets it.
+expect 0 "furnace bake with --target-error" \
+    "$sharcbake" bake "$furnace" -o "$work/target.sharc" --iterations 100000 $small --target-error 0.05 \
+    --report "$work/target" --stats-json "$work/target.json"
+check_report "$work/target" "--target-error: stopped early with the target met" \
+    'rows[-1]["voxel_mean_relative_error"] <= 0.05 and rows[-2]["voxel_mean_relative_error"] > 0.05 and
+     rows[-1]["iteration"] < 100000 and report["target_error"] == 0.05'
+grep -q '"stop_reason": "target error"' "$work/target.json" || fail "stats JSON does not say the target stopped the bake"
+"$sharcbake" info "$work/target.sharc" > "$work/info.txt" 2>&1 && grep -q "target error" "$work/info.txt" ||
+    fail "the cache's metadata does not record the stop reason"
+
+# Cornell box against a reference render: the image error falls between the first and the last
+# checkpoint.
+expect 0 "reference render" "$sharcbake" render "$cornell" -o "$work/reference.exr" --resolution 48 --spp 512 -q
+expect 0 "Cornell box bake with --report --reference" \
+    "$sharcbake" bake "$cornell" -o "$work/cornell.sharc" --iterations 32 --resolution 320x320 \
+    --reference "$work/reference.exr" --report "$work/cornell"
+check_report "$work/cornell" "Cornell box: image error falls" \
+    'rows[-1]["image_mean_relative_error"] < 0.9 * rows[0]["image_mean_relative_error"] and
+     rows[-1]["image_relative_mse"] < 0.75 * rows[0]["image_relative_mse"] and
+     rows[-1]["voxel_mean_relative_error"] is None and len(plain) >= 2'
+grep -q "plain path tracing" "$work/out.txt" || fail "the summary does not compare with plain path tracing"
+
+if [ "$failures" -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
+echo "all report tests passed"
