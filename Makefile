@@ -11,7 +11,7 @@ SHARCBAKE  := $(BUILD_DIR)/bin/sharcbake
 DEB_PACKAGES := build-essential cmake pkg-config python3 \
     libembree-dev libtbb-dev libopenvdb-dev libopenexr-dev libglm-dev libcli11-dev \
     libtinygltf-dev nlohmann-json3-dev libstb-dev libboost-iostreams-dev libgtest-dev libbenchmark-dev \
-    libopenvdb-tools python3-openvdb clang libclang-rt-14-dev
+    libopenvdb-tools python3-openvdb clang libclang-rt-14-dev gnuplot-nox
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -38,19 +38,22 @@ build: configure
 
 demo: build
 	@mkdir -p $(OUT_DIR)
-	$(SHARCBAKE) bake scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box.sharc \
-	    --stats-json $(OUT_DIR)/cornell_box_bake.json
-	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_cached.exr \
-	    --resolution 256x256 --spp 64 --cache $(OUT_DIR)/cornell_box.sharc
-	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_cache_view.exr \
-	    --resolution 256x256 --spp 4 --cache $(OUT_DIR)/cornell_box.sharc --debug-view cache -q
 	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_reference.exr \
-	    --resolution 256x256 --spp 256
+	    --resolution 160x160 --spp 1024
+	$(SHARCBAKE) bake scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box.sharc \
+	    --stats-json $(OUT_DIR)/cornell_box_bake.json \
+	    --report $(OUT_DIR)/report --reference $(OUT_DIR)/cornell_box_reference.exr
+	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_cached.exr \
+	    --resolution 160x160 --spp 64 --cache $(OUT_DIR)/cornell_box.sharc
+	$(SHARCBAKE) render scenes/cornell_box/cornell_box.gltf -o $(OUT_DIR)/cornell_box_cache_view.exr \
+	    --resolution 160x160 --spp 4 --cache $(OUT_DIR)/cornell_box.sharc --debug-view cache -q
 	$(SHARCBAKE) compare $(OUT_DIR)/cornell_box_cached.exr $(OUT_DIR)/cornell_box_reference.exr
 	@echo "Demo outputs are in $(OUT_DIR)/: cornell_box.sharc (the baked cache), cornell_box_bake.json"
 	@echo "(bake statistics), cornell_box_cached.exr/.png (paths ending on the cache),"
 	@echo "cornell_box_cache_view.exr/.png (the cache seen from the camera) and"
-	@echo "cornell_box_reference.exr/.png (plain path tracing, 256 spp; the error above is against it)."
+	@echo "cornell_box_reference.exr/.png (plain path tracing, 1024 spp; the error above is against it)."
+	@echo "Error against run time: $(OUT_DIR)/report/convergence.png (tables: convergence.csv,"
+	@echo "plain_path_tracing.csv, convergence.json; README.md, 'Error against run time', explains them)."
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
