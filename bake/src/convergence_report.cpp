@@ -149,11 +149,25 @@ ConvergenceRow ConvergenceEvaluator::evaluate(const SharcCache& cache) const {
         settings.max_bounces = view_.max_bounces;
         const PathTracer path_tracer(tracer_, lights_, settings, &baked);
         TraceCounters counters;
-        const Image image = renderImage(
-            CameraRays(view_.camera, view_.width, view_.height),
-            ImageRenderSettings{view_.width, view_.height, view_.samples_per_pixel, kCachedRenderSeed},
-            [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
-            nullptr);
+        const auto render = [&](uint32_t samples_per_pixel, uint32_t seed) {
+            return renderImage(
+                CameraRays(view_.camera, view_.width, view_.height),
+                ImageRenderSettings{view_.width, view_.height, samples_per_pixel, seed},
+                [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
+                nullptr);
+        };
+        // Two independent halves: their mean is the render, their difference its own noise.
+        const uint32_t spp = view_.samples_per_pixel;
+        const uint32_t first_half = spp / 2, second_half = spp - spp / 2;
+        Image image = render(std::max(first_half, 1u), kCachedRenderSeed);
+        if (first_half > 0) {
+            const Image second = render(second_half, kCachedRenderSeed + 1);
+            row.image_split = splitRelativeMse(image, first_half, second, second_half, *reference_);
+            for (size_t i = 0; i < image.pixels.size(); ++i) {
+                image.pixels[i] = (image.pixels[i] * float(first_half) + second.pixels[i] * float(second_half)) /
+                                  float(spp);
+            }
+        }
         row.render_seconds = secondsSince(start);
         row.image = compareImages(image, *reference_);
     }
@@ -217,7 +231,8 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
     std::ofstream csv = openForWriting(csv_path);
     csv << "iteration,bake_seconds,render_seconds,total_seconds,rays,live_voxels,"
            "voxel_mean_relative_error,voxel_rms_relative_error,voxel_max_relative_error,voxel_within_1_percent,"
-           "image_relative_mse,image_mean_relative_error,image_relative_bias\n";
+           "image_relative_mse,image_mean_relative_error,image_relative_bias,image_render_noise_relative_mse,"
+           "image_cache_relative_mse,image_cache_relative_mse_standard_error\n";
     for (const ConvergenceRow& r : report.rows) {
         const auto voxel = [&](double VoxelError::*field) -> std::optional<double> {
             if (!r.voxel || r.voxel->voxels == 0) return std::nullopt;
@@ -227,6 +242,10 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
             if (!r.image) return std::nullopt;
             return (*r.image).*field;
         };
+        const auto split = [&](double RelativeMseSplit::*field) -> std::optional<double> {
+            if (!r.image_split) return std::nullopt;
+            return (*r.image_split).*field;
+        };
         csv << r.iteration << ',' << csvNumber(r.bake_seconds) << ',' << csvNumber(r.render_seconds) << ','
             << csvNumber(r.bake_seconds + r.render_seconds) << ',' << r.rays << ',' << r.live_voxels << ','
             << csvNumber(voxel(&VoxelError::mean_relative)) << ',' << csvNumber(voxel(&VoxelError::rms_relative))
@@ -234,7 +253,9 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
             << csvNumber(voxel(&VoxelError::within_1_percent)) << ','
             << csvNumber(image(&ImageComparison::relative_mse)) << ','
             << csvNumber(image(&ImageComparison::mean_relative_error)) << ','
-            << csvNumber(image(&ImageComparison::relative_bias)) << '\n';
+            << csvNumber(image(&ImageComparison::relative_bias)) << ',' << csvNumber(split(&RelativeMseSplit::noise))
+            << ',' << csvNumber(split(&RelativeMseSplit::rest)) << ','
+            << csvNumber(split(&RelativeMseSplit::rest_standard_error)) << '\n';
     }
     finishWriting(csv, csv_path);
 
@@ -275,7 +296,13 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
         if (r.image) {
             json << ", \"image\": {\"relative_mse\": " << jsonNumber(r.image->relative_mse)
                  << ", \"mean_relative_error\": " << jsonNumber(r.image->mean_relative_error)
-                 << ", \"relative_bias\": " << jsonNumber(r.image->relative_bias) << "}";
+                 << ", \"relative_bias\": " << jsonNumber(r.image->relative_bias);
+            if (r.image_split) {
+                json << ", \"render_noise_relative_mse\": " << jsonNumber(r.image_split->noise)
+                     << ", \"cache_relative_mse\": " << jsonNumber(r.image_split->rest)
+                     << ", \"cache_relative_mse_standard_error\": " << jsonNumber(r.image_split->rest_standard_error);
+            }
+            json << "}";
         }
         json << "}";
     }
@@ -302,34 +329,57 @@ std::string plotConvergence(const std::string& dir, const ConvergenceReport& rep
     const std::string script_path = dir + "/convergence.gp";
     {
         std::ofstream gp(script_path);
+        const auto plot = [&gp](const std::vector<std::string>& curves) {
+            gp << "plot ";
+            for (size_t i = 0; i < curves.size(); ++i) gp << (i ? ", \\\n     " : "") << curves[i];
+            gp << "\n";
+        };
+        const std::string spp = std::to_string(report.view.samples_per_pixel);
         gp << "# Written by sharcbake bake --report; re-run with: gnuplot convergence.gp\n"
-              "set terminal png size 1000,650 font ',11'\n"
+              "set terminal png size " << (has_image ? "1400,620" : "900,620") << " font ',11'\n"
               "set output 'convergence.png'\n"
               "set datafile separator ','\n"
               "set logscale xy\n"
               "set grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
               "set key top right box opaque\n"
               "set format y '%g'\n"
-              "set title " << jsonString("Error against time: " + report.scene) << " noenhanced\n"
               "set xlabel 'seconds (cache: bake + render through it; path tracing: render)'\n"
-              "set ylabel 'mean relative error'\n"
-              "plot ";
+           << (has_image ? "set multiplot layout 1,2 title " : "set title ")
+           << jsonString("Error against time: " + report.scene) << " noenhanced\n"
+           << "set ylabel 'mean relative error'\n";
         std::vector<std::string> curves;
         if (has_image) {
             curves.push_back("'convergence.csv' using 'total_seconds':'image_mean_relative_error' with linespoints "
-                             "lw 2 pt 7 title 'render through the cache (" + std::to_string(report.view.samples_per_pixel) +
-                             " spp)'");
+                             "lw 2 pt 7 lc rgb '#9400d3' title 'render through the cache (" + spp + " spp)'");
             if (!report.plain.empty()) {
                 curves.push_back("'plain_path_tracing.csv' using 'seconds':'image_mean_relative_error' with linespoints "
-                                 "lw 2 pt 5 title 'plain path tracing'");
+                                 "lw 2 pt 5 lc rgb '#009e73' title 'plain path tracing'");
             }
         }
         if (has_voxel) {
             curves.push_back("'convergence.csv' using 'bake_seconds':'voxel_mean_relative_error' with linespoints "
-                             "lw 2 pt 9 title 'voxels vs known radiance (bake seconds)'");
+                             "lw 2 pt 9 lc rgb '#e69f00' title 'voxels vs known radiance (bake seconds)'");
         }
-        for (size_t i = 0; i < curves.size(); ++i) gp << (i ? ", \\\n     " : "") << curves[i];
-        gp << "\n";
+        plot(curves);
+        if (has_image) {
+            // Relative MSE splits into the render's own noise and the rest (the cache's error):
+            // the panel shows which of the two a longer bake would reduce.
+            curves.clear();
+            curves.push_back("'convergence.csv' using 'total_seconds':'image_relative_mse' with linespoints "
+                             "lw 2 pt 7 lc rgb '#9400d3' title 'render through the cache (" + spp + " spp)'");
+            // Only where the rest stands out from its own standard error: elsewhere it is noise.
+            curves.push_back("'convergence.csv' using 'total_seconds':(column('image_cache_relative_mse') > "
+                             "2 * column('image_cache_relative_mse_standard_error') ? column('image_cache_relative_mse') "
+                             ": NaN) with linespoints lw 2 pt 6 lc rgb '#56b4e9' title 'less its render noise: the cache "
+                             "(> 2 s.e.)'");
+            if (!report.plain.empty()) {
+                curves.push_back("'plain_path_tracing.csv' using 'seconds':'image_relative_mse' with linespoints "
+                                 "lw 2 pt 5 lc rgb '#009e73' title 'plain path tracing'");
+            }
+            gp << "set ylabel 'relative MSE'\n";
+            plot(curves);
+            gp << "unset multiplot\n";
+        }
         if (!gp) return script_path + ": cannot write";
     }
     // fork + exec rather than system(): no shell, so no quoting of the folder name.

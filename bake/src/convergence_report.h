@@ -49,6 +49,10 @@ struct ConvergenceRow {
     uint64_t live_voxels = 0;
     std::optional<VoxelError> voxel;
     std::optional<ImageComparison> image;
+    /// image->relative_mse split into the evaluation render's own noise (it falls with
+    /// --report-spp, not with bake time) and the rest: the cache's own error, plus the
+    /// reference's noise (none without a --report-spp of at least 2).
+    std::optional<RelativeMseSplit> image_split;
 
     /// The error --target-error compares: the voxel mean relative error where the scene has a
     /// known radiance, else the image's mean relative error.

@@ -25,4 +25,25 @@ struct ImageComparison {
 /// Compares `image` with `reference`. Throws std::invalid_argument if the sizes differ.
 ImageComparison compareImages(const Image& image, const Image& reference);
 
+/// The relative MSE of a Monte Carlo render made of two independent renders `a` and `b` (of
+/// `a_samples` and `b_samples` samples per pixel; the render is their sample-weighted mean c),
+/// split into the render's own noise and the rest. Per pixel and channel, with d = a - b,
+/// Var(c) = E[d^2] a_samples b_samples / (a_samples + b_samples)^2, so
+///   (c - r)^2 - d^2 a_samples b_samples / n^2
+/// estimates, without bias, the squared error of what the renders converge to (for a render
+/// through a cache: the cache's own error) plus the reference's noise. Normalised like
+/// ImageComparison::relative_mse. The rest is a difference of two noisy means and may come out
+/// negative; its standard error over the pixels says how far it can be trusted (fireflies make it
+/// large).
+struct RelativeMseSplit {
+    double total = 0.0;                ///< relative MSE of c
+    double noise = 0.0;                ///< the part that is c's own noise
+    double rest = 0.0;                 ///< total - noise (unbiased, not clamped)
+    double rest_standard_error = 0.0;  ///< standard error of `rest` over the pixels
+};
+
+/// Throws std::invalid_argument if the sizes differ.
+RelativeMseSplit splitRelativeMse(const Image& a, uint32_t a_samples, const Image& b, uint32_t b_samples,
+                                  const Image& reference);
+
 }  // namespace sharcbake
