@@ -70,19 +70,40 @@ struct BakeOptions {
 std::atomic<int> g_stop_signal{0};
 extern "C" void onStopSignal(int signal) { g_stop_signal.store(signal); }
 
-/// FNV-1a (64-bit) of the scene file's bytes, so a cache records which scene it was baked from.
-std::string sceneFileHash(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
+/// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
+/// its external buffers and images: Scene::source_files), so a cache records which scene it was
+/// baked from, geometry included.
+std::string sceneContentHash(const std::vector<std::string>& files) {
     uint64_t hash = 0xcbf29ce484222325ull;
-    char buffer[1 << 16];
-    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-        for (std::streamsize i = 0; i < in.gcount(); ++i) {
-            hash = (hash ^ uint8_t(buffer[i])) * 0x100000001b3ull;
+    std::vector<char> buffer(1 << 16);
+    for (const std::string& file : files) {
+        std::ifstream in(file, std::ios::binary);
+        if (!in) throw CommandError(kExitIo, file + ": cannot read (a file of the scene)");
+        while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) {
+            for (std::streamsize i = 0; i < in.gcount(); ++i) hash = (hash ^ uint8_t(buffer[size_t(i)])) * 0x100000001b3ull;
         }
     }
     char text[32];
     std::snprintf(text, sizeof text, "fnv1a64:%016llx", (unsigned long long)hash);
     return text;
+}
+
+/// The sky the bake used where it is not the scene file's own (that one is in scene_hash): a
+/// uniform radiance as parsed, or a map by the hash of its bytes and its scale. Shards baked
+/// under different skies must not merge.
+std::string skyDescription(const SkyOptions& sky) {
+    if (!sky.uniform.empty()) {
+        const glm::vec3 radiance = parseVec3(sky.uniform, "--sky");
+        char text[96];
+        std::snprintf(text, sizeof text, "uniform %.9g,%.9g,%.9g", radiance.x, radiance.y, radiance.z);
+        return text;
+    }
+    if (!sky.exr_path.empty()) {
+        char scale[32];
+        std::snprintf(scale, sizeof scale, "%.9g", sky.scale);
+        return "map " + sceneContentHash({sky.exr_path}) + " x " + scale;
+    }
+    return "scene";
 }
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
@@ -303,7 +324,8 @@ void runBake(const BakeOptions& o) {
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", o.scene_path},
-        {"scene_hash", sceneFileHash(o.scene_path)},
+        {"scene_hash", sceneContentHash(scene.source_files)},
+        {"sky", skyDescription(o.sky)},
         {"iterations", ""},  // filled in after the bake
         {"seed", std::to_string(o.seed)},
         {"history", settings.sharc.history.describe()},
@@ -328,7 +350,6 @@ void runBake(const BakeOptions& o) {
         if (entry.first != "scene" && entry.first != "iterations") resume_settings.push_back(entry);
     }
     resume_settings.emplace_back("shard", o.shard);
-    resume_settings.emplace_back("sky", o.sky.uniform + "|" + o.sky.exr_path + "|" + std::to_string(o.sky.scale));
     resume_settings.emplace_back("camera_options", o.camera_source + "|" + o.camera_path + "|" +
                                                        std::to_string(o.explore_points) + "|" +
                                                        std::to_string(o.iterations_per_leg));

@@ -22,9 +22,10 @@ struct MergeOptions {
     bool quiet = false;
 };
 
-/// Metadata that must be equal for two caches to estimate the same radiance: the scene file
-/// and the path length (grid parameters and format version are checked by mergeCaches).
-const std::vector<std::string> kMustAgree = {"scene_hash", "max_bounces"};
+/// Metadata that must be equal for two caches to estimate the same radiance: the scene's files,
+/// the sky, and the path length (grid parameters and format version are checked by mergeCaches).
+/// Caches baked before bakes recorded "sky" lack it: those may still merge with each other.
+const std::vector<std::string> kMustAgree = {"scene_hash", "sky", "max_bounces"};
 
 /// Metadata that describes one bake, not the merge: recomputed or dropped.
 bool describesOneBake(const std::string& key) {
@@ -126,7 +127,11 @@ void runMerge(const MergeOptions& o) {
     }
     CacheData merged;
     std::string message;
-    if (mergeCaches(sorted, kMustAgree, &merged, &message) != CacheFileStatus::kOk) {
+    std::vector<std::string> must_agree = kMustAgree;
+    if (std::none_of(sorted.begin(), sorted.end(), [](const CacheData& d) { return findMetadata(d, "sky"); })) {
+        must_agree.erase(std::find(must_agree.begin(), must_agree.end(), "sky"));
+    }
+    if (mergeCaches(sorted, must_agree, &merged, &message) != CacheFileStatus::kOk) {
         // mergeCaches numbers inputs in canonical order: name the files instead.
         for (size_t i = sorted_paths.size(); i-- > 0;) {
             const std::string tag = "input " + std::to_string(i + 1);
@@ -157,8 +162,8 @@ void registerMergeCommand(CLI::App& app) {
         "merge",
         "Merge caches baked as shards of one bake into a single cache.\n\n"
         "Each voxel gets the sample-weighted mean of the inputs that hold it, and their summed\n"
-        "sample weight. The inputs must come from the same scene file (scene_hash) with the same\n"
-        "grid parameters and --max-bounces; otherwise merge refuses (exit 3). The output does not\n"
+        "sample weight. The inputs must come from the same scene files (scene_hash) and sky with the\n"
+        "same grid parameters and --max-bounces; otherwise merge refuses (exit 3). The output does not\n"
         "depend on the order of the inputs.\n\n"
         "Example (4 shards, e.g. a Slurm job array or GNU parallel, then one merge):\n"
         "  for i in 0 1 2 3; do sharcbake bake scene.gltf --shard $i/4 -o shard$i.sharc; done\n"

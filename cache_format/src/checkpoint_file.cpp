@@ -19,9 +19,6 @@
 namespace sharcbake {
 namespace {
 
-/// «SHARCCKPT» with the bytes around it of the cache identifier (SPEC §C.1).
-constexpr uint8_t kCheckpointIdentifier[16] = {0xAB, 'S', 'H', 'A', 'R', 'C', 'C', 'K',
-                                               'P',  'T', 0xBB, '\r', '\n', 0x1A, '\n', 0x00};
 constexpr uint16_t kCheckpointVersionMajor = 2;
 constexpr uint16_t kCheckpointVersionMinor = 0;
 

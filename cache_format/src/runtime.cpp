@@ -309,6 +309,12 @@ CacheFileStatus CacheView::parse(CacheError* error) {
             return fail(error, S::kUnsupportedVersion, 1,
                         "interim format 0.1 (before the versioned layout) is not readable; re-bake the cache");
         }
+        if (size >= sizeof kCheckpointIdentifier &&
+            std::memcmp(d, kCheckpointIdentifier, sizeof kCheckpointIdentifier) == 0) {
+            return fail(error, S::kBadMagic, 1,
+                        "a sharcbake bake checkpoint, not a cache: continue the bake with "
+                        "'sharcbake bake --resume FILE', which writes the cache");
+        }
         return fail(error, S::kBadMagic, 1, "not a sharcbake cache file (identifier mismatch)");
     }
     // V2: a complete header.

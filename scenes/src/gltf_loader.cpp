@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -165,6 +166,7 @@ public:
 
     Scene load() {
         parseFile();
+        listSourceFiles();
         checkRequiredExtensions();
         warnAboutIgnoredExtensions();
         convertMaterials();
@@ -230,6 +232,36 @@ private:
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : err));
         }
+    }
+
+    /// The file itself, then each external buffer and image (URIs are relative to the glTF
+    /// file and percent-encoded; data: URIs and buffer views live inside the file).
+    void listSourceFiles() {
+        scene_.source_files = {path_};
+        const std::filesystem::path folder = std::filesystem::path(path_).parent_path();
+        const auto add = [&](const std::string& uri) {
+            if (uri.empty() || uri.rfind("data:", 0) == 0) return;
+            const std::string file = (folder / percentDecoded(uri)).lexically_normal().string();
+            if (std::find(scene_.source_files.begin(), scene_.source_files.end(), file) == scene_.source_files.end()) {
+                scene_.source_files.push_back(file);
+            }
+        };
+        for (const tinygltf::Buffer& buffer : model_.buffers) add(buffer.uri);
+        for (const tinygltf::Image& image : model_.images) add(image.uri);
+    }
+
+    static std::string percentDecoded(const std::string& uri) {
+        std::string out;
+        for (size_t i = 0; i < uri.size(); ++i) {
+            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(uint8_t(uri[i + 1])) &&
+                std::isxdigit(uint8_t(uri[i + 2]))) {
+                out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+                i += 2;
+            } else {
+                out += uri[i];
+            }
+        }
+        return out;
     }
 
     void checkRequiredExtensions() const {

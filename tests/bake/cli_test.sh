@@ -45,13 +45,15 @@ expect 0 "bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$wo
     --resolution 64x64 --stats-json "$work/bake.json"
 [ -s "$work/cornell.sharc" ] || { echo "FAIL: bake did not write the cache"; failures=$((failures + 1)); }
 grep -q '"live_voxels"' "$work/bake.json" || { echo "FAIL: bake stats JSON lacks live_voxels"; failures=$((failures + 1)); }
-# The cache records which scene it came from: FNV-1a 64 of the glTF file's bytes.
+# The cache records which scene it came from: FNV-1a 64 of the bytes of the glTF file and then
+# its .bin (cache_format/SPEC.md, F.8).
 expected_hash=$(python3 -c "
 import sys
 h = 0xcbf29ce484222325
-for b in open(sys.argv[1], 'rb').read():
-    h = ((h ^ b) * 0x100000001b3) % (1 << 64)
-print('fnv1a64:%016x' % h)" "$scenes/cornell_box/cornell_box.gltf")
+for path in sys.argv[1:]:
+    for b in open(path, 'rb').read():
+        h = ((h ^ b) * 0x100000001b3) % (1 << 64)
+print('fnv1a64:%016x' % h)" "$scenes/cornell_box/cornell_box.gltf" "$scenes/cornell_box/cornell_box.bin")
 expect 0 "info --json" "$sharcbake" info "$work/cornell.sharc" --json
 grep -q "\"scene_hash\": \"$expected_hash\"" "$work/out.txt" ||
     { echo "FAIL: the cache does not record scene_hash $expected_hash"; failures=$((failures + 1)); }

@@ -107,8 +107,14 @@ grep -q "scene_hash" "$work/err.txt" || fail "the scene mismatch message does no
 expect 0 "shard with another scene scale" "$sharcbake" bake "$furnace" -o "$work/coarse.sharc" --iterations 2 --resolution 64x64 -q --shard 1/4 --scene-scale 10
 expect 3 "merge different grids" "$sharcbake" merge "$work/shard0.sharc" "$work/coarse.sharc" -o "$work/x.sharc"
 grep -q "scene scale" "$work/err.txt" || fail "the grid mismatch message does not name the parameter"
+expect 0 "shard under another sky" "$sharcbake" bake "$furnace" -o "$work/sky.sharc" --iterations 2 --resolution 64x64 -q --shard 1/4 --sky 0.5,0.5,0.5
+expect 3 "merge different skies" "$sharcbake" merge "$work/shard0.sharc" "$work/sky.sharc" -o "$work/x.sharc"
+grep -q '"sky" differs' "$work/err.txt" || fail "the sky mismatch message does not name the sky"
 expect 3 "merge the same shard twice" "$sharcbake" merge "$work/shard0.sharc" "$work/shard0.sharc" -o "$work/x.sharc"
 expect 3 "merge a checkpoint" "$sharcbake" merge "$work/shard0.sharc" "$work/short.ckpt" -o "$work/x.sharc"
+grep -q "checkpoint" "$work/err.txt" || fail "merge does not say that the input is a checkpoint"
+expect 3 "info on a checkpoint" "$sharcbake" info "$work/short.ckpt"
+grep -q "bake --resume" "$work/err.txt" || fail "info does not say how to use a checkpoint"
 expect 1 "merge a missing file" "$sharcbake" merge "$work/shard0.sharc" "$work/none.sharc" -o "$work/x.sharc"
 
 # --capacity auto: a table sized from the scene, and info reports what the bake left out.

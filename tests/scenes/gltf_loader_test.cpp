@@ -738,5 +738,31 @@ TEST(GltfLoaderKnownAnswer, FurnaceScenesCarryTheirAnswer) {
     expectVec3Near(*furnace.known_radiance, {10.0f, 10.0f, 10.0f});
 }
 
+// ------------------------------------------------------------------------- source files
+
+TEST(GltfLoaderSourceFiles, TheFileThenItsExternalBuffersAndImages) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    const std::string embedded = b.writeEmbedded(dir, "embedded.gltf");
+    EXPECT_EQ(loadGltf(embedded).source_files, std::vector<std::string>{embedded});
+    const std::string glb = b.writeGlb(dir, "scene.glb");
+    EXPECT_EQ(loadGltf(glb).source_files, std::vector<std::string>{glb});
+    // URIs are percent-encoded (Blender writes "my%20mesh.bin" for "my mesh.bin").
+    const std::string external = b.writeExternal(dir, "external.gltf", "my%20mesh.bin", /*writeBin=*/false);
+    test::writeFile(dir.file("my mesh.bin"), b.bin.data(), b.bin.size());
+    const Scene scene = loadGltf(external);
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    EXPECT_EQ(scene.source_files, (std::vector<std::string>{external, dir.file("my mesh.bin")}));
+
+    const std::string quad = std::string(SHARCBAKE_SCENES_DIR) + "/textured_quad/textured_quad.gltf";
+    const Scene textured = loadGltf(quad);
+    ASSERT_EQ(textured.source_files.size(), 3u);
+    EXPECT_EQ(textured.source_files[0], quad);
+    EXPECT_NE(textured.source_files[1].find("textured_quad.bin"), std::string::npos);
+    EXPECT_NE(textured.source_files[2].find("textured_quad.png"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace sharcbake

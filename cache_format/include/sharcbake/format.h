@@ -22,6 +22,11 @@ namespace sharcbake {
 inline constexpr uint8_t kCacheIdentifier[16] = {0xAB, 'S',  'H',  'A',  'R',  'C',  'B',  'A',
                                                  'K',  'E',  0xBB, '\r', '\n', 0x1A, '\n', 0x00};
 
+/// The bake checkpoint's identifier (SPEC §C.1): "SHARCCKPT" in the same frame, so that a
+/// checkpoint is never read as a cache and readers can say what it is.
+inline constexpr uint8_t kCheckpointIdentifier[16] = {0xAB, 'S', 'H', 'A', 'R', 'C', 'C', 'K',
+                                                      'P',  'T', 0xBB, '\r', '\n', 0x1A, '\n', 0x00};
+
 inline constexpr uint16_t kCacheVersionMajor = 1;  ///< incompatible changes
 inline constexpr uint16_t kCacheVersionMinor = 0;  ///< compatible additions (optional sections)
 

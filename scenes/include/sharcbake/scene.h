@@ -123,6 +123,10 @@ struct LoadStats {
 /// The whole scene, flattened to world space.
 struct Scene {
     std::string source_path;
+    /// Every file the scene was read from: the glTF or GLB file, then the external buffers and
+    /// images it references (in glTF index order, each once). A content hash of the scene must
+    /// cover them all: a .gltf's geometry lives in its .bin.
+    std::vector<std::string> source_files;
 
     // Geometry: one indexed triangle soup in world space. Vertex attributes are per vertex;
     // triangles index them; each triangle has a material index.
