@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Writing the .sharc byte layout (SPEC.md §F), and readCacheFile over CacheView (runtime.cpp).
 #include "sharcbake/cache_file.h"
+
+#include "container.h"
 #include "sharcbake/format.h"
 #include "sharcbake/runtime.h"
 
@@ -11,41 +13,15 @@
 #include <cstring>
 #include <fstream>
 
+#include <cerrno>
+
+#include <fcntl.h>
 #include <unistd.h>
 
 namespace sharcbake {
 namespace {
 
-/// Little-endian writer into a byte vector.
-struct ByteWriter {
-    std::vector<uint8_t>& bytes;
-    template <typename T> void put(T value) {
-        const size_t at = bytes.size();
-        bytes.resize(at + sizeof(T));
-        std::memcpy(bytes.data() + at, &value, sizeof(T));  // the host is little-endian (checked)
-    }
-    void putBytes(const void* data, size_t size) {
-        const size_t at = bytes.size();
-        bytes.resize(at + size);
-        if (size) std::memcpy(bytes.data() + at, data, size);
-    }
-    void pad8() { bytes.resize((bytes.size() + 7u) & ~size_t(7)); }
-    template <typename T> void patch(size_t at, T value) { std::memcpy(bytes.data() + at, &value, sizeof(T)); }
-};
-
 static_assert(sizeof(float) == 4 && sizeof(double) == 8, "IEEE 754 floats expected");
-
-bool isLittleEndian() {
-    const uint16_t one = 1;
-    uint8_t first;
-    std::memcpy(&first, &one, 1);
-    return first == 1;
-}
-
-CacheFileStatus fail(CacheFileStatus status, std::string* message, const std::string& text) {
-    if (message) *message = text;
-    return status;
-}
 
 /// CRC-32 tables for slicing-by-16 (16 KiB, built once): opening a cache is mostly this CRC.
 struct Crc32Tables {
@@ -131,7 +107,7 @@ void sortVoxels(std::vector<CacheVoxel>& voxels) {
 // Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META.
 CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
     if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
-    if (!isLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
+    if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
     // The writer refuses what a reader would reject (SPEC §F.10), with a writer-side message.
     std::array<uint32_t, kHashGridLevelMax + 1> per_level{};
     for (size_t i = 0; i < data.voxels.size(); ++i) {
@@ -180,35 +156,10 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     bytes.clear();
     bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
                   levels.size() * 8 + 4096);
-    ByteWriter w{bytes};
-    // 1) Identifier and header (SPEC §F.3); file_size and the CRC are patched at the end.
-    w.putBytes(kCacheIdentifier, sizeof kCacheIdentifier);
-    w.put(kCacheVersionMajor);
-    w.put(kCacheVersionMinor);
-    w.put(kCacheHeaderSize);
-    w.put(uint32_t(0));  // flags
-    w.put(kSections);
-    w.put(uint64_t(kCacheHeaderSize));  // section table offset
-    w.put(uint64_t(0));                 // file size (patched)
-    w.put(kCacheSectionEntrySize);
-    w.put(uint32_t(0));
-    w.put(uint32_t(0));
-    w.put(uint32_t(0));  // header CRC (patched)
-    // 2) Section table placeholder (SPEC §F.4).
-    const size_t table = bytes.size();
-    bytes.resize(table + kSections * kCacheSectionEntrySize, 0);
-    w.pad8();
-    struct Placed {
-        uint32_t type;
-        uint32_t flags;
-        size_t offset, length;
-    };
-    std::vector<Placed> placed;
-    auto begin = [&](uint32_t type, uint32_t flags) { placed.push_back({type, flags, bytes.size(), 0}); };
-    auto end = [&] {
-        placed.back().length = bytes.size() - placed.back().offset;
-        w.pad8();
-    };
+    ContainerWriter container(bytes, kCacheIdentifier, kCacheVersionMajor, kCacheVersionMinor, kSections);
+    ByteWriter& w = container.out();
+    const auto begin = [&](uint32_t type, uint32_t flags) { container.beginSection(type, flags); };
+    const auto end = [&] { container.endSection(); };
     // 3) GRID (SPEC §F.5).
     begin(kSectionGrid, kCacheSectionRequired);
     w.put(kHashGridPositionBits);
@@ -259,24 +210,40 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     }
     end();
     // 8) Table entries, file size, checksums.
-    for (size_t i = 0; i < placed.size(); ++i) {
-        const size_t e = table + i * kCacheSectionEntrySize;
-        w.patch(e, placed[i].type);
-        w.patch(e + 4, placed[i].flags);
-        w.patch(e + 8, uint64_t(placed[i].offset));
-        w.patch(e + 16, uint64_t(placed[i].length));
-        w.patch(e + 24, cacheCrc32(bytes.data() + placed[i].offset, placed[i].length));
-        w.patch(e + 28, uint32_t(0));
-    }
-    w.patch(40, uint64_t(bytes.size()));
-    uint32_t crc = cacheCrc32(bytes.data(), kCacheHeaderCrcOffset);
-    crc = cacheCrc32(bytes.data() + kCacheHeaderSize, kSections * kCacheSectionEntrySize, crc);
-    w.patch(kCacheHeaderCrcOffset, crc);
+    container.finish();
     // Metadata text is validated as UTF-8 by the reader: check here, on the encoded bytes.
     CacheView view;
     CacheError error;
     if (CacheView::openMemory(bytes.data(), bytes.size(), &view, &error) != CacheFileStatus::kOk) {
         return fail(CacheFileStatus::kInvalidData, message, "the data cannot be stored: " + error.message);
+    }
+    return CacheFileStatus::kOk;
+}
+
+CacheFileStatus writeFileAtomically(const std::string& path, const std::string& temporary,
+                                    const std::vector<uint8_t>& bytes, std::string* message) {
+    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) return fail(CacheFileStatus::kIoError, message, temporary + ": cannot create: " + std::strerror(errno));
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            ::close(fd);
+            std::remove(temporary.c_str());
+            return fail(CacheFileStatus::kIoError, message, temporary + ": write failed (disk full?)");
+        }
+        done += size_t(n);
+    }
+    const bool synced = ::fsync(fd) == 0;
+    const bool closed = ::close(fd) == 0;
+    if (!synced || !closed) {
+        std::remove(temporary.c_str());
+        return fail(CacheFileStatus::kIoError, message, temporary + ": fsync or close failed");
+    }
+    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+        std::remove(temporary.c_str());
+        return fail(CacheFileStatus::kIoError, message, path + ": cannot rename the temporary file into place");
     }
     return CacheFileStatus::kOk;
 }
@@ -288,22 +255,9 @@ CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, s
         if (message) *message = path + ": " + *message;
         return encoded;
     }
-    const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
-    {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        if (!out) return fail(CacheFileStatus::kIoError, message, path + ": cannot create " + temporary);
-        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-        out.flush();
-        if (!out) {
-            out.close();
-            std::remove(temporary.c_str());
-            return fail(CacheFileStatus::kIoError, message, path + ": write failed (disk full?)");
-        }
-    }
-    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-        std::remove(temporary.c_str());
-        return fail(CacheFileStatus::kIoError, message, path + ": cannot rename the temporary file into place");
-    }
+    // A per-process temporary name: two bakes writing the same output do not write one file.
+    const CacheFileStatus written = writeFileAtomically(path, path + ".tmp-" + std::to_string(::getpid()), bytes, message);
+    if (written != CacheFileStatus::kOk) return written;
     // Re-open what landed on disk and validate it (KTX habit); keep the file for the bug report.
     CacheView view;
     CacheError error;

@@ -4,6 +4,7 @@
 #include "sharcbake/checkpoint_file.h"
 
 #include "sharcbake/format.h"
+#include "container.h"
 #include "utf8.h"
 
 #include <cerrno>
@@ -33,28 +34,6 @@ constexpr uint32_t kSlotRecordSize = 64;
 constexpr uint32_t kCounterUnsigned = 1;
 constexpr uint32_t kCounterReal = 2;
 
-CacheFileStatus fail(CacheFileStatus status, std::string* message, const std::string& text) {
-    if (message) *message = text;
-    return status;
-}
-
-struct ByteWriter {
-    std::vector<uint8_t>& bytes;
-    template <typename T> void put(T value) {
-        const size_t at = bytes.size();
-        bytes.resize(at + sizeof(T));
-        std::memcpy(bytes.data() + at, &value, sizeof(T));  // little-endian host (checked)
-    }
-    void putBytes(const void* data, size_t size) {
-        const size_t at = bytes.size();
-        bytes.resize(at + size);
-        if (size) std::memcpy(bytes.data() + at, data, size);
-    }
-    void putText(const std::string& text) { putBytes(text.data(), text.size()); }
-    void pad8() { bytes.resize((bytes.size() + 7u) & ~size_t(7)); }
-    template <typename T> void patch(size_t at, T value) { std::memcpy(bytes.data() + at, &value, sizeof(T)); }
-};
-
 /// Bounds-checked little-endian reader over one section.
 struct ByteReader {
     const uint8_t* data;
@@ -83,14 +62,6 @@ struct ByteReader {
     }
 };
 
-bool hostIsLittleEndian() {
-    const uint16_t one = 1;
-    uint8_t first;
-    std::memcpy(&first, &one, 1);
-    return first == 1;
-}
-
-uint64_t align8(uint64_t v) { return (v + 7u) & ~uint64_t(7); }
 
 bool validSettingsText(const std::vector<std::pair<std::string, std::string>>& settings, std::string* problem) {
     for (size_t i = 0; i < settings.size(); ++i) {
@@ -194,26 +165,11 @@ CacheFileStatus encodeCheckpoint(const CheckpointData& data, std::vector<uint8_t
     bytes.clear();
     bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + kStateSize +
                   data.slots.size() * kSlotRecordSize + 4096);
-    ByteWriter w{bytes};
-    // Header (SPEC §F.3 layout); file size and CRC patched at the end.
-    w.putBytes(kCheckpointIdentifier, sizeof kCheckpointIdentifier);
-    w.put(kCheckpointVersionMajor);
-    w.put(kCheckpointVersionMinor);
-    w.put(kCacheHeaderSize);
-    w.put(uint32_t(0));  // flags
-    w.put(kSections);
-    w.put(uint64_t(kCacheHeaderSize));
-    w.put(uint64_t(0));  // file size (patched)
-    w.put(kCacheSectionEntrySize);
-    w.put(uint32_t(0));
-    w.put(uint32_t(0));
-    w.put(uint32_t(0));  // header CRC (patched)
-    const size_t table = bytes.size();
-    bytes.resize(table + kSections * kCacheSectionEntrySize, 0);
-    w.pad8();
-    size_t offsets[kSections], lengths[kSections];
+    ContainerWriter container(bytes, kCheckpointIdentifier, kCheckpointVersionMajor, kCheckpointVersionMinor,
+                              kSections);
+    ByteWriter& w = container.out();
     for (uint32_t section = 0; section < kSections; ++section) {
-        offsets[section] = bytes.size();
+        container.beginSection(kSectionOrder[section], kCacheSectionRequired);
         switch (kSectionOrder[section]) {
             case kSectionState:
                 w.put(data.iterations_done);
@@ -267,21 +223,9 @@ CacheFileStatus encodeCheckpoint(const CheckpointData& data, std::vector<uint8_t
                 }
                 break;
         }
-        lengths[section] = bytes.size() - offsets[section];
-        w.pad8();
+        container.endSection();
     }
-    for (uint32_t section = 0; section < kSections; ++section) {
-        const size_t e = table + section * kCacheSectionEntrySize;
-        w.patch(e, kSectionOrder[section]);
-        w.patch(e + 4, kCacheSectionRequired);
-        w.patch(e + 8, uint64_t(offsets[section]));
-        w.patch(e + 16, uint64_t(lengths[section]));
-        w.patch(e + 24, cacheCrc32(bytes.data() + offsets[section], lengths[section]));
-    }
-    w.patch(40, uint64_t(bytes.size()));
-    uint32_t crc = cacheCrc32(bytes.data(), kCacheHeaderCrcOffset);
-    crc = cacheCrc32(bytes.data() + kCacheHeaderSize, kSections * kCacheSectionEntrySize, crc);
-    w.patch(kCacheHeaderCrcOffset, crc);
+    container.finish();
     return CacheFileStatus::kOk;
 }
 
@@ -447,32 +391,7 @@ CacheFileStatus writeCheckpointFile(const std::string& path, const CheckpointDat
     }
     // A fixed temporary name: a process killed mid-write leaves one stale file that the next
     // write replaces, never a growing litter, and never a half-written checkpoint at `path`.
-    const std::string temporary = path + ".partial";
-    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) return fail(CacheFileStatus::kIoError, message, temporary + ": cannot create: " + std::strerror(errno));
-    size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            ::close(fd);
-            std::remove(temporary.c_str());
-            return fail(CacheFileStatus::kIoError, message, temporary + ": write failed (disk full?)");
-        }
-        done += size_t(n);
-    }
-    // Durable before the rename: after a power cut the checkpoint is the old one or the new one.
-    const bool synced = ::fsync(fd) == 0;
-    ::close(fd);
-    if (!synced) {
-        std::remove(temporary.c_str());
-        return fail(CacheFileStatus::kIoError, message, temporary + ": fsync failed");
-    }
-    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-        std::remove(temporary.c_str());
-        return fail(CacheFileStatus::kIoError, message, path + ": cannot rename the temporary file into place");
-    }
-    return CacheFileStatus::kOk;
+    return writeFileAtomically(path, path + ".partial", bytes, message);
 }
 
 CacheFileStatus readCheckpointFile(const std::string& path, CheckpointData* data, std::string* message) {

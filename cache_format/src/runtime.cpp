@@ -4,6 +4,7 @@
 // checking it against the bytes that hold it.
 #include "sharcbake/runtime.h"
 
+#include "container.h"
 #include "utf8.h"
 
 #include <algorithm>
@@ -32,15 +33,6 @@ template <typename T> T load(const uint8_t* p) {
     std::memcpy(&value, p, sizeof(T));  // little-endian host (checked in openMemory)
     return value;
 }
-
-bool hostIsLittleEndian() {
-    const uint16_t one = 1;
-    uint8_t first;
-    std::memcpy(&first, &one, 1);
-    return first == 1;
-}
-
-uint64_t align8(uint64_t v) { return (v + 7u) & ~uint64_t(7); }
 
 std::string fourccText(uint32_t type) {
     std::string s;
