@@ -6,19 +6,7 @@ set -u
 sharcbake=$1
 scenes=$2
 work=$3
-rm -rf "$work" && mkdir -p "$work"
-failures=0
-
-expect() {  # expect CODE DESCRIPTION COMMAND...
-    code=$1; what=$2; shift 2
-    "$@" >"$work/out.txt" 2>"$work/err.txt"
-    got=$?
-    if [ "$got" -ne "$code" ]; then
-        echo "FAIL: $what: exit $got, expected $code"; cat "$work/err.txt"; failures=$((failures + 1))
-    else
-        echo "ok: $what (exit $got)"
-    fi
-}
+. "$(dirname "$0")/../cli_support.sh"
 
 expect 0 "top-level --help" "$sharcbake" --help
 expect 0 "render --help" "$sharcbake" render --help
@@ -112,5 +100,4 @@ PY
 expect 2 "compare with a missing image" "$sharcbake" compare "$work/nothing.exr" "$work/ref48.exr"
 expect 3 "compare different sizes" "$sharcbake" compare "$work/cornell.exr" "$work/ref48.exr"
 
-[ "$failures" -eq 0 ] && echo "all CLI checks passed"
-exit "$failures"
+finish "command line"

@@ -9,20 +9,7 @@ sharcbake=$1
 scenes=$2
 work=$3
 python=$4
-rm -rf "$work" && mkdir -p "$work"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-expect() {  # expect CODE DESCRIPTION COMMAND...
-    code=$1; what=$2; shift 2
-    "$@" >"$work/out.txt" 2>"$work/err.txt"
-    got=$?
-    if [ "$got" -ne "$code" ]; then
-        fail "$what: exit $got, expected $code"; cat "$work/out.txt" "$work/err.txt"
-    else
-        echo "ok: $what (exit $got)"
-    fi
-}
+. "$(dirname "$0")/../cli_support.sh"
 
 # Checks a report folder with Python (stdlib only): columns, JSON, PNG, and a condition on the
 # rows, given as a Python expression over `rows` (convergence.csv as dicts of floats or None),
@@ -112,5 +99,4 @@ check_report "$work/cornell" "Cornell box: image error falls" \
      rows[-1]["voxel_mean_relative_error"] is None and len(plain) >= 2'
 grep -q "plain path tracing" "$work/out.txt" || fail "the summary does not compare with plain path tracing"
 
-if [ "$failures" -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
-echo "all report tests passed"
+finish "report"

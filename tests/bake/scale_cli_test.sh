@@ -8,20 +8,7 @@ set -u
 sharcbake=$1
 scenes=$2
 work=$3
-rm -rf "$work" && mkdir -p "$work"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-expect() {  # expect CODE DESCRIPTION COMMAND...
-    code=$1; what=$2; shift 2
-    "$@" >"$work/out.txt" 2>"$work/err.txt"
-    got=$?
-    if [ "$got" -ne "$code" ]; then
-        fail "$what: exit $got, expected $code"; cat "$work/err.txt"
-    else
-        echo "ok: $what (exit $got)"
-    fi
-}
+. "$(dirname "$0")/../cli_support.sh"
 
 cornell="$scenes/cornell_box/cornell_box.gltf"
 furnace="$scenes/furnace_rho050/furnace_rho050.gltf"
@@ -136,5 +123,4 @@ print(sorted((s['type'], s['crc32']) for s in json.load(sys.stdin)['sections'] i
 done
 cmp -s "$work/auto.voxels" "$work/fixed.voxels" || fail "--capacity auto changed the baked voxels"
 
-[ "$failures" -eq 0 ] && echo "all scale checks passed"
-exit "$failures"
+finish "bake at scale"

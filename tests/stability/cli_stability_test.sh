@@ -9,22 +9,7 @@ set -u
 sharcbake=$1
 scenes=$2
 work=$3
-rm -rf "$work" && mkdir -p "$work"
-failures=0
-
-expect() {  # expect CODE DESCRIPTION COMMAND...
-    code=$1; what=$2; shift 2
-    "$@" >"$work/out.txt" 2>"$work/err.txt"
-    got=$?
-    if [ "$got" -ne "$code" ]; then
-        echo "FAIL: $what: exit $got, expected $code"; cat "$work/err.txt"; failures=$((failures + 1))
-    else
-        echo "ok: $what (exit $got)"
-    fi
-}
-says() {  # says FILE TEXT DESCRIPTION
-    if grep -q -- "$2" "$1"; then echo "ok: $3"; else echo "FAIL: $3: no \"$2\" in:"; cat "$1"; failures=$((failures + 1)); fi
-}
+. "$(dirname "$0")/../cli_support.sh"
 
 # Small glTF files: no meshes at all; one triangle with a NaN vertex; a closed tetrahedron with
 # no emission, no lights and no sky.
@@ -87,5 +72,4 @@ expect 0 "healthy bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf"
     --iterations 4 --resolution 64x64
 says "$work/out.txt" "no problems found" "healthy bake: no warnings"
 
-echo "$failures failure(s)"
-[ "$failures" -eq 0 ]
+finish "stability (command line)"
