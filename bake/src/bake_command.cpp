@@ -261,6 +261,106 @@ std::string general(std::optional<double> value) {
     return text;
 }
 
+/// The convergence table of --report / --target-error, and the comparison at equal time.
+void printConvergence(const ConvergenceReport& report) {
+    std::printf("Convergence (%s; evaluation %.2f s, not counted in the bake):\n", report.reference.c_str(),
+                report.evaluation_seconds);
+    // relMSE less the render's noise is the cache's own error: the column a longer bake lowers.
+    std::printf("  %10s %10s %12s %12s %12s %12s %20s\n", "iteration", "bake s", "live voxels", "voxel error",
+                "image error", "image relMSE", "less render noise");
+    for (const ConvergenceRow& r : report.rows) {
+        std::printf("  %10u %10.3f %12llu %12s %12s %12s %20s\n", r.iteration, r.bake_seconds,
+                    (unsigned long long)r.live_voxels,
+                    percent(r.voxel ? std::optional<double>(r.voxel->mean_relative) : std::nullopt).c_str(),
+                    percent(r.image ? std::optional<double>(r.image->mean_relative_error) : std::nullopt).c_str(),
+                    general(r.image ? std::optional<double>(r.image->relative_mse) : std::nullopt).c_str(),
+                    cacheRelativeMse(r).c_str());
+    }
+    if (!report.plain.empty()) {
+        const ConvergenceRow& last = report.rows.back();
+        const double total = last.bake_seconds + last.render_seconds;
+        const std::optional<double> plain = plainErrorAt(report.plain, total);
+        std::printf("  at %.2f s (bake + render through the cache): cache %s, plain path tracing %s "
+                    "(%u spp took %.2f s)\n",
+                    total, percent(last.image->mean_relative_error).c_str(), percent(plain).c_str(),
+                    report.plain.back().samples_per_pixel, report.plain.back().seconds);
+    }
+}
+
+/// The bake's settings from its options (usage errors for malformed ones).
+BakeSettings settingsFromOptions(const BakeOptions& o) {
+    BakeSettings settings;
+    parseSize(o.resolution, "--resolution", settings.width, settings.height);
+    settings.update_stride = o.update_stride;
+    settings.seed = o.seed;
+    parseShard(o.shard, settings.shard_index, settings.shard_count);
+    settings.path.max_bounces = o.max_bounces;
+    // --capacity auto starts from the SDK's default; the bake replaces it after a pre-pass.
+    const uint32_t capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
+    settings.sharc.capacity = capacity;
+    settings.sharc.grid.scene_scale = o.scene_scale;
+    settings.sharc.grid.logarithm_base = o.log_base;
+    settings.sharc.grid.level_bias = o.level_bias;
+    settings.sharc.grid.capacity = capacity;
+    if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
+        throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
+                                           o.history + "\"");
+    }
+    const HashGridStatus grid_status = validateHashGridParameters(settings.sharc.grid);
+    if (grid_status != HashGridStatus::kOk) {
+        throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(grid_status));
+    }
+    return settings;
+}
+
+/// The cache's metadata: everything that reproduces the bake, and nothing that varies between
+/// runs (timings go to --stats-json), so the same scene, settings and seed give the same file
+/// byte for byte. "iterations" is filled in after the bake.
+std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions& o, const Scene& scene,
+                                                              const LightSampler& lights,
+                                                              const BakeSettings& settings, double radiance_scale,
+                                                              const std::string& camera_description,
+                                                              const CapacityChoice* capacity_choice) {
+    std::vector<std::pair<std::string, std::string>> metadata = {
+        {"writer", "sharcbake " SHARCBAKE_VERSION},
+        {"scene", o.scene_path},
+        {"scene_hash", sceneContentHash(scene.source_files)},
+        {"sky", skyDescription(o.sky)},
+        {"iterations", ""},
+        {"seed", std::to_string(o.seed)},
+        {"history", settings.sharc.history.describe()},
+        {"resolution", o.resolution},
+        {"update_stride", std::to_string(o.update_stride)},
+        {"max_bounces", std::to_string(o.max_bounces)},
+        {"camera", camera_description},
+        {"radiance_scale", std::to_string(radiance_scale)},
+        {"scene_scale", std::to_string(o.scene_scale)},
+        {"log_base", std::to_string(o.log_base)},
+        {"level_bias", std::to_string(o.level_bias)},
+        {"capacity", std::to_string(settings.sharc.capacity)},
+        {"left_out", workLeftOut(scene, lights)},
+    };
+    if (capacity_choice) metadata.emplace_back("capacity_choice", capacity_choice->describe());
+    if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
+    return metadata;
+}
+
+/// What a resume must match: the metadata without the scene's path (the hash names the scene)
+/// and the iteration count, plus the options that change the work but are not recorded in the
+/// cache.
+BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::string>>& metadata,
+                                const BakeOptions& o) {
+    BakeSettingsText settings;
+    for (const auto& entry : metadata) {
+        if (entry.first != "scene" && entry.first != "iterations") settings.push_back(entry);
+    }
+    settings.emplace_back("shard", o.shard);
+    settings.emplace_back("camera_options", o.camera_source + "|" + o.camera_path + "|" +
+                                                std::to_string(o.explore_points) + "|" +
+                                                std::to_string(o.iterations_per_leg));
+    return settings;
+}
+
 void runBake(const BakeOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
@@ -276,28 +376,9 @@ void runBake(const BakeOptions& o) {
         std::filesystem::create_directories(o.report_dir, error);
         checkOutputPath(o.report_dir + "/convergence.csv", "report");
     }
-    BakeSettings settings;
-    parseSize(o.resolution, "--resolution", settings.width, settings.height);
-    settings.update_stride = o.update_stride;
-    settings.seed = o.seed;
-    parseShard(o.shard, settings.shard_index, settings.shard_count);
-    settings.path.max_bounces = o.max_bounces;
-    uint32_t capacity = 1u << 22;
+    BakeSettings settings = settingsFromOptions(o);
     const bool auto_capacity = o.capacity == "auto";
-    if (!auto_capacity) capacity = parseCapacity(o.capacity);
-    settings.sharc.capacity = capacity;
-    settings.sharc.grid.scene_scale = o.scene_scale;
-    settings.sharc.grid.logarithm_base = o.log_base;
-    settings.sharc.grid.level_bias = o.level_bias;
-    settings.sharc.grid.capacity = capacity;
-    if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
-        throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
-                                           o.history + "\"");
-    }
-    const HashGridStatus grid_status = validateHashGridParameters(settings.sharc.grid);
-    if (grid_status != HashGridStatus::kOk) {
-        throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(grid_status));
-    }
+    uint32_t capacity = settings.sharc.capacity;
 
     const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
     if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
@@ -319,40 +400,10 @@ void runBake(const BakeOptions& o) {
     }
     const double max_radiance = estimateMaxRadiance(scene);
     Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
-    // Everything that reproduces the bake, and nothing that varies between runs (timings go to
-    // --stats-json): the same scene, settings and seed give the same file byte for byte.
-    std::vector<std::pair<std::string, std::string>> metadata = {
-        {"writer", "sharcbake " SHARCBAKE_VERSION},
-        {"scene", o.scene_path},
-        {"scene_hash", sceneContentHash(scene.source_files)},
-        {"sky", skyDescription(o.sky)},
-        {"iterations", ""},  // filled in after the bake
-        {"seed", std::to_string(o.seed)},
-        {"history", settings.sharc.history.describe()},
-        {"resolution", o.resolution},
-        {"update_stride", std::to_string(o.update_stride)},
-        {"max_bounces", std::to_string(o.max_bounces)},
-        {"camera", camera_description},
-        {"radiance_scale", std::to_string(baker.cache().radianceScale())},
-        {"scene_scale", std::to_string(o.scene_scale)},
-        {"log_base", std::to_string(o.log_base)},
-        {"level_bias", std::to_string(o.level_bias)},
-        {"capacity", std::to_string(capacity)},
-        {"left_out", workLeftOut(scene, lights)},
-    };
-    if (auto_capacity) metadata.emplace_back("capacity_choice", capacity_choice.describe());
-    if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
-    // What a resume must match: the metadata without the scene's path (the hash names the
-    // scene) and the iteration count, plus the options that change the work but are not
-    // recorded in the cache.
-    BakeSettingsText resume_settings;
-    for (const auto& entry : metadata) {
-        if (entry.first != "scene" && entry.first != "iterations") resume_settings.push_back(entry);
-    }
-    resume_settings.emplace_back("shard", o.shard);
-    resume_settings.emplace_back("camera_options", o.camera_source + "|" + o.camera_path + "|" +
-                                                       std::to_string(o.explore_points) + "|" +
-                                                       std::to_string(o.iterations_per_leg));
+    std::vector<std::pair<std::string, std::string>> metadata =
+        bakeMetadata(o, scene, lights, settings, baker.cache().radianceScale(), camera_description,
+                     auto_capacity ? &capacity_choice : nullptr);
+    const BakeSettingsText resume_settings = resumeSettings(metadata, o);
     if (!o.resume_path.empty()) resumeFromCheckpoint(o.resume_path, resume_settings, baker);
     const uint32_t first_iteration = baker.iterationsDone();
     ConvergenceReport report;
@@ -486,30 +537,7 @@ void runBake(const BakeOptions& o) {
             evaluation_seconds += secondsSince(plain_start);
         }
         report.evaluation_seconds = evaluation_seconds;
-        if (!o.quiet) {
-            std::printf("Convergence (%s; evaluation %.2f s, not counted in the bake):\n", report.reference.c_str(),
-                        evaluation_seconds);
-            // relMSE less the render's noise is the cache's own error: the column a longer bake lowers.
-            std::printf("  %10s %10s %12s %12s %12s %12s %20s\n", "iteration", "bake s", "live voxels", "voxel error",
-                        "image error", "image relMSE", "less render noise");
-            for (const ConvergenceRow& r : report.rows) {
-                std::printf("  %10u %10.3f %12llu %12s %12s %12s %20s\n", r.iteration, r.bake_seconds,
-                            (unsigned long long)r.live_voxels,
-                            percent(r.voxel ? std::optional<double>(r.voxel->mean_relative) : std::nullopt).c_str(),
-                            percent(r.image ? std::optional<double>(r.image->mean_relative_error) : std::nullopt).c_str(),
-                            general(r.image ? std::optional<double>(r.image->relative_mse) : std::nullopt).c_str(),
-                            cacheRelativeMse(r).c_str());
-            }
-            if (!report.plain.empty()) {
-                const ConvergenceRow& last = report.rows.back();
-                const double total = last.bake_seconds + last.render_seconds;
-                const std::optional<double> plain = plainErrorAt(report.plain, total);
-                std::printf("  at %.2f s (bake + render through the cache): cache %s, plain path tracing %s "
-                            "(%u spp took %.2f s)\n",
-                            total, percent(last.image->mean_relative_error).c_str(), percent(plain).c_str(),
-                            report.plain.back().samples_per_pixel, report.plain.back().seconds);
-            }
-        }
+        if (!o.quiet) printConvergence(report);
         if (!o.report_dir.empty()) {
             try {
                 writeConvergenceTables(o.report_dir, report);
