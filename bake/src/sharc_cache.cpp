@@ -110,7 +110,7 @@ double SharcCache::chooseRadianceScale(double max_radiance) {
 SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
     : settings_(settings),
       radiance_scale_(radiance_scale),
-      accumulation_(std::make_unique<AccumulationEntry[]>(settings.capacity)),
+      accumulation_(settings.capacity),
       resolved_(settings.capacity) {
     const HashGridStatus status = HashGridTable::create(settings.capacity, &table_);
     if (status != HashGridStatus::kOk) {
@@ -365,7 +365,7 @@ void SharcCache::grow(uint32_t capacity) {
     HashGridTable table;
     const HashGridStatus status = HashGridTable::create(capacity, &table);
     if (status != HashGridStatus::kOk) throw std::invalid_argument(std::string("hash grid: ") + toString(status));
-    std::vector<ResolvedEntry> resolved(capacity);
+    ZeroedArray<ResolvedEntry> resolved(capacity);
     uint64_t occupied = 0;
     for (uint32_t slot = 0; slot < table_.capacity(); ++slot) {
         const uint64_t key = table_.keyAt(slot);
@@ -380,7 +380,7 @@ void SharcCache::grow(uint32_t capacity) {
     }
     table_ = std::move(table);
     resolved_ = std::move(resolved);
-    accumulation_ = std::make_unique<AccumulationEntry[]>(capacity);
+    accumulation_ = ZeroedArray<AccumulationEntry>(capacity);
     occupied_ = occupied;
     settings_.capacity = settings_.grid.capacity = capacity;
 }
@@ -396,8 +396,9 @@ CacheData toCacheData(const SharcCache& cache) {
     const HashGridTable& table = cache.table();
     for (uint32_t slot = 0; slot < table.capacity(); ++slot) {
         const uint64_t key = table.keyAt(slot);
+        if (key == kHashGridInvalidKey) continue;  // before reading the entry: its page may be untouched
         const ResolvedEntry& r = cache.resolved()[slot];
-        if (key == kHashGridInvalidKey || !(r.weight > 0.0)) continue;
+        if (!(r.weight > 0.0)) continue;
         CacheVoxel v;
         v.key = key;
         v.radiance[0] = r.mean.x;

@@ -15,6 +15,7 @@
 
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
+#include "sharcbake/zeroed_array.h"
 
 #include <glm/glm.hpp>
 
@@ -162,7 +163,7 @@ public:
     void grow(uint32_t capacity);
 
     const HashGridTable& table() const { return table_; }
-    const std::vector<ResolvedEntry>& resolved() const { return resolved_; }
+    const ZeroedArray<ResolvedEntry>& resolved() const { return resolved_; }
 
     /// Puts `key` back into `slot` with its resolved state, on a cache fresh from the
     /// constructor, for a resumed bake. Call in increasing slot order: a key then lands where it
@@ -184,8 +185,10 @@ private:
     SharcSettings settings_;
     HashGridTable table_;
     double radiance_scale_;
-    std::unique_ptr<AccumulationEntry[]> accumulation_;
-    std::vector<ResolvedEntry> resolved_;
+    // Zero-filled lazily (ZeroedArray): a table far larger than the scene needs costs memory only
+    // for the pages its voxels land in.
+    ZeroedArray<AccumulationEntry> accumulation_;
+    ZeroedArray<ResolvedEntry> resolved_;
     std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<uint32_t>> chunk_missing_;  ///< commit scratch: deposits with a new key

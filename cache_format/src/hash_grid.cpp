@@ -233,8 +233,8 @@ HashGridStatus HashGridTable::create(uint32_t capacity, HashGridTable* out, uint
     if (capacity == 0) return HashGridStatus::kInvalidCapacity;
     if (bucket_size == 0) return HashGridStatus::kInvalidBucketSize;
     HashGridTable table;
-    table.keys_ = std::vector<std::atomic<uint64_t>>(capacity);
-    for (auto& slot : table.keys_) slot.store(kHashGridInvalidKey, std::memory_order_relaxed);
+    static_assert(kHashGridInvalidKey == 0, "empty slots are the zero bytes of a fresh ZeroedArray");
+    table.keys_ = ZeroedArray<std::atomic<uint64_t>>(capacity);
     table.bucket_size_ = bucket_size;
     *out = std::move(table);
     return HashGridStatus::kOk;

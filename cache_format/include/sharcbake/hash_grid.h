@@ -12,6 +12,8 @@
 /// give a defined (documented) key, never undefined behaviour.
 #pragma once
 
+#include "sharcbake/zeroed_array.h"
+
 #include <atomic>
 #include <cstdint>
 #include <optional>
@@ -231,7 +233,7 @@ public:
     HashGridTable& operator=(const HashGridTable&) = delete;
 
 private:
-    std::vector<std::atomic<uint64_t>> keys_;
+    ZeroedArray<std::atomic<uint64_t>> keys_;  ///< kHashGridInvalidKey (0) = empty: calloc'd, touched lazily
     uint32_t bucket_size_ = kHashGridBucketSize;
     std::atomic<uint64_t> failed_inserts_{0};
 };
