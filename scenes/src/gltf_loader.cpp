@@ -242,6 +242,9 @@ private:
         const auto add = [&](const std::string& uri) {
             if (uri.empty() || uri.rfind("data:", 0) == 0) return;
             const std::string file = (folder / percentDecoded(uri)).lexically_normal().string();
+            // A missing image is a warning (the texture is ignored), not part of the scene read.
+            std::error_code error;
+            if (!std::filesystem::is_regular_file(file, error)) return;
             if (std::find(scene_.source_files.begin(), scene_.source_files.end(), file) == scene_.source_files.end()) {
                 scene_.source_files.push_back(file);
             }

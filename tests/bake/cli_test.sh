@@ -42,6 +42,10 @@ for path in sys.argv[1:]:
     for b in open(path, 'rb').read():
         h = ((h ^ b) * 0x100000001b3) % (1 << 64)
 print('fnv1a64:%016x' % h)" "$scenes/cornell_box/cornell_box.gltf" "$scenes/cornell_box/cornell_box.bin")
+# A scene whose image is missing bakes (the texture is ignored with a warning).
+mkdir -p "$work/no_image" && cp "$scenes/textured_quad/textured_quad.gltf" "$scenes/textured_quad/textured_quad.bin" "$work/no_image/"
+expect 0 "bake a scene with a missing image" "$sharcbake" bake "$work/no_image/textured_quad.gltf" -o "$work/no_image.sharc" --iterations 2 --resolution 32x32
+grep -q "textured_quad.png" "$work/err.txt" || fail "no warning about the missing image"
 expect 0 "info --json" "$sharcbake" info "$work/cornell.sharc" --json
 grep -q "\"scene_hash\": \"$expected_hash\"" "$work/out.txt" ||
     { echo "FAIL: the cache does not record scene_hash $expected_hash"; failures=$((failures + 1)); }

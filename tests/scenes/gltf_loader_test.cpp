@@ -9,6 +9,7 @@
 #include <stb_image_write.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 namespace sharcbake {
@@ -762,6 +763,13 @@ TEST(GltfLoaderSourceFiles, TheFileThenItsExternalBuffersAndImages) {
     EXPECT_EQ(textured.source_files[0], quad);
     EXPECT_NE(textured.source_files[1].find("textured_quad.bin"), std::string::npos);
     EXPECT_NE(textured.source_files[2].find("textured_quad.png"), std::string::npos);
+
+    // A missing image loads with a warning (texture ignored) and is not among the files.
+    const std::string folder = std::string(SHARCBAKE_SCENES_DIR) + "/textured_quad/";
+    std::filesystem::copy_file(folder + "textured_quad.gltf", dir.file("quad.gltf"));
+    std::filesystem::copy_file(folder + "textured_quad.bin", dir.file("textured_quad.bin"));
+    const Scene without_image = loadGltf(dir.file("quad.gltf"));
+    EXPECT_EQ(without_image.source_files, (std::vector<std::string>{dir.file("quad.gltf"), dir.file("textured_quad.bin")}));
 }
 
 }  // namespace

@@ -124,7 +124,8 @@ struct LoadStats {
 struct Scene {
     std::string source_path;
     /// Every file the scene was read from: the glTF or GLB file, then the external buffers and
-    /// images it references (in glTF index order, each once). A content hash of the scene must
+    /// images it references that exist (in glTF index order, each once; a missing image is
+    /// ignored with a warning). A content hash of the scene must
     /// cover them all: a .gltf's geometry lives in its .bin.
     std::vector<std::string> source_files;
 
