@@ -56,7 +56,8 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
       camera_path_(camera_path),
       settings_(settings),
       cache_(settings.sharc, radiance_scale),
-      update_(tracer, lights, cache_, settings.path) {
+      update_(tracer, lights, cache_, settings.path),
+      keyer_(settings.sharc.grid) {
     const uint32_t stride = std::max(1u, settings_.update_stride);
     blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
     blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
@@ -66,8 +67,7 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
                              UpdateCounters& counters) const {
     const CameraPose pose = camera_path_.poseAt(work_iteration);
     const CameraRays camera(cameraFromPose(pose), settings_.width, settings_.height);
-    HashGridParameters grid = settings_.sharc.grid;
-    grid.camera_position = Float3{pose.position.x, pose.position.y, pose.position.z};
+    const Float3 camera_position{pose.position.x, pose.position.y, pose.position.z};
     const uint32_t stride = std::max(1u, settings_.update_stride);
     const uint32_t paths = pathsPerIteration();
     chunk_deposits.resize((paths + kPathsPerChunk - 1) / kPathsPerChunk);
@@ -88,7 +88,7 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
                 const Ray ray = camera.generate(x, y, glm::fract(u));
-                update_.trace(ray, sampler, grid, deposits, local);
+                update_.trace(ray, sampler, keyer_, camera_position, deposits, local);
             }
         }
     });

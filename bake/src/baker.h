@@ -78,6 +78,7 @@ private:
     BakeSettings settings_;
     SharcCache cache_;
     UpdatePathTracer update_;
+    HashGridKeyer keyer_;  ///< the grid's keys, camera aside: no logarithm per path vertex
     uint32_t blocks_x_, blocks_y_;
     uint32_t iteration_ = 0;
     std::vector<std::vector<Deposit>> chunk_deposits_;  ///< one list per fixed chunk of paths

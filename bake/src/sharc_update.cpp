@@ -50,16 +50,17 @@ glm::vec3 finiteOrZero(glm::vec3 v, uint64_t& non_finite) {
 
 }  // namespace
 
-uint64_t voxelKey(glm::vec3 position, glm::vec3 facing_normal, const HashGridParameters& grid) {
-    return hashGridKey(Float3{position.x, position.y, position.z},
-                       Float3{facing_normal.x, facing_normal.y, facing_normal.z}, grid);
+uint64_t voxelKey(glm::vec3 position, glm::vec3 facing_normal, const HashGridKeyer& keyer, const Float3& camera) {
+    return keyer.key(Float3{position.x, position.y, position.z},
+                     Float3{facing_normal.x, facing_normal.y, facing_normal.z}, camera);
 }
 
 UpdatePathTracer::UpdatePathTracer(const Tracer& tracer, const LightSampler& lights,
                                    const SharcCache& cache, UpdatePathSettings settings)
     : tracer_(tracer), lights_(lights), cache_(cache), settings_(settings) {}
 
-void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const HashGridParameters& grid,
+void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const HashGridKeyer& keyer,
+                             const Float3& camera,
                              std::vector<Deposit>& out, UpdateCounters& counters) const {
     const SharcSettings& sharc = cache_.settings();
     const uint32_t depth = std::clamp(sharc.propagation_depth, 1u, PathHistory::kMaxDepth);
@@ -91,7 +92,7 @@ void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const
         const SurfaceHit hit = makeSurfaceHit(tracer_.scene(), ray_hit, ray.direction);
         const ShadingMaterial material = evaluateMaterial(tracer_.scene(), hit);
         const glm::vec3 wo = -ray.direction;
-        const uint64_t key = voxelKey(hit.position, hit.geometric_normal, grid);
+        const uint64_t key = voxelKey(hit.position, hit.geometric_normal, keyer, camera);
 
         const glm::vec2 u_select_resample = sampler.next2D();
         const glm::vec2 u_light_point = sampler.next2D();

@@ -33,7 +33,7 @@ struct UpdateCounters {
 
 /// The hash-grid key of a hit for the current camera: SHaRC keys use the geometric normal
 /// turned towards the incoming ray, so the two sides of a thin wall are different voxels.
-uint64_t voxelKey(glm::vec3 position, glm::vec3 facing_normal, const HashGridParameters& grid);
+uint64_t voxelKey(glm::vec3 position, glm::vec3 facing_normal, const HashGridKeyer& keyer, const Float3& camera);
 
 class UpdatePathTracer {
 public:
@@ -42,8 +42,9 @@ public:
 
     /// Traces one update path and appends its deposits, in path order, to `out`. Reads the
     /// cache's resolved entries (the previous iteration's state) but never writes the cache.
-    /// `grid` holds this iteration's camera position.
-    void trace(const Ray& camera_ray, PixelSampler& sampler, const HashGridParameters& grid,
+    /// `keyer` holds the cache's grid parameters, `camera` is this iteration's camera position
+    /// (the level-of-detail centre).
+    void trace(const Ray& camera_ray, PixelSampler& sampler, const HashGridKeyer& keyer, const Float3& camera,
                std::vector<Deposit>& out, UpdateCounters& counters) const;
 
 private:

@@ -99,23 +99,79 @@ HashGridStatus validateHashGridParameters(const HashGridParameters& params) {
     return HashGridStatus::kOk;
 }
 
-uint32_t gridLevel(const Float3& position, const HashGridParameters& params) {
-    // 1) Squared distance, dot(c - p, c - p) evaluated as (dx*dx + dy*dy) + dz*dz, unfused.
-    const float dx = params.camera_position.x - position.x;
-    const float dy = params.camera_position.y - position.y;
-    const float dz = params.camera_position.z - position.z;
-    float distance2 = dx * dx;
-    distance2 = distance2 + dy * dy;
-    distance2 = distance2 + dz * dz;
+namespace {
+
+/// SPEC §H.3 steps 2-4: the level of a squared distance.
+uint32_t levelFromDistance2(float distance2, float log2_base, float level_bias) {
     // 2) Clamp (SDK 1.7+): never log(0); a NaN distance becomes 1e-10 (maxNum), i.e. level 1.
     distance2 = maxNum(distance2, kHashGridMinDistance2);
     // 3) 0.5 * log_b(d^2) + beta with log_b(x) = log2(x) / log2(b) (SPEC §H.3 on log vs log2).
-    const float log_ratio = log2F32(distance2) / log2F32(params.logarithm_base);
-    const float level = 0.5f * log_ratio + params.level_bias;
+    const float log_ratio = log2F32(distance2) / log2_base;
+    const float level = 0.5f * log_ratio + level_bias;
     // 4) clamp to [1, 511] (NaN -> 1), then truncate.
     const float clamped = minNum(maxNum(level, static_cast<float>(kHashGridLevelMin)),
                                  static_cast<float>(kHashGridLevelMax));
     return static_cast<uint32_t>(clamped);
+}
+
+/// 1) Squared distance, dot(c - p, c - p) evaluated as (dx*dx + dy*dy) + dz*dz, unfused.
+float distance2(const Float3& camera, const Float3& position) {
+    const float dx = camera.x - position.x;
+    const float dy = camera.y - position.y;
+    const float dz = camera.z - position.z;
+    float d2 = dx * dx;
+    d2 = d2 + dy * dy;
+    d2 = d2 + dz * dz;
+    return d2;
+}
+
+uint32_t floatBits(float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    return bits;
+}
+
+float bitsFloat(uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+}
+
+}  // namespace
+
+uint32_t gridLevel(const Float3& position, const HashGridParameters& params) {
+    return levelFromDistance2(distance2(params.camera_position, position), log2F32(params.logarithm_base),
+                              params.level_bias);
+}
+
+HashGridKeyer::HashGridKeyer(const HashGridParameters& params)
+    : log2_base_(log2F32(params.logarithm_base)), level_bias_(params.level_bias) {
+    voxel_size_.resize(kHashGridLevelMax + 1);
+    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) voxel_size_[level] = voxelSize(level, params);
+    // Where each level starts, by bisection over the bit patterns of the clamped squared
+    // distance (positive floats order like their bits; +Inf is the largest).
+    level_start_.assign(kHashGridLevelMax + 2, 0xFFFFFFFFu);
+    const uint32_t lowest = floatBits(kHashGridMinDistance2), highest = floatBits(INFINITY);
+    const uint32_t top = levelFromDistance2(INFINITY, log2_base_, level_bias_);
+    for (uint32_t level = 0; level <= top; ++level) {
+        uint32_t lo = lowest, hi = highest;  // invariant: the level at hi is >= level
+        while (lo < hi) {
+            const uint32_t mid = lo + (hi - lo) / 2;
+            if (levelFromDistance2(bitsFloat(mid), log2_base_, level_bias_) >= level) {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        level_start_[level] = lo;
+    }
+}
+
+uint64_t HashGridKeyer::key(const Float3& position, const Float3& normal, const Float3& camera) const {
+    const Float3 biased{position.x + kHashGridPositionBias, position.y + kHashGridPositionBias,
+                        position.z + kHashGridPositionBias};
+    const uint32_t level = levelOf(distance2(camera, biased));
+    return packHashGridKey(quantisePosition(biased, voxel_size_[level]), level, normalBits(normal), false);
 }
 
 float voxelSize(uint32_t level, const HashGridParameters& params) {

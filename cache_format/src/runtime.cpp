@@ -68,28 +68,6 @@ bool finiteNonNegative(float v) { return std::isfinite(v) && v >= 0.0f; }
 
 constexpr uint64_t kIndexMultiplier = 0x9E3779B97F4A7C15ull;  // 2^64 / golden ratio (lookup index)
 
-uint32_t floatBits(float f) {
-    uint32_t bits;
-    std::memcpy(&bits, &f, 4);
-    return bits;
-}
-float bitsFloat(uint32_t bits) {
-    float f;
-    std::memcpy(&f, &bits, 4);
-    return f;
-}
-
-/// SPEC §H.3 steps 2-4 from the squared distance, in binary32 as in hash_grid.cpp: the
-/// reference that CacheView's level thresholds are computed from.
-uint32_t levelFromDistance2(float d2, float log2_base, float level_bias) {
-    d2 = (std::isnan(d2) || d2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : d2;
-    const float ratio = float(std::log2(double(d2))) / log2_base;
-    float level = 0.5f * ratio + level_bias;
-    level = std::isnan(level) || level < 1.0f ? 1.0f : level;
-    level = level > 511.0f ? 511.0f : level;
-    return uint32_t(level);
-}
-
 }  // namespace
 
 // ------------------------------------------------------------------------------------------------
@@ -162,9 +140,7 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     voxels_ = other.voxels_;
     levels_ = std::move(other.levels_);
     metadata_ = std::move(other.metadata_);
-    log2_base_ = other.log2_base_;
-    voxel_size_ = std::move(other.voxel_size_);
-    level_start_ = std::move(other.level_start_);
+    keyer_ = std::move(other.keyer_);
     index_ = std::move(other.index_);
     index_slots_ = other.index_slots_;
     index_shift_ = other.index_shift_;
@@ -190,8 +166,7 @@ void CacheView::reset() {
     keys_ = voxels_ = nullptr;
     levels_.clear();
     metadata_.clear();
-    voxel_size_.clear();
-    level_start_.clear();
+    keyer_ = HashGridKeyer();
     index_.reset();
     index_slots_ = 0;
     index_shift_ = 64;
@@ -577,28 +552,8 @@ CacheFileStatus CacheView::parse(CacheError* error) {
         }
         if (at != n) return fail(error, S::kCorrupt, 18, "META: bytes after the last entry");
     }
-    // Query acceleration (not validation): log2(b) and the voxel size of every level.
-    log2_base_ = float(std::log2(double(logarithm_base_)));
-    const HashGridParameters params = gridParameters();
-    voxel_size_.resize(kHashGridLevelMax + 1);
-    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) voxel_size_[level] = voxelSize(level, params);
-    // Where each level starts, found by bisection over the bit patterns of the clamped squared
-    // distance (positive floats order like their bits; +Inf is the largest).
-    level_start_.assign(kHashGridLevelMax + 2, 0xFFFFFFFFu);
-    const uint32_t lowest = floatBits(kHashGridMinDistance2), highest = floatBits(INFINITY);
-    const uint32_t top = levelFromDistance2(INFINITY, log2_base_, level_bias_);
-    for (uint32_t level = 0; level <= top; ++level) {
-        uint32_t lo = lowest, hi = highest;  // invariant: levelFromDistance2(hi) >= level
-        while (lo < hi) {
-            const uint32_t mid = lo + (hi - lo) / 2;
-            if (levelFromDistance2(bitsFloat(mid), log2_base_, level_bias_) >= level) {
-                hi = mid;
-            } else {
-                lo = mid + 1;
-            }
-        }
-        level_start_[level] = lo;
-    }
+    // Query acceleration (not validation): voxel sizes and level thresholds.
+    keyer_ = HashGridKeyer(gridParameters());
     return S::kOk;
 }
 
@@ -674,32 +629,8 @@ const CacheView::IndexSlot* CacheView::findSlot(uint64_t k) const {
     }
 }
 
-uint32_t CacheView::levelOf(float d2) const {
-    d2 = (std::isnan(d2) || d2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : d2;
-    if (level_start_.empty()) return levelFromDistance2(d2, log2_base_, level_bias_);
-    const uint32_t bits = floatBits(d2);
-    // A first guess from the float's exponent and mantissa (log2 to within 0.09), then steps
-    // to the exact level along the thresholds.
-    const float approximate_log2 = float(int32_t(bits >> 23) - 127) + float(bits & 0x7FFFFFu) * 0x1p-23f;
-    float guess = 0.5f * approximate_log2 / log2_base_ + level_bias_;
-    guess = std::isnan(guess) || guess < 1.0f ? 1.0f : (guess > 511.0f ? 511.0f : guess);
-    uint32_t level = uint32_t(guess);
-    while (level < kHashGridLevelMax && bits >= level_start_[level + 1]) ++level;
-    while (level > kHashGridLevelMin && bits < level_start_[level]) --level;
-    return level;
-}
-
 uint64_t CacheView::keyFor(const Float3& p, const Float3& n, const Float3& c) const {
-    // SPEC §H.2 - §H.6, the same binary32 operations in the same order as hash_grid.cpp
-    // (this file is compiled without FMA contraction too); cross-checked in cache_file_test.
-    const Float3 b{p.x + kHashGridPositionBias, p.y + kHashGridPositionBias, p.z + kHashGridPositionBias};
-    const float dx = c.x - b.x, dy = c.y - b.y, dz = c.z - b.z;
-    float d2 = dx * dx;
-    d2 = d2 + dy * dy;
-    d2 = d2 + dz * dz;
-    const uint32_t l = levelOf(d2);
-    const float size = voxel_size_.empty() ? voxelSize(l, gridParameters(c)) : voxel_size_[l];
-    return packHashGridKey(quantisePosition(b, size), l, normalBits(n));
+    return keyer_.key(p, n, c);
 }
 
 void CacheView::keysFor(size_t count, const Float3* positions, const Float3* normals, const Float3& c,
@@ -708,7 +639,7 @@ void CacheView::keysFor(size_t count, const Float3* positions, const Float3* nor
 #if defined(__SSE2__)
     // SPEC §H.2 - §H.6 on four points per step. Every SSE operation below is the IEEE binary32
     // operation keyFor() performs, lane by lane and in the same order, so the keys are the same.
-    if (!voxel_size_.empty() && !level_start_.empty()) {
+    {
         const __m128 bias = _mm_set1_ps(kHashGridPositionBias);
         const __m128 min_distance2 = _mm_set1_ps(kHashGridMinDistance2);
         const __m128 normal_bias = _mm_set1_ps(kHashGridNormalBias);
@@ -747,8 +678,8 @@ void CacheView::keysFor(size_t count, const Float3* positions, const Float3* nor
             uint32_t level[4];
             _mm_store_ps(distance2, d2);
             for (int j = 0; j < 4; ++j) {
-                level[j] = levelOf(distance2[j]);
-                size[j] = voxel_size_[level[j]];
+                level[j] = keyer_.levelOf(distance2[j]);
+                size[j] = keyer_.voxelSizeAt(level[j]);
             }
             const __m128 s = _mm_load_ps(size);
             _mm_store_si128(reinterpret_cast<__m128i*>(gx), floorToInt(_mm_div_ps(bx, s)));
@@ -872,7 +803,7 @@ bool CacheView::lookupNearestLevel(const Float3& position, const Float3& normal,
             pick = down--;  // finer level on ties
         }
         const uint32_t level = levels_[size_t(pick)].level;
-        const Int3 grid = quantisePosition(biased, voxel_size_[level]);
+        const Int3 grid = quantisePosition(biased, keyer_.voxelSizeAt(level));
         const uint64_t index = findKey(packHashGridKey(grid, level, bits));
         if (index != voxel_count_) {
             if (radiance) std::memcpy(radiance, voxels_ + index * 16, 12);

@@ -157,6 +157,49 @@ TEST(HashGridKey, KeyAtLevelMatchesCameraKey) {
     }
 }
 
+TEST(HashGridKeyer, SameKeysAsHashGridKey) {
+    // Several grids (the SDK's defaults, a coarse and a fine one, a fractional base, negative and
+    // positive biases); random points and cameras, and points a few float steps either side of
+    // every level boundary along one axis, where a threshold off by one ULP would show.
+    struct Grid {
+        float base, scale, bias;
+    };
+    const Grid grids[] = {{2.0f, 50.0f, 0.0f}, {2.0f, 5.0f, 0.0f}, {1.5f, 200.0f, 2.0f}, {3.0f, 50.0f, -1.5f},
+                          {2.0f, 1e4f, 0.25f}};
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> coord(-300.0f, 300.0f), unit(-1.0f, 1.0f);
+    for (const Grid& g : grids) {
+        HashGridParameters params;
+        params.logarithm_base = g.base;
+        params.scene_scale = g.scale;
+        params.level_bias = g.bias;
+        const HashGridKeyer keyer(params);
+        for (int i = 0; i < 5000; ++i) {
+            params.camera_position = Float3{coord(rng), coord(rng), coord(rng)};
+            const Float3 p{coord(rng), coord(rng), coord(rng)};
+            const Float3 n{unit(rng), unit(rng), unit(rng)};
+            ASSERT_EQ(keyer.key(p, n, params.camera_position), hashGridKey(p, n, params)) << "grid " << g.base << " case " << i;
+        }
+        params.camera_position = Float3{0.0f, 0.0f, 0.0f};
+        const Float3 n{0.0f, 1.0f, 0.0f};
+        for (uint32_t level = 2; level < 40; ++level) {
+            // The distance where `level` starts: b^((L - bias) * 2) = d^2, then walk floats around it.
+            const double d = std::pow(double(g.base), double(level) - double(g.bias));
+            if (!(d < 1e18)) break;
+            float x = float(d);
+            for (int k = 0; k < 8; ++k) x = std::nextafter(x, 0.0f);
+            for (int k = 0; k < 16; ++k, x = std::nextafter(x, INFINITY)) {
+                const Float3 p{x - kHashGridPositionBias, -kHashGridPositionBias, -kHashGridPositionBias};
+                ASSERT_EQ(keyer.key(p, n, params.camera_position), hashGridKey(p, n, params))
+                    << "grid " << g.base << " level " << level << " x " << x;
+            }
+        }
+        EXPECT_EQ(keyer.levelOf(std::nanf("")), 1u);
+        EXPECT_EQ(keyer.levelOf(0.0f), gridLevel(Float3{0, 0, 0}, params));
+        EXPECT_EQ(keyer.levelOf(INFINITY), gridLevel(Float3{INFINITY, 0, 0}, params));
+    }
+}
+
 TEST(HashGridKey, NormalBits) {
     EXPECT_EQ(normalBits(Float3{0.0f, 0.0f, 0.0f}), 0u);
     EXPECT_EQ(normalBits(Float3{-0.0f, -0.0f, -0.0f}), 0u);

@@ -16,6 +16,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <vector>
 
@@ -142,6 +143,47 @@ uint64_t packHashGridKey(const Int3& grid, uint32_t level, uint32_t normal_bits,
 /// field is always in 1..511 (SPEC §H.6).
 uint64_t hashGridKey(const Float3& position, const Float3& normal,
                      const HashGridParameters& params);
+
+/// @brief hashGridKey() for fixed grid parameters and any camera position, without a logarithm
+/// or a power per key: the voxel size of every level and, since the SPEC §H.3 level only grows
+/// with the squared distance, the squared distance where each level starts are computed once.
+/// The keys are hashGridKey()'s bit for bit (tested over every level boundary).
+class HashGridKeyer {
+public:
+    /// Keys for the default HashGridParameters.
+    HashGridKeyer() : HashGridKeyer(HashGridParameters{}) {}
+    /// `params.camera_position` is not used: key() takes the camera.
+    explicit HashGridKeyer(const HashGridParameters& params);
+
+    /// The SPEC §H.3 level of a squared camera distance (clamped as gridLevel() does). Inline:
+    /// batched queries call it per lane.
+    uint32_t levelOf(float distance2) const {
+        distance2 = (distance2 != distance2 || distance2 < kHashGridMinDistance2) ? kHashGridMinDistance2 : distance2;
+        uint32_t bits;
+        std::memcpy(&bits, &distance2, 4);
+        // A first guess from the float's exponent and mantissa (log2 to within 0.09), then steps
+        // to the exact level along the thresholds.
+        const float approximate_log2 = float(int32_t(bits >> 23) - 127) + float(bits & 0x7FFFFFu) * 0x1p-23f;
+        float guess = 0.5f * approximate_log2 / log2_base_ + level_bias_;
+        guess = guess != guess || guess < 1.0f ? 1.0f : (guess > 511.0f ? 511.0f : guess);
+        uint32_t level = uint32_t(guess);
+        while (level < kHashGridLevelMax && bits >= level_start_[level + 1]) ++level;
+        while (level > kHashGridLevelMin && bits < level_start_[level]) --level;
+        return level;
+    }
+    /// voxelSize(level) for these parameters; level <= kHashGridLevelMax.
+    float voxelSizeAt(uint32_t level) const { return voxel_size_[level]; }
+    /// hashGridKey(position, normal, params with camera_position = camera).
+    uint64_t key(const Float3& position, const Float3& normal, const Float3& camera) const;
+
+private:
+    float log2_base_;
+    float level_bias_;
+    std::vector<float> voxel_size_;  ///< voxelSize(L) for L = 0..511
+    /// level_start_[L]: bits of the smallest clamped squared distance whose level is >= L
+    /// (L = 1..512; 0xFFFFFFFF when no float reaches L).
+    std::vector<uint32_t> level_start_;
+};
 
 /// @brief The key the point would have at an explicit `level` (hashGridKey() with the level
 /// chosen by the caller instead of by the camera distance): bias, voxelSize(level), quantise,

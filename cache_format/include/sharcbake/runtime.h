@@ -203,12 +203,7 @@ private:
     const uint8_t* voxels_ = nullptr;  ///< voxel_count_ records of 16 bytes
     std::vector<CacheLevel> levels_;
     std::vector<std::pair<std::string_view, std::string_view>> metadata_;
-    float log2_base_ = 1.0f;                ///< log2(logarithm_base) rounded to float (SPEC §H.3)
-    std::vector<float> voxel_size_;         ///< voxelSize(L) for L = 0..511
-    /// level_start_[L]: bits of the smallest clamped squared distance whose level is >= L
-    /// (L = 1..512; 0xFFFFFFFF when no float reaches L). The level is monotonic in the
-    /// distance, so these thresholds give exactly the SPEC §H.3 level without a logarithm.
-    std::vector<uint32_t> level_start_;
+    HashGridKeyer keyer_;  ///< this cache's grid: keys without a logarithm per query
 
     /// A lookup-index slot: key, radiance and voxel index side by side (key 0 = empty; KEYS
     /// never holds 0, rule V15).
@@ -224,7 +219,6 @@ private:
     size_t index_slots_ = 0;                ///< a power of two, or 0 without an index
     uint32_t index_shift_ = 64;             ///< slot = (key * golden) >> shift
 
-    uint32_t levelOf(float distance2) const;
     const IndexSlot* findSlot(uint64_t key) const;  ///< nullptr when absent; needs the index
 };
 
