@@ -21,6 +21,7 @@ bool cacheQueryEligible(float segment_length, float cone_roughness, float voxel_
 BakedCache::BakedCache(CacheData data, glm::vec3 camera_position) : data_(std::move(data)) {
     params_ = data_.gridParameters();
     params_.camera_position = Float3{camera_position.x, camera_position.y, camera_position.z};
+    keyer_ = HashGridKeyer(params_);
     // readCacheFile returns sorted voxels; sort anyway so a hand-built CacheData also works.
     if (!std::is_sorted(data_.voxels.begin(), data_.voxels.end(),
                         [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; })) {
@@ -29,7 +30,8 @@ BakedCache::BakedCache(CacheData data, glm::vec3 camera_position) : data_(std::m
 }
 
 uint64_t BakedCache::key(glm::vec3 position, glm::vec3 normal) const {
-    return hashGridKey(Float3{position.x, position.y, position.z}, Float3{normal.x, normal.y, normal.z}, params_);
+    return keyer_.key(Float3{position.x, position.y, position.z}, Float3{normal.x, normal.y, normal.z},
+                      params_.camera_position);
 }
 
 const CacheVoxel* BakedCache::find(uint64_t key) const {
@@ -41,7 +43,7 @@ const CacheVoxel* BakedCache::find(uint64_t key) const {
 
 bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
     const uint64_t k = key(query.position, query.geometric_normal);
-    const float s = voxelSize(decodeHashGridKey(k).level, params_);
+    const float s = keyer_.voxelSizeAt(decodeHashGridKey(k).level);
     if (!cacheQueryEligible(query.segment_length, query.cone_roughness, s)) {
         refused_.fetch_add(1, std::memory_order_relaxed);
         return false;

@@ -50,6 +50,7 @@ public:
 private:
     CacheData data_;
     HashGridParameters params_;
+    HashGridKeyer keyer_;  ///< params_ without a logarithm per query
     mutable std::atomic<uint64_t> refused_{0};
     mutable std::atomic<uint64_t> misses_{0};
     mutable std::atomic<uint64_t> hits_{0};
