@@ -17,19 +17,7 @@ void throwOnEmbreeError(RTCDevice device, const char* what) {
 }
 
 void initRayHit(const Ray& ray, RTCRayHit& rayhit) {
-    RTCRay& r = rayhit.ray;
-    r.org_x = ray.origin.x;
-    r.org_y = ray.origin.y;
-    r.org_z = ray.origin.z;
-    r.dir_x = ray.direction.x;
-    r.dir_y = ray.direction.y;
-    r.dir_z = ray.direction.z;
-    r.tnear = 0.0f;
-    r.tfar = ray.t_max;
-    r.time = 0.0f;
-    r.mask = 0xffffffffu;
-    r.id = 0;
-    r.flags = 0;
+    initEmbreeRay(ray, rayhit.ray);
     rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
@@ -75,6 +63,21 @@ Tracer::Tracer(const Scene& scene) : scene_(scene) {
     }
     rtcCommitScene(rtc_scene_);
     throwOnEmbreeError(device_, "building the scene");
+}
+
+void initEmbreeRay(const Ray& ray, RTCRay& r) {
+    r.org_x = ray.origin.x;
+    r.org_y = ray.origin.y;
+    r.org_z = ray.origin.z;
+    r.dir_x = ray.direction.x;
+    r.dir_y = ray.direction.y;
+    r.dir_z = ray.direction.z;
+    r.tnear = 0.0f;
+    r.tfar = ray.t_max;
+    r.time = 0.0f;
+    r.mask = 0xffffffffu;
+    r.id = 0;
+    r.flags = 0;
 }
 
 Tracer::~Tracer() {

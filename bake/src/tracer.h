@@ -28,6 +28,10 @@ struct RayHit {
     float v = 0.0f;  ///< barycentric of vertex 2
 };
 
+/// Fills an Embree ray from `ray` over (0, t_max): what Tracer traces, for code that calls
+/// Embree's packet or stream APIs itself.
+void initEmbreeRay(const Ray& ray, RTCRay& embree_ray);
+
 /// Owns an Embree device and a committed scene built over Scene's triangles. Thread-safe for
 /// queries after construction. Holds a reference to the Scene, which must outlive it.
 class Tracer {

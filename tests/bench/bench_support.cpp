@@ -41,20 +41,6 @@ CameraPath exploredCameraPath(const Tracer& tracer, const Scene& scene, uint32_t
     return CameraPath(std::move(poses), true, 1, 0.0f, seed);
 }
 
-void initRay(const Ray& ray, RTCRay& r) {
-    r.org_x = ray.origin.x;
-    r.org_y = ray.origin.y;
-    r.org_z = ray.origin.z;
-    r.dir_x = ray.direction.x;
-    r.dir_y = ray.direction.y;
-    r.dir_z = ray.direction.z;
-    r.tnear = 0.0f;
-    r.tfar = ray.t_max;
-    r.time = 0.0f;
-    r.mask = 0xffffffffu;
-    r.id = 0;
-    r.flags = 0;
-}
 
 /// Fills lane `i` of an SOA packet (RTCRayN layout: one array per field).
 template <typename Packet>
@@ -214,12 +200,12 @@ uint64_t tracePairs(const Tracer& tracer, const RayPair* pairs, size_t count, Ra
             rtcInitIntersectContext(&context);
             for (size_t i = 0; i < count; ++i) {
                 RTCRayHit rayhit;
-                initRay(pairs[i].closest, rayhit.ray);
+                initEmbreeRay(pairs[i].closest, rayhit.ray);
                 rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                 rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
                 rtcIntersect1(scene, &context, &rayhit);
                 RTCRay shadow;
-                initRay(pairs[i].shadow, shadow);
+                initEmbreeRay(pairs[i].shadow, shadow);
                 rtcOccluded1(scene, &context, &shadow);
                 checksum += (rayhit.hit.geomID != RTC_INVALID_GEOMETRY_ID) + (shadow.tfar < 0.0f);
             }
@@ -234,10 +220,10 @@ uint64_t tracePairs(const Tracer& tracer, const RayPair* pairs, size_t count, Ra
             for (size_t start = 0; start < count; start += kBlock) {
                 const size_t n = std::min(kBlock, count - start);
                 for (size_t i = 0; i < n; ++i) {
-                    initRay(pairs[start + i].closest, rayhits[i].ray);
+                    initEmbreeRay(pairs[start + i].closest, rayhits[i].ray);
                     rayhits[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
                     rayhits[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                    initRay(pairs[start + i].shadow, shadows[i]);
+                    initEmbreeRay(pairs[start + i].shadow, shadows[i]);
                 }
                 rtcIntersect1M(scene, &context, rayhits, unsigned(n), sizeof(RTCRayHit));
                 rtcOccluded1M(scene, &context, shadows, unsigned(n), sizeof(RTCRay));
