@@ -667,7 +667,9 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--report-camera", o->report_camera, "Evaluation camera: glTF camera name or index (default: the first)");
     cmd->add_option("--report-resolution", o->report_resolution,
                     "Evaluation image size \"W\" or \"WxH\" when there is no --reference (default 128 wide)");
-    cmd->add_option("--report-spp", o->report_spp, "Samples per pixel of the evaluation render through the cache")
+    cmd->add_option("--report-spp", o->report_spp, "Samples per pixel of the evaluation render through the cache, rendered as two independent "
+                    "halves whose difference splits the image error into the render's own noise and the cache's "
+                    "error (the \"less render noise\" column)")
         ->capture_default_str()->check(CLI::Range(1u, 1u << 16));
     cmd->add_option("--target-error", o->target_error,
                     "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
