@@ -178,25 +178,17 @@ CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer
         description = "glTF cameras (" + std::to_string(poses.size()) + " waypoints)";
         return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
     }
-    std::vector<glm::vec3> starts;
-    for (const Camera& c : scene.cameras) starts.push_back(c.position);
-    if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
-    const ExplorationResult explored = exploreFreeSpace(tracer, starts, o.explore_points, o.seed);
-    if (explored.points.empty()) {
+    ExplorationResult explored;
+    std::optional<CameraPath> path = exploringCameraPath(tracer, scene, o.explore_points, o.seed, &explored);
+    if (!path) {
         throw CommandError(kExitInvalidInput,
                            o.scene_path + ": found no free space to place the camera in (tried " +
                                std::to_string(explored.candidates) +
                                " points); give a --camera-path or --camera-source gltf");
     }
-    std::vector<CameraPose> poses;
-    for (const glm::vec3& p : explored.points) {
-        CameraPose pose;
-        pose.position = p;
-        poses.push_back(pose);
-    }
-    description = "exploration (" + std::to_string(poses.size()) + " reachable free-space points of " +
+    description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
                   std::to_string(explored.candidates) + " tried)";
-    return CameraPath(std::move(poses), true, 1, 0.0f, o.seed);
+    return std::move(*path);
 }
 
 /// The evaluator --report and --target-error need, or none when neither is asked for.

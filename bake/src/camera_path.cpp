@@ -211,4 +211,17 @@ CameraPose CameraPath::poseAt(uint32_t iteration) const {
     return pose;
 }
 
+std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
+                                              uint32_t seed, ExplorationResult* explored) {
+    std::vector<glm::vec3> starts;
+    for (const Camera& c : scene.cameras) starts.push_back(c.position);
+    if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
+    const ExplorationResult result = exploreFreeSpace(tracer, starts, points, seed);
+    if (explored) *explored = result;
+    if (result.points.empty()) return std::nullopt;
+    std::vector<CameraPose> poses;
+    for (const glm::vec3& p : result.points) poses.push_back(CameraPose{p});
+    return CameraPath(std::move(poses), true, 1, 0.0f, seed);
+}
+
 }  // namespace sharcbake

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,5 +86,12 @@ private:
     float position_jitter_;
     uint32_t seed_;
 };
+
+/// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's
+/// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
+/// new random direction. std::nullopt when no free space was found; `explored` (if given)
+/// receives the search's counts either way.
+std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
+                                              uint32_t seed, ExplorationResult* explored = nullptr);
 
 }  // namespace sharcbake

@@ -100,12 +100,7 @@ protected:
         scene_ = new Scene(loadGltf(scenePath("furnace_rho090")));
         tracer_ = new Tracer(*scene_);
         lights_ = new LightSampler(*scene_);
-        std::vector<glm::vec3> starts;
-        for (const Camera& c : scene_->cameras) starts.push_back(c.position);
-        const ExplorationResult explored = exploreFreeSpace(*tracer_, starts, 16, 3);
-        std::vector<CameraPose> poses;
-        for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
-        const CameraPath path(poses, true, 1, 0.0f, 3);
+        const CameraPath path = exploringCameraPath(*tracer_, *scene_, 16, 3).value();
         BakeSettings settings;
         settings.width = settings.height = 128;
         settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;

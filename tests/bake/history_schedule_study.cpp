@@ -17,10 +17,7 @@ int main(int argc, char** argv) {
     const Scene scene = loadGltf(scenes + "/furnace_rho090/furnace_rho090.gltf");
     const Tracer tracer(scene);
     const LightSampler lights(scene);
-    const ExplorationResult explored = exploreFreeSpace(tracer, {scene.cameras.at(0).position}, 16, 3);
-    std::vector<CameraPose> poses;
-    for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
-    const CameraPath path(poses, true, 1, 0.0f, 3);
+    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();  // the furnace's one camera
     constexpr double kExpected = 10.0;  // Le / (1 - rho)
 
     for (const char* history : {"window:20", "window:64", "average", "ramp:2", "ramp:4", "ramp:8"}) {

@@ -40,12 +40,7 @@ struct BakeScene {
         scene = loadGltf(scenePath(name));
         tracer = std::make_unique<Tracer>(scene);
         lights = std::make_unique<LightSampler>(scene);
-        std::vector<glm::vec3> starts;
-        for (const Camera& c : scene.cameras) starts.push_back(c.position);
-        const ExplorationResult explored = exploreFreeSpace(*tracer, starts, 16, 3);
-        std::vector<CameraPose> poses;
-        for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
-        path = std::make_unique<CameraPath>(poses, true, 1, 0.0f, 3);
+        path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
     }
     std::unique_ptr<Baker> baker(uint32_t shard_index, uint32_t shard_count, uint32_t capacity = 1u << 16,
                                  bool grow = false) const {

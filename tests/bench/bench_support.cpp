@@ -32,13 +32,9 @@ void addQuad(Scene& scene, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, u
 }
 
 CameraPath exploredCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points, uint32_t seed) {
-    std::vector<glm::vec3> starts;
-    for (const Camera& c : scene.cameras) starts.push_back(c.position);
-    const ExplorationResult explored = exploreFreeSpace(tracer, starts, points, seed);
-    if (explored.points.empty()) throw std::runtime_error("benchmark scene: no free space for the camera");
-    std::vector<CameraPose> poses;
-    for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
-    return CameraPath(std::move(poses), true, 1, 0.0f, seed);
+    std::optional<CameraPath> path = exploringCameraPath(tracer, scene, points, seed);
+    if (!path) throw std::runtime_error("benchmark scene: no free space for the camera");
+    return std::move(*path);
 }
 
 

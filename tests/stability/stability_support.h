@@ -69,14 +69,13 @@ public:
     SmallBake(Scene scene_in, const BakeConfig& config) : scene(std::move(scene_in)), config_(config) {
         tracer = std::make_unique<Tracer>(scene);
         lights = std::make_unique<LightSampler>(scene);
-        std::vector<glm::vec3> starts;
-        for (const Camera& c : scene.cameras) starts.push_back(c.position);
-        if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
-        const ExplorationResult explored = exploreFreeSpace(*tracer, starts, config.explore_points, 3);
-        std::vector<CameraPose> poses;
-        for (const glm::vec3& p : explored.points) poses.push_back(CameraPose{p});
-        if (poses.empty()) poses.push_back(CameraPose{starts.front()});
-        path = std::make_unique<CameraPath>(poses, true, 1, 0.0f, 3);
+        std::optional<CameraPath> explored = exploringCameraPath(*tracer, scene, config.explore_points, 3);
+        if (!explored) {  // degenerate scenes: a camera where the first start would have been
+            const glm::vec3 start = scene.cameras.empty() ? 0.5f * (scene.bounds_min + scene.bounds_max)
+                                                          : scene.cameras.front().position;
+            explored = CameraPath({CameraPose{start}}, true, 1, 0.0f, 3);
+        }
+        path = std::make_unique<CameraPath>(std::move(*explored));
         makeBaker(*path);
     }
 
