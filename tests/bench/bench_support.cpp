@@ -13,7 +13,6 @@
 #include <fstream>
 #include <random>
 #include <stdexcept>
-#include <unordered_set>
 
 namespace sharcbake::bench {
 namespace {
@@ -305,33 +304,6 @@ uint64_t peakResidentBytes() {
         if (line.rfind("VmHWM:", 0) == 0) return uint64_t(std::stoull(line.substr(6))) * 1024u;
     }
     return 0;
-}
-
-CacheData makeSyntheticCache(size_t live, uint32_t capacity, std::vector<Float3>& points, std::vector<Float3>& normals,
-                             uint32_t seed) {
-    CacheData data;
-    data.bake_capacity = capacity;
-    const HashGridParameters params = data.gridParameters();  // camera at the origin
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> coord(-40.0f, 40.0f);
-    std::unordered_set<uint64_t> seen;
-    points.clear();
-    normals.clear();
-    while (data.voxels.size() < live) {
-        const Float3 p{coord(rng), coord(rng), coord(rng)};
-        const Float3 n{coord(rng), coord(rng), coord(rng)};
-        const uint64_t key = hashGridKey(p, n, params);
-        if (!seen.insert(key).second) continue;
-        CacheVoxel v;
-        v.key = key;
-        v.radiance[0] = v.radiance[1] = v.radiance[2] = 0.5f;
-        v.sample_weight = 4.0f;
-        data.voxels.push_back(v);
-        points.push_back(p);
-        normals.push_back(n);
-    }
-    sortVoxels(data.voxels);
-    return data;
 }
 
 }  // namespace sharcbake::bench

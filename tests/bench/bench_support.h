@@ -86,10 +86,4 @@ BakeRun runBake(const BakeScene& scene, const BakeSettings& settings, uint32_t i
 /// Peak resident memory of this process so far (VmHWM), bytes; 0 where /proc is missing.
 uint64_t peakResidentBytes();
 
-/// A synthetic cache like cache_runtime_bench's: `live` voxels at random points within 40 m of
-/// the origin (camera at the origin), bake capacity `capacity`; the query points that hit them
-/// come back in `points`/`normals`.
-CacheData makeSyntheticCache(size_t live, uint32_t capacity, std::vector<Float3>& points,
-                             std::vector<Float3>& normals, uint32_t seed = 1234);
-
 }  // namespace sharcbake::bench

@@ -6,6 +6,7 @@
 // `--smoke` shrinks every data set so the whole binary runs in about a second (ctest).
 // SHARCBAKE_SCENES_DIR overrides the scenes folder compiled in.
 // Figures and commands: BENCHMARKS.md.
+#include "../cache_format/synthetic_cache.h"
 #include "bench_support.h"
 
 #include "sharcbake/runtime.h"
@@ -58,7 +59,8 @@ struct CacheFixture {
             CacheFixture f;
             f.live = g_smoke ? 20000 : 1000000;
             std::vector<Float3> points, normals;
-            const CacheData data = makeSyntheticCache(f.live, 1u << 22, points, normals);
+            std::mt19937 random(1234);
+            const CacheData data = makeSyntheticCache(f.live, 1u << 22, random, points, normals);
             std::string message;
             if (encodeCacheFile(data, &f.bytes, &message) != CacheFileStatus::kOk) throw std::runtime_error(message);
             if (CacheView::openMemory(f.bytes.data(), f.bytes.size(), &f.view, nullptr) != CacheFileStatus::kOk ||

@@ -2,6 +2,8 @@
 // Load and query throughput of the runtime library (DESIGN.md bars: open + validate >= 1 GB/s,
 // >= 20 M lookups/s per core on a cache with 1 M live entries). Prints one JSON object.
 // Usage: cache_runtime_bench [live_voxels (default 1000000)] [lookups (default 4000000)]
+#include "synthetic_cache.h"
+
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
 
@@ -10,7 +12,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <random>
-#include <unordered_set>
 #include <vector>
 
 using namespace sharcbake;
@@ -18,27 +19,9 @@ using namespace sharcbake;
 int main(int argc, char** argv) {
     const size_t live = argc > 1 ? size_t(std::strtoull(argv[1], nullptr, 10)) : 1000000;
     const size_t queries = argc > 2 ? size_t(std::strtoull(argv[2], nullptr, 10)) : 4000000;
-    CacheData data;
-    data.bake_capacity = 1u << 22;
-    const HashGridParameters params = data.gridParameters();  // camera at the origin
-    std::mt19937 rng(1234);
-    std::uniform_real_distribution<float> coord(-40.0f, 40.0f);
+    std::mt19937 rng(1234);  // also orders the queries below
     std::vector<Float3> points, normals;
-    std::unordered_set<uint64_t> seen;
-    while (data.voxels.size() < live) {
-        const Float3 p{coord(rng), coord(rng), coord(rng)};
-        const Float3 n{coord(rng), coord(rng), coord(rng)};
-        const uint64_t key = hashGridKey(p, n, params);
-        if (!seen.insert(key).second) continue;
-        CacheVoxel v;
-        v.key = key;
-        v.radiance[0] = v.radiance[1] = v.radiance[2] = 0.5f;
-        v.sample_weight = 4.0f;
-        data.voxels.push_back(v);
-        points.push_back(p);
-        normals.push_back(n);
-    }
-    sortVoxels(data.voxels);
+    const CacheData data = makeSyntheticCache(live, 1u << 22, rng, points, normals);
     std::vector<uint8_t> bytes;
     std::string message;
     if (encodeCacheFile(data, &bytes, &message) != CacheFileStatus::kOk) {
