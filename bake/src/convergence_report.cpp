@@ -145,23 +145,12 @@ ConvergenceRow ConvergenceEvaluator::evaluate(const SharcCache& cache) const {
     if (reference_) {
         const auto start = std::chrono::steady_clock::now();
         const BakedCache baked(std::move(data), view_.camera.position);
-        PathTracerSettings settings;
-        settings.max_bounces = view_.max_bounces;
-        const PathTracer path_tracer(tracer_, lights_, settings, &baked);
-        TraceCounters counters;
-        const auto render = [&](uint32_t samples_per_pixel, uint32_t seed) {
-            return renderImage(
-                CameraRays(view_.camera, view_.width, view_.height),
-                ImageRenderSettings{view_.width, view_.height, samples_per_pixel, seed},
-                [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
-                nullptr);
-        };
         // Two independent halves: their mean is the render, their difference its own noise.
         const uint32_t spp = view_.samples_per_pixel;
         const uint32_t first_half = spp / 2, second_half = spp - spp / 2;
-        Image image = render(std::max(first_half, 1u), kCachedRenderSeed);
+        Image image = renderView(&baked, std::max(first_half, 1u), kCachedRenderSeed);
         if (first_half > 0) {
-            const Image second = render(second_half, kCachedRenderSeed + 1);
+            const Image second = renderView(&baked, second_half, kCachedRenderSeed + 1);
             row.image_split = splitRelativeMse(image, first_half, second, second_half, *reference_);
             for (size_t i = 0; i < image.pixels.size(); ++i) {
                 image.pixels[i] = (image.pixels[i] * float(first_half) + second.pixels[i] * float(second_half)) /
@@ -174,14 +163,23 @@ ConvergenceRow ConvergenceEvaluator::evaluate(const SharcCache& cache) const {
     return row;
 }
 
+Image ConvergenceEvaluator::renderView(const RadianceCache* cache, uint32_t samples_per_pixel, uint32_t seed,
+                                       TraceCounters* counters) const {
+    PathTracerSettings settings;
+    settings.max_bounces = view_.max_bounces;
+    const PathTracer path_tracer(tracer_, lights_, settings, cache);
+    TraceCounters ignored;
+    TraceCounters& count = counters ? *counters : ignored;
+    return renderImage(
+        CameraRays(view_.camera, view_.width, view_.height),
+        ImageRenderSettings{view_.width, view_.height, samples_per_pixel, seed},
+        [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, count); }, nullptr);
+}
+
 std::vector<PlainPathTracingRow> ConvergenceEvaluator::plainPathTracing(double until_seconds,
                                                                          uint32_t max_samples_per_pixel) const {
     std::vector<PlainPathTracingRow> rows;
     if (!reference_) return rows;
-    PathTracerSettings settings;
-    settings.max_bounces = view_.max_bounces;
-    const PathTracer path_tracer(tracer_, lights_, settings, nullptr);
-    const CameraRays camera(view_.camera, view_.width, view_.height);
     TraceCounters counters;
     std::vector<glm::dvec3> sum(size_t(view_.width) * size_t(view_.height), glm::dvec3(0.0));
     uint32_t total_samples = 0;
@@ -191,10 +189,7 @@ std::vector<PlainPathTracingRow> ConvergenceEvaluator::plainPathTracing(double u
     for (uint32_t level = 0; total_samples < max_samples_per_pixel; ++level) {
         const uint32_t batch = std::min(std::max(total_samples, 1u), max_samples_per_pixel - total_samples);
         const auto start = std::chrono::steady_clock::now();
-        const Image image = renderImage(
-            camera, ImageRenderSettings{view_.width, view_.height, batch, kPlainRenderSeed + level},
-            [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
-            nullptr);
+        const Image image = renderView(nullptr, batch, kPlainRenderSeed + level, &counters);
         Image mean = image;
         total_samples += batch;
         for (size_t i = 0; i < sum.size(); ++i) {

@@ -98,6 +98,11 @@ public:
     std::vector<PlainPathTracingRow> plainPathTracing(double until_seconds, uint32_t max_samples_per_pixel) const;
 
 private:
+    /// The view path traced at `samples_per_pixel`, through `cache` when given (paths end on
+    /// its hits); ray counts are added to `counters` when given.
+    Image renderView(const RadianceCache* cache, uint32_t samples_per_pixel, uint32_t seed,
+                     TraceCounters* counters = nullptr) const;
+
     const Tracer& tracer_;
     const LightSampler& lights_;
     EvaluationView view_;
