@@ -10,6 +10,7 @@
 #include "coverage.h"
 #include "progress.h"
 #include "stability_report.h"
+#include "stopwatch.h"
 #include "sharcbake/cache_file.h"
 #include "tracer.h"
 
@@ -104,10 +105,6 @@ std::string skyDescription(const SkyOptions& sky) {
         return "map " + sceneContentHash({sky.exr_path}) + " x " + scale;
     }
     return "scene";
-}
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void parseSize(const std::string& text, const char* option, int& width, int& height) {

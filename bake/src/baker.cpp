@@ -2,6 +2,7 @@
 #include "baker.h"
 
 #include "render.h"
+#include "stopwatch.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -15,10 +16,6 @@ namespace {
 /// Paths per chunk: each chunk is traced by one task and owns its deposit list, so the commit
 /// can replay all deposits in path order whatever thread traced them.
 constexpr uint32_t kPathsPerChunk = 64;
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 Camera cameraFromPose(const CameraPose& pose) {
     Camera camera;

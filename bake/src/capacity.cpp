@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "capacity.h"
 
+#include "stopwatch.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -48,7 +50,7 @@ CapacityChoice chooseCapacity(const Tracer& tracer, const LightSampler& lights, 
     uint64_t capacity = kCapacityMinimum;
     while (capacity < choice.sampled_voxels * kCapacityHeadroom && capacity < kMaxCacheCapacity) capacity *= 2;
     choice.capacity = uint32_t(capacity);
-    choice.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    choice.seconds = secondsSince(start);
     return choice;
 }
 

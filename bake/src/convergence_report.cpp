@@ -4,6 +4,7 @@
 #include "cache_query.h"
 #include "path_tracer.h"
 #include "render.h"
+#include "stopwatch.h"
 
 #include <algorithm>
 #include <chrono>
@@ -28,10 +29,6 @@ namespace {
 // errors and understate them.
 constexpr uint32_t kCachedRenderSeed = 0x5eba7e01u;
 constexpr uint32_t kPlainRenderSeed = 0x9a1e0000u;
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 /// Empty for a missing value: spreadsheets and gnuplot both read that as "no data".
 std::string csvNumber(std::optional<double> value) {

@@ -8,6 +8,7 @@
 #include "path_tracer.h"
 #include "progress.h"
 #include "render.h"
+#include "stopwatch.h"
 #include "surface.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
@@ -183,8 +184,7 @@ void runRender(const RenderOptions& o) {
     const auto build_start = std::chrono::steady_clock::now();
     const Tracer tracer(scene);
     const LightSampler lights(scene);
-    const double build_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
+    const double build_seconds = secondsSince(build_start);
     if (!o.quiet && !lights.hasLights()) {
         std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
                              "the image will be black\n");
@@ -249,8 +249,7 @@ void runRender(const RenderOptions& o) {
                             },
                             &progress);
     }
-    const double render_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - render_start).count();
+    const double render_seconds = secondsSince(render_start);
     const uint64_t rays = counters.closest_hit_rays + counters.shadow_rays;
     if (cache) counters.cache_misses = cache->misses();
     const uint64_t eligible = counters.cache_hits + counters.cache_misses;
@@ -299,8 +298,7 @@ void runRender(const RenderOptions& o) {
     } catch (const ImageError& e) {
         throw CommandError(kExitIo, e.what());
     }
-    const double total_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double total_seconds = secondsSince(start);
 
     if (!o.quiet) {
         std::printf("Rendered %dx%d, %u spp, camera '%s' in %.2f s (BVH build %.2f s, %d threads)\n",

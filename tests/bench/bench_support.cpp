@@ -3,6 +3,7 @@
 
 #include "render.h"
 #include "sampling.h"
+#include "stopwatch.h"
 #include "surface.h"
 
 #include <tbb/parallel_for.h>
@@ -16,10 +17,6 @@
 
 namespace sharcbake::bench {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 /// Appends the quad a, b, c, d (two triangles, winding a -> b -> c).
 void addQuad(Scene& scene, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, uint32_t material) {
