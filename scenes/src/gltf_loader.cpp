@@ -17,7 +17,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -166,7 +165,6 @@ public:
 
     Scene load() {
         parseFile();
-        listSourceFiles();
         checkRequiredExtensions();
         warnAboutIgnoredExtensions();
         convertMaterials();
@@ -217,9 +215,24 @@ private:
         return in.gcount() == 4 && std::memcmp(magic, "glTF", 4) == 0;
     }
 
+    static bool readAndRecordFile(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                                  void* files) {
+        if (!tinygltf::ReadWholeFile(out, err, path, nullptr)) return false;
+        auto& list = *static_cast<std::vector<std::string>*>(files);
+        const std::string file = std::filesystem::path(path).lexically_normal().string();
+        if (std::find(list.begin(), list.end(), file) == list.end()) list.push_back(file);
+        return true;
+    }
+
     void parseFile() {
         if (!std::filesystem::exists(path_)) fail("file not found");
         tinygltf::TinyGLTF parser;
+        // tinygltf's own file access, recording each file it reads (the glTF or GLB, external
+        // buffers, images): Scene::source_files is then exactly what the scene was loaded from,
+        // with tinygltf's URI decoding and its handling of missing images.
+        parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
+                                                    &readAndRecordFile, &tinygltf::WriteWholeFile,
+                                                    &scene_.source_files});
         std::string err;
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.
@@ -232,39 +245,6 @@ private:
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : err));
         }
-    }
-
-    /// The file itself, then each external buffer and image (URIs are relative to the glTF
-    /// file and percent-encoded; data: URIs and buffer views live inside the file).
-    void listSourceFiles() {
-        scene_.source_files = {path_};
-        const std::filesystem::path folder = std::filesystem::path(path_).parent_path();
-        const auto add = [&](const std::string& uri) {
-            if (uri.empty() || uri.rfind("data:", 0) == 0) return;
-            const std::string file = (folder / percentDecoded(uri)).lexically_normal().string();
-            // A missing image is a warning (the texture is ignored), not part of the scene read.
-            std::error_code error;
-            if (!std::filesystem::is_regular_file(file, error)) return;
-            if (std::find(scene_.source_files.begin(), scene_.source_files.end(), file) == scene_.source_files.end()) {
-                scene_.source_files.push_back(file);
-            }
-        };
-        for (const tinygltf::Buffer& buffer : model_.buffers) add(buffer.uri);
-        for (const tinygltf::Image& image : model_.images) add(image.uri);
-    }
-
-    static std::string percentDecoded(const std::string& uri) {
-        std::string out;
-        for (size_t i = 0; i < uri.size(); ++i) {
-            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(uint8_t(uri[i + 1])) &&
-                std::isxdigit(uint8_t(uri[i + 2]))) {
-                out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-                i += 2;
-            } else {
-                out += uri[i];
-            }
-        }
-        return out;
     }
 
     void checkRequiredExtensions() const {

@@ -756,6 +756,9 @@ TEST(GltfLoaderSourceFiles, TheFileThenItsExternalBuffersAndImages) {
     const Scene scene = loadGltf(external);
     ASSERT_EQ(scene.triangles.size(), 1u);
     EXPECT_EQ(scene.source_files, (std::vector<std::string>{external, dir.file("my mesh.bin")}));
+    // The files are the ones the parser read, with its URI decoding ('+' is a space to it too).
+    const std::string plus = b.writeExternal(dir, "plus.gltf", "my+mesh.bin", /*writeBin=*/false);
+    EXPECT_EQ(loadGltf(plus).source_files, (std::vector<std::string>{plus, dir.file("my mesh.bin")}));
 
     const std::string quad = std::string(SHARCBAKE_SCENES_DIR) + "/textured_quad/textured_quad.gltf";
     const Scene textured = loadGltf(quad);

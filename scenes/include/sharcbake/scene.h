@@ -123,10 +123,10 @@ struct LoadStats {
 /// The whole scene, flattened to world space.
 struct Scene {
     std::string source_path;
-    /// Every file the scene was read from: the glTF or GLB file, then the external buffers and
-    /// images it references that exist (in glTF index order, each once; a missing image is
-    /// ignored with a warning). A content hash of the scene must
-    /// cover them all: a .gltf's geometry lives in its .bin.
+    /// Every file the scene was read from, each once, in the order the glTF parser read them:
+    /// the glTF or GLB file, then its external buffers and images (a missing image, ignored
+    /// with a warning, is not among them). A content hash of the scene must cover them all: a
+    /// .gltf's geometry lives in its .bin.
     std::vector<std::string> source_files;
 
     // Geometry: one indexed triangle soup in world space. Vertex attributes are per vertex;
