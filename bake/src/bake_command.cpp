@@ -367,7 +367,6 @@ void runBake(const BakeOptions& o) {
     }
     BakeSettings settings = settingsFromOptions(o);
     const bool auto_capacity = o.capacity == "auto";
-    uint32_t capacity = settings.sharc.capacity;
 
     const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
     if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
@@ -383,8 +382,7 @@ void runBake(const BakeOptions& o) {
     CapacityChoice capacity_choice;
     if (auto_capacity) {
         capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
-        capacity = capacity_choice.capacity;
-        settings.sharc.capacity = settings.sharc.grid.capacity = capacity;
+        settings.sharc.capacity = settings.sharc.grid.capacity = capacity_choice.capacity;
         settings.sharc.grow_when_loaded = true;
     }
     const double max_radiance = estimateMaxRadiance(scene);
@@ -415,7 +413,7 @@ void runBake(const BakeOptions& o) {
         }
         std::printf("Left out: %s\n", workLeftOut(scene, lights).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
-                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, capacity,
+                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, settings.sharc.capacity,
                     settings.sharc.history.describe().c_str(), threads);
         std::fflush(stdout);
     }
@@ -567,7 +565,7 @@ void runBake(const BakeOptions& o) {
         std::fprintf(stderr,
                      "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no slot "
                      "within an iteration; bake with a fixed --capacity %llu\n",
-                     capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts, 2ull * cache.capacity());
+                     settings.sharc.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts, 2ull * cache.capacity());
     }
     if (g_stop_signal == SIGTERM) {
         throw CommandError(kExitTerminated, "terminated (SIGTERM); the cache and checkpoint written hold the iterations done");
