@@ -8,6 +8,9 @@
 #include "commands.h"
 #include "convergence_report.h"
 #include "coverage.h"
+#include "grid_fit.h"
+#include "hit_rate.h"
+#include "json_text.h"
 #include "progress.h"
 #include "stability_report.h"
 #include "stopwatch.h"
@@ -37,9 +40,12 @@ struct BakeOptions {
     double time_budget = 0.0;
     unsigned threads = 0;
     uint32_t seed = 0;
-    float scene_scale = kHashGridDefaultSceneScale;
+    std::string scene_scale = "auto";  // a number, or "auto": the SDK sample's 50
     float log_base = kHashGridDefaultLogarithmBase;
-    float level_bias = kHashGridDefaultLevelBias;
+    std::string level_bias = "auto";   // a number, or "auto": fitted to the scene (grid_fit.h)
+    uint64_t voxel_budget = kDefaultVoxelBudget;
+    std::string view_region = "free";
+    uint32_t prediction_views = 32;
     std::string capacity = "4194304";  // the SDK default, or "auto"
     uint32_t update_stride = 5;
     std::string resolution = "1280x720";
@@ -276,6 +282,16 @@ void printConvergence(const ConvergenceReport& report) {
     }
 }
 
+/// A finite float option ("--scene-scale 25"); usage error otherwise.
+float parseFiniteFloat(const std::string& text, const char* option) {
+    char* end = nullptr;
+    const float value = std::strtof(text.c_str(), &end);
+    if (text.empty() || !end || *end != '\0' || !std::isfinite(value)) {
+        throw CommandError(kExitUsage, std::string(option) + ": expected \"auto\" or a number, got \"" + text + "\"");
+    }
+    return value;
+}
+
 /// The bake's settings from its options (usage errors for malformed ones).
 BakeSettings settingsFromOptions(const BakeOptions& o) {
     BakeSettings settings;
@@ -287,9 +303,16 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     // --capacity auto starts from the SDK's default; the bake replaces it after a pre-pass.
     const uint32_t capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
     settings.sharc.capacity = capacity;
-    settings.sharc.grid.scene_scale = o.scene_scale;
+    settings.sharc.grid.scene_scale =
+        o.scene_scale == "auto" ? kHashGridDefaultSceneScale : parseFiniteFloat(o.scene_scale, "--scene-scale");
     settings.sharc.grid.logarithm_base = o.log_base;
-    settings.sharc.grid.level_bias = o.level_bias;
+    // --level-bias auto is fitted once the scene is loaded (fitGrid); 0 until then.
+    settings.sharc.grid.level_bias = o.level_bias == "auto" ? 0.0f : parseFiniteFloat(o.level_bias, "--level-bias");
+    try {
+        settings.view_region = parseViewRegion(o.view_region);
+    } catch (const std::invalid_argument& e) {
+        throw CommandError(kExitUsage, std::string("--view-region: ") + e.what());
+    }
     settings.sharc.grid.capacity = capacity;
     if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
         throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
@@ -302,6 +325,114 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     return settings;
 }
 
+/// The levels of a cache's voxels, ascending.
+std::vector<uint32_t> levelsOf(const CacheData& data) {
+    std::vector<uint32_t> levels;
+    for (const CacheVoxel& v : data.voxels) levels.push_back(decodeHashGridKey(v.key).level);
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    return levels;
+}
+
+/// "98.7% of 131072 lookups from 33 views (lowest: camera 'Main' 97.1%)"
+std::string describeHitRate(const HitRatePrediction& p) {
+    char text[256];
+    std::snprintf(text, sizeof text, "%.1f%% of %llu lookups from %zu views", 100.0 * p.rate(),
+                  (unsigned long long)p.eligible, p.views.size());
+    std::string result = text;
+    if (const ViewHitRate* worst = p.worst()) {
+        std::snprintf(text, sizeof text, " (lowest: %s, %.1f%%)", worst->view.name.c_str(), 100.0 * worst->rate());
+        result += text;
+    }
+    return result;
+}
+
+std::string hitRateJson(const HitRatePrediction& p) {
+    std::ostringstream json;
+    json << "{\"rate\": " << p.rate() << ", \"lookups\": " << p.eligible << ", \"hits\": " << p.hits
+         << ", \"views\": [";
+    for (size_t i = 0; i < p.views.size(); ++i) {
+        const ViewHitRate& v = p.views[i];
+        json << (i ? ", " : "") << "{\"name\": " << jsonString(v.view.name) << ", \"declared\": "
+             << (v.view.declared ? "true" : "false") << ", \"position\": [" << v.view.position.x << ", "
+             << v.view.position.y << ", " << v.view.position.z << "], \"rate\": " << v.rate()
+             << ", \"lookups\": " << v.eligible << "}";
+    }
+    json << "]}";
+    return json.str();
+}
+
+/// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
+void warnAboutHitRate(const HitRatePrediction& p, const CoverageReport& coverage) {
+    constexpr double kWanted = 0.95;
+    const ViewHitRate* worst = p.worst();
+    if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
+    char lowest[192] = "";
+    if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.name.c_str(), 100.0 * worst->rate());
+    const char* remedy = coverage.unreached_area > 0.05
+                             ? "The roaming camera never reached part of the surface: give more --iterations, a "
+                               "--camera-path through the places the views see, or --camera-source gltf."
+                             : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
+                               "holds the views (free, the default, holds every camera position).";
+    std::fprintf(stderr,
+                 "warning: the cache answers %.1f%% of SHaRC's lookups from its views%s; a runtime traces the rest. "
+                 "%s Engines can also fall back to the nearest level the file holds (lookupNearestLevel; render "
+                 "--cache-lookup nearest shows it)\n",
+                 100.0 * p.rate(), lowest, remedy);
+}
+
+/// What the grid step decided, for the output, the metadata and the stats.
+struct GridDecision {
+    std::string choice;                 ///< "auto: level bias 3.5: ..." or "given: ..."
+    std::vector<std::string> warnings;  ///< units that do not fit the scene, each with the fix
+    uint32_t finest_level = 1;
+    uint32_t coarsest_level = 0;
+    std::string levelsCovered() const {
+        if (coarsest_level == 0) return "the bake camera's";
+        return std::to_string(finest_level) + "-" + std::to_string(coarsest_level);
+    }
+};
+
+/// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
+/// or checks the given one against the scene.
+GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& settings) {
+    ViewRegion& region = settings.view_region;
+    if (region.kind == ViewRegion::Kind::Points && region.source == "gltf") {
+        if (scene.cameras.empty()) {
+            throw CommandError(kExitInvalidInput, o.scene_path + ": --view-region gltf, but the scene has no camera");
+        }
+        for (const Camera& c : scene.cameras) region.points.push_back(c.position);
+        region.source = "the glTF cameras";
+    } else if (region.kind == ViewRegion::Kind::Points && region.source == "path") {
+        if (o.camera_path.empty()) throw CommandError(kExitUsage, "--view-region path needs --camera-path FILE");
+        try {
+            for (const CameraPose& pose : readCameraPathFile(o.camera_path)) region.points.push_back(pose.position);
+        } catch (const CameraPathError& e) {
+            throw CommandError(kExitInvalidInput, e.what());
+        }
+        region.source = "waypoints of " + o.camera_path;
+    }
+    GridDecision decision;
+    HashGridParameters& grid = settings.sharc.grid;
+    if (o.level_bias == "auto") {
+        const GridFit fit = fitLevelBias(scene, grid, o.voxel_budget);
+        grid.level_bias = fit.level_bias;
+        decision.choice = "auto, " + fit.reason;
+    } else {
+        char text[96];
+        std::snprintf(text, sizeof text, "given: level bias %g, finest voxels %.4g wide", double(grid.level_bias),
+                      double(voxelSize(kHashGridLevelMin, grid)));
+        decision.choice = text;
+    }
+    const HashGridStatus status = validateHashGridParameters(grid);
+    if (status != HashGridStatus::kOk) throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(status));
+    const DepositLevels levels = levelsFor(scene, settings);
+    decision.finest_level = levels.finestLevel();
+    decision.coarsest_level = levels.coarsestLevel();
+    if (o.level_bias != "auto") decision.warnings = checkGridForScene(scene, grid, decision.finest_level, o.voxel_budget);
+    return decision;
+}
+
 /// The cache's metadata: everything that reproduces the bake, and nothing that varies between
 /// runs (timings go to --stats-json), so the same scene, settings and seed give the same file
 /// byte for byte. "iterations" is filled in after the bake.
@@ -309,7 +440,9 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
                                                               const LightSampler& lights,
                                                               const BakeSettings& settings, double radiance_scale,
                                                               const std::string& camera_description,
-                                                              const CapacityChoice* capacity_choice) {
+                                                              const CapacityChoice* capacity_choice,
+                                                              const std::string& grid_choice,
+                                                              const std::string& levels_covered) {
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", o.scene_path},
@@ -323,9 +456,12 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
         {"max_bounces", std::to_string(o.max_bounces)},
         {"camera", camera_description},
         {"radiance_scale", std::to_string(radiance_scale)},
-        {"scene_scale", std::to_string(o.scene_scale)},
-        {"log_base", std::to_string(o.log_base)},
-        {"level_bias", std::to_string(o.level_bias)},
+        {"scene_scale", std::to_string(settings.sharc.grid.scene_scale)},
+        {"log_base", std::to_string(settings.sharc.grid.logarithm_base)},
+        {"level_bias", std::to_string(settings.sharc.grid.level_bias)},
+        {"grid_choice", grid_choice},
+        {"view_region", settings.view_region.describe()},
+        {"levels_covered", levels_covered},
         {"capacity", std::to_string(settings.sharc.capacity)},
         {"left_out", workLeftOut(scene, lights)},
     };
@@ -377,6 +513,8 @@ void runBake(const BakeOptions& o) {
         std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
                              "the cache will be black\n");
     }
+    const GridDecision grid_decision = decideGrid(o, scene, settings);
+    for (const std::string& warning : grid_decision.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
     std::string camera_description;
     const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
     CapacityChoice capacity_choice;
@@ -389,7 +527,7 @@ void runBake(const BakeOptions& o) {
     Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
     std::vector<std::pair<std::string, std::string>> metadata =
         bakeMetadata(o, scene, lights, settings, baker.cache().radianceScale(), camera_description,
-                     auto_capacity ? &capacity_choice : nullptr);
+                     auto_capacity ? &capacity_choice : nullptr, grid_decision.choice, grid_decision.levelsCovered());
     const BakeSettingsText resume_settings = resumeSettings(metadata, o);
     if (!o.resume_path.empty()) resumeFromCheckpoint(o.resume_path, resume_settings, baker);
     const uint32_t first_iteration = baker.iterationsDone();
@@ -408,6 +546,10 @@ void runBake(const BakeOptions& o) {
             std::printf("Resumed from %s after %u iterations\n", o.resume_path.c_str(), first_iteration);
         }
         std::printf("Camera: %s\n", camera_description.c_str());
+        std::printf("Grid: scene scale %g, log base %g, %s\n", double(settings.sharc.grid.scene_scale),
+                    double(settings.sharc.grid.logarithm_base), grid_decision.choice.c_str());
+        std::printf("Views: %s; levels %s\n", settings.view_region.describe().c_str(),
+                    grid_decision.levelsCovered().c_str());
         if (auto_capacity) {
             std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice.describe().c_str(), capacity_choice.seconds);
         }
@@ -481,6 +623,11 @@ void runBake(const BakeOptions& o) {
     const std::vector<uint32_t> levels = levelsPresent(cache);
     const CoverageReport coverage = measureCoverage(scene, cache, levels, o.coverage_points);
     CacheData data = toCacheData(cache);
+    // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
+    const HitRatePrediction prediction =
+        predictHitRate(tracer, data, settings.view_region,
+                       predictionViews(tracer, settings.view_region, o.prediction_views, o.seed));
+    metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction));
     for (auto& entry : metadata) {
         if (entry.first == "iterations") entry.second = std::to_string(baker.iterationsDone());
         if (entry.first == "capacity") entry.second = std::to_string(cache.capacity());  // grown?
@@ -499,7 +646,7 @@ void runBake(const BakeOptions& o) {
     const uint64_t live = data.voxels.size();
     const double occupancy = double(cache.liveEntries()) / double(cache.capacity());
     std::string level_list;
-    for (uint32_t l : levels) level_list += (level_list.empty() ? "" : ",") + std::to_string(l);
+    for (uint32_t l : levelsOf(data)) level_list += (level_list.empty() ? "" : ",") + std::to_string(l);
 
     if (!o.quiet) {
         std::printf("Baked %u iterations in %.2f s (stopped by %s)\n", baker.iterationsDone(), bake_seconds, stop_reason);
@@ -512,6 +659,13 @@ void runBake(const BakeOptions& o) {
                     100.0 * occupancy, cache.capacity(), level_list.c_str());
         std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
                     100.0 * coverage.unreached_area, coverage.points);
+        std::printf("  predicted hit rate: %s\n", describeHitRate(prediction).c_str());
+        for (const ViewHitRate& v : prediction.views) {
+            if (v.view.declared) {
+                std::printf("    %s: %.1f%% of %llu lookups\n", v.view.name.c_str(), 100.0 * v.rate(),
+                            (unsigned long long)v.eligible);
+            }
+        }
         printStabilitySection(stdout, stability);
         std::printf("Wrote %s (%llu voxels)\n", o.output_path.c_str(), (unsigned long long)live);
     }
@@ -556,10 +710,19 @@ void runBake(const BakeOptions& o) {
              << "  \"occupancy\": " << occupancy << ",\n  \"levels\": [" << level_list << "],\n"
              << "  \"coverage\": {\"points\": " << coverage.points << ", \"unreached_area_fraction\": "
              << coverage.unreached_area << "},\n"
+             << "  \"grid\": {\"scene_scale\": " << settings.sharc.grid.scene_scale
+             << ", \"log_base\": " << settings.sharc.grid.logarithm_base
+             << ", \"level_bias\": " << settings.sharc.grid.level_bias << ", \"level_bias_auto\": "
+             << (o.level_bias == "auto" ? "true" : "false") << ", \"finest_voxel_size\": "
+             << voxelSize(kHashGridLevelMin, settings.sharc.grid) << "},\n"
+             << "  \"view_region\": " << jsonString(settings.view_region.describe()) << ",\n"
+             << "  \"levels_covered\": " << jsonString(grid_decision.levelsCovered()) << ",\n"
+             << "  \"predicted_hit_rate\": " << hitRateJson(prediction) << ",\n"
              << "  \"stability\": " << stabilityJson(stability) << "\n"
              << "}\n";
         if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
     }
+    warnAboutHitRate(prediction, coverage);
     if (auto_capacity && cache.numerics().failed_inserts > 0) {
         // The table doubles between iterations; one iteration filled it faster than that.
         std::fprintf(stderr,
@@ -594,10 +757,32 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
     cmd->add_option("--scene-scale", o->scene_scale,
-                    "SHaRC scene scale S: voxels are about distance/S wide (larger = finer)")->capture_default_str();
-    cmd->add_option("--log-base", o->log_base, "SHaRC level logarithm base b (> 1)")->capture_default_str();
-    cmd->add_option("--level-bias", o->level_bias, "SHaRC level bias (positive = finer levels near the camera)")
+                    "SHaRC scene scale S: a voxel at camera distance d is about d/S wide, in any units (larger = "
+                    "finer). auto = 50, the SDK sample's value. Copy it into the engine's SHaRC parameters "
+                    "(sharcbake info shows it)")->capture_default_str();
+    cmd->add_option("--log-base", o->log_base,
+                    "SHaRC level logarithm base b (> 1); a power of two (2, the SDK's, or 4) makes the levels "
+                    "nest exactly")->capture_default_str();
+    cmd->add_option("--level-bias", o->level_bias,
+                    "SHaRC level bias: sets the finest voxels, b^(1-bias)/S wide, which every camera closer than "
+                    "b^(2-bias) uses. auto fits it to the scene's units: the finest level holds the visible surface "
+                    "in about --voxel-budget voxels. A number is checked against the scene (warning when it spans "
+                    "too few or too many voxels)")
         ->capture_default_str();
+    cmd->add_option("--voxel-budget", o->voxel_budget,
+                    "Voxels for the whole visible surface at the finest level (--level-bias auto); each coarser "
+                    "level adds about a quarter of the one below")
+        ->capture_default_str()->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
+    cmd->add_option("--view-region", o->view_region,
+                    "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
+                    "level such a camera can ask for there. free: anywhere (every level from the finest up); gltf: "
+                    "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "
+                    "distance:MIN[:MAX]: never nearer than MIN to what it looks up; bake-camera: only the "
+                    "roaming camera's own levels (the SDK's rule, no coverage)")
+        ->capture_default_str();
+    cmd->add_option("--prediction-views", o->prediction_views,
+                    "Viewpoints of the region, besides the glTF cameras, from which the bake predicts its hit rate")
+        ->capture_default_str()->check(CLI::Range(0u, 4096u));
     cmd->add_option("--capacity", o->capacity,
                     "Hash table slots (>= 16; a power of two is SDK-friendly), or \"auto\": sized from the scene "
                     "to start by a short pre-pass (4x the voxels that 16 sampled iterations reach, next power of two), doubled between iterations whenever a quarter is occupied")

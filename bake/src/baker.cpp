@@ -28,6 +28,15 @@ Camera cameraFromPose(const CameraPose& pose) {
 
 }  // namespace
 
+DepositLevels levelsFor(const Scene& scene, const BakeSettings& settings) {
+    return DepositLevels(settings.sharc.grid, settings.view_region, scene.bounds_min, scene.bounds_max);
+}
+
+SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels) {
+    sharc.coarsest_level = levels.coarsestLevel();
+    return sharc;
+}
+
 double estimateMaxRadiance(const Scene& scene) {
     double max_radiance = 0.0;
     for (const Material& m : scene.materials) {
@@ -52,9 +61,9 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
       lights_(lights),
       camera_path_(camera_path),
       settings_(settings),
-      cache_(settings.sharc, radiance_scale),
-      update_(tracer, lights, cache_, settings.path),
-      keyer_(settings.sharc.grid) {
+      levels_(levelsFor(tracer.scene(), settings)),
+      cache_(withCoverage(settings.sharc, levels_), radiance_scale),
+      update_(tracer, lights, cache_, settings.path) {
     const uint32_t stride = std::max(1u, settings_.update_stride);
     blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
     blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
@@ -85,7 +94,7 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
                 const Ray ray = camera.generate(x, y, glm::fract(u));
-                update_.trace(ray, sampler, keyer_, camera_position, deposits, local);
+                update_.trace(ray, sampler, levels_, camera_position, deposits, local);
             }
         }
     });

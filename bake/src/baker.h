@@ -27,6 +27,9 @@ struct BakeSettings {
     uint32_t shard_count = 1;
     UpdatePathSettings path;
     SharcSettings sharc;
+    /// Where the runtime's cameras may be: decides each deposit's level and the levels the
+    /// written cache covers (view_region.h).
+    ViewRegion view_region;
 };
 
 /// Seconds spent per stage, summed over iterations.
@@ -70,21 +73,27 @@ public:
     const StageSeconds& seconds() const { return seconds_; }
     uint32_t pathsPerIteration() const { return blocks_x_ * blocks_y_; }
     const BakeSettings& settings() const { return settings_; }
+    const DepositLevels& depositLevels() const { return levels_; }
 
 private:
     const Tracer& tracer_;
     const LightSampler& lights_;
     const CameraPath& camera_path_;
     BakeSettings settings_;
+    DepositLevels levels_;  ///< each path vertex's voxel, from the grid and the view region
     SharcCache cache_;
     UpdatePathTracer update_;
-    HashGridKeyer keyer_;  ///< the grid's keys, camera aside: no logarithm per path vertex
     uint32_t blocks_x_, blocks_y_;
     uint32_t iteration_ = 0;
     std::vector<std::vector<Deposit>> chunk_deposits_;  ///< one list per fixed chunk of paths
     UpdateCounters counters_;
     StageSeconds seconds_;
 };
+
+/// The deposit levels of a bake of `scene` with `settings` (grid and view region).
+DepositLevels levelsFor(const Scene& scene, const BakeSettings& settings);
+/// `sharc` with the coarsest level its written cache covers (SharcSettings::coarsest_level).
+SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels);
 
 /// The brightest radiance the scene can put into a voxel, for the fixed-point scale:
 /// emission, sky, and the radiance a white surface facing a punctual light at 1 cm would have.

@@ -18,15 +18,30 @@ bool cacheQueryEligible(float segment_length, float cone_roughness, float voxel_
     return footprint > s;
 }
 
-BakedCache::BakedCache(CacheData data, glm::vec3 camera_position) : data_(std::move(data)) {
+BakedCache::BakedCache(CacheData data, glm::vec3 camera_position, CacheLookup mode)
+    : data_(std::move(data)), mode_(mode) {
     params_ = data_.gridParameters();
     params_.camera_position = Float3{camera_position.x, camera_position.y, camera_position.z};
     keyer_ = HashGridKeyer(params_);
+    for (const CacheLevel& level : data_.levels) levels_.push_back(level.level);
+    if (levels_.empty()) {
+        for (const CacheVoxel& v : data_.voxels) levels_.push_back(decodeHashGridKey(v.key).level);
+        std::sort(levels_.begin(), levels_.end());
+        levels_.erase(std::unique(levels_.begin(), levels_.end()), levels_.end());
+    }
     // readCacheFile returns sorted voxels; sort anyway so a hand-built CacheData also works.
     if (!std::is_sorted(data_.voxels.begin(), data_.voxels.end(),
                         [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; })) {
         sortVoxels(data_.voxels);
     }
+}
+
+void BakedCache::setCamera(glm::vec3 camera_position) {
+    params_.camera_position = Float3{camera_position.x, camera_position.y, camera_position.z};
+    refused_ = 0;
+    misses_ = 0;
+    hits_ = 0;
+    nearest_level_hits_ = 0;
 }
 
 uint64_t BakedCache::key(glm::vec3 position, glm::vec3 normal) const {
@@ -49,6 +64,22 @@ bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
         return false;
     }
     const CacheVoxel* v = find(k);
+    if (!v && mode_ == CacheLookup::NearestLevel) {
+        // The levels present by distance from the camera's, the finer first on ties.
+        const uint32_t wanted = decodeHashGridKey(k).level;
+        const Float3 p{query.position.x, query.position.y, query.position.z};
+        const Float3 n{query.geometric_normal.x, query.geometric_normal.y, query.geometric_normal.z};
+        uint32_t best_distance = UINT32_MAX;
+        for (uint32_t level : levels_) {
+            const uint32_t distance = level > wanted ? level - wanted : wanted - level;
+            if (distance == 0 || distance >= best_distance) continue;
+            if (const CacheVoxel* found = find(keyer_.keyAtLevel(p, n, level))) {
+                v = found;
+                best_distance = distance;
+            }
+        }
+        if (v) nearest_level_hits_.fetch_add(1, std::memory_order_relaxed);
+    }
     if (!v) {
         misses_.fetch_add(1, std::memory_order_relaxed);
         return false;

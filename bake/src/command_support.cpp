@@ -67,14 +67,28 @@ Camera sceneCamera(const Scene& scene, const std::string& selector, const std::s
                                            (names.empty() ? "it has none" : "it has " + names) + ")");
     }
     if (!scene.cameras.empty()) return scene.cameras.front();
-    // Frame the bounding sphere with the given field of view, looking down -Z.
+    // Frame the bounding sphere with the given field of view from the front, to the right and
+    // above (26.5 degrees of elevation, 24 of azimuth): no axis-aligned plane of a glTF scene
+    // (+Y up) is seen edge-on, so a lone floor or wall is never a black line.
     Camera c;
     c.name = "automatic";
     c.yfov = glm::radians(fov_degrees);
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
     const float radius = std::max(0.5f * glm::length(scene.bounds_max - scene.bounds_min), 1e-3f);
-    c.position = center + glm::vec3(0.0f, 0.0f, 1.1f * radius / std::sin(0.5f * c.yfov));
+    const glm::vec3 toward_camera = glm::normalize(glm::vec3(0.45f, 0.55f, 1.0f));
+    c.position = center + toward_camera * (1.1f * radius / std::sin(0.5f * c.yfov));
+    c.forward = -toward_camera;
+    c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
     return c;
+}
+
+std::string describeCamera(const Camera& camera) {
+    const glm::vec3 target = camera.position + camera.forward;
+    char text[256];
+    std::snprintf(text, sizeof text, "'%s' at (%g, %g, %g) looking at (%g, %g, %g), up (%g, %g, %g), vertical fov %.3g deg",
+                  camera.name.c_str(), camera.position.x, camera.position.y, camera.position.z, target.x, target.y,
+                  target.z, camera.up.x, camera.up.y, camera.up.z, double(glm::degrees(camera.yfov)));
+    return text;
 }
 
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,

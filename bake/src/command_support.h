@@ -53,6 +53,10 @@ void checkOutputPath(const std::string& path, const std::string& what);
 Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
                    float fov_degrees);
 
+/// "'name' at (x, y, z) looking at (x, y, z), up (...), vertical fov N deg": a camera's pose, so
+/// an automatic one can be reproduced with --look-at.
+std::string describeCamera(const Camera& camera);
+
 /// Parses an image size "W" or "WxH"; "W" takes the height from `aspect` (width / height, 1 if
 /// unknown). Throws CommandError(kExitUsage) naming the option.
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,

@@ -52,8 +52,21 @@ struct RenderOptions {
     bool quiet = false;
     std::string stats_json;
     std::string cache_path;  // --cache
+    std::string cache_lookup = "exact";  // --cache-lookup
     std::string debug_view;  // --debug-view (requires --cache)
 };
+
+/// "1-4, 7" for the levels {1, 2, 3, 4, 7}.
+std::string describeLevels(const std::vector<uint32_t>& levels) {
+    std::string text;
+    for (size_t i = 0; i < levels.size();) {
+        size_t j = i;
+        while (j + 1 < levels.size() && levels[j + 1] == levels[j] + 1) ++j;
+        text += (text.empty() ? "" : ", ") + std::to_string(levels[i]) + (j > i ? "-" + std::to_string(levels[j]) : "");
+        i = j + 1;
+    }
+    return text.empty() ? "none" : text;
+}
 
 /// Reads a .sharc file: kExitIo if it cannot be read, kExitInvalidInput if it is not a valid cache.
 CacheData loadCacheForCommand(const std::string& path) {
@@ -178,6 +191,10 @@ void runRender(const RenderOptions& o) {
 
     const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
     const Camera camera = chooseCamera(scene, o);
+    if (!o.quiet && camera.name == "automatic") {
+        std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
+                    describeCamera(camera).c_str());
+    }
     int width = 0, height = 0;
     parseResolution(o, camera, width, height);
 
@@ -191,7 +208,10 @@ void runRender(const RenderOptions& o) {
     }
 
     std::unique_ptr<BakedCache> cache;
-    if (!o.cache_path.empty()) cache = std::make_unique<BakedCache>(loadCacheForCommand(o.cache_path), camera.position);
+    if (!o.cache_path.empty()) {
+        cache = std::make_unique<BakedCache>(loadCacheForCommand(o.cache_path), camera.position,
+                                             o.cache_lookup == "nearest" ? CacheLookup::NearestLevel : CacheLookup::Exact);
+    }
     std::unique_ptr<CountingCache> counting_cache;
     if (o.debug_view == "bounces") counting_cache = std::make_unique<CountingCache>(*cache);
     const RadianceCache* path_cache = counting_cache ? static_cast<const RadianceCache*>(counting_cache.get())
@@ -254,6 +274,15 @@ void runRender(const RenderOptions& o) {
     if (cache) counters.cache_misses = cache->misses();
     const uint64_t eligible = counters.cache_hits + counters.cache_misses;
     const double hit_rate = eligible > 0 ? double(counters.cache_hits) / double(eligible) : 0.0;
+    if (cache && !primary_view && eligible >= 100 && hit_rate < 0.9) {
+        // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
+        std::fprintf(stderr,
+                     "warning: the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); the "
+                     "rest were traced. It was baked for other views: bake with --view-region free (the default) "
+                     "or a region holding this camera, and check the bake's \"predicted hit rate\"%s\n",
+                     100.0 * hit_rate, describeLevels(cache->levels()).c_str(), o.cache_path.c_str(),
+                     o.cache_lookup == "nearest" ? "" : "; --cache-lookup nearest falls back to the nearest level the file holds");
+    }
 
     float max_bounces_seen = 0.0f;
     if (o.debug_view == "bounces") {
@@ -277,6 +306,8 @@ void runRender(const RenderOptions& o) {
         metadata["sharcbake:cache_hits"] = std::to_string(counters.cache_hits.load());
         metadata["sharcbake:cache_misses"] = std::to_string(counters.cache_misses.load());
         metadata["sharcbake:cache_refused"] = std::to_string(cache->refused());
+        metadata["sharcbake:cache_lookup"] = o.cache_lookup;
+        metadata["sharcbake:cache_nearest_level_hits"] = std::to_string(cache->nearestLevelHits());
     }
     if (!o.debug_view.empty()) {
         metadata["sharcbake:debug_view"] = o.debug_view;
@@ -312,6 +343,10 @@ void runRender(const RenderOptions& o) {
                         (unsigned long long)counters.cache_hits.load(), (unsigned long long)counters.cache_misses.load(),
                         100.0 * hit_rate, (unsigned long long)cache->refused(),
                         double(counters.cache_hits) / (double(width) * double(height) * double(o.spp)));
+            if (cache->nearestLevelHits() > 0) {
+                std::printf("  of the hits, %llu came from another level than the camera's (--cache-lookup nearest)\n",
+                            (unsigned long long)cache->nearestLevelHits());
+            }
         }
         if (o.debug_view == "cache") {
             std::printf("  debug view 'cache': %llu of %llu primary hits have no cached voxel (written as 0)\n",
@@ -404,6 +439,11 @@ void registerRenderCommand(CLI::App& app) {
     cmd->add_option("--stats-json", options->stats_json, "Write timings and ray counts as JSON");
     CLI::Option* cache_option =
         cmd->add_option("--cache", options->cache_path, "Baked cache (.sharc): end paths on cache hits");
+    cmd->add_option("--cache-lookup", options->cache_lookup,
+                    "exact: SHaRC's lookup, the level the camera's distance picks (what a GPU runtime with the "
+                    "SDK gets); nearest: then the nearest level the cache holds (the runtime library's "
+                    "lookupNearestLevel)")
+        ->capture_default_str()->check(CLI::IsMember({"exact", "nearest"}))->needs(cache_option);
     cmd->add_option("--debug-view", options->debug_view,
                     "Write a debug image of the cache instead: cache, hash, levels, occupancy or bounces")
         ->needs(cache_option)

@@ -2,6 +2,7 @@
 #include "sharc_cache.h"
 
 #include "sampling.h"
+#include "view_region.h"
 
 #include <tbb/parallel_for.h>
 
@@ -408,6 +409,7 @@ CacheData toCacheData(const SharcCache& cache) {
         data.voxels.push_back(v);
     }
     sortVoxels(data.voxels);
+    addCoarserLevels(data, s.coarsest_level);
     return data;
 }
 

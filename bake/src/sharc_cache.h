@@ -70,6 +70,9 @@ struct SharcSettings {
     /// Double the table between iterations whenever more than kGrowAtLoad of it is occupied
     /// (--capacity auto), so no insert fails whatever the initial estimate.
     bool grow_when_loaded = false;
+    /// The written cache (toCacheData) holds every level from the deposits' up to this one,
+    /// coarser levels built from finer ones (addCoarserLevels); 0 = only the deposited levels.
+    uint32_t coarsest_level = 0;
 };
 
 /// The load above which a growing table doubles. 16-slot buckets start failing inserts near 40%
@@ -197,7 +200,7 @@ private:
 };
 
 /// The cache as file data: live voxels with samples, in canonical (key) order, and the grid
-/// parameters. What `bake` writes.
+/// parameters, with the coarser levels up to SharcSettings::coarsest_level. What `bake` writes.
 CacheData toCacheData(const SharcCache& cache);
 
 }  // namespace sharcbake

@@ -50,16 +50,11 @@ glm::vec3 finiteOrZero(glm::vec3 v, uint64_t& non_finite) {
 
 }  // namespace
 
-uint64_t voxelKey(glm::vec3 position, glm::vec3 facing_normal, const HashGridKeyer& keyer, const Float3& camera) {
-    return keyer.key(Float3{position.x, position.y, position.z},
-                     Float3{facing_normal.x, facing_normal.y, facing_normal.z}, camera);
-}
-
 UpdatePathTracer::UpdatePathTracer(const Tracer& tracer, const LightSampler& lights,
                                    const SharcCache& cache, UpdatePathSettings settings)
     : tracer_(tracer), lights_(lights), cache_(cache), settings_(settings) {}
 
-void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const HashGridKeyer& keyer,
+void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const DepositLevels& levels,
                              const Float3& camera,
                              std::vector<Deposit>& out, UpdateCounters& counters) const {
     const SharcSettings& sharc = cache_.settings();
@@ -92,7 +87,9 @@ void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const
         const SurfaceHit hit = makeSurfaceHit(tracer_.scene(), ray_hit, ray.direction);
         const ShadingMaterial material = evaluateMaterial(tracer_.scene(), hit);
         const glm::vec3 wo = -ray.direction;
-        const uint64_t key = voxelKey(hit.position, hit.geometric_normal, keyer, camera);
+        // SHaRC keys use the geometric normal turned towards the incoming ray, so the two sides
+        // of a thin wall are different voxels.
+        const uint64_t key = levels.key(hit.position, hit.geometric_normal, camera);
 
         const glm::vec2 u_select_resample = sampler.next2D();
         const glm::vec2 u_light_point = sampler.next2D();

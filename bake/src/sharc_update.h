@@ -9,6 +9,7 @@
 #include "path_tracer.h"
 #include "sharc_cache.h"
 #include "tracer.h"
+#include "view_region.h"
 
 #include <cstdint>
 #include <vector>
@@ -31,10 +32,6 @@ struct UpdateCounters {
     uint64_t clamped_propagation = 0;  ///< resampled values whose emission share exceeded the voxel mean
 };
 
-/// The hash-grid key of a hit for the current camera: SHaRC keys use the geometric normal
-/// turned towards the incoming ray, so the two sides of a thin wall are different voxels.
-uint64_t voxelKey(glm::vec3 position, glm::vec3 facing_normal, const HashGridKeyer& keyer, const Float3& camera);
-
 class UpdatePathTracer {
 public:
     UpdatePathTracer(const Tracer& tracer, const LightSampler& lights, const SharcCache& cache,
@@ -42,9 +39,10 @@ public:
 
     /// Traces one update path and appends its deposits, in path order, to `out`. Reads the
     /// cache's resolved entries (the previous iteration's state) but never writes the cache.
-    /// `keyer` holds the cache's grid parameters, `camera` is this iteration's camera position
-    /// (the level-of-detail centre).
-    void trace(const Ray& camera_ray, PixelSampler& sampler, const HashGridKeyer& keyer, const Float3& camera,
+    /// `levels` picks each vertex's voxel (the finest level a runtime camera of the view region
+    /// can ask for there); `camera` is this iteration's camera position (the level-of-detail
+    /// centre when the region is the bake camera itself).
+    void trace(const Ray& camera_ray, PixelSampler& sampler, const DepositLevels& levels, const Float3& camera,
                std::vector<Deposit>& out, UpdateCounters& counters) const;
 
 private:

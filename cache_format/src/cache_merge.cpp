@@ -28,12 +28,6 @@ std::string incompatibility(const CacheData& first, const CacheData& other, cons
         return "format version " + std::to_string(other.version_major) + "." + std::to_string(other.version_minor) +
                " differs from " + std::to_string(first.version_major) + "." + std::to_string(first.version_minor);
     }
-    // Bit-exact: the keys of two caches name the same voxels only if every parameter that feeds
-    // the key is identical.
-    if (!sameBits(first.logarithm_base, other.logarithm_base)) return "grid logarithm base differs";
-    if (!sameBits(first.scene_scale, other.scene_scale)) return "grid scene scale differs";
-    if (!sameBits(first.level_bias, other.level_bias)) return "grid level bias differs";
-    if (first.bucket_size != other.bucket_size) return "grid bucket size differs";
     for (const std::string& key : keys) {
         const std::string* a = findMetadata(first, key);
         const std::string* b = findMetadata(other, key);
@@ -42,6 +36,13 @@ std::string incompatibility(const CacheData& first, const CacheData& other, cons
                    (a ? *a : std::string("<missing>")) + "\"";
         }
     }
+    // After the metadata: another scene (whose fitted grid differs too) is named as such.
+    // Bit-exact: the keys of two caches name the same voxels only if every parameter that feeds
+    // the key is identical.
+    if (!sameBits(first.logarithm_base, other.logarithm_base)) return "grid logarithm base differs";
+    if (!sameBits(first.scene_scale, other.scene_scale)) return "grid scene scale differs";
+    if (!sameBits(first.level_bias, other.level_bias)) return "grid level bias differs";
+    if (first.bucket_size != other.bucket_size) return "grid bucket size differs";
     return {};
 }
 

@@ -174,6 +174,12 @@ uint64_t HashGridKeyer::key(const Float3& position, const Float3& normal, const 
     return packHashGridKey(quantisePosition(biased, voxel_size_[level]), level, normalBits(normal), false);
 }
 
+uint64_t HashGridKeyer::keyAtLevel(const Float3& position, const Float3& normal, uint32_t level) const {
+    const Float3 biased{position.x + kHashGridPositionBias, position.y + kHashGridPositionBias,
+                        position.z + kHashGridPositionBias};
+    return packHashGridKey(quantisePosition(biased, voxel_size_[level]), level, normalBits(normal), false);
+}
+
 float voxelSize(uint32_t level, const HashGridParameters& params) {
     const float b = params.logarithm_base;
     const float numerator = powF32(b, static_cast<float>(level));
@@ -246,6 +252,25 @@ Float3 voxelCenter(uint64_t key, const HashGridParameters& params) {
     return Float3{(static_cast<float>(cell.grid.x) + 0.5f) * size,
                   (static_cast<float>(cell.grid.y) + 0.5f) * size,
                   (static_cast<float>(cell.grid.z) + 0.5f) * size};
+}
+
+uint64_t coarserKey(uint64_t key, const HashGridParameters& params) {
+    const HashGridCell cell = decodeHashGridKey(key);
+    if (cell.level >= kHashGridLevelMax) return kHashGridInvalidKey;
+    const uint32_t level = cell.level + 1;
+    // A power-of-two base b = 2^k: floor(p / (b s)) == floor(floor(p / s) / b), exactly in float32
+    // because b s is exact and dividing by a power of two commutes with rounding.
+    int exponent = 0;
+    const float mantissa = std::frexp(params.logarithm_base, &exponent);
+    if (mantissa == 0.5f && exponent >= 2) {
+        const int shift = exponent - 1;
+        // floor(g / 2^shift) for either sign (C++17 leaves >> of a negative value to the compiler).
+        const auto floorShift = [shift](int32_t v) { return v >= 0 ? v >> shift : -((-(v + 1)) >> shift) - 1; };
+        const Int3 g{floorShift(cell.grid.x), floorShift(cell.grid.y), floorShift(cell.grid.z)};
+        return packHashGridKey(g, level, cell.normal_bits, cell.user_bit);
+    }
+    return packHashGridKey(quantisePosition(voxelCenter(key, params), voxelSize(level, params)), level,
+                           cell.normal_bits, cell.user_bit);
 }
 
 uint32_t jenkins32(uint32_t a) {

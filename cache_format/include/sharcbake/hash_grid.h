@@ -175,6 +175,8 @@ public:
     float voxelSizeAt(uint32_t level) const { return voxel_size_[level]; }
     /// hashGridKey(position, normal, params with camera_position = camera).
     uint64_t key(const Float3& position, const Float3& normal, const Float3& camera) const;
+    /// hashGridKeyAtLevel(position, normal, level, params); level in 1..511.
+    uint64_t keyAtLevel(const Float3& position, const Float3& normal, uint32_t level) const;
 
 private:
     float log2_base_;
@@ -190,6 +192,17 @@ private:
 /// normal bits, pack. For lookups at levels other than the camera's (coverage, fallbacks).
 uint64_t hashGridKeyAtLevel(const Float3& position, const Float3& normal, uint32_t level,
                             const HashGridParameters& params);
+
+/// @brief The key of the voxel one level coarser (level + 1, same normal bits) that holds `key`'s
+/// voxel: what a camera one level further away asks for at the same surface point.
+///
+/// When the logarithm base is a power of two (2, 4, ...; SDK default 2), voxels nest exactly:
+/// voxelSize(L + 1) is exactly b * voxelSize(L) in float32, so every point of the voxel has the
+/// returned key at level + 1 (grid coordinates floor-divided by b). For other bases a coarse voxel
+/// straddles fine ones and the voxel's centre decides. Grid coordinates that wrapped at 17 bits
+/// are divided as stored (the parent of a wrapped cell is then wrong, as its position already
+/// is; the bake warns about wrapping). Level 511 (the last) returns 0 (no coarser level).
+uint64_t coarserKey(uint64_t key, const HashGridParameters& params);
 
 /// @brief Decodes a key: grid coordinates sign-extended from 17 bits, level, normal bits and the
 /// user bit. Exact inverse of packHashGridKey() for coordinates in [-65536, 65535].
