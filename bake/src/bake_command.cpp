@@ -387,6 +387,7 @@ struct GridDecision {
     std::vector<std::string> warnings;  ///< units that do not fit the scene, each with the fix
     uint32_t finest_level = 1;
     uint32_t coarsest_level = 0;
+    std::string misses;  ///< which camera distances find no voxel, or empty
     std::string levelsCovered() const {
         if (coarsest_level == 0) return "the bake camera's";
         return std::to_string(finest_level) + "-" + std::to_string(coarsest_level);
@@ -429,6 +430,14 @@ GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& 
     const DepositLevels levels = levelsFor(scene, settings);
     decision.finest_level = levels.finestLevel();
     decision.coarsest_level = levels.coarsestLevel();
+    if (region.kind == ViewRegion::Kind::Distance && decision.finest_level > kHashGridLevelMin) {
+        // Level L starts at camera distance b^(L - bias).
+        char text[160];
+        std::snprintf(text, sizeof text, "; cameras nearer than %g to a surface ask for finer levels and miss there "
+                      "(the runtime's nearest-level lookup falls back)",
+                      std::pow(double(grid.logarithm_base), double(decision.finest_level) - double(grid.level_bias)));
+        decision.misses = text;
+    }
     if (o.level_bias != "auto") decision.warnings = checkGridForScene(scene, grid, decision.finest_level, o.voxel_budget);
     return decision;
 }
@@ -548,8 +557,8 @@ void runBake(const BakeOptions& o) {
         std::printf("Camera: %s\n", camera_description.c_str());
         std::printf("Grid: scene scale %g, log base %g, %s\n", double(settings.sharc.grid.scene_scale),
                     double(settings.sharc.grid.logarithm_base), grid_decision.choice.c_str());
-        std::printf("Views: %s; levels %s\n", settings.view_region.describe().c_str(),
-                    grid_decision.levelsCovered().c_str());
+        std::printf("Views: %s; levels %s%s\n", settings.view_region.describe().c_str(),
+                    grid_decision.levelsCovered().c_str(), grid_decision.misses.c_str());
         if (auto_capacity) {
             std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice.describe().c_str(), capacity_choice.seconds);
         }

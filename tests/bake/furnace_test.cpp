@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <string>
 
 namespace sharcbake {
@@ -129,6 +130,29 @@ TEST(FurnaceBake, EveryVoxelConvergesToTheAnalyticRadiance) {
     EXPECT_EQ(within, live) << "worst relative error " << worst;
     EXPECT_EQ(cache.numerics().failed_inserts, 0u);
     EXPECT_EQ(cache.numerics().non_finite_deposits, 0u);
+}
+
+/// The written cache holds every level from the deposits' up (view_region.h): each level, built
+/// from the finer ones, holds the analytic radiance as well as the deposited level does.
+TEST(FurnaceBake, EveryLevelOfTheWrittenCacheHoldsTheAnalyticRadiance) {
+    const SmallBake bake("furnace_rho090", 1024, HistorySchedule{});
+    const CacheData data = toCacheData(bake.baker->cache());
+    std::map<uint32_t, std::pair<double, double>> error_and_weight;  // per level
+    std::map<uint32_t, uint32_t> tested;
+    for (const CacheVoxel& v : data.voxels) {
+        if (v.sample_weight < float(kMinSamplesTested)) continue;
+        const uint32_t level = decodeHashGridKey(v.key).level;
+        const double error = std::abs(double(v.radiance[0]) - 10.0) / 10.0;
+        EXPECT_LT(error, 0.02) << "level " << level << " weight " << v.sample_weight;
+        error_and_weight[level].first += error * v.sample_weight;
+        error_and_weight[level].second += v.sample_weight;
+        ++tested[level];
+    }
+    const DepositLevels& levels = bake.baker->depositLevels();
+    for (uint32_t level = levels.finestLevel(); level <= levels.coarsestLevel(); ++level) {
+        ASSERT_GT(tested[level], 0u) << "level " << level << " has no voxel";
+        EXPECT_LT(error_and_weight[level].first / error_and_weight[level].second, 0.005) << "level " << level;
+    }
 }
 
 /// Bake -> file -> runtime: every live voxel of the bake is in the file with its value, and the

@@ -200,6 +200,72 @@ TEST(HashGridKeyer, SameKeysAsHashGridKey) {
     }
 }
 
+TEST(HashGridKeyer, KeyAtLevelIsHashGridKeyAtLevel) {
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> coord(-300.0f, 300.0f), unit(-1.0f, 1.0f);
+    std::uniform_int_distribution<uint32_t> level(1, 40);
+    for (const float bias : {0.0f, 3.515625f, -2.25f}) {
+        HashGridParameters params;
+        params.level_bias = bias;
+        const HashGridKeyer keyer(params);
+        for (int i = 0; i < 5000; ++i) {
+            const Float3 p{coord(rng), coord(rng), coord(rng)};
+            const Float3 n{unit(rng), unit(rng), unit(rng)};
+            const uint32_t l = level(rng);
+            ASSERT_EQ(keyer.keyAtLevel(p, n, l), hashGridKeyAtLevel(p, n, l, params)) << "bias " << bias << " case " << i;
+        }
+    }
+}
+
+// With a power-of-two base the levels nest: every point's key at level L + 1 is coarserKey of its
+// key at level L (tested at random points, both signs, and a few float steps around cell edges).
+TEST(HashGridKey, CoarserKeyNestsExactlyForPowerOfTwoBases) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> coord(-50.0f, 50.0f), unit(-1.0f, 1.0f);
+    for (const float base : {2.0f, 4.0f}) {
+        for (const float bias : {0.0f, 2.515625f, -1.0f}) {
+            HashGridParameters params;
+            params.logarithm_base = base;
+            params.level_bias = bias;
+            for (int i = 0; i < 20000; ++i) {
+                Float3 p{coord(rng), coord(rng), coord(rng)};
+                if (i % 4 == 0) {
+                    // On a cell edge of the level, then a few float steps either way.
+                    const float size = voxelSize(1 + uint32_t(i) % 6, params);
+                    p.x = std::nextafter(std::round(p.x / size) * size - kHashGridPositionBias, i % 8 ? INFINITY : 0.0f);
+                }
+                const Float3 n{unit(rng), unit(rng), unit(rng)};
+                for (uint32_t level = 1; level < 12; ++level) {
+                    ASSERT_EQ(coarserKey(hashGridKeyAtLevel(p, n, level, params), params),
+                              hashGridKeyAtLevel(p, n, level + 1, params))
+                        << "base " << base << " bias " << bias << " level " << level << " case " << i;
+                }
+            }
+        }
+    }
+}
+
+// Other bases: the coarse voxel that holds the fine voxel's centre.
+TEST(HashGridKey, CoarserKeyOfOtherBasesHoldsTheCentre) {
+    HashGridParameters params;
+    params.logarithm_base = 1.5f;
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<float> coord(-50.0f, 50.0f);
+    for (int i = 0; i < 5000; ++i) {
+        const uint64_t key = hashGridKeyAtLevel(Float3{coord(rng), coord(rng), coord(rng)}, Float3{0, -1, 0}, 3, params);
+        const uint64_t parent = coarserKey(key, params);
+        const Float3 centre = voxelCenter(key, params);
+        const HashGridCell cell = decodeHashGridKey(parent);
+        EXPECT_EQ(cell.level, 4u);
+        EXPECT_EQ(cell.normal_bits, decodeHashGridKey(key).normal_bits);
+        const Int3 expected = quantisePosition(centre, voxelSize(4, params));
+        EXPECT_EQ(cell.grid.x, expected.x);
+        EXPECT_EQ(cell.grid.y, expected.y);
+        EXPECT_EQ(cell.grid.z, expected.z);
+    }
+    EXPECT_EQ(coarserKey(packHashGridKey(Int3{1, 2, 3}, kHashGridLevelMax, 0), params), kHashGridInvalidKey);
+}
+
 TEST(HashGridKey, NormalBits) {
     EXPECT_EQ(normalBits(Float3{0.0f, 0.0f, 0.0f}), 0u);
     EXPECT_EQ(normalBits(Float3{-0.0f, -0.0f, -0.0f}), 0u);

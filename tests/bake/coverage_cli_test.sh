@@ -1,0 +1,137 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# A default bake serves every view: SHaRC's exact lookups from cameras at 0.25x to 8x the glTF
+# camera's distance all hit; the same scene in millimetres or kilometres gets the same grid (in its
+# units), the same voxel count and hit rate, and no warning; a level bias that does not fit the
+# units is warned about; the automatic camera sees a lone floor.
+# Usage: coverage_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+. "$(dirname "$0")/../cli_support.sh"
+
+cornell="$scenes/cornell_box/cornell_box.gltf"
+
+# The Cornell box (a room with two blocks) with default settings.
+expect 0 "default bake" "$sharcbake" bake "$cornell" -o "$work/cornell.sharc" --stats-json "$work/cornell.json"
+says "$work/out.txt" "Views: free space" "the bake names the view region"
+says "$work/out.txt" "predicted hit rate: " "the bake prints its predicted hit rate"
+[ -s "$work/err.txt" ] && fail "the default bake warned: $(cat "$work/err.txt")"
+expect 0 "info" "$sharcbake" info "$work/cornell.sharc"
+says "$work/out.txt" "levels_covered: 1-" "info shows the levels the file covers"
+says "$work/out.txt" "view_region: free space" "info shows the region"
+
+# The glTF camera is 2 units from the box's centre, looking at it: cameras from 0.5 to 16 units
+# away on the same line ask for levels 1 to 6. SHaRC's exact lookup must hit 99% of the time.
+for factor in 0.25 0.5 1 2 4 8; do
+    z=$(awk "BEGIN { print 2 * $factor }")
+    expect 0 "render from ${factor}x the camera's distance" "$sharcbake" render "$cornell" -o "$work/view.exr" \
+        --look-at "0,0.5,$z,0,0.5,0" --fov 40 --resolution 64 --spp 4 --cache "$work/cornell.sharc" --no-png -q \
+        --stats-json "$work/view.json"
+    python3 - "$work/view.json" "$factor" <<'PY' || failures=$((failures + 1))
+import json, sys
+s = json.load(open(sys.argv[1]))
+lookups = s["cache_hits"] + s["cache_misses"]
+ok = lookups >= 50 and s["cache_hits"] >= 0.99 * lookups
+print(("ok" if ok else "FAIL") + ": %sx: %d of %d lookups hit" % (sys.argv[2], s["cache_hits"], lookups))
+sys.exit(0 if ok else 1)
+PY
+done
+
+# The same room in millimetres (x1000) and in kilometres (x0.001): a root node scales it.
+scaled() {  # scaled FACTOR NAME
+    mkdir -p "$work/$2"
+    cp "$scenes/cornell_box/cornell_box.bin" "$work/$2/"
+    python3 - "$cornell" "$1" "$work/$2/cornell_box.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+k = float(sys.argv[2])
+g["nodes"].append({"name": "units", "scale": [k, k, k], "children": g["scenes"][0]["nodes"]})
+g["scenes"][0]["nodes"] = [len(g["nodes"]) - 1]
+json.dump(g, open(sys.argv[3], "w"))
+PY
+}
+scaled 1000 mm
+scaled 0.001 km
+small="--iterations 64 --resolution 640x360"
+for units in unit mm km; do
+    scene="$work/$units/cornell_box.gltf"
+    [ "$units" = unit ] && scene="$cornell"
+    expect 0 "bake in $units" "$sharcbake" bake "$scene" -o "$work/$units.sharc" $small --stats-json "$work/$units.json"
+    [ -s "$work/err.txt" ] && fail "the $units bake warned: $(cat "$work/err.txt")"
+done
+python3 - "$work/unit.json" "$work/mm.json" "$work/km.json" <<'PY' || failures=$((failures + 1))
+import json, sys
+unit, mm, km = (json.load(open(f)) for f in sys.argv[1:])
+for name, s, k in (("mm", mm, 1000.0), ("km", km, 0.001)):
+    voxels = s["live_voxels"] / unit["live_voxels"]
+    size = s["grid"]["finest_voxel_size"] / (k * unit["grid"]["finest_voxel_size"])
+    rate = s["predicted_hit_rate"]["rate"] - unit["predicted_hit_rate"]["rate"]
+    ok = abs(voxels - 1) < 0.10 and abs(size - 1) < 0.02 and abs(rate) < 0.01
+    print(("ok" if ok else "FAIL") + ": %s: voxels x%.4f, finest voxel x%.4f of the scaled unit's, hit rate %+.4f"
+          % (name, voxels, size, rate))
+    if not ok:
+        sys.exit(1)
+PY
+
+# A level bias given by hand that does not fit the units: a warning naming the fix.
+expect 0 "the room shrunk to 1 mm with the SDK's level bias" "$sharcbake" bake "$work/km/cornell_box.gltf" -o "$work/x.sharc" \
+    --iterations 2 --resolution 64x64 --level-bias 0
+says "$work/err.txt" "warning: the scene's .* span only about" "too few voxels are warned about"
+says "$work/err.txt" "level-bias auto" "the warning names the fix"
+expect 0 "m scene with a far too large level bias" "$sharcbake" bake "$cornell" -o "$work/x.sharc" \
+    --iterations 2 --resolution 64x64 --level-bias 12
+says "$work/err.txt" "the voxel budget" "too many voxels are warned about"
+
+# Declared regions.
+expect 0 "a region box" "$sharcbake" bake "$cornell" -o "$work/box.sharc" --iterations 8 --resolution 160x90 \
+    --view-region box:-0.4,0.1,0.2,0.4,0.9,2.5
+says "$work/out.txt" "Views: box" "a box region is described"
+expect 0 "the glTF cameras as the region" "$sharcbake" bake "$cornell" -o "$work/gltf.sharc" --iterations 8 \
+    --resolution 160x90 --view-region gltf
+says "$work/out.txt" "Views: 1 camera positions" "a glTF camera region is described"
+expect 0 "a distance range" "$sharcbake" bake "$cornell" -o "$work/far.sharc" --iterations 8 --resolution 160x90 \
+    --view-region distance:1.5
+says "$work/out.txt" "ask for finer levels and miss" "the bake says which camera distances will miss"
+expect 1 "a malformed region" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --view-region box:1,2
+says "$work/err.txt" "box:x0,y0,z0,x1,y1,z1" "the message names the accepted forms"
+expect 1 "path region without a path" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --view-region path
+expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --level-bias fine
+
+# The SDK's rule (the bake camera's levels only) from far away: the render warns with the remedy,
+# and the nearest-level fallback answers.
+expect 0 "a bake without coverage" "$sharcbake" bake "$cornell" -o "$work/sdk.sharc" --iterations 16 \
+    --resolution 320x180 --view-region bake-camera --camera-source gltf
+expect 0 "render it from 8x the distance" "$sharcbake" render "$cornell" -o "$work/far.exr" \
+    --look-at 0,0.5,16,0,0.5,0 --fov 20 --resolution 64 --spp 4 --cache "$work/sdk.sharc" --no-png
+says "$work/err.txt" "warning: the cache answered only" "a low hit rate is warned about"
+says "$work/err.txt" "view-region" "the warning names the remedy"
+expect 0 "the same with the nearest-level fallback" "$sharcbake" render "$cornell" -o "$work/far.exr" \
+    --look-at 0,0.5,16,0,0.5,0 --fov 20 --resolution 64 --spp 4 --cache "$work/sdk.sharc" --no-png \
+    --cache-lookup nearest
+says "$work/out.txt" "came from another level" "the fallback answers from another level"
+
+# A lone floor plane and no camera: the automatic camera sees it (not edge-on) and says where it is.
+python3 - "$work/floor.gltf" <<'PY'
+import base64, json, struct, sys
+positions = [(-1, 0, -1), (1, 0, -1), (1, 0, 1), (-1, 0, 1)]
+data = b"".join(struct.pack("<3f", *p) for p in positions) + struct.pack("<6H", 0, 2, 1, 0, 3, 2)
+g = {"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+     "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+     "materials": [{"emissiveFactor": [1, 1, 1], "pbrMetallicRoughness": {"metallicFactor": 0}}],
+     "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+     "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+     "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
+                   {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}]}
+json.dump(g, open(sys.argv[1], "w"))
+PY
+expect 0 "render a lone floor from the automatic camera" "$sharcbake" render "$work/floor.gltf" -o "$work/floor.exr" \
+    --resolution 32 --spp 1 --no-png
+says "$work/out.txt" "Camera: 'automatic' at (" "the automatic camera's pose is printed"
+expect 0 "bake the floor" "$sharcbake" bake "$work/floor.gltf" -o "$work/floor.sharc" --iterations 2 --resolution 64x64 -q
+expect 0 "the floor's primary hits" "$sharcbake" render "$work/floor.gltf" -o "$work/floor.exr" --resolution 32 \
+    --spp 1 --no-png --cache "$work/floor.sharc" --debug-view cache
+hits=$(sed -n "s/.* of \([0-9]*\) primary hits.*/\1/p" "$work/out.txt")
+[ "${hits:-0}" -ge 100 ] || fail "the automatic camera sees the floor in ${hits:-0} of 1024 pixels (edge-on?)"
+finish "coverage"
