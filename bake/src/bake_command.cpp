@@ -756,8 +756,14 @@ void registerBakeCommand(CLI::App& app) {
         "(one random pixel per --update-stride block), deposits each path vertex's radiance into\n"
         "its hash-grid voxel, and resolves the voxels. The result is written as a .sharc file.\n"
         "Same scene, options and --seed give a byte-identical cache for any --threads.\n\n"
-        "Example:\n"
-        "  sharcbake bake scenes/cornell_box/cornell_box.gltf -o out/cornell_box.sharc --iterations 512");
+        "SHaRC picks a lookup's level from the runtime camera's distance, so each vertex is cached\n"
+        "at every level a camera of --view-region (default: anywhere) can ask for there, on a grid\n"
+        "whose finest level is fitted to the scene's units (--level-bias auto). After the bake the\n"
+        "share of SHaRC's exact lookups the cache answers from the scene's cameras and sampled\n"
+        "viewpoints is printed as the predicted hit rate (a warning below 95%).\n\n"
+        "Examples:\n"
+        "  sharcbake bake scenes/cornell_box/cornell_box.gltf -o out/cornell_box.sharc --iterations 512\n"
+        "  sharcbake bake level.gltf -o level.sharc --view-region distance:0.5 --voxel-budget 1000000");
     cmd->add_option("scene", o->scene_path, "glTF 2.0 scene (.gltf or .glb)")->required();
     cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc)")->required();
     cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));

@@ -99,6 +99,17 @@ void printText(const std::string& path, const CacheView& v) {
         std::printf("  level %3u  voxel size %-10g  %10u voxels\n", l.level, double(voxelSize(l.level, p)),
                     l.voxel_count);
     }
+    // Which runtime cameras the levels were baked for (bake's view_region, levels_covered and
+    // predicted_hit_rate metadata).
+    bool has_region = false, has_levels = false, has_rate = false;
+    const std::string_view region = v.metadata("view_region", &has_region);
+    const std::string_view covered = v.metadata("levels_covered", &has_levels);
+    const std::string_view rate = v.metadata("predicted_hit_rate", &has_rate);
+    if (has_region && has_levels) {
+        std::printf("Baked for views: %.*s; levels %.*s\n", int(region.size()), region.data(), int(covered.size()),
+                    covered.data());
+    }
+    if (has_rate) std::printf("Predicted hit rate: %.*s\n", int(rate.size()), rate.data());
     // What the bake left out because the scene had no use for it (bake's "left_out" metadata),
     // next to what the file leaves out by design (empty slots, absent levels, above).
     for (size_t i = 0; i < v.metadataCount(); ++i) {
