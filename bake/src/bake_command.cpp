@@ -439,6 +439,10 @@ GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& 
         decision.misses = text;
     }
     if (o.level_bias != "auto") decision.warnings = checkGridForScene(scene, grid, decision.finest_level, o.voxel_budget);
+    if (o.scene_scale != "auto") {
+        const std::string warning = checkSceneScale(grid.scene_scale);
+        if (!warning.empty()) decision.warnings.push_back(warning);
+    }
     return decision;
 }
 

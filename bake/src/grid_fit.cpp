@@ -105,4 +105,25 @@ std::vector<std::string> checkGridForScene(const Scene& scene, const HashGridPar
     return warnings;
 }
 
+std::string checkSceneScale(float scene_scale) {
+    char text[320];
+    if (scene_scale < 4.0f) {
+        std::snprintf(text, sizeof text,
+                      "--scene-scale %g makes voxels about 1/%g of their distance from the camera wide: a blurry "
+                      "cache. SHaRC's scene scale is the same in any units (the units are fitted by --level-bias "
+                      "auto); use --scene-scale auto (50)",
+                      double(scene_scale), double(scene_scale));
+        return text;
+    }
+    if (scene_scale > 4096.0f) {
+        std::snprintf(text, sizeof text,
+                      "--scene-scale %g makes voxels about 1/%g of their distance from the camera wide: far more "
+                      "voxels than a view can use. SHaRC's scene scale is the same in any units (the units are "
+                      "fitted by --level-bias auto); use --scene-scale auto (50)",
+                      double(scene_scale), double(scene_scale));
+        return text;
+    }
+    return {};
+}
+
 }  // namespace sharcbake

@@ -49,4 +49,11 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
 std::vector<std::string> checkGridForScene(const Scene& scene, const HashGridParameters& grid, uint32_t finest_level,
                                            uint64_t voxel_budget);
 
+/// For a scene scale given by hand: a warning (with the fix) when it is far from what SHaRC means
+/// by it, voxels about distance/S wide. Below 4 a voxel spans a quarter of its distance from the
+/// camera and more (a blurry cache; usually an attempt to convert units, which the level bias does);
+/// above 4096 voxels are a few thousandths of the distance (a cache far larger than the view needs).
+/// Empty when it is sensible.
+std::string checkSceneScale(float scene_scale);
+
 }  // namespace sharcbake

@@ -84,6 +84,11 @@ expect 0 "m scene with a far too large level bias" "$sharcbake" bake "$cornell" 
     --iterations 2 --resolution 64x64 --level-bias 12
 says "$work/err.txt" "the voxel budget" "too many voxels are warned about"
 
+expect 0 "a scene scale meant as a unit conversion" "$sharcbake" bake "$work/mm/cornell_box.gltf" -o "$work/x.sharc" \
+    --iterations 2 --resolution 64x64 --scene-scale 0.05
+says "$work/err.txt" "warning: --scene-scale 0.05 makes voxels" "a scene scale far from SHaRC's meaning is warned about"
+says "$work/err.txt" "scene-scale auto" "the warning names the fix"
+
 # Declared regions.
 expect 0 "a region box" "$sharcbake" bake "$cornell" -o "$work/box.sharc" --iterations 8 --resolution 160x90 \
     --view-region box:-0.4,0.1,0.2,0.4,0.9,2.5

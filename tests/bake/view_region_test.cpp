@@ -201,3 +201,10 @@ TEST(GridFit, WrongUnitsAreWarnedAbout) {
     EXPECT_FALSE(checkGridForScene(square(1e5f), sdk, 1, 1u << 17).empty());   // 100 km in 4 cm voxels
     EXPECT_TRUE(checkGridForScene(square(20.0f), sdk, 1, 1u << 17).empty());
 }
+
+TEST(GridFit, SceneScalesFarFromSharcsMeaningAreWarnedAbout) {
+    EXPECT_FALSE(checkSceneScale(0.05f).empty());
+    EXPECT_FALSE(checkSceneScale(1e5f).empty());
+    EXPECT_TRUE(checkSceneScale(50.0f).empty());
+    EXPECT_TRUE(checkSceneScale(5.0f).empty());
+}
