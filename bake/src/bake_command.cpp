@@ -50,6 +50,7 @@ struct BakeOptions {
     uint32_t update_stride = 5;
     std::string resolution = "1280x720";
     uint32_t max_bounces = 8;
+    uint32_t propagation_depth = 2;
     std::string history = "ramp:8";
     std::string camera_source = "explore";
     std::string camera_path;
@@ -300,6 +301,7 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     settings.seed = o.seed;
     parseShard(o.shard, settings.shard_index, settings.shard_count);
     settings.path.max_bounces = o.max_bounces;
+    settings.sharc.propagation_depth = o.propagation_depth;
     // --capacity auto starts from the SDK's default; the bake replaces it after a pre-pass.
     const uint32_t capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
     settings.sharc.capacity = capacity;
@@ -811,6 +813,11 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--resolution", o->resolution, "Virtual camera image size WxH")->capture_default_str();
     cmd->add_option("--max-bounces", o->max_bounces, "Surface interactions per update path")
         ->capture_default_str()->check(CLI::Range(1u, 1024u));
+    cmd->add_option("--propagation-depth", o->propagation_depth,
+                    "Path vertices that receive the radiance found after them (SHARC_PROPAGATION_DEPTH); cache "
+                    "resampling ends a path at a random depth up to this, so deeper paths carry more bounces per "
+                    "iteration")
+        ->capture_default_str()->check(CLI::Range(1u, 8u));
     cmd->add_option("--history", o->history,
                     "How voxels forget early (biased) iterations: ramp:P (iteration k weighs k^P), "
                     "window:A (SHaRC's exponential window of A iterations) or average")

@@ -2,8 +2,8 @@
 #include "sharc_cache.h"
 
 #include "sampling.h"
-#include "view_region.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -307,7 +307,74 @@ glm::dvec3 SharcCache::feedbackMean(const ResolvedEntry& r, const glm::dvec3& ne
     return glm::dvec3(r.feedback) + (newest - glm::dvec3(r.feedback)) * newest_weight;
 }
 
+void SharcCache::sumIntoCoarserLevels() {
+    const uint32_t coarsest = settings_.coarsest_level;
+    if (coarsest == 0 || touched_.empty()) return;
+    using SlotLists = tbb::enumerable_thread_specific<std::vector<uint32_t>>;
+    const auto gather = [](SlotLists& lists, std::vector<uint32_t>& out) {
+        for (std::vector<uint32_t>& list : lists) {
+            out.insert(out.end(), list.begin(), list.end());
+            list.clear();
+        }
+    };
+    // The touched voxels by level; coarser voxels join the next level's list as they are touched.
+    std::vector<std::vector<uint32_t>> by_level(size_t(coarsest) + 1);
+    for (const uint32_t slot : touched_) {
+        const uint32_t level = decodeHashGridKey(table_.keyAt(slot)).level;
+        if (level < coarsest) by_level[level].push_back(slot);
+    }
+    SlotLists unknown, newly_touched;
+    for (uint32_t level = kHashGridLevelMin; level < coarsest; ++level) {
+        const std::vector<uint32_t>& slots = by_level[level];
+        if (slots.empty()) continue;
+        // The coarser voxel of each voxel is looked up once (then remembered in coarser_slot).
+        // New coarser keys are inserted serially in slot order, so their slots do not depend on
+        // the thread count.
+        tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
+            if (accumulation_[slots[i]].coarser_slot == 0) unknown.local().push_back(slots[i]);
+        });
+        std::vector<uint32_t> lookups;
+        gather(unknown, lookups);
+        std::sort(lookups.begin(), lookups.end());
+        for (const uint32_t slot : lookups) {
+            const uint64_t parent_key = coarserKey(table_.keyAt(slot), settings_.grid);
+            const bool fresh = !table_.find(parent_key);
+            const std::optional<uint32_t> parent = table_.insert(parent_key);
+            if (!parent) {
+                ++numerics_.failed_inserts;  // the finer voxel keeps its samples; this level lacks it
+                continue;
+            }
+            occupied_ += fresh;
+            accumulation_[slot].coarser_slot = *parent + 1;
+        }
+        // Integer adds commute, so the coarser sums do not depend on the order either.
+        std::atomic<uint64_t> saturated{0};
+        tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
+            AccumulationEntry& child = accumulation_[slots[i]];
+            if (child.coarser_slot == 0) return;
+            const uint32_t parent_slot = child.coarser_slot - 1;
+            AccumulationEntry& parent = accumulation_[parent_slot];
+            if (parent.touched.exchange(1, std::memory_order_relaxed) == 0) newly_touched.local().push_back(parent_slot);
+            for (int c = 0; c < 3; ++c) {
+                const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
+                const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);
+                if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries)) {
+                    saturated.fetch_add(1, std::memory_order_relaxed);
+                }
+            }
+            parent.samples.fetch_add(child.samples.load(std::memory_order_relaxed), std::memory_order_relaxed);
+        });
+        numerics_.saturated_sums += saturated.load();
+        const size_t before = touched_.size();
+        gather(newly_touched, touched_);
+        if (level + 1 < coarsest) {
+            by_level[level + 1].insert(by_level[level + 1].end(), touched_.begin() + std::ptrdiff_t(before), touched_.end());
+        }
+    }
+}
+
 void SharcCache::resolve(uint32_t iteration) {
+    sumIntoCoarserLevels();
     const double inverse_scale = 1.0 / radiance_scale_;
     std::vector<uint8_t> orphan(touched_.size(), 0);
     tbb::parallel_for(size_t(0), touched_.size(), [&](size_t i) {
@@ -409,7 +476,6 @@ CacheData toCacheData(const SharcCache& cache) {
         data.voxels.push_back(v);
     }
     sortVoxels(data.voxels);
-    addCoarserLevels(data, s.coarsest_level);
     return data;
 }
 

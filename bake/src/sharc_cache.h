@@ -70,8 +70,10 @@ struct SharcSettings {
     /// Double the table between iterations whenever more than kGrowAtLoad of it is occupied
     /// (--capacity auto), so no insert fails whatever the initial estimate.
     bool grow_when_loaded = false;
-    /// The written cache (toCacheData) holds every level from the deposits' up to this one,
-    /// coarser levels built from finer ones (addCoarserLevels); 0 = only the deposited levels.
+    /// Every voxel also feeds its coarser voxels (coarserKey) up to this level: each iteration,
+    /// before the resolve, a voxel's accumulation is added to its parent's, so the table holds
+    /// every level from the deposits' up, each with its own history, as if every deposit had also
+    /// been made at every coarser level (sumIntoCoarserLevels). 0 = only the deposited levels.
     uint32_t coarsest_level = 0;
 };
 
@@ -90,6 +92,10 @@ struct AccumulationEntry {
     std::array<std::atomic<uint8_t>, 3> carries{};
     std::atomic<uint32_t> samples{0};
     std::atomic<uint8_t> touched{0};  ///< already listed for this iteration's resolve
+    /// Slot + 1 of the voxel's coarser voxel (SharcSettings::coarsest_level), 0 until looked up.
+    /// Kept across iterations (it never changes while the table does not grow), so the hash
+    /// lookup happens once per voxel; fits the entry's padding.
+    uint32_t coarser_slot = 0;
 };
 
 /// Per-slot resolved state: what queries and cache resampling read.
@@ -150,8 +156,8 @@ public:
     void commit(const std::vector<Deposit>& deposits, uint32_t iteration = 0);
 
     /// Folds this iteration's accumulation into the resolved entries with the history schedule
-    /// and clears it. Each slot reads and writes only itself, so the result does not depend on
-    /// the thread count.
+    /// and clears it (after sumIntoCoarserLevels). Each slot reads and writes only itself, so the
+    /// result does not depend on the thread count.
     void resolve(uint32_t iteration);
 
     const NumericsCounters& numerics() const { return numerics_; }
@@ -182,6 +188,11 @@ public:
     static double chooseRadianceScale(double max_radiance);
 
 private:
+    /// Adds this iteration's accumulation of every touched voxel below SharcSettings::coarsest_level
+    /// to its coarser voxel, level by level from the finest, inserting coarser keys that are new in
+    /// increasing slot order of their finer voxels (so slots are the same on every run); integer
+    /// sums commute, so the sums are too.
+    void sumIntoCoarserLevels();
     /// The voxel's new short-window feedback value (r.frames already counts this iteration).
     glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
 
@@ -199,8 +210,8 @@ private:
     uint64_t occupied_ = 0;
 };
 
-/// The cache as file data: live voxels with samples, in canonical (key) order, and the grid
-/// parameters, with the coarser levels up to SharcSettings::coarsest_level. What `bake` writes.
+/// The cache as file data: live voxels with samples (every level the table holds), in canonical
+/// (key) order, and the grid parameters. What `bake` writes.
 CacheData toCacheData(const SharcCache& cache);
 
 }  // namespace sharcbake

@@ -105,7 +105,7 @@ void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const
             const uint32_t resample_depth =
                 uint32_t(std::lround(1.0f + float(depth - 1) * u_select_resample.y));
             if (resample_depth <= history.length) {
-                const ResolvedEntry* entry = cache_.findResolved(key);
+                const ResolvedEntry* entry = cache_.findResolved(levels.feedbackKey(hit.position, hit.geometric_normal, camera));
                 if (entry && entry->weight > 0.0) {
                     // The cached mean holds this voxel's full emission, but the previous vertex's
                     // light sampling already counted the emission's light-sampled share.

@@ -165,62 +165,14 @@ uint64_t DepositLevels::key(glm::vec3 position, glm::vec3 facing_normal, const F
     return keyer_.keyAtLevel(p, n, levelOfPoint(biased));
 }
 
-void addCoarserLevels(CacheData& data, uint32_t coarsest_level) {
-    if (coarsest_level == 0 || data.voxels.empty()) return;
-    const HashGridParameters grid = data.gridParameters();
-    struct Sum {
-        uint64_t key;
-        double radiance[3];  ///< radiance x weight
-        double weight;
-    };
-    // One list per level, each in key order; coarser lists are built from finer ones level by
-    // level, so every sum is made in the same order whatever the input order.
-    sortVoxels(data.voxels);
-    std::vector<std::vector<Sum>> levels(size_t(std::max(coarsest_level, kHashGridLevelMin)) + 1);
-    std::vector<CacheVoxel> beyond;  // voxels already coarser than coarsest_level: kept as they are
-    for (const CacheVoxel& v : data.voxels) {
-        const uint32_t level = decodeHashGridKey(v.key).level;
-        if (level > coarsest_level) {
-            beyond.push_back(v);
-            continue;
-        }
-        const double w = double(v.sample_weight);
-        levels[level].push_back(Sum{v.key, {v.radiance[0] * w, v.radiance[1] * w, v.radiance[2] * w}, w});
-    }
-    const auto byKey = [](const Sum& a, const Sum& b) { return a.key < b.key; };
-    for (uint32_t level = kHashGridLevelMin; level <= coarsest_level; ++level) {
-        std::vector<Sum>& list = levels[level];
-        // Merge equal keys (children that share a parent, or a parent that also had deposits).
-        std::stable_sort(list.begin(), list.end(), byKey);
-        size_t out = 0;
-        for (size_t i = 0; i < list.size(); ++i) {
-            if (out > 0 && list[out - 1].key == list[i].key) {
-                for (int c = 0; c < 3; ++c) list[out - 1].radiance[c] += list[i].radiance[c];
-                list[out - 1].weight += list[i].weight;
-            } else {
-                list[out++] = list[i];
-            }
-        }
-        list.resize(out);
-        if (level == coarsest_level) break;
-        std::vector<Sum>& parents = levels[level + 1];
-        for (const Sum& s : list) {
-            const uint64_t parent = coarserKey(s.key, grid);
-            if (parent != kHashGridInvalidKey) parents.push_back(Sum{parent, {s.radiance[0], s.radiance[1], s.radiance[2]}, s.weight});
-        }
-    }
-    data.voxels = std::move(beyond);
-    for (const std::vector<Sum>& list : levels) {
-        for (const Sum& s : list) {
-            if (!(s.weight > 0.0)) continue;
-            CacheVoxel v;
-            v.key = s.key;
-            for (int c = 0; c < 3; ++c) v.radiance[c] = float(s.radiance[c] / s.weight);
-            v.sample_weight = float(s.weight);
-            data.voxels.push_back(v);
-        }
-    }
-    sortVoxels(data.voxels);
+uint64_t DepositLevels::feedbackKey(glm::vec3 position, glm::vec3 facing_normal, const Float3& bake_camera) const {
+    const Float3 p{position.x, position.y, position.z};
+    const Float3 n{facing_normal.x, facing_normal.y, facing_normal.z};
+    if (region_.kind == ViewRegion::Kind::BakeCamera) return keyer_.key(p, n, bake_camera);
+    const Float3 biased{p.x + kHashGridPositionBias, p.y + kHashGridPositionBias, p.z + kHashGridPositionBias};
+    const float dx = bake_camera.x - biased.x, dy = bake_camera.y - biased.y, dz = bake_camera.z - biased.z;
+    const uint32_t camera_level = keyer_.levelOf(dx * dx + dy * dy + dz * dz);
+    return keyer_.keyAtLevel(p, n, std::clamp(camera_level, levelOfPoint(biased), coarsest_level_));
 }
 
 }  // namespace sharcbake

@@ -6,17 +6,21 @@
 /// *runtime* camera: level = floor(log_b(distance) + level_bias), at least 1. A bake that fills
 /// each point only at the level of its own roaming camera's distance misses every lookup from a
 /// camera at another distance. So the bake deposits each path vertex at the finest level that a
-/// camera of the declared view region can ask for there (the "deposit level"), and the coarser
-/// levels are built from the finer ones when the cache is written (addCoarserLevels): a coarse
-/// voxel holds the sample-weighted mean of the finer voxels inside it, which is what deposits at
-/// that level would have averaged. With a power-of-two logarithm base the levels nest exactly.
+/// camera of the declared view region can ask for there (the "deposit level"), and every voxel
+/// feeds its coarser voxels in the cache (SharcSettings::coarsest_level): each coarser level
+/// accumulates the same samples, with its own history, as if every deposit had been made there
+/// too. With a power-of-two logarithm base the levels nest exactly (coarserKey).
+///
+/// Cache feedback reads the level the roaming camera itself would ask for (feedbackKey), as the
+/// SDK does: a voxel of the finest level receives a sample only every few iterations, and light
+/// gains a bounce per feedback step, so reading the finest level would slow stiff transport down
+/// by that factor.
 ///
 /// The finest level is level 1, and the grid fit (grid_fit.h) sizes level 1 to the voxel budget:
 /// a camera closer than level 1's distances still asks for level 1 (SHaRC clamps there), so no
 /// camera distance asks for a level finer than the cache holds.
 #pragma once
 
-#include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 
 #include <glm/glm.hpp>
@@ -65,6 +69,10 @@ public:
     /// region camera can ask for there (the bake camera's own level for Kind::BakeCamera).
     uint64_t key(glm::vec3 position, glm::vec3 facing_normal, const Float3& bake_camera) const;
 
+    /// The key cache resampling reads at a path vertex: the bake camera's own level (SHaRC's
+    /// rule), but no finer than the deposit level and no coarser than coarsestLevel().
+    uint64_t feedbackKey(glm::vec3 position, glm::vec3 facing_normal, const Float3& bake_camera) const;
+
     /// The coarsest level a region camera can ask for anywhere in the scene; the written cache
     /// holds every level from the deposits' up to this one. 0 for Kind::BakeCamera (no coverage
     /// levels are added).
@@ -85,10 +93,5 @@ private:
     uint32_t coarsest_level_ = 0;
 };
 
-/// Adds, for every voxel of `data`, its coarser voxels (coarserKey) up to `coarsest_level`: each
-/// holds the sample-weighted mean radiance and the summed sample weight of the finer voxels inside
-/// it (and of deposits made at its own level, if any). Voxels stay in canonical (key) order; the
-/// result does not depend on the order of `data.voxels`.
-void addCoarserLevels(CacheData& data, uint32_t coarsest_level);
 
 }  // namespace sharcbake

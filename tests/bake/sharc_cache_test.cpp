@@ -142,4 +142,41 @@ TEST(SharcCache, ResultDoesNotDependOnDepositOrderWithinOneSlot) {
 }
 
 }  // namespace
+/// Every voxel feeds its coarser voxels (SharcSettings::coarsest_level): each coarser level holds
+/// the same samples as the deposits below it, with its own history, and nothing beyond it.
+TEST(SharcCache, VoxelsFeedTheirCoarserVoxels) {
+    SharcSettings settings = smallSettings(4096, {HistorySchedule::Kind::Average, 0.0f});
+    settings.coarsest_level = 3;
+    SharcCache cache(settings, SharcCache::chooseRadianceScale(100.0));
+    // Level-1 cells 0 and 1 share their level-2 parent 0; cell 2 has parent 1; all share level 3.
+    const uint64_t a = packHashGridKey(Int3{0, 0, 0}, 1, 0), b = packHashGridKey(Int3{1, 0, 0}, 1, 0),
+                   c = packHashGridKey(Int3{2, 0, 0}, 1, 0);
+    for (uint32_t iteration = 0; iteration < 4; ++iteration) {
+        cache.commit({Deposit{a, glm::vec3(1.0f), 1}, Deposit{a, glm::vec3(3.0f), 1}, Deposit{b, glm::vec3(8.0f), 1},
+                      Deposit{c, glm::vec3(4.0f), 2}},
+                     iteration);
+        cache.resolve(iteration);
+    }
+    const auto mean = [&](uint64_t key) {
+        const ResolvedEntry* e = cache.findResolved(key);
+        return e ? double(e->mean.x) : -1.0;
+    };
+    EXPECT_NEAR(mean(a), 2.0, 1e-6);
+    EXPECT_NEAR(mean(packHashGridKey(Int3{0, 0, 0}, 2, 0)), (1.0 + 3.0 + 8.0) / 3.0, 1e-6);
+    EXPECT_NEAR(mean(packHashGridKey(Int3{1, 0, 0}, 2, 0)), 4.0 / 2.0, 1e-6);  // 4 over 2 samples
+    EXPECT_NEAR(mean(packHashGridKey(Int3{0, 0, 0}, 3, 0)), (12.0 + 4.0) / 5.0, 1e-6);
+    EXPECT_EQ(cache.findResolved(packHashGridKey(Int3{0, 0, 0}, 4, 0)), nullptr);
+    EXPECT_EQ(cache.findResolved(packHashGridKey(Int3{0, 0, 0}, 3, 0))->total_samples, 4u * 5u);
+    EXPECT_EQ(cache.occupiedSlots(), 3u + 2u + 1u);
+    EXPECT_EQ(cache.numerics().failed_inserts, 0u);
+}
+
+/// Without coarsest_level (the SDK's rule) a cache holds only what was deposited.
+TEST(SharcCache, NoCoarserVoxelsWithoutCoverage) {
+    SharcCache cache(smallSettings(1024), SharcCache::chooseRadianceScale(100.0));
+    cache.commit({Deposit{keyAt(0), glm::vec3(1.0f), 1}});
+    cache.resolve(0);
+    EXPECT_EQ(cache.occupiedSlots(), 1u);
+}
+
 }  // namespace sharcbake

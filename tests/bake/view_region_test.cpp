@@ -64,86 +64,17 @@ TEST(DepositLevels, EachRegionPicksTheFinestLevelItsCamerasAskFor) {
     const ViewRegion far_box = parseViewRegion("box:-1,40,-1,1,50,1");  // ~40 away: level 5
     EXPECT_EQ(level(DepositLevels(grid, far_box, lo, hi)), 5u);
 
+    // Cache feedback reads the bake camera's own level (here 2), but never below the deposits'.
+    EXPECT_EQ(decodeHashGridKey(free.feedbackKey(p, n, bake_camera)).level, 2u);
+    EXPECT_EQ(decodeHashGridKey(DepositLevels(grid, parseViewRegion("distance:9"), lo, hi).feedbackKey(p, n, bake_camera)).level,
+              3u);
+    EXPECT_EQ(decodeHashGridKey(free.feedbackKey(p, n, Float3{1e6f, 0.0f, 0.0f})).level, free.coarsestLevel());
+
     ViewRegion sdk;
     sdk.kind = ViewRegion::Kind::BakeCamera;
     const DepositLevels camera_only(grid, sdk, lo, hi);
     EXPECT_EQ(level(camera_only), 2u);  // 5 from the bake camera
     EXPECT_EQ(camera_only.coarsestLevel(), 0u);
-}
-
-namespace {
-
-CacheData dataWith(std::vector<CacheVoxel> voxels) {
-    CacheData data;
-    data.voxels = std::move(voxels);
-    return data;
-}
-
-CacheVoxel voxel(uint64_t key, float r, float g, float b, float weight) {
-    CacheVoxel v;
-    v.key = key;
-    v.radiance[0] = r;
-    v.radiance[1] = g;
-    v.radiance[2] = b;
-    v.sample_weight = weight;
-    return v;
-}
-
-}  // namespace
-
-TEST(AddCoarserLevels, CoarseVoxelsAreTheWeightedMeansOfTheFineOnes) {
-    // Four level-1 voxels: three share a level-2 parent (x 0, 1 -> 0; y 0, 1 -> 0), one is apart,
-    // one has another normal octant. A deposit made directly at level 2 joins its children.
-    const uint64_t a = packHashGridKey(Int3{0, 0, 0}, 1, 0);
-    const uint64_t b = packHashGridKey(Int3{1, 1, 0}, 1, 0);
-    const uint64_t c = packHashGridKey(Int3{-1, 0, 0}, 1, 0);  // parent x = -1
-    const uint64_t d = packHashGridKey(Int3{0, 0, 0}, 1, 2);   // other normal octant
-    const uint64_t direct = packHashGridKey(Int3{0, 0, 0}, 2, 0);
-    CacheData data = dataWith({voxel(a, 1, 2, 3, 1), voxel(b, 3, 2, 1, 3), voxel(c, 5, 5, 5, 2), voxel(d, 7, 7, 7, 1),
-                               voxel(direct, 10, 10, 10, 4)});
-    addCoarserLevels(data, 3);
-    std::map<uint64_t, CacheVoxel> by_key;
-    for (const CacheVoxel& v : data.voxels) by_key[v.key] = v;
-    EXPECT_TRUE(std::is_sorted(data.voxels.begin(), data.voxels.end(),
-                               [](const CacheVoxel& x, const CacheVoxel& y) { return x.key < y.key; }));
-    // Level 2, octant 0, cell 0: a, b and the direct deposit.
-    const CacheVoxel& parent = by_key.at(direct);
-    EXPECT_FLOAT_EQ(parent.sample_weight, 8.0f);
-    EXPECT_FLOAT_EQ(parent.radiance[0], (1 * 1 + 3 * 3 + 10 * 4) / 8.0f);
-    EXPECT_FLOAT_EQ(parent.radiance[2], (3 * 1 + 1 * 3 + 10 * 4) / 8.0f);
-    EXPECT_FLOAT_EQ(by_key.at(packHashGridKey(Int3{-1, 0, 0}, 2, 0)).radiance[0], 5.0f);
-    EXPECT_FLOAT_EQ(by_key.at(packHashGridKey(Int3{0, 0, 0}, 2, 2)).radiance[0], 7.0f);
-    // Level 3: cells 0 and -1 of level 2 have parents 0 and -1.
-    EXPECT_FLOAT_EQ(by_key.at(packHashGridKey(Int3{0, 0, 0}, 3, 0)).sample_weight, 8.0f);
-    EXPECT_FLOAT_EQ(by_key.at(packHashGridKey(Int3{-1, 0, 0}, 3, 0)).sample_weight, 2.0f);
-    EXPECT_EQ(data.voxels.size(), 5u + 3u + 3u - 1u);  // the direct level-2 voxel was already there
-    EXPECT_FALSE(by_key.count(packHashGridKey(Int3{0, 0, 0}, 4, 0)));  // not beyond the coarsest level
-}
-
-TEST(AddCoarserLevels, DoesNotDependOnTheInputOrder) {
-    std::mt19937 rng(23);
-    std::uniform_int_distribution<int32_t> cell(-40, 40);
-    std::uniform_real_distribution<float> value(0.0f, 3.0f);
-    std::vector<CacheVoxel> voxels;
-    std::set<uint64_t> keys;
-    while (voxels.size() < 3000) {
-        const uint64_t key = packHashGridKey(Int3{cell(rng), cell(rng), cell(rng)}, 1, uint32_t(cell(rng)) & 7u);
-        if (keys.insert(key).second) voxels.push_back(voxel(key, value(rng), value(rng), value(rng), 1.0f + value(rng)));
-    }
-    CacheData sorted = dataWith(voxels);
-    std::shuffle(voxels.begin(), voxels.end(), rng);
-    CacheData shuffled = dataWith(voxels);
-    addCoarserLevels(sorted, 6);
-    addCoarserLevels(shuffled, 6);
-    ASSERT_EQ(sorted.voxels.size(), shuffled.voxels.size());
-    for (size_t i = 0; i < sorted.voxels.size(); ++i) {
-        ASSERT_EQ(sorted.voxels[i].key, shuffled.voxels[i].key);
-        ASSERT_EQ(std::memcmp(&sorted.voxels[i], &shuffled.voxels[i], sizeof(CacheVoxel)), 0);
-    }
-    // Total weight is kept on every level.
-    std::map<uint32_t, double> weight;
-    for (const CacheVoxel& v : sorted.voxels) weight[decodeHashGridKey(v.key).level] += v.sample_weight;
-    for (uint32_t level = 2; level <= 6; ++level) EXPECT_NEAR(weight[level], weight[1], 1e-6 * weight[1]);
 }
 
 namespace {

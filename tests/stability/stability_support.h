@@ -183,8 +183,9 @@ struct AreaMean {
     double reached = 0.0;      ///< share of the points with a voxel at some level present
 };
 
-/// The cache's mean outgoing radiance over surface points: each point reads the
-/// weight-averaged value of its voxels at every level present in the cache.
+/// The cache's mean outgoing radiance over surface points: each point reads its voxel at the
+/// finest level present that holds one (the deposits' level; the coarser levels every voxel feeds
+/// average over more of the scene, as a far camera sees it).
 inline AreaMean cacheMean(const SharcCache& cache, const std::vector<SurfacePoint>& samples) {
     const std::vector<uint32_t> levels = levelsPresent(cache);
     const HashGridParameters& grid = cache.settings().grid;
@@ -199,6 +200,7 @@ inline AreaMean cacheMean(const SharcCache& cache, const std::vector<SurfacePoin
             if (e && e->weight > 0.0) {
                 sum += glm::dvec3(e->mean) * e->weight;
                 weight += e->weight;
+                break;
             }
         }
         if (weight > 0.0) {
