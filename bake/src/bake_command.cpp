@@ -738,6 +738,14 @@ void runBake(const BakeOptions& o) {
         if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
     }
     warnAboutHitRate(prediction, coverage);
+    if (coverage.unreached_area > 0.3) {
+        // Not a stability problem, so not in that section, but the cache is missing much of the scene.
+        std::fprintf(stderr,
+                     "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
+                     "tested; hidden sides count too): cameras that see it will miss. Give more --iterations, "
+                     "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
+                     100.0 * coverage.unreached_area, coverage.points);
+    }
     if (auto_capacity && cache.numerics().failed_inserts > 0) {
         // The table doubles between iterations; one iteration filled it faster than that.
         std::fprintf(stderr,
