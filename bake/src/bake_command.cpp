@@ -343,7 +343,7 @@ std::string describeHitRate(const HitRatePrediction& p) {
                   (unsigned long long)p.eligible, p.views.size());
     std::string result = text;
     if (const ViewHitRate* worst = p.worst()) {
-        std::snprintf(text, sizeof text, " (lowest: %s, %.1f%%)", worst->view.name.c_str(), 100.0 * worst->rate());
+        std::snprintf(text, sizeof text, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
         result += text;
     }
     return result;
@@ -355,9 +355,9 @@ std::string hitRateJson(const HitRatePrediction& p) {
          << ", \"views\": [";
     for (size_t i = 0; i < p.views.size(); ++i) {
         const ViewHitRate& v = p.views[i];
-        json << (i ? ", " : "") << "{\"name\": " << jsonString(v.view.name) << ", \"declared\": "
-             << (v.view.declared ? "true" : "false") << ", \"position\": [" << v.view.position.x << ", "
-             << v.view.position.y << ", " << v.view.position.z << "], \"rate\": " << v.rate()
+        json << (i ? ", " : "") << "{\"name\": " << jsonString(v.view.camera.name) << ", \"declared\": "
+             << (v.view.declared ? "true" : "false") << ", \"position\": [" << v.view.camera.position.x << ", "
+             << v.view.camera.position.y << ", " << v.view.camera.position.z << "], \"rate\": " << v.rate()
              << ", \"lookups\": " << v.eligible << "}";
     }
     json << "]}";
@@ -370,7 +370,7 @@ void warnAboutHitRate(const HitRatePrediction& p, const CoverageReport& coverage
     const ViewHitRate* worst = p.worst();
     if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
     char lowest[192] = "";
-    if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.name.c_str(), 100.0 * worst->rate());
+    if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
     const char* remedy = coverage.unreached_area > 0.05
                              ? "The roaming camera never reached part of the surface: give more --iterations, a "
                                "--camera-path through the places the views see, or --camera-source gltf."
@@ -677,7 +677,7 @@ void runBake(const BakeOptions& o) {
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction).c_str());
         for (const ViewHitRate& v : prediction.views) {
             if (v.view.declared) {
-                std::printf("    %s: %.1f%% of %llu lookups\n", v.view.name.c_str(), 100.0 * v.rate(),
+                std::printf("    %s: %.1f%% of %llu lookups\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
                             (unsigned long long)v.eligible);
             }
         }

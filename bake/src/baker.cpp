@@ -17,15 +17,6 @@ namespace {
 /// can replay all deposits in path order whatever thread traced them.
 constexpr uint32_t kPathsPerChunk = 64;
 
-Camera cameraFromPose(const CameraPose& pose) {
-    Camera camera;
-    camera.position = pose.position;
-    camera.forward = pose.forward;
-    camera.up = pose.up;
-    camera.yfov = pose.yfov;
-    return camera;
-}
-
 }  // namespace
 
 DepositLevels levelsFor(const Scene& scene, const BakeSettings& settings) {
@@ -72,7 +63,7 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
 void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<Deposit>>& chunk_deposits,
                              UpdateCounters& counters) const {
     const CameraPose pose = camera_path_.poseAt(work_iteration);
-    const CameraRays camera(cameraFromPose(pose), settings_.width, settings_.height);
+    const CameraRays camera(toCamera(pose), settings_.width, settings_.height);
     const Float3 camera_position{pose.position.x, pose.position.y, pose.position.z};
     const uint32_t stride = std::max(1u, settings_.update_stride);
     const uint32_t paths = pathsPerIteration();

@@ -55,6 +55,15 @@ bool visible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
 
 }  // namespace
 
+Camera toCamera(const CameraPose& pose) {
+    Camera camera;
+    camera.position = pose.position;
+    camera.forward = pose.forward;
+    camera.up = pose.up;
+    camera.yfov = pose.yfov;
+    return camera;
+}
+
 bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pose) {
     const glm::vec3 d = target - eye;
     const float length = glm::length(d);

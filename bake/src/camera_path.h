@@ -46,6 +46,9 @@ public:
 /// and line on malformed input or when the file has no waypoint.
 std::vector<CameraPose> readCameraPathFile(const std::string& path);
 
+/// The pinhole camera of a pose (no name, no aspect ratio of its own).
+Camera toCamera(const CameraPose& pose);
+
 /// Builds a pose looking from `eye` towards `target` with +Y up (a different up when the view
 /// is vertical). Returns false if eye == target.
 bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pose);

@@ -2,6 +2,7 @@
 #include "convergence_report.h"
 
 #include "cache_query.h"
+#include "json_text.h"
 #include "path_tracer.h"
 #include "render.h"
 #include "stopwatch.h"
@@ -40,21 +41,6 @@ std::string csvNumber(std::optional<double> value) {
 
 std::string jsonNumber(std::optional<double> value) {
     return value && std::isfinite(*value) ? csvNumber(value) : "null";
-}
-
-std::string jsonString(const std::string& text) {
-    std::string out = "\"";
-    for (char c : text) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (uint8_t(c) < 0x20) {
-            char escaped[8];
-            std::snprintf(escaped, sizeof escaped, "\\u%04x", unsigned(uint8_t(c)));
-            out += escaped;
-            continue;
-        }
-        out += c;
-    }
-    return out + "\"";
 }
 
 std::ofstream openForWriting(const std::string& path) {

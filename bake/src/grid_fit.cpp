@@ -106,24 +106,17 @@ std::vector<std::string> checkGridForScene(const Scene& scene, const HashGridPar
 }
 
 std::string checkSceneScale(float scene_scale) {
+    const char* cost = scene_scale < 4.0f      ? "a blurry cache"
+                       : scene_scale > 4096.0f ? "far more voxels than a view can use"
+                                               : nullptr;
+    if (!cost) return {};
     char text[320];
-    if (scene_scale < 4.0f) {
-        std::snprintf(text, sizeof text,
-                      "--scene-scale %g makes voxels about 1/%g of their distance from the camera wide: a blurry "
-                      "cache. SHaRC's scene scale is the same in any units (the units are fitted by --level-bias "
-                      "auto); use --scene-scale auto (50)",
-                      double(scene_scale), double(scene_scale));
-        return text;
-    }
-    if (scene_scale > 4096.0f) {
-        std::snprintf(text, sizeof text,
-                      "--scene-scale %g makes voxels about 1/%g of their distance from the camera wide: far more "
-                      "voxels than a view can use. SHaRC's scene scale is the same in any units (the units are "
-                      "fitted by --level-bias auto); use --scene-scale auto (50)",
-                      double(scene_scale), double(scene_scale));
-        return text;
-    }
-    return {};
+    std::snprintf(text, sizeof text,
+                  "--scene-scale %g makes voxels about 1/%g of their distance from the camera wide: %s. SHaRC's "
+                  "scene scale is the same in any units (the units are fitted by --level-bias auto); use "
+                  "--scene-scale auto (50)",
+                  double(scene_scale), double(scene_scale), cost);
+    return text;
 }
 
 }  // namespace sharcbake

@@ -16,17 +16,13 @@ namespace {
 
 /// A view looking along a hashed direction from `position`.
 PredictionView sampledView(const std::string& name, glm::vec3 position, uint32_t hash) {
-    PredictionView view;
-    view.name = name;
-    view.position = position;
-    view.yfov = glm::radians(75.0f);
     const glm::vec3 direction =
         sampleUniformSphere({bitsToUnitFloat(hashUint32(hash)), bitsToUnitFloat(hashUint32(hash ^ 0x9E3779B9u))});
     CameraPose pose;
-    if (makeLookAtPose(position, position + direction, view.yfov, pose)) {
-        view.forward = pose.forward;
-        view.up = pose.up;
-    }
+    pose.position = position;
+    (void)makeLookAtPose(position, position + direction, glm::radians(75.0f), pose);
+    PredictionView view{toCamera(pose), false};
+    view.camera.name = name;
     return view;
 }
 
@@ -46,13 +42,8 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
     std::vector<PredictionView> views;
     std::vector<glm::vec3> starts;
     for (const Camera& c : scene.cameras) {
-        PredictionView view;
-        view.name = "camera '" + c.name + "'";
-        view.position = c.position;
-        view.forward = c.forward;
-        view.up = c.up;
-        view.yfov = c.yfov;
-        view.declared = true;
+        PredictionView view{c, true};
+        view.camera.name = "camera '" + c.name + "'";
         views.push_back(view);
         starts.push_back(c.position);
     }
@@ -90,13 +81,8 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
     const float min_distance2 =
         region.kind == ViewRegion::Kind::Distance ? region.min_distance * region.min_distance : 0.0f;
     for (size_t v = 0; v < views.size(); ++v) {
-        const PredictionView& view = views[v];
-        baked.setCamera(view.position);
-        Camera camera;
-        camera.position = view.position;
-        camera.forward = view.forward;
-        camera.up = view.up;
-        camera.yfov = view.yfov;
+        const Camera& camera = views[v].camera;
+        baked.setCamera(camera.position);
         const CameraRays rays(camera, width, height);
         tbb::parallel_for(tbb::blocked_range<int>(0, width * height, 256), [&](const tbb::blocked_range<int>& r) {
             for (int pixel = r.begin(); pixel != r.end(); ++pixel) {
@@ -111,14 +97,14 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
                 RayHit second;
                 if (!tracer.intersect(bounce, second)) continue;
                 const SurfaceHit b = makeSurfaceHit(tracer.scene(), second, bounce.direction);
-                const glm::vec3 to_camera = b.position - view.position;
+                const glm::vec3 to_camera = b.position - camera.position;
                 if (glm::dot(to_camera, to_camera) < min_distance2) continue;  // nearer than declared
                 glm::vec3 radiance;
                 (void)baked.lookup(CacheQuery{b.position, b.geometric_normal, second.t, 1.0f}, radiance);
             }
         });
         ViewHitRate rate;
-        rate.view = view;
+        rate.view = views[v];
         rate.hits = baked.hits();
         rate.eligible = baked.hits() + baked.misses();
         prediction.hits += rate.hits;

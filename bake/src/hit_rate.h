@@ -16,13 +16,9 @@
 
 namespace sharcbake {
 
-/// A camera position and direction to predict from.
+/// A camera to predict from; its name says which ("camera 'Main'", "region sample 3").
 struct PredictionView {
-    std::string name;  ///< "camera 'Main'", "region sample 3"
-    glm::vec3 position{0.0f};
-    glm::vec3 forward{0.0f, 0.0f, -1.0f};
-    glm::vec3 up{0.0f, 1.0f, 0.0f};
-    float yfov = 1.0f;
+    Camera camera;
     bool declared = false;  ///< a camera the scene or the user declared (not a region sample)
 };
 

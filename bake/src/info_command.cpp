@@ -3,6 +3,7 @@
 // (SPEC.md §F.10 rules). Everything is read through the runtime library (CacheView).
 #include "command_support.h"
 #include "commands.h"
+#include "json_text.h"
 #include "sharcbake/runtime.h"
 
 #include <cinttypes>
@@ -27,29 +28,6 @@ std::string fourcc(uint32_t type) {
         s += (c >= 0x20 && c < 0x7F && c != '"' && c != '\\') ? c : '?';
     }
     return s;
-}
-
-std::string jsonString(std::string_view text) {
-    std::string out = "\"";
-    for (const char ch : text) {
-        const unsigned char c = static_cast<unsigned char>(ch);
-        switch (c) {
-            case '"': out += "\\\""; break;
-            case '\\': out += "\\\\"; break;
-            case '\n': out += "\\n"; break;
-            case '\r': out += "\\r"; break;
-            case '\t': out += "\\t"; break;
-            default:
-                if (c < 0x20) {
-                    char buf[8];
-                    std::snprintf(buf, sizeof buf, "\\u%04x", c);
-                    out += buf;
-                } else {
-                    out += ch;  // UTF-8 passes through (validated by the reader, V18)
-                }
-        }
-    }
-    return out + "\"";
 }
 
 std::string num(double v) {

@@ -1,26 +1,35 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file json_text.h
-/// @brief Text for the JSON the tools write (--stats-json, reports): strings quoted and escaped.
+/// @brief Text for the JSON the tools write (--stats-json, info --json, reports): one string escaper.
 #pragma once
 
-#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 namespace sharcbake {
 
-/// `text` as a JSON string literal: quotes and backslashes escaped, control characters as \uXXXX.
-inline std::string jsonString(const std::string& text) {
+/// `text` as a JSON string literal: quotes and backslashes escaped, \n \r \t by name, other control
+/// characters as \uXXXX; UTF-8 passes through (the readers validate it).
+inline std::string jsonString(std::string_view text) {
     std::string out = "\"";
-    for (char c : text) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (uint8_t(c) < 0x20) {
-            char escaped[8];
-            std::snprintf(escaped, sizeof escaped, "\\u%04x", unsigned(uint8_t(c)));
-            out += escaped;
-            continue;
+    for (const char ch : text) {
+        const unsigned char c = static_cast<unsigned char>(ch);
+        switch (c) {
+            case '"': out += "\\\""; break;
+            case '\\': out += "\\\\"; break;
+            case '\n': out += "\\n"; break;
+            case '\r': out += "\\r"; break;
+            case '\t': out += "\\t"; break;
+            default:
+                if (c < 0x20) {
+                    char escaped[8];
+                    std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
+                    out += escaped;
+                } else {
+                    out += ch;
+                }
         }
-        out += c;
     }
     return out + "\"";
 }

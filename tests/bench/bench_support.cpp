@@ -147,12 +147,7 @@ std::vector<RayPair> makeRayPairs(const Tracer& tracer, const LightSampler& ligh
     for (uint32_t attempt = 0; pairs.size() < count; ++attempt) {
         if (attempt > 64 * count + 1024) throw std::runtime_error("benchmark rays: the scene yields no shadow rays");
         const CameraPose pose = path.poseAt(attempt % 1024);
-        Camera camera;
-        camera.position = pose.position;
-        camera.forward = pose.forward;
-        camera.up = pose.up;
-        camera.yfov = pose.yfov;
-        const CameraRays rays(camera, width, height);
+        const CameraRays rays(toCamera(pose), width, height);
         Ray ray = rays.generate(int(uniform(rng) * width), int(uniform(rng) * height), {uniform(rng), uniform(rng)});
         for (int vertex = 0; vertex < 4 && pairs.size() < count; ++vertex) {
             RayHit ray_hit;
