@@ -46,6 +46,21 @@ CapacityChoice chooseCapacity(const Tracer& tracer, const LightSampler& lights, 
         std::sort(keys.begin(), keys.end());
         keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     }
+    // The coarser voxels every deposited voxel feeds live in the table too (view_region.h).
+    const uint32_t coarsest = sampler.depositLevels().coarsestLevel();
+    std::vector<uint64_t> level = keys;
+    while (!level.empty()) {
+        std::vector<uint64_t> coarser;
+        for (const uint64_t key : level) {
+            if (decodeHashGridKey(key).level < coarsest) coarser.push_back(coarserKey(key, settings.sharc.grid));
+        }
+        std::sort(coarser.begin(), coarser.end());
+        coarser.erase(std::unique(coarser.begin(), coarser.end()), coarser.end());
+        keys.insert(keys.end(), coarser.begin(), coarser.end());
+        level = std::move(coarser);
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     choice.sampled_voxels = keys.size();
     uint64_t capacity = kCapacityMinimum;
     while (capacity < choice.sampled_voxels * kCapacityHeadroom && capacity < kMaxCacheCapacity) capacity *= 2;

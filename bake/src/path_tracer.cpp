@@ -99,16 +99,18 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
         }
 
         const glm::vec2 u_lobe_rr = sampler.next2D();
+        // Russian roulette before sampling, from the vertex's albedo (not the sampled weight): a
+        // path survives with its expected throughput, at most the albedo even when the throughput
+        // exceeds 1, so the throughput cannot grow in expectation however long the path.
+        float survive = 1.0f;
+        if (bounce >= settings_.russian_roulette_start) {
+            survive = russianRouletteSurvival(throughput, bsdf.albedo(wo));
+            if (!(survive > 0.0f) || u_lobe_rr.y >= survive) break;
+        }
         const GltfBsdf::Sample s = bsdf.sample(wo, u_lobe_rr.x, sampler.next2D());
         if (!s.valid) break;
-        throughput *= s.weight;
+        throughput *= s.weight / survive;
         cone_roughness += s.specular ? bsdf.roughness() : 1.0f;
-
-        if (bounce >= settings_.russian_roulette_start) {
-            const float survive = std::min(1.0f, maxComponent(throughput));
-            if (!(survive > 0.0f) || u_lobe_rr.y >= survive) break;
-            throughput /= survive;
-        }
         previous_bsdf_pdf = s.pdf;
         previous_position = hit.position;
         previous_shading_normal = hit.shading_normal;

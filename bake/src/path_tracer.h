@@ -42,6 +42,15 @@ glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, 
                               const GltfBsdf& bsdf, glm::vec3 wo, float u_select, glm::vec2 u_point,
                               TraceCounters& counters);
 
+/// Russian roulette's survival probability at a vertex: the path's throughput so far (at most 1)
+/// times the vertex's directional albedo, largest channel. Decided before the direction is
+/// sampled, it never depends on the sample's weight, and above a throughput of 1 paths still
+/// thin by the albedo, so the throughput divided by it has the expectation it had: it cannot run
+/// away geometrically in a high-albedo scene.
+inline float russianRouletteSurvival(glm::vec3 throughput, glm::vec3 albedo) {
+    return std::min(1.0f, maxComponent(albedo) * std::min(1.0f, maxComponent(throughput)));
+}
+
 /// MIS weight of emission found by a BSDF-sampled ray, against next-event estimation of the
 /// same emitter. 1 at the primary hit, where no light was sampled.
 float emissionMisWeight(const LightSampler& lights, uint32_t bounce, float previous_bsdf_pdf,

@@ -138,14 +138,14 @@ void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const
 
         if (bounce + 1 >= settings_.max_bounces) break;
         const glm::vec2 u_lobe_rr = sampler.next2D();
+        float survive = 1.0f;  // Russian roulette from the vertex's albedo, as PathTracer does
+        if (bounce >= settings_.russian_roulette_start) {
+            survive = russianRouletteSurvival(path_throughput, bsdf.albedo(wo));
+            if (!(survive > 0.0f) || u_lobe_rr.y >= survive) break;
+        }
         const GltfBsdf::Sample s = bsdf.sample(wo, u_lobe_rr.x, sampler.next2D());
         if (!s.valid) break;
-        glm::vec3 segment = s.weight;
-        if (bounce >= settings_.russian_roulette_start) {
-            const float survive = std::min(1.0f, maxComponent(path_throughput * segment));
-            if (!(survive > 0.0f) || u_lobe_rr.y >= survive) break;
-            segment /= survive;
-        }
+        const glm::vec3 segment = s.weight / survive;
         path_throughput *= segment;
         history.applyThroughput(segment);
         previous_bsdf_pdf = s.pdf;

@@ -108,11 +108,11 @@ expect 1 "merge a missing file" "$sharcbake" merge "$work/shard0.sharc" "$work/n
 expect 1 "bad capacity" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --capacity lots
 expect 1 "capacity below a bucket" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --capacity 8
 expect 0 "bake with --capacity auto" "$sharcbake" bake "$cornell" -o "$work/auto.sharc" --iterations 8 --resolution 160x90 --capacity auto
-grep -q "Capacity auto: 32768 slots to start" "$work/out.txt" || fail "auto capacity: expected 32768 slots for this Cornell bake"
+grep -q "Capacity auto: 131072 slots to start" "$work/out.txt" || fail "auto capacity: expected 131072 slots for this Cornell bake"
 expect 0 "info on the auto bake" "$sharcbake" info "$work/auto.sharc"
 grep -q "Left out by the bake: sky lookups and sky sampling (black sky); texture fetches and UV interpolation (no textures)" \
     "$work/out.txt" || fail "info does not report what the Cornell bake left out"
-grep -q "Table capacity auto: 32768 slots" "$work/out.txt" || fail "info does not report the auto capacity"
+grep -q "Table capacity auto: 131072 slots" "$work/out.txt" || fail "info does not report the auto capacity"
 expect 0 "the same bake with a fixed capacity" "$sharcbake" bake "$cornell" -o "$work/fixed.sharc" --iterations 8 --resolution 160x90 --capacity 65536 -q
 # The voxels (KEYS and VOXL sections, compared by their CRC-32s) do not depend on the capacity.
 for f in auto fixed; do
