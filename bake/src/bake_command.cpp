@@ -12,6 +12,7 @@
 #include "hit_rate.h"
 #include "json_text.h"
 #include "progress.h"
+#include "render.h"
 #include "stability_report.h"
 #include "stopwatch.h"
 #include "sharcbake/cache_file.h"
@@ -232,6 +233,9 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
                        view.camera.aspect_ratio, view.width, view.height);
         reference_description = "known radiance";
     }
+    const Camera unfitted = view.camera;
+    view.camera = fitCameraToImage(view.camera, view.width, view.height);
+    warnAboutCameraFit(unfitted, view.camera, view.width, view.height);
     return std::make_unique<ConvergenceEvaluator>(scene, tracer, lights, view, std::move(reference));
 }
 

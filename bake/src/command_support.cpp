@@ -91,6 +91,17 @@ std::string describeCamera(const Camera& camera) {
     return text;
 }
 
+void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, int height) {
+    if (fitted.yfov == camera.yfov || !camera.aspect_ratio) return;
+    std::fprintf(stderr,
+                 "warning: camera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
+                 "fit Auto frames it (the field of view of the camera's longer side spans the image's longer side; "
+                 "vertical field of view %.3g deg instead of %.3g). Give only the width (--resolution %d) for the "
+                 "camera's own frame\n",
+                 camera.name.c_str(), double(*camera.aspect_ratio), width, height, double(width) / double(height),
+                 double(glm::degrees(fitted.yfov)), double(glm::degrees(camera.yfov)), width);
+}
+
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
                     int& width, int& height) {
     width = 0;

@@ -57,6 +57,10 @@ Camera sceneCamera(const Scene& scene, const std::string& selector, const std::s
 /// an automatic one can be reproduced with --look-at.
 std::string describeCamera(const Camera& camera);
 
+/// Warns (stderr, also under -q) when fitCameraToImage changed the camera's framing: its glTF
+/// aspect ratio differs from the image's.
+void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, int height);
+
 /// Parses an image size "W" or "WxH"; "W" takes the height from `aspect` (width / height, 1 if
 /// unknown). Throws CommandError(kExitUsage) naming the option.
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,

@@ -10,6 +10,20 @@
 
 namespace sharcbake {
 
+Camera fitCameraToImage(Camera camera, int width, int height) {
+    if (!camera.aspect_ratio || !(*camera.aspect_ratio > 0.0f) || width <= 0 || height <= 0) return camera;
+    const float camera_aspect = *camera.aspect_ratio, image_aspect = float(width) / float(height);
+    if (std::abs(image_aspect / camera_aspect - 1.0f) < 1e-3f) return camera;
+    // tan of half the field of view along the camera's larger dimension ("the sensor").
+    const float tan_half_y = std::tan(0.5f * camera.yfov);
+    const float sensor = camera_aspect >= 1.0f ? tan_half_y * camera_aspect : tan_half_y;
+    // Auto fit: the sensor spans the image's larger dimension.
+    const float fitted = image_aspect >= 1.0f ? sensor / image_aspect : sensor;
+    camera.yfov = 2.0f * std::atan(fitted);
+    camera.aspect_ratio = image_aspect;
+    return camera;
+}
+
 CameraRays::CameraRays(const Camera& camera, int width, int height)
     : origin_(camera.position), width_(width), height_(height) {
     forward_ = glm::normalize(camera.forward);

@@ -13,6 +13,12 @@ namespace sharcbake {
 
 class Progress;
 
+/// The camera for an image of width x height when its glTF aspect ratio differs: fitted as
+/// Blender's sensor fit "Auto" does (Blender's exporter writes yfov for the camera's own aspect):
+/// the field of view of the camera's larger dimension is kept on the image's larger dimension.
+/// The camera itself when it has no aspect ratio or the image has the same one.
+Camera fitCameraToImage(Camera camera, int width, int height);
+
 /// Primary rays of a pinhole camera for an image of width x height (row 0 at the top).
 class CameraRays {
 public:

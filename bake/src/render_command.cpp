@@ -190,13 +190,15 @@ void runRender(const RenderOptions& o) {
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
     const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
-    const Camera camera = chooseCamera(scene, o);
-    if (!o.quiet && camera.name == "automatic") {
+    const Camera chosen = chooseCamera(scene, o);
+    if (!o.quiet && chosen.name == "automatic") {
         std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
-                    describeCamera(camera).c_str());
+                    describeCamera(chosen).c_str());
     }
     int width = 0, height = 0;
-    parseResolution(o, camera, width, height);
+    parseResolution(o, chosen, width, height);
+    const Camera camera = fitCameraToImage(chosen, width, height);
+    warnAboutCameraFit(chosen, camera, width, height);
 
     const auto build_start = std::chrono::steady_clock::now();
     const Tracer tracer(scene);

@@ -663,6 +663,9 @@ private:
         if (default_material_ < 0) {
             default_material_ = static_cast<int>(scene_.materials.size());
             scene_.materials.push_back(defaultMaterial());
+            warn(label + " has no material: glTF's default applies, a white metal (metallicFactor 1, "
+                 "roughnessFactor 1), which reflects differently from the grey diffuse Blender shows for a mesh "
+                 "without a material; assign a material to say what it is");
         }
         return static_cast<uint32_t>(default_material_);
     }
@@ -734,6 +737,15 @@ private:
             m.specular_color = vec3Value(*ext, "specularColorFactor").value_or(glm::vec3(1.0f));
             m.specular_texture = textureRef(textureSlot(*ext, "specularTexture"), false, label);
             m.specular_color_texture = textureRef(textureSlot(*ext, "specularColorTexture"), true, label);
+            if (m.specular_color == glm::vec3(0.0f) && !m.specular_color_texture.isSet()) {
+                // Blender's exporter writes colour [0, 0, 0] (and no factor) for Principled
+                // "Specular" 0: no specular reflection at all. Read to the letter, glTF keeps
+                // F90 = specularFactor, a reflection at grazing angles only that the artist never
+                // saw; read it as Blender meant.
+                m.specular = 0.0f;
+                warn("KHR_materials_specular specularColorFactor [0, 0, 0] (how Blender exports Specular 0) is "
+                     "read as no specular reflection; glTF's formula would keep a grazing-angle reflection");
+            }
         }
     }
 

@@ -188,4 +188,28 @@ TEST_F(FurnaceCache, CacheSeenFromTheCameraIsTenWhereVoxelsExist) {
 }
 
 }  // namespace
+// ---- Framing a glTF camera whose aspect ratio differs from the image's (Blender's sensor fit Auto)
+
+TEST(CameraFit, KeepsTheFieldOfViewOfTheCamerasLongerSideOnTheImagesLongerSide) {
+    Camera wide;
+    wide.yfov = 0.6f;
+    wide.aspect_ratio = 16.0f / 9.0f;
+    const float tan_x = std::tan(0.3f) * 16.0f / 9.0f;  // the camera's horizontal half-angle tangent
+    // Its own aspect: unchanged.
+    EXPECT_EQ(fitCameraToImage(wide, 1600, 900).yfov, 0.6f);
+    // Square image: the horizontal field of view stays, so the vertical one grows to it.
+    EXPECT_NEAR(std::tan(0.5f * fitCameraToImage(wide, 256, 256).yfov), tan_x, 1e-5f);
+    // Portrait 9:16: the camera's long side spans the image's long side (its height).
+    EXPECT_NEAR(std::tan(0.5f * fitCameraToImage(wide, 90, 160).yfov), tan_x, 1e-5f);
+    // A portrait camera (1:2) on a 2:1 image: its vertical field of view spans the image's width.
+    Camera tall;
+    tall.yfov = 1.0f;
+    tall.aspect_ratio = 0.5f;
+    EXPECT_NEAR(std::tan(0.5f * fitCameraToImage(tall, 200, 100).yfov), std::tan(0.5f) / 2.0f, 1e-5f);
+    // No aspect ratio in the glTF: nothing to fit.
+    Camera free;
+    free.yfov = 0.7f;
+    EXPECT_EQ(fitCameraToImage(free, 100, 300).yfov, 0.7f);
+}
+
 }  // namespace sharcbake

@@ -107,4 +107,19 @@ PY
 expect 2 "compare with a missing image" "$sharcbake" compare "$work/nothing.exr" "$work/ref48.exr"
 expect 3 "compare different sizes" "$sharcbake" compare "$work/cornell.exr" "$work/ref48.exr"
 
+# A glTF camera with aspect ratio 16:9 rendered square: framed as Blender frames it, with a warning.
+cp "$scenes/cornell_box/cornell_box.bin" "$work/"
+python3 - "$cornell" "$work/wide.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+g["cameras"][0]["perspective"]["aspectRatio"] = 16 / 9
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "a 16:9 camera rendered at 32 wide" "$sharcbake" render "$work/wide.gltf" -o "$work/wide.exr" --resolution 32 \
+    --spp 1 --no-png
+grep -q "warning" "$work/err.txt" && fail "a width alone follows the camera's aspect: no warning expected"
+expect 0 "a 16:9 camera rendered square" "$sharcbake" render "$work/wide.gltf" -o "$work/wide.exr" --resolution 32x32 \
+    --spp 1 --no-png
+says "$work/err.txt" "sensor fit Auto" "a square image of a 16:9 camera is fitted as Blender does, and said so"
+
 finish "command line"
