@@ -52,6 +52,7 @@ struct BakeOptions {
     std::string resolution = "1280x720";
     uint32_t max_bounces = 8;
     uint32_t propagation_depth = 2;
+    std::string resampling = "random";
     std::string history = "ramp:8";
     std::string camera_source = "explore";
     std::string camera_path;
@@ -306,6 +307,7 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     parseShard(o.shard, settings.shard_index, settings.shard_count);
     settings.path.max_bounces = o.max_bounces;
     settings.sharc.propagation_depth = o.propagation_depth;
+    settings.sharc.resample_at_end = o.resampling == "end";
     // --capacity auto starts from the SDK's default; the bake replaces it after a pre-pass.
     const uint32_t capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
     settings.sharc.capacity = capacity;
@@ -829,7 +831,12 @@ void registerBakeCommand(CLI::App& app) {
                     "Path vertices that receive the radiance found after them (SHARC_PROPAGATION_DEPTH); cache "
                     "resampling ends a path at a random depth up to this, so deeper paths carry more bounces per "
                     "iteration")
-        ->capture_default_str()->check(CLI::Range(1u, 8u));
+        ->capture_default_str()->check(CLI::Range(1u, 16u));
+    cmd->add_option("--resampling", o->resampling,
+                    "Where update paths end on the cache: random (the SDK's: a random depth up to "
+                    "--propagation-depth) or end (only once --propagation-depth vertices wait, or at the last "
+                    "vertex --max-bounces allows: that many bounces per iteration)")
+        ->capture_default_str()->check(CLI::IsMember({"random", "end"}));
     cmd->add_option("--history", o->history,
                     "How voxels forget early (biased) iterations: ramp:P (iteration k weighs k^P), "
                     "window:A (SHaRC's exponential window of A iterations) or average")

@@ -14,7 +14,7 @@ namespace {
 /// The last few path vertices that still receive radiance (SharcState): their keys and the
 /// product of segment throughputs from each of them to the current vertex.
 struct PathHistory {
-    static constexpr uint32_t kMaxDepth = 8;
+    static constexpr uint32_t kMaxDepth = 16;
     std::array<uint64_t, kMaxDepth> keys{};
     std::array<glm::vec3, kMaxDepth> weights{};
     uint32_t length = 0;
@@ -102,8 +102,10 @@ void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const
         // Cache resampling: from the second vertex on, with a random depth in [1, depth], end
         // the path on the voxel's resolved value (the previous iteration's).
         if (sharc.cache_resampling && history.length > 0) {
+            const bool last_vertex = bounce + 1 >= settings_.max_bounces;
             const uint32_t resample_depth =
-                uint32_t(std::lround(1.0f + float(depth - 1) * u_select_resample.y));
+                sharc.resample_at_end ? (last_vertex ? 1u : depth)
+                                      : uint32_t(std::lround(1.0f + float(depth - 1) * u_select_resample.y));
             if (resample_depth <= history.length) {
                 const ResolvedEntry* entry = cache_.findResolved(levels.feedbackKey(hit.position, hit.geometric_normal, camera));
                 if (entry && entry->weight > 0.0) {

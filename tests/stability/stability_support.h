@@ -60,6 +60,8 @@ struct BakeConfig {
     uint32_t explore_points = 16;
     HistorySchedule history;
     uint32_t feedback_window = SharcSettings{}.feedback_window;
+    uint32_t propagation_depth = SharcSettings{}.propagation_depth;
+    bool resample_at_end = false;
 };
 
 /// A bake of `scene` from the exploring camera (starting at the scene's glTF cameras), run
@@ -116,6 +118,8 @@ private:
         settings.sharc.grid.level_bias = config_.level_bias;
         settings.sharc.history = config_.history;
         settings.sharc.feedback_window = config_.feedback_window;
+        settings.sharc.propagation_depth = config_.propagation_depth;
+        settings.sharc.resample_at_end = config_.resample_at_end;
         baker = std::make_unique<Baker>(*tracer, *lights, camera_path, settings,
                                         SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
     }
@@ -271,10 +275,9 @@ struct FurnaceConvergence {
 };
 
 inline FurnaceConvergence bakeFurnaceToConvergence(float rho, double tolerance, uint32_t max_iterations,
-                                                   int resolution, uint32_t step = 64) {
+                                                   int resolution, uint32_t step = 64, BakeConfig config = {}) {
     Scene scene = loadGltf(scenePath("furnace_rho099"));
     makeFurnace(scene, rho, 1.0f);
-    BakeConfig config;
     config.resolution = resolution;
     SmallBake bake(std::move(scene), config);
     FurnaceConvergence result;

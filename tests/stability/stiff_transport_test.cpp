@@ -23,6 +23,24 @@ TEST(StiffFurnace, Rho099ReachesLeOverOneMinusRhoThroughCacheFeedback) {
     EXPECT_TRUE(run.report.warnings.empty()) << run.report.warnings.front();
 }
 
+/// Resampling only at the end of 16-vertex paths (bake --resampling end --propagation-depth 16
+/// --max-bounces 17): every path carries up to 16 bounces of exact transport per iteration, so
+/// the same furnace converges in a fraction of the iterations.
+TEST(StiffFurnace, ResamplingAtTheEndOfLongPathsConvergesInFewIterations) {
+    BakeConfig config;
+    config.propagation_depth = 16;
+    config.resample_at_end = true;
+    config.max_bounces = 17;
+    const FurnaceConvergence run = bakeFurnaceToConvergence(0.99f, 0.01, 512, 96, 32, config);
+    RecordProperty("iterations_needed", int(run.iterations));
+    EXPECT_TRUE(run.converged) << "mean " << run.measured << " after " << run.iterations << " iterations";
+    EXPECT_LE(run.iterations, 128u);
+    EXPECT_TRUE(run.finite);
+    // rho = 0.999 (L = 1000): within 1% in at most 1024 iterations.
+    const FurnaceConvergence stiffer = bakeFurnaceToConvergence(0.999f, 0.01, 1024, 96, 64, config);
+    EXPECT_TRUE(stiffer.converged) << "mean " << stiffer.measured << " after " << stiffer.iterations << " iterations";
+}
+
 /// With the SDK's feedback (cache resampling reads the long history mean), ramp:8 remembers the
 /// last ~F/9 of F iterations, so bounces accumulate only logarithmically with F: rho = 0.99 is
 /// still 3/4 dark after 512 iterations, where the short feedback window is past half way.
