@@ -67,9 +67,16 @@ struct BakeOptions {
 };
 
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
-/// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs.
+/// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
+/// second signal aborts promptly.
 std::atomic<int> g_stop_signal{0};
-extern "C" void onStopSignal(int signal) { g_stop_signal.store(signal); }
+/// A second signal while the first is being honoured ends the process at once (the default action).
+extern "C" void onStopSignal(int signal) {
+    if (g_stop_signal.exchange(signal) != 0) {
+        std::signal(signal, SIG_DFL);
+        std::raise(signal);
+    }
+}
 
 /// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
 /// its external buffers and images: Scene::source_files), so a cache records which scene it was
@@ -355,20 +362,35 @@ void runBake(const BakeOptions& o) {
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
-    checkOutputPath(o.output_path, "cache");
-    // --resume keeps checkpointing into the file it resumed from unless told otherwise.
+    // No output may be an input or another output; --resume F keeps checkpointing into F.
+    const std::vector<std::string> inputs = {o.scene_path, o.resume_path, o.sky.exr_path};
     const std::string checkpoint_path = !o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path;
-    if (!checkpoint_path.empty()) checkOutputPath(checkpoint_path, "checkpoint");
-    if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
+    const std::string report_csv = o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv";
+    auto checkOutputs = [&](const std::vector<std::string>& more_inputs) {
+        std::vector<std::string> others = inputs;
+        others.insert(others.end(), more_inputs.begin(), more_inputs.end());
+        checkOutputPath(o.output_path, "cache", others);
+        others.push_back(o.output_path);
+        if (!checkpoint_path.empty()) {
+            std::vector<std::string> checkpoint_others = others;
+            std::erase(checkpoint_others, o.resume_path);  // the one input it may replace
+            checkOutputPath(checkpoint_path, "checkpoint", checkpoint_others);
+        }
+        others.push_back(checkpoint_path);
+        if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON", others);
+        others.push_back(o.stats_json);
+        if (!report_csv.empty()) checkOutputPath(report_csv, "report", others);
+    };
     if (!o.report_dir.empty()) {
         std::error_code error;
         std::filesystem::create_directories(o.report_dir, error);
-        checkOutputPath(o.report_dir + "/convergence.csv", "report");
     }
+    checkOutputs({});
     BakeSettings settings = settingsFromOptions(o);
     const bool auto_capacity = o.capacity == "auto";
 
     const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
+    checkOutputs(scene.source_files);  // the buffers and images the scene read
     if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
     const auto setup_start = std::chrono::steady_clock::now();
     const Tracer tracer(scene);
@@ -441,7 +463,9 @@ void runBake(const BakeOptions& o) {
         Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
                           !o.quiet && Progress::isTerminal());
         uint32_t next_checkpoint = nextReportCheckpoint(0);
-        while (next_checkpoint <= first_iteration) next_checkpoint = nextReportCheckpoint(next_checkpoint);
+        while (next_checkpoint <= first_iteration && next_checkpoint != UINT32_MAX) {
+            next_checkpoint = nextReportCheckpoint(next_checkpoint);
+        }
         while (baker.iterationsDone() < o.iterations) {
             if (g_stop_signal != 0) {
                 stop_reason = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
@@ -540,7 +564,7 @@ void runBake(const BakeOptions& o) {
         }
     }
     if (!o.stats_json.empty()) {
-        std::ofstream json(o.stats_json);
+        std::ostringstream json;
         json << "{\n"
              << "  \"iterations\": " << baker.iterationsDone() << ",\n"
              << "  \"stop_reason\": \"" << stop_reason << "\",\n"
@@ -558,7 +582,7 @@ void runBake(const BakeOptions& o) {
              << coverage.unreached_area << "},\n"
              << "  \"stability\": " << stabilityJson(stability) << "\n"
              << "}\n";
-        if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
+        writeTextOutput(o.stats_json, "stats JSON", json.str());
     }
     if (auto_capacity && cache.numerics().failed_inserts > 0) {
         // The table doubles between iterations; one iteration filled it faster than that.
@@ -590,14 +614,14 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc)")->required();
     cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
     cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
-        ->capture_default_str()->check(CLI::NonNegativeNumber);
+        ->capture_default_str()->check(CLI::NonNegativeNumber)->check(kFiniteNumber);
     cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
     cmd->add_option("--scene-scale", o->scene_scale,
-                    "SHaRC scene scale S: voxels are about distance/S wide (larger = finer)")->capture_default_str();
-    cmd->add_option("--log-base", o->log_base, "SHaRC level logarithm base b (> 1)")->capture_default_str();
+                    "SHaRC scene scale S: voxels are about distance/S wide (larger = finer)")->capture_default_str()->check(kFiniteNumber);
+    cmd->add_option("--log-base", o->log_base, "SHaRC level logarithm base b (> 1)")->capture_default_str()->check(kFiniteNumber);
     cmd->add_option("--level-bias", o->level_bias, "SHaRC level bias (positive = finer levels near the camera)")
-        ->capture_default_str();
+        ->capture_default_str()->check(kFiniteNumber);
     cmd->add_option("--capacity", o->capacity,
                     "Hash table slots (>= 16; a power of two is SDK-friendly), or \"auto\": sized from the scene "
                     "to start by a short pre-pass (4x the voxels that 16 sampled iterations reach, next power of two), doubled between iterations whenever a quarter is occupied")
@@ -662,7 +686,7 @@ void registerBakeCommand(CLI::App& app) {
                     "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
                     "mean relative error against the known radiance where the scene has one, else the image's mean "
                     "relative error against --reference")
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
     cmd->callback([o] { runBake(*o); });
 }

@@ -26,6 +26,7 @@ struct ExportVdbOptions {
 };
 
 void run(const ExportVdbOptions& o) {
+    checkOutputPath(o.output, "VDB", {o.input});
     CacheView view;
     CacheError error;
     const CacheFileStatus status = CacheView::openFile(o.input, &view, &error, CacheView::FileMode::kMap);
@@ -105,7 +106,7 @@ void registerExportVdbCommand(CLI::App& app) {
         ->check(CLI::IsMember({"density", "color", "radiance", "samples"}));
     cmd->add_option("--scale", o->scale, "Display scale for the density and color grids")
         ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("--split-normals", o->split_normals, "One grid set per normal octant instead of merging them");
     cmd->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
     cmd->callback([o] { run(*o); });

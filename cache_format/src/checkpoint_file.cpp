@@ -15,6 +15,7 @@
 #include <iterator>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace sharcbake {
@@ -103,8 +104,13 @@ bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::ve
 
 /// Rules C8-C11 on the decoded data (shared by the writer, which refuses what a reader rejects).
 bool validateContent(const CheckpointData& data, std::string* problem) {
-    if (data.capacity == 0 || data.bucket_size == 0) {
-        *problem = "C8: capacity and bucket size must be >= 1";
+    if (data.capacity == 0 || data.bucket_size == 0 || data.bucket_size > data.capacity) {
+        *problem = "C8: capacity and bucket size must be >= 1, the bucket size <= the capacity";
+        return false;
+    }
+    if (data.iterations_done > kCheckpointMaxIterations) {
+        *problem = "C8: iterations_done " + std::to_string(data.iterations_done) + " is above " +
+                   std::to_string(kCheckpointMaxIterations);
         return false;
     }
     if (!std::isfinite(data.radiance_scale) || !(data.radiance_scale > 0.0)) {
@@ -251,7 +257,7 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
     if (major != kCheckpointVersionMajor) {
         return fail(S::kUnsupportedVersion, message,
                     "C3: checkpoint version " + std::to_string(major) + "." + std::to_string(minor) +
-                        " is not supported (this reader reads 1.x)");
+                        " is not supported (this reader reads " + std::to_string(kCheckpointVersionMajor) + ".x)");
     }
     // C4: declared size and header/table geometry.
     const uint64_t file_size = load64(40);
@@ -389,12 +395,16 @@ CacheFileStatus writeCheckpointFile(const std::string& path, const CheckpointDat
         if (message) *message = path + ": " + *message;
         return encoded;
     }
-    // A fixed temporary name: a process killed mid-write leaves one stale file that the next
-    // write replaces, never a growing litter, and never a half-written checkpoint at `path`.
-    return writeFileAtomically(path, path + ".partial", bytes, message);
+    // A per-process temporary beside the target; one left by a killed process is removed by the
+    // next write (prepareOutputFile), and a half-written checkpoint never appears at `path`.
+    return writeFileAtomically(path, bytes.data(), bytes.size(), message);
 }
 
 CacheFileStatus readCheckpointFile(const std::string& path, CheckpointData* data, std::string* message) {
+    struct stat info {};
+    if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
+        return fail(CacheFileStatus::kIoError, message, path + ": not a regular file (a FIFO, device or folder)");
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in) return fail(CacheFileStatus::kIoError, message, path + ": cannot open");
     const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

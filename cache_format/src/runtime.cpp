@@ -202,12 +202,13 @@ CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, Cac
     if (error) *error = CacheError{};
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "openFile: null output view");
     out->reset();
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    // O_NONBLOCK: opening a FIFO does not wait for a writer (it is then refused as not regular).
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) return fail(error, CacheFileStatus::kIoError, 0, path + ": cannot open: " + std::strerror(errno));
     struct stat st;
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         ::close(fd);
-        return fail(error, CacheFileStatus::kIoError, 0, path + ": not a regular file");
+        return fail(error, CacheFileStatus::kIoError, 0, path + ": not a regular file (a FIFO, device or folder)");
     }
     const size_t size = size_t(st.st_size);
     CacheView view;

@@ -215,10 +215,38 @@ private:
         return in.gcount() == 4 && std::memcmp(magic, "glTF", 4) == 0;
     }
 
+    /// What readAndRecordFile needs: the list it records into and the scene's folder.
+    struct FileAccess {
+        std::vector<std::string>* files;
+        std::filesystem::path folder;  ///< canonical
+    };
+
+    /// Reads one file for tinygltf. Untrusted scenes: only regular files (a FIFO or a device
+    /// would block or never end), and a buffer or image only from the scene's folder or below
+    /// (a URI with "../" or an absolute path is refused, so a scene cannot read /etc/passwd).
     static bool readAndRecordFile(std::vector<unsigned char>* out, std::string* err, const std::string& path,
-                                  void* files) {
+                                  void* user) {
+        auto& access = *static_cast<FileAccess*>(user);
+        std::error_code error;
+        if (!std::filesystem::is_regular_file(path, error)) {
+            if (err) *err += "File is not a regular file: " + path + "\n";
+            return false;
+        }
+        if (!access.files->empty()) {
+            const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, error);
+            const auto [end, unused] = std::mismatch(access.folder.begin(), access.folder.end(), resolved.begin(),
+                                                     resolved.end());
+            (void)unused;
+            if (error || end != access.folder.end()) {
+                if (err) {
+                    *err += "File " + path + " is outside the scene's folder " + access.folder.string() +
+                            "; untrusted scenes may not read it\n";
+                }
+                return false;
+            }
+        }
         if (!tinygltf::ReadWholeFile(out, err, path, nullptr)) return false;
-        auto& list = *static_cast<std::vector<std::string>*>(files);
+        auto& list = *access.files;
         const std::string file = std::filesystem::path(path).lexically_normal().string();
         if (std::find(list.begin(), list.end(), file) == list.end()) list.push_back(file);
         return true;
@@ -226,13 +254,17 @@ private:
 
     void parseFile() {
         if (!std::filesystem::exists(path_)) fail("file not found");
+        std::error_code error;
+        if (!std::filesystem::is_regular_file(path_, error)) fail("not a regular file");
+        FileAccess access{&scene_.source_files,
+                          std::filesystem::weakly_canonical(path_, error).parent_path()};
         tinygltf::TinyGLTF parser;
         // tinygltf's own file access, recording each file it reads (the glTF or GLB, external
         // buffers, images): Scene::source_files is then exactly what the scene was loaded from,
         // with tinygltf's URI decoding and its handling of missing images.
         parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
                                                     &readAndRecordFile, &tinygltf::WriteWholeFile,
-                                                    &scene_.source_files});
+                                                    &access});
         std::string err;
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.

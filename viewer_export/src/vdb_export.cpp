@@ -2,12 +2,16 @@
 // .sharc -> OpenVDB: see vdb_export.h for the grid layout and the octant merge rule.
 #include "sharcbake/vdb_export.h"
 
+#include "sharcbake/cache_file.h"
+
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <sstream>
 #include <unordered_map>
 #include <utility>
 
@@ -223,12 +227,19 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
                         openvdb::StringMetadata(std::string(cache.metadataValue(i))));
     }
 
+    // Serialised in memory, then written with the caches' atomic, checked write: a full disk
+    // fails (kIoError) and leaves the previous file intact, a device is never replaced.
+    std::ostringstream bytes(std::ios::binary);
     try {
-        openvdb::io::File file(out_path);
-        file.write(grids, meta);
-        file.close();
+        openvdb::io::Stream(bytes).write(grids, meta);
     } catch (const std::exception& e) {
         return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + e.what());
+    }
+    if (!bytes) return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": serialisation failed");
+    const std::string data = std::move(bytes).str();
+    std::string problem;
+    if (writeFileAtomically(out_path, data.data(), data.size(), &problem) != CacheFileStatus::kOk) {
+        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
     }
     return VdbExportStatus::kOk;
 }
