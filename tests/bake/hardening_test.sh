@@ -36,7 +36,7 @@ expect 0 "bake over a mode-600 file" "$sharcbake" bake "$furnace" -o "$work/link
 expect 0 "export-vdb" "$sharcbake" export-vdb "$work/a.sharc" -o "$work/a.vdb" -q
 cp "$work/a.vdb" "$work/a.vdb.orig"
 expect 2 "export-vdb on a full disk" sh -c "trap '' XFSZ; ulimit -f 1; exec '$sharcbake' export-vdb '$work/a.sharc' -o '$work/a.vdb' --split-normals -q"
-says "$work/err.txt" "write failed" "the message says the write failed"
+says "$work/err.txt" "previous file is untouched" "the message says the write failed and the old file is kept"
 cmp -s "$work/a.vdb" "$work/a.vdb.orig" || fail "the failed export changed the previous VDB"
 ls "$work" | grep -q "tmp-" && fail "a temporary file was left behind: $(ls "$work")"
 
@@ -64,3 +64,66 @@ cmp -s "$work/a.sharc" "$work/a.orig" || fail "a refused command changed the cac
 expect 2 "stats JSON into /dev/full" "$sharcbake" render "$furnace" -o "$work/s.exr" --no-png --resolution 8 --spp 1 -q --stats-json /dev/full
 expect 0 "stats JSON written" "$sharcbake" render "$furnace" -o "$work/s.exr" --no-png --resolution 8 --spp 1 -q --stats-json "$work/s.json"
 says "$work/s.json" '"width"' "the stats JSON has its content"
+
+# 6. Floating-point options refuse NaN and infinities (range checks alone let NaN through).
+expect 1 "render --fov nan" "$sharcbake" render "$furnace" -o "$work/n.exr" --look-at 0,0,3,0,0,0 --fov nan --resolution 8 --spp 1 -q
+expect 1 "render --exposure inf" "$sharcbake" render "$furnace" -o "$work/n.exr" --exposure inf --resolution 8 --spp 1 -q
+expect 1 "bake --time-budget nan" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --time-budget nan $quick
+expect 1 "bake --sky-scale nan" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --sky-scale nan $quick
+expect 1 "bake --sky with a negative radiance" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --sky=-1,0,0 $quick
+
+# 7. A CRC-valid checkpoint claiming 0xFFFFFFFF iterations is refused at once (rule C8).
+expect 0 "bake with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/c.sharc" --checkpoint "$work/c.ckpt" $quick
+python3 - "$work/c.ckpt" "$work/huge.ckpt" <<'PY' || fail "could not craft the checkpoint"
+import struct, sys, zlib
+d = bytearray(open(sys.argv[1], 'rb').read())
+count = struct.unpack_from('<I', d, 28)[0]
+for i in range(count):
+    e = 64 + 32 * i
+    if d[e:e + 4] == b'STAT':
+        offset, length = struct.unpack_from('<QQ', d, e + 8)
+        struct.pack_into('<I', d, offset, 0xFFFFFFFF)                     # iterations_done
+        struct.pack_into('<I', d, e + 24, zlib.crc32(d[offset:offset + length]))
+struct.pack_into('<I', d, 60, zlib.crc32(d[64:64 + 32 * count], zlib.crc32(d[:60])))
+open(sys.argv[2], 'wb').write(d)
+PY
+expect 3 "resume from a checkpoint with 0xFFFFFFFF iterations" timeout 20 "$sharcbake" bake "$furnace" -o "$work/h.sharc" --resume "$work/huge.ckpt" $quick
+says "$work/err.txt" "C8" "the message names rule C8"
+
+# 8. A FIFO given as an input is refused instead of blocking.
+mkfifo "$work/fifo_in"
+expect 2 "info on a FIFO" timeout 20 "$sharcbake" info "$work/fifo_in"
+expect 2 "render a FIFO scene" timeout 20 "$sharcbake" render "$work/fifo_in" -o "$work/f.exr" -q
+expect 2 "resume from a FIFO" timeout 20 "$sharcbake" bake "$furnace" -o "$work/f.sharc" --resume "$work/fifo_in" $quick
+expect 2 "render --cache FIFO" timeout 20 "$sharcbake" render "$furnace" -o "$work/f.exr" --cache "$work/fifo_in" --resolution 8 --spp 1 -q
+
+# 12. A buffer URI that leaves the scene's folder is refused, and no byte of that file is echoed.
+mkdir -p "$work/esc/inner"
+printf 'SECRET-BYTES-0123' > "$work/esc/secret.bin"
+printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri": "../secret.bin" } ] }' > "$work/esc/inner/s.gltf"
+expect 3 "a buffer outside the scene's folder" "$sharcbake" render "$work/esc/inner/s.gltf" -o "$work/e.exr" -q
+says "$work/err.txt" "outside the scene's folder" "the message says why"
+grep -q "SECRET" "$work/err.txt" "$work/out.txt" && fail "bytes of the outside file were echoed"
+
+# 13. info escapes control characters of the metadata (a crafted value could drive the terminal).
+python3 - "$work/a.sharc" "$work/esc.sharc" <<'PY' || fail "could not craft the cache"
+import struct, sys, zlib
+d = bytearray(open(sys.argv[1], 'rb').read())
+count = struct.unpack_from('<I', d, 28)[0]
+for i in range(count):
+    e = 64 + 32 * i
+    if d[e:e + 4] == b'META':
+        offset, length = struct.unpack_from('<QQ', d, e + 8)
+        at = d.index(b'stop_reason', offset) + len('stop_reason')   # the value follows its key
+        d[at:at + 3] = b'\x1b[2'                                    # ESC [ 2: the start of "clear screen"
+        struct.pack_into('<I', d, e + 24, zlib.crc32(d[offset:offset + length]))
+struct.pack_into('<I', d, 60, zlib.crc32(d[64:64 + 32 * count], zlib.crc32(d[:60])))
+open(sys.argv[2], 'wb').write(d)
+PY
+expect 0 "info on a cache whose metadata holds ESC" "$sharcbake" info "$work/esc.sharc"
+says "$work/out.txt" 'stop_reason: \\x1B\[2' "ESC is printed as \\x1B"
+tr -d '\n' < "$work/out.txt" | grep -q "$(printf '\033')" && fail "info printed a raw ESC"
+expect 0 "info --json on it" "$sharcbake" info "$work/esc.sharc" --json
+python3 -c "import json,sys; json.load(open(sys.argv[1]))" "$work/out.txt" || fail "info --json is not valid JSON"
+
+finish "hardening"

@@ -6,14 +6,15 @@
 
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
-#include <openvdb/io/Stream.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 #include <utility>
+
+#include <unistd.h>
 
 namespace sharcbake {
 namespace {
@@ -227,18 +228,30 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
                         openvdb::StringMetadata(std::string(cache.metadataValue(i))));
     }
 
-    // Serialised in memory, then written with the caches' atomic, checked write: a full disk
-    // fails (kIoError) and leaves the previous file intact, a device is never replaced.
-    std::ostringstream bytes(std::ios::binary);
-    try {
-        openvdb::io::Stream(bytes).write(grids, meta);
-    } catch (const std::exception& e) {
-        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + e.what());
+    // The caches' output rules (cache_file.h): the grids go to a temporary beside the target, which
+    // is read back in full (OpenVDB does not report write errors: a full disk leaves a truncated
+    // file) and only then renamed over the target. A device or FIFO is never replaced, and on
+    // failure the previous file is intact. (io::File, not io::Stream: vdb_render needs the grid
+    // offsets that only a file archive stores.)
+    std::string target, temporary, problem;
+    if (prepareOutputFile(out_path, &target, &temporary, &problem) != CacheFileStatus::kOk) {
+        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
     }
-    if (!bytes) return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": serialisation failed");
-    const std::string data = std::move(bytes).str();
-    std::string problem;
-    if (writeFileAtomically(out_path, data.data(), data.size(), &problem) != CacheFileStatus::kOk) {
+    try {
+        openvdb::io::File file(temporary);
+        file.write(grids, meta);
+        file.close();
+        openvdb::io::File check(temporary);
+        check.open(false);
+        const openvdb::GridPtrVecPtr read_back = check.getGrids();
+        check.close();
+        if (!read_back || read_back->size() != grids.size()) throw std::runtime_error("the grids do not read back");
+    } catch (const std::exception& e) {
+        ::unlink(temporary.c_str());
+        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + " (disk full?): " + e.what() +
+                                                   "; the previous file is untouched");
+    }
+    if (commitOutputFile(temporary, target, &problem) != CacheFileStatus::kOk) {
         return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
     }
     return VdbExportStatus::kOk;
