@@ -13,6 +13,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <string_view>
+#include <unordered_set>
 
 #include <cerrno>
 #include <climits>
@@ -140,15 +142,15 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         return fail(CacheFileStatus::kInvalidData, message,
                     std::string("grid parameters: ") + toString(validateHashGridParameters(data.gridParameters())));
     }
+    std::unordered_set<std::string_view> keys;  // linear, not quadratic, in the entry count
+    keys.reserve(data.metadata.size());
     for (size_t i = 0; i < data.metadata.size(); ++i) {
         const auto& [key, value] = data.metadata[i];
         if (key.empty() || key.size() > 0xFFFFFFFFu || value.size() > 0xFFFFFFFFu) {
             return fail(CacheFileStatus::kInvalidData, message, "metadata keys must be non-empty");
         }
-        for (size_t j = 0; j < i; ++j) {
-            if (data.metadata[j].first == key) {
-                return fail(CacheFileStatus::kInvalidData, message, "duplicate metadata key \"" + key + "\"");
-            }
+        if (!keys.insert(key).second) {
+            return fail(CacheFileStatus::kInvalidData, message, "duplicate metadata key \"" + key + "\"");
         }
     }
     std::vector<CacheLevel> levels;

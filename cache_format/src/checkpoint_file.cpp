@@ -13,6 +13,8 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <string_view>
+#include <unordered_set>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -65,6 +67,8 @@ struct ByteReader {
 
 
 bool validSettingsText(const std::vector<std::pair<std::string, std::string>>& settings, std::string* problem) {
+    std::unordered_set<std::string_view> keys;  // linear, not quadratic, in the entry count
+    keys.reserve(settings.size());
     for (size_t i = 0; i < settings.size(); ++i) {
         const auto& [key, value] = settings[i];
         if (key.empty() || !isValidUtf8(reinterpret_cast<const uint8_t*>(key.data()), key.size()) ||
@@ -72,18 +76,16 @@ bool validSettingsText(const std::vector<std::pair<std::string, std::string>>& s
             *problem = "setting " + std::to_string(i) + ": keys must be non-empty and text valid UTF-8";
             return false;
         }
-        for (size_t j = 0; j < i; ++j) {
-            if (settings[j].first == key) {
-                *problem = "duplicate setting \"" + key + "\"";
-                return false;
-            }
+        if (!keys.insert(key).second) {
+            *problem = "duplicate setting \"" + key + "\"";
+            return false;
         }
     }
     return true;
 }
 
 template <typename Value>
-bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::vector<std::string>& seen,
+bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::unordered_set<std::string_view>& seen,
                  std::string* problem) {
     for (const auto& [name, value] : list) {
         (void)value;
@@ -91,13 +93,10 @@ bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::ve
             *problem = "counter names must be non-empty UTF-8";
             return false;
         }
-        for (const std::string& other : seen) {
-            if (other == name) {
-                *problem = "duplicate counter \"" + name + "\"";
-                return false;
-            }
+        if (!seen.insert(name).second) {
+            *problem = "duplicate counter \"" + name + "\"";
+            return false;
         }
-        seen.push_back(name);
     }
     return true;
 }
@@ -150,7 +149,7 @@ bool validateContent(const CheckpointData& data, std::string* problem) {
         *problem = "C10: " + text_problem;
         return false;
     }
-    std::vector<std::string> seen;
+    std::unordered_set<std::string_view> seen;
     if (!uniqueNames(data.counts, seen, &text_problem) || !uniqueNames(data.amounts, seen, &text_problem)) {
         *problem = "C11: " + text_problem;
         return false;
