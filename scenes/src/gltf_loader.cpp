@@ -21,6 +21,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -252,6 +253,44 @@ private:
         return true;
     }
 
+    /// The deepest JSON nesting the loader accepts; real glTF files nest about 10 deep. The JSON
+    /// parser recurses per level, so 20,000 nested arrays would overflow its stack.
+    static constexpr int kMaxJsonNesting = 256;
+
+    /// The largest |coordinate| of a vertex in world space (metres) the loader accepts.
+    static constexpr double kMaxWorldCoordinate = 1e9;
+
+    /// Refuses absurd nesting in the glTF's JSON (the file, or a GLB's JSON chunk) before parsing.
+    void checkJsonNesting() {
+        std::ifstream in(path_, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        size_t begin = 0, end = bytes.size();
+        if (bytes.size() >= 20 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
+            uint32_t length = 0;
+            std::memcpy(&length, bytes.data() + 12, 4);
+            begin = 20;
+            end = std::min<size_t>(bytes.size(), begin + length);
+        }
+        int depth = 0;
+        bool in_string = false;
+        for (size_t i = begin; i < end; ++i) {
+            const char c = bytes[i];
+            if (in_string) {
+                if (c == '\\') ++i;
+                else if (c == '"') in_string = false;
+            } else if (c == '"') {
+                in_string = true;
+            } else if (c == '[' || c == '{') {
+                if (++depth > kMaxJsonNesting) {
+                    fail("JSON nested more than " + std::to_string(kMaxJsonNesting) + " levels deep (at byte " +
+                         std::to_string(i) + "); refused before parsing");
+                }
+            } else if (c == ']' || c == '}') {
+                --depth;
+            }
+        }
+    }
+
     void parseFile() {
         if (!std::filesystem::exists(path_)) fail("file not found");
         std::error_code error;
@@ -265,6 +304,7 @@ private:
         parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
                                                     &readAndRecordFile, &tinygltf::WriteWholeFile,
                                                     &access});
+        checkJsonNesting();
         std::string err;
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.
@@ -464,21 +504,42 @@ private:
         return roots;
     }
 
-    void visitNode(int index, const glm::dmat4& parent) {
-        if (index < 0 || static_cast<size_t>(index) >= model_.nodes.size())
-            fail("node " + std::to_string(index) + " does not exist");
-        if (on_path_.empty()) on_path_.assign(model_.nodes.size(), false);
-        if (on_path_[index]) fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
-        on_path_[index] = true;
-
-        const tinygltf::Node& node = model_.nodes[index];
-        const glm::dmat4 world = parent * localTransform(node);
-        if (node.mesh >= 0) addMesh(node.mesh, world, index);
-        if (node.camera >= 0) addCamera(node, world);
-        addNodeLight(node, world);
-        for (int child : node.children) visitNode(child, world);
-
-        on_path_[index] = false;
+    /// Depth-first over the hierarchy under `root` with an explicit stack, not recursion, so a
+    /// crafted chain of 20,000 nested nodes cannot overflow the call stack.
+    void visitNode(int root, const glm::dmat4& parent) {
+        struct Frame {
+            int index;
+            glm::dmat4 world;
+            size_t next_child;
+        };
+        std::vector<Frame> stack;
+        const auto enter = [&](int index, const glm::dmat4& parent_world) {
+            if (index < 0 || static_cast<size_t>(index) >= model_.nodes.size())
+                fail("node " + std::to_string(index) + " does not exist");
+            if (on_path_.empty()) on_path_.assign(model_.nodes.size(), false);
+            if (on_path_[index])
+                fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
+            on_path_[index] = true;
+            const tinygltf::Node& node = model_.nodes[index];
+            const glm::dmat4 world = parent_world * localTransform(node);
+            if (node.mesh >= 0) addMesh(node.mesh, world, index);
+            if (node.camera >= 0) addCamera(node, world);
+            addNodeLight(node, world);
+            stack.push_back(Frame{index, world, 0});
+        };
+        enter(root, parent);
+        while (!stack.empty()) {
+            Frame& top = stack.back();
+            const std::vector<int>& children = model_.nodes[top.index].children;
+            if (top.next_child < children.size()) {
+                const int child = children[top.next_child++];
+                const glm::dmat4 world = top.world;  // `top` moves when the stack grows
+                enter(child, world);
+            } else {
+                on_path_[top.index] = false;
+                stack.pop_back();
+            }
+        }
     }
 
     // ---------------------------------------------------------------- geometry
@@ -567,7 +628,16 @@ private:
     /// perpendicular under non-uniform scale). A mirroring transform (negative determinant)
     /// turns counter-clockwise triangles clockwise, so their winding is flipped back.
     void transformToWorld(PrimitiveGeometry& geo, const glm::dmat4& world, const std::string& label) {
-        for (glm::vec3& p : geo.positions) p = glm::vec3(world * glm::dvec4(glm::dvec3(p), 1.0));
+        for (size_t i = 0; i < geo.positions.size(); ++i) {
+            const glm::dvec3 p = glm::dvec3(world * glm::dvec4(glm::dvec3(geo.positions[i]), 1.0));
+            // Embree's BVH needs bounded coordinates (it asserts near 1e19); 1e9 m is far beyond any scene.
+            if (!(std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
+                  std::abs(p.z) <= kMaxWorldCoordinate)) {
+                fail(label + ": vertex " + std::to_string(i) + " lies at (" + std::to_string(p.x) + ", " +
+                     std::to_string(p.y) + ", " + std::to_string(p.z) + ") after the node transforms, beyond +-1e9 m");
+            }
+            geo.positions[i] = glm::vec3(p);
+        }
         const glm::dmat3 linear(world);
         const double det = glm::determinant(linear);
         if (det == 0.0 || !std::isfinite(det))

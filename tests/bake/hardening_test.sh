@@ -126,4 +126,30 @@ tr -d '\n' < "$work/out.txt" | grep -q "$(printf '\033')" && fail "info printed 
 expect 0 "info --json on it" "$sharcbake" info "$work/esc.sharc" --json
 python3 -c "import json,sys; json.load(open(sys.argv[1]))" "$work/out.txt" || fail "info --json is not valid JSON"
 
+# 5. A node chain 20,000 deep loads (no recursion); JSON nested 20,000 deep is refused before parsing.
+# 6. A node scale that puts vertices near 1e19 is refused (exit 3), not an abort inside Embree.
+mkdir -p "$work/deep"
+cp "$scenes/furnace_rho090/furnace_rho090.bin" "$work/deep/"
+python3 - "$scenes/furnace_rho090/furnace_rho090.gltf" "$work/deep" <<'PY' || fail "could not write the crafted scenes"
+import copy, json, sys
+base = json.load(open(sys.argv[1]))
+chain = copy.deepcopy(base)
+first = len(chain['nodes'])
+n = 20000
+for i in range(n):
+    chain['nodes'].append({'children': [first + i + 1]} if i + 1 < n else {'mesh': 1})
+chain['scenes'][0]['nodes'].append(first)
+json.dump(chain, open(sys.argv[2] + '/chain.gltf', 'w'))
+huge = copy.deepcopy(base)
+huge['nodes'][1]['scale'] = [1e19, 1e19, 1e19]
+json.dump(huge, open(sys.argv[2] + '/huge.gltf', 'w'))
+nested = json.dumps(base)[:-1] + ', "extras": ' + '[' * 20000 + ']' * 20000 + '}'
+open(sys.argv[2] + '/nested.gltf', 'w').write(nested)
+PY
+expect 0 "render a scene with a node chain 20,000 deep" "$sharcbake" render "$work/deep/chain.gltf" -o "$work/deep/chain.exr" --no-png --resolution 8 --spp 1 -q
+expect 3 "JSON nested 20,000 deep" "$sharcbake" render "$work/deep/nested.gltf" -o "$work/deep/n.exr" --no-png --resolution 8 --spp 1 -q
+says "$work/err.txt" "nested more than" "the message says the JSON is nested too deep"
+expect 3 "vertices near 1e19" "$sharcbake" render "$work/deep/huge.gltf" -o "$work/deep/h.exr" --no-png --resolution 8 --spp 1 -q
+says "$work/err.txt" "beyond" "the message says where the vertex lies"
+
 finish "hardening"
