@@ -51,6 +51,7 @@ struct BakeOptions {
     uint32_t iterations_per_leg = 8;
     uint32_t coverage_points = 20000;
     SkyOptions sky;
+    GltfLoadLimits limits;
     std::string stats_json;
     std::string checkpoint_path;
     uint32_t checkpoint_interval = 32;
@@ -389,7 +390,7 @@ void runBake(const BakeOptions& o) {
     BakeSettings settings = settingsFromOptions(o);
     const bool auto_capacity = o.capacity == "auto";
 
-    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
+    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
     checkOutputs(scene.source_files);  // the buffers and images the scene read
     if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
     const auto setup_start = std::chrono::steady_clock::now();
@@ -649,6 +650,7 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--coverage-points", o->coverage_points, "Surface points tested for the coverage report")
         ->capture_default_str();
     addSkyOptions(*cmd, o->sky);
+    addSceneLimitOptions(*cmd, o->limits);
     cmd->add_option("--stats-json", o->stats_json, "Write the bake statistics as JSON");
     cmd->add_option("--checkpoint", o->checkpoint_path,
                     "Save the bake state to this file every --checkpoint-interval iterations and at the end "

@@ -150,7 +150,14 @@ void addSkyOptions(CLI::App& command, SkyOptions& options) {
         ->check(kFiniteNumber);
 }
 
-Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet) {
+void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits) {
+    command.add_option("--max-texture-size", limits.max_texture_size,
+                       "Refuse scene images wider or taller than this many texels (checked before decoding)")
+        ->capture_default_str()
+        ->check(CLI::Range(1u, 1u << 16));
+}
+
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
     std::error_code error;
     if (!std::filesystem::is_regular_file(path, error)) {
         throw CommandError(kExitIo, path + (std::filesystem::exists(path, error)
@@ -162,7 +169,7 @@ Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool q
     }
     Scene scene;
     try {
-        scene = loadGltf(path);
+        scene = loadGltf(path, limits);
         if (!sky.exr_path.empty()) {
             scene.sky.map = loadEquirectExr(sky.exr_path);
             scene.sky.scale = sky.scale;

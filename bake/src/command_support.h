@@ -5,6 +5,7 @@
 #pragma once
 
 #include "sharcbake/scene.h"
+#include "sharcbake/scene_loader.h"
 
 #include <CLI/CLI.hpp>
 #include <glm/glm.hpp>
@@ -81,7 +82,11 @@ void addSkyOptions(CLI::App& command, SkyOptions& options);
 
 /// Loads the scene (kExitIo if the file is missing, kExitInvalidInput if it is malformed) and
 /// applies the sky options over what the scene file says.
-Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet);
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet,
+                          const GltfLoadLimits& limits = {});
+
+/// --max-texture-size, shared by render and bake.
+void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits);
 
 /// One line about the loaded scene (triangles, materials, lights, what was dropped), and the
 /// loader's warnings, on stdout.

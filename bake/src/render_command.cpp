@@ -46,6 +46,7 @@ struct RenderOptions {
     uint32_t seed = 0;
     unsigned threads = 0;
     SkyOptions sky;
+    GltfLoadLimits limits;
     float exposure = 0.0f;
     std::string tone_map = "aces";
     bool no_png = false;
@@ -194,7 +195,7 @@ void runRender(const RenderOptions& o) {
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
-    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
+    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
     checkOutputs(scene.source_files);  // the buffers and textures the scene read
     const Camera camera = chooseCamera(scene, o);
     int width = 0, height = 0;
@@ -414,6 +415,7 @@ void registerRenderCommand(CLI::App& app) {
     cmd->add_option("--seed", options->seed, "Random seed")->capture_default_str();
     cmd->add_option("--threads", options->threads, "Worker threads (0 = all cores)")->capture_default_str();
     addSkyOptions(*cmd, options->sky);
+    addSceneLimitOptions(*cmd, options->limits);
     cmd->add_option("--exposure", options->exposure, "PNG preview exposure in stops")->capture_default_str()->check(kFiniteNumber);
     cmd->add_option("--tonemap", options->tone_map, "PNG preview tone map")
         ->capture_default_str()

@@ -8,6 +8,7 @@
 /// because a bad scene must fail loudly at load time rather than render wrong hours later.
 #include "sharcbake/scene_loader.h"
 
+#include <stb_image.h>
 #include <tiny_gltf.h>
 
 #include <glm/gtc/matrix_inverse.hpp>
@@ -162,7 +163,9 @@ Material defaultMaterial() {
 
 class GltfLoader {
 public:
-    explicit GltfLoader(std::string path) : path_(std::move(path)) { scene_.source_path = path_; }
+    GltfLoader(std::string path, const GltfLoadLimits& limits) : path_(std::move(path)), limits_(limits) {
+        scene_.source_path = path_;
+    }
 
     Scene load() {
         parseFile();
@@ -180,6 +183,7 @@ public:
 
 private:
     std::string path_;
+    GltfLoadLimits limits_;
     tinygltf::Model model_;
     Scene scene_;
     int default_material_ = -1;
@@ -291,6 +295,24 @@ private:
         }
     }
 
+    /// tinygltf's image decoder behind a size check on the image header, so a small file that
+    /// declares a huge image is refused before its texels are allocated.
+    static bool loadImageBounded(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
+                                 int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
+        const uint32_t max_side = static_cast<const GltfLoadLimits*>(user)->max_texture_size;
+        int width = 0, height = 0, channels = 0;
+        if (stbi_info_from_memory(bytes, size, &width, &height, &channels) &&
+            (uint64_t(width) > max_side || uint64_t(height) > max_side)) {
+            if (err) {
+                *err += "image " + std::to_string(index) + " is " + std::to_string(width) + "x" +
+                        std::to_string(height) + " texels, above the limit of " + std::to_string(max_side) +
+                        " per side (raise it with --max-texture-size)\n";
+            }
+            return false;
+        }
+        return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, nullptr);
+    }
+
     void parseFile() {
         if (!std::filesystem::exists(path_)) fail("file not found");
         std::error_code error;
@@ -301,6 +323,7 @@ private:
         // tinygltf's own file access, recording each file it reads (the glTF or GLB, external
         // buffers, images): Scene::source_files is then exactly what the scene was loaded from,
         // with tinygltf's URI decoding and its handling of missing images.
+        parser.SetImageLoader(&loadImageBounded, &limits_);
         parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
                                                     &readAndRecordFile, &tinygltf::WriteWholeFile,
                                                     &access});
@@ -436,7 +459,16 @@ private:
         if (acc.type != expectedType)
             fail(label + ": has type " + std::to_string(acc.type) + ", expected " + std::to_string(expectedType));
         const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
-        std::vector<double> out(acc.count * components, 0.0);
+        // Bound the allocation before making it: an 8 KB file must not cost gigabytes. Elements in
+        // a bufferView take at least a byte each; a zero-filled accessor gets the same allowance.
+        uint64_t buffer_bytes = 0;
+        for (const tinygltf::Buffer& b : model_.buffers) buffer_bytes += b.data.size();
+        const uint64_t max_elements = std::max<uint64_t>(uint64_t(1) << 16, buffer_bytes);
+        if (components <= 0 || acc.count > max_elements) {
+            fail(label + ": count " + std::to_string(acc.count) + " is more than the scene's buffers can hold (" +
+                 std::to_string(max_elements) + " elements at most)");
+        }
+        std::vector<double> out(acc.count * size_t(components), 0.0);
         // Without a bufferView the accessor is all zeros (plus any sparse substitutions).
         if (acc.bufferView >= 0) {
             ElementLayout layout =
@@ -1055,6 +1087,6 @@ private:
 
 }  // namespace
 
-Scene loadGltf(const std::string& path) { return GltfLoader(path).load(); }
+Scene loadGltf(const std::string& path, const GltfLoadLimits& limits) { return GltfLoader(path, limits).load(); }
 
 }  // namespace sharcbake

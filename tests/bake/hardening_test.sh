@@ -152,4 +152,31 @@ says "$work/err.txt" "nested more than" "the message says the JSON is nested too
 expect 3 "vertices near 1e19" "$sharcbake" render "$work/deep/huge.gltf" -o "$work/deep/h.exr" --no-png --resolution 8 --spp 1 -q
 says "$work/err.txt" "beyond" "the message says where the vertex lies"
 
+# 9. Sizes are checked before allocating: an accessor of 2^26 elements without a bufferView, and
+# a PNG declaring 16000x16000 texels, are refused at once (exit 3), saying so.
+python3 - "$scenes/furnace_rho090/furnace_rho090.gltf" "$work/deep" <<'PY' || fail "could not write the crafted scenes"
+import copy, json, struct, sys, zlib
+base = json.load(open(sys.argv[1]))
+big = copy.deepcopy(base)
+big['accessors'].append({'componentType': 5126, 'count': 1 << 26, 'type': 'VEC3', 'min': [0, 0, 0], 'max': [0, 0, 0]})
+big['meshes'][1]['primitives'][0]['attributes']['POSITION'] = len(big['accessors']) - 1
+json.dump(big, open(sys.argv[2] + '/big_accessor.gltf', 'w'))
+def chunk(kind, data):
+    return struct.pack('>I', len(data)) + kind + data + struct.pack('>I', zlib.crc32(kind + data))
+png = b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', 16000, 16000, 8, 0, 0, 0, 0)) + \
+      chunk(b'IDAT', zlib.compress(b'\0' * 16001 * 4)) + chunk(b'IEND', b'')
+open(sys.argv[2] + '/huge.png', 'wb').write(png)
+textured = copy.deepcopy(base)
+textured['images'] = [{'uri': 'huge.png'}]
+textured['textures'] = [{'source': 0}]
+textured['materials'][0].setdefault('pbrMetallicRoughness', {})['baseColorTexture'] = {'index': 0}
+json.dump(textured, open(sys.argv[2] + '/huge_texture.gltf', 'w'))
+PY
+expect 3 "an accessor of 2^26 elements without a bufferView" "$sharcbake" render "$work/deep/big_accessor.gltf" -o "$work/deep/b.exr" --no-png --resolution 8 --spp 1 -q
+says "$work/err.txt" "more than the scene's buffers can hold" "the message says why"
+expect 3 "a 16000x16000 PNG" "$sharcbake" render "$work/deep/huge_texture.gltf" -o "$work/deep/t.exr" --no-png --resolution 8 --spp 1 -q
+says "$work/err.txt" "max-texture-size" "the message names the option"
+expect 3 "--max-texture-size 1 refuses the 2x2 texture" "$sharcbake" render "$work/tq/textured_quad.gltf" -o "$work/tq/t.exr" --no-png --max-texture-size 1 --resolution 8 --spp 1 -q
+expect 0 "the default limit loads it" "$sharcbake" render "$work/tq/textured_quad.gltf" -o "$work/tq/t.exr" --no-png --resolution 8 --spp 1 -q
+
 finish "hardening"
