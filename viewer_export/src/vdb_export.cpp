@@ -145,7 +145,7 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
                                                                (list.empty() ? "none" : list) + ")");
         }
     }
-    if (levels.empty()) return fail(VdbExportStatus::kInvalidArgument, "the cache holds no voxels: nothing to export");
+    if (levels.empty()) return fail(VdbExportStatus::kUnrepresentable, "the cache holds no voxels: nothing to export");
 
     openvdb::initialize();
     const HashGridParameters params = cache.gridParameters();
@@ -153,12 +153,17 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
     for (const uint32_t l : levels) {
         const float s = voxelSize(l, params);
         if (!std::isfinite(s) || s <= 0.0f) {
-            return fail(VdbExportStatus::kInvalidArgument, "level " + std::to_string(l) + " has no finite voxel size");
+            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + " has no finite voxel size");
         }
         // VDB voxel centres sit at index × s; the cache voxel g spans [g·s, (g+1)·s).
-        auto xform = openvdb::math::Transform::createLinearTransform(double(s));
-        xform->postTranslate(openvdb::Vec3d(0.5 * double(s)));
-        transforms[l] = xform;
+        try {
+            auto xform = openvdb::math::Transform::createLinearTransform(double(s));
+            xform->postTranslate(openvdb::Vec3d(0.5 * double(s)));
+            transforms[l] = xform;
+        } catch (const std::exception& e) {
+            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + ": voxel size " +
+                                                               std::to_string(s) + " is out of OpenVDB's range: " + e.what());
+        }
     }
 
     openvdb::GridPtrVec grids;
