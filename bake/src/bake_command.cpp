@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <memory>
 #include <sstream>
 
@@ -387,6 +388,8 @@ void runBake(const BakeOptions& o) {
         std::filesystem::create_directories(o.report_dir, error);
     }
     checkOutputs({});
+    std::optional<CheckpointLock> checkpoint_lock;  // two bakes sharing one checkpoint: refuse the second now
+    if (!checkpoint_path.empty()) checkpoint_lock.emplace(checkpoint_path);
     BakeSettings settings = settingsFromOptions(o);
     const bool auto_capacity = o.capacity == "auto";
 

@@ -179,4 +179,18 @@ says "$work/err.txt" "max-texture-size" "the message names the option"
 expect 3 "--max-texture-size 1 refuses the 2x2 texture" "$sharcbake" render "$work/tq/textured_quad.gltf" -o "$work/tq/t.exr" --no-png --max-texture-size 1 --resolution 8 --spp 1 -q
 expect 0 "the default limit loads it" "$sharcbake" render "$work/tq/textured_quad.gltf" -o "$work/tq/t.exr" --no-png --resolution 8 --spp 1 -q
 
+# 16. Two bakes sharing one --checkpoint: the second is refused at start (exit 2), the first goes on.
+"$sharcbake" bake "$furnace" -o "$work/l1.sharc" --checkpoint "$work/l.ckpt" --iterations 1000000 --resolution 16x16 -q \
+    >"$work/l1.out" 2>&1 &
+first=$!
+tries=0
+while [ ! -e "$work/l.ckpt.lock" ] && [ $tries -lt 100 ]; do sleep 0.1; tries=$((tries + 1)); done
+expect 2 "a second bake on the same checkpoint" "$sharcbake" bake "$furnace" -o "$work/l2.sharc" --checkpoint "$work/l.ckpt" $quick
+says "$work/err.txt" "in use by another bake (process $first)" "the message names the other bake"
+kill -TERM "$first"
+wait "$first"
+[ $? -eq 143 ] || fail "the first bake did not stop cleanly on SIGTERM"
+[ -e "$work/l.ckpt.lock" ] && fail "the checkpoint lock was left behind"
+expect 0 "the first bake's checkpoint resumes" "$sharcbake" bake "$furnace" -o "$work/l1.sharc" --resume "$work/l.ckpt" --iterations 4 --resolution 16x16 -q
+
 finish "hardening"
