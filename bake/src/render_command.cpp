@@ -102,11 +102,22 @@ glm::vec3 levelColor(uint32_t level) {
 }
 
 /// Per-bucket occupancy of the cache's keys re-inserted into a table of the bake's capacity.
+/// The capacity and bucket size come from the file, so they are bounded first: each pixel scans
+/// one bucket, and a crafted bucket size of 2^32 made an 8x8 image take 35 s.
 class BucketOccupancy {
 public:
+    static constexpr uint32_t kMaxBucketSize = 1024;
+    static constexpr uint32_t kMaxCapacity = 1u << 28;  // 2 GiB of keys
+
     explicit BucketOccupancy(const CacheData& data) {
         capacity_ = data.bake_capacity > 0 ? data.bake_capacity : kHashGridDefaultCapacity;
         bucket_size_ = data.bucket_size > 0 ? data.bucket_size : kHashGridBucketSize;
+        if (bucket_size_ > kMaxBucketSize || capacity_ > kMaxCapacity) {
+            throw CommandError(kExitInvalidInput,
+                               "--debug-view occupancy: the cache's bucket size " + std::to_string(bucket_size_) +
+                                   " or table capacity " + std::to_string(capacity_) + " is beyond what the view shows (" +
+                                   std::to_string(kMaxBucketSize) + ", " + std::to_string(kMaxCapacity) + ")");
+        }
         if (HashGridTable::create(capacity_, &table_, bucket_size_) != HashGridStatus::kOk) {
             throw CommandError(kExitInvalidInput, "the cache's table capacity or bucket size is invalid");
         }

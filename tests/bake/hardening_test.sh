@@ -193,4 +193,22 @@ wait "$first"
 [ -e "$work/l.ckpt.lock" ] && fail "the checkpoint lock was left behind"
 expect 0 "the first bake's checkpoint resumes" "$sharcbake" bake "$furnace" -o "$work/l1.sharc" --resume "$work/l.ckpt" --iterations 4 --resolution 16x16 -q
 
+# 11. The occupancy view bounds the file's bucket size before scanning buckets per pixel.
+python3 - "$work/a.sharc" "$work/bucket.sharc" <<'PY' || fail "could not craft the cache"
+import struct, sys, zlib
+d = bytearray(open(sys.argv[1], 'rb').read())
+count = struct.unpack_from('<I', d, 28)[0]
+for i in range(count):
+    e = 64 + 32 * i
+    if d[e:e + 4] == b'GRID':
+        offset, length = struct.unpack_from('<QQ', d, e + 8)
+        struct.pack_into('<I', d, offset + 12, 0xFFFFFFF0)                 # bucket_size
+        struct.pack_into('<I', d, e + 24, zlib.crc32(d[offset:offset + length]))
+struct.pack_into('<I', d, 60, zlib.crc32(d[64:64 + 32 * count], zlib.crc32(d[:60])))
+open(sys.argv[2], 'wb').write(d)
+PY
+expect 3 "occupancy view of a cache with a bucket size of 2^32-16" timeout 20 "$sharcbake" render "$furnace" -o "$work/occ.exr" --no-png \
+    --cache "$work/bucket.sharc" --debug-view occupancy --resolution 8 --spp 1 -q
+says "$work/err.txt" "bucket size 4294967280" "the message names the bucket size"
+
 finish "hardening"
