@@ -318,7 +318,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
                                                               const LightSampler& lights,
                                                               const BakeSettings& settings, double radiance_scale,
                                                               const std::string& camera_description,
-                                                              const CapacityChoice* capacity_choice) {
+                                                              const std::string& capacity_choice) {
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", o.scene_path},
@@ -338,7 +338,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
         {"capacity", std::to_string(settings.sharc.capacity)},
         {"left_out", workLeftOut(scene, lights)},
     };
-    if (capacity_choice) metadata.emplace_back("capacity_choice", capacity_choice->describe());
+    if (!capacity_choice.empty()) metadata.emplace_back("capacity_choice", capacity_choice);
     if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
     return metadata;
 }
@@ -346,6 +346,25 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
 /// What a resume must match: the metadata without the scene's path (the hash names the scene)
 /// and the iteration count, plus the options that change the work but are not recorded in the
 /// cache.
+/// With --capacity auto and --resume: the starting capacity and its description that the first
+/// run chose (its checkpoint's settings), so the resumed bake uses that table whatever
+/// --iterations now says (the pre-pass depends on it). Nothing when the checkpoint cannot be
+/// read or was not an auto bake; resumeFromCheckpoint then reports what is wrong.
+std::optional<std::pair<uint32_t, std::string>> autoCapacityOfCheckpoint(const std::string& path) {
+    CheckpointData data;
+    std::string message;
+    if (path.empty() || readCheckpointFile(path, &data, &message) != CacheFileStatus::kOk) return std::nullopt;
+    std::string capacity, choice;
+    for (const auto& [key, value] : data.settings) {
+        if (key == "capacity") capacity = value;
+        if (key == "capacity_choice") choice = value;
+    }
+    char* end = nullptr;
+    const unsigned long slots = std::strtoul(capacity.c_str(), &end, 10);
+    if (choice.empty() || capacity.empty() || *end != '\0' || slots < 16 || slots > (1ul << 28)) return std::nullopt;
+    return std::make_pair(uint32_t(slots), choice);
+}
+
 BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::string>>& metadata,
                                 const BakeOptions& o) {
     BakeSettingsText settings;
@@ -406,8 +425,16 @@ void runBake(const BakeOptions& o) {
     std::string camera_description;
     const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
     CapacityChoice capacity_choice;
+    std::string capacity_choice_text;  // empty for a fixed --capacity
     if (auto_capacity) {
-        capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
+        if (const auto resumed = autoCapacityOfCheckpoint(o.resume_path)) {
+            // Resuming: the table the first run chose, however many iterations are asked now.
+            capacity_choice.capacity = resumed->first;
+            capacity_choice_text = resumed->second;
+        } else {
+            capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
+            capacity_choice_text = capacity_choice.describe();
+        }
         settings.sharc.capacity = settings.sharc.grid.capacity = capacity_choice.capacity;
         settings.sharc.grow_when_loaded = true;
     }
@@ -415,7 +442,7 @@ void runBake(const BakeOptions& o) {
     Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
     std::vector<std::pair<std::string, std::string>> metadata =
         bakeMetadata(o, scene, lights, settings, baker.cache().radianceScale(), camera_description,
-                     auto_capacity ? &capacity_choice : nullptr);
+                     capacity_choice_text);
     const BakeSettingsText resume_settings = resumeSettings(metadata, o);
     if (!o.resume_path.empty()) resumeFromCheckpoint(o.resume_path, resume_settings, baker);
     const uint32_t first_iteration = baker.iterationsDone();
@@ -435,7 +462,7 @@ void runBake(const BakeOptions& o) {
         }
         std::printf("Camera: %s\n", camera_description.c_str());
         if (auto_capacity) {
-            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice.describe().c_str(), capacity_choice.seconds);
+            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text.c_str(), capacity_choice.seconds);
         }
         std::printf("Left out: %s\n", workLeftOut(scene, lights).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",

@@ -211,4 +211,12 @@ expect 3 "occupancy view of a cache with a bucket size of 2^32-16" timeout 20 "$
     --cache "$work/bucket.sharc" --debug-view occupancy --resolution 8 --spp 1 -q
 says "$work/err.txt" "bucket size 4294967280" "the message names the bucket size"
 
+# 14. A --capacity auto bake resumes with more iterations, on the table its first run chose.
+expect 0 "an auto-capacity bake with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/au.sharc" --capacity auto \
+    --checkpoint "$work/au.ckpt" $quick
+expect 0 "resumed with more iterations" "$sharcbake" bake "$furnace" -o "$work/au.sharc" --capacity auto \
+    --resume "$work/au.ckpt" --iterations 6 --resolution 16x16 -q
+expect 0 "info on the resumed cache" "$sharcbake" info "$work/au.sharc"
+says "$work/out.txt" "iterations: 6" "the resumed auto bake ran to 6 iterations"
+
 finish "hardening"
