@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -45,7 +46,41 @@ const std::array<const char*, 5> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_materials_ior", "KHR_mesh_quantization"};
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+/// Text from the scene file for a message: control characters and bytes >= 0x7F are shown as
+/// \xNN, so a crafted name cannot drive the terminal.
+std::string printable(const std::string& s) {
+    std::string out;
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c < 0x20 || c >= 0x7F) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02X", c);
+            out += buf;
+        } else {
+            out += ch;
+        }
+    }
+    return out;
+}
+
+std::string quoted(const std::string& s) {
+    std::string out(1, '\'');
+    out += printable(s);
+    out += '\'';
+    return out;
+}
+
+/// tinygltf's error text without bytes of the files it read: the JSON parser quotes what it
+/// read last ("last read: '...'"), which for a file that is not glTF is its raw content.
+std::string parserMessage(std::string err) {
+    for (size_t at = err.find("last read: '"); at != std::string::npos; at = err.find("last read: '", at + 1)) {
+        const size_t start = at + 12;
+        const size_t end = err.find('\'', start);
+        err.replace(start - 1, end == std::string::npos ? std::string::npos : end - start + 2, "(bytes not shown)");
+    }
+    if (err.size() > 2000) err = err.substr(0, 2000) + "...";
+    return printable(err);
+}
 
 /// sRGB transfer function to linear (IEC 61966-2-1).
 float srgbToLinear(float c) {
@@ -338,7 +373,7 @@ private:
             if (!line.empty()) warn("tinygltf: " + line);
         if (!ok) {
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
-            fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : err));
+            fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }
     }
 

@@ -104,6 +104,10 @@ printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri":
 expect 3 "a buffer outside the scene's folder" "$sharcbake" render "$work/esc/inner/s.gltf" -o "$work/e.exr" -q
 says "$work/err.txt" "outside the scene's folder" "the message says why"
 grep -q "SECRET" "$work/err.txt" "$work/out.txt" && fail "bytes of the outside file were echoed"
+# A scene file that is not JSON: the parser's error does not quote the file's bytes.
+printf 'root:x:0:0:SECRET-BYTES:/root:/bin/bash\n' > "$work/esc/notjson.gltf"
+expect 3 "a scene that is not JSON" "$sharcbake" render "$work/esc/notjson.gltf" -o "$work/e.exr" -q
+grep -q "SECRET\|root:x" "$work/err.txt" && fail "bytes of the file were echoed: $(cat "$work/err.txt")"
 
 # 13. info escapes control characters of the metadata (a crafted value could drive the terminal).
 python3 - "$work/a.sharc" "$work/esc.sharc" <<'PY' || fail "could not craft the cache"
