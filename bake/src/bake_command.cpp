@@ -28,6 +28,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <memory>
 #include <sstream>
 
@@ -60,6 +61,7 @@ struct BakeOptions {
     uint32_t iterations_per_leg = 8;
     uint32_t coverage_points = 20000;
     SkyOptions sky;
+    GltfLoadLimits limits;
     std::string stats_json;
     std::string checkpoint_path;
     uint32_t checkpoint_interval = 32;
@@ -76,9 +78,16 @@ struct BakeOptions {
 };
 
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
-/// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs.
+/// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
+/// second signal aborts promptly.
 std::atomic<int> g_stop_signal{0};
-extern "C" void onStopSignal(int signal) { g_stop_signal.store(signal); }
+/// A second signal while the first is being honoured ends the process at once (the default action).
+extern "C" void onStopSignal(int signal) {
+    if (g_stop_signal.exchange(signal) != 0) {
+        std::signal(signal, SIG_DFL);
+        std::raise(signal);
+    }
+}
 
 /// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
 /// its external buffers and images: Scene::source_files), so a cache records which scene it was
@@ -461,7 +470,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
                                                               const LightSampler& lights,
                                                               const BakeSettings& settings, double radiance_scale,
                                                               const std::string& camera_description,
-                                                              const CapacityChoice* capacity_choice,
+                                                              const std::string& capacity_choice,
                                                               const std::string& grid_choice,
                                                               const std::string& levels_covered) {
     std::vector<std::pair<std::string, std::string>> metadata = {
@@ -486,7 +495,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
         {"capacity", std::to_string(settings.sharc.capacity)},
         {"left_out", workLeftOut(scene, lights)},
     };
-    if (capacity_choice) metadata.emplace_back("capacity_choice", capacity_choice->describe());
+    if (!capacity_choice.empty()) metadata.emplace_back("capacity_choice", capacity_choice);
     if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
     return metadata;
 }
@@ -494,6 +503,25 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
 /// What a resume must match: the metadata without the scene's path (the hash names the scene)
 /// and the iteration count, plus the options that change the work but are not recorded in the
 /// cache.
+/// With --capacity auto and --resume: the starting capacity and its description that the first
+/// run chose (its checkpoint's settings), so the resumed bake uses that table whatever
+/// --iterations now says (the pre-pass depends on it). Nothing when the checkpoint cannot be
+/// read or was not an auto bake; resumeFromCheckpoint then reports what is wrong.
+std::optional<std::pair<uint32_t, std::string>> autoCapacityOfCheckpoint(const std::string& path) {
+    CheckpointData data;
+    std::string message;
+    if (path.empty() || readCheckpointFile(path, &data, &message) != CacheFileStatus::kOk) return std::nullopt;
+    std::string capacity, choice;
+    for (const auto& [key, value] : data.settings) {
+        if (key == "capacity") capacity = value;
+        if (key == "capacity_choice") choice = value;
+    }
+    char* end = nullptr;
+    const unsigned long slots = std::strtoul(capacity.c_str(), &end, 10);
+    if (choice.empty() || capacity.empty() || *end != '\0' || slots < 16 || slots > (1ul << 28)) return std::nullopt;
+    return std::make_pair(uint32_t(slots), choice);
+}
+
 BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::string>>& metadata,
                                 const BakeOptions& o) {
     BakeSettingsText settings;
@@ -512,20 +540,37 @@ void runBake(const BakeOptions& o) {
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
-    checkOutputPath(o.output_path, "cache");
-    // --resume keeps checkpointing into the file it resumed from unless told otherwise.
+    // No output may be an input or another output; --resume F keeps checkpointing into F.
+    const std::vector<std::string> inputs = {o.scene_path, o.resume_path, o.sky.exr_path};
     const std::string checkpoint_path = !o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path;
-    if (!checkpoint_path.empty()) checkOutputPath(checkpoint_path, "checkpoint");
-    if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
+    const std::string report_csv = o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv";
+    auto checkOutputs = [&](const std::vector<std::string>& more_inputs) {
+        std::vector<std::string> others = inputs;
+        others.insert(others.end(), more_inputs.begin(), more_inputs.end());
+        checkOutputPath(o.output_path, "cache", others);
+        others.push_back(o.output_path);
+        if (!checkpoint_path.empty()) {
+            std::vector<std::string> checkpoint_others = others;
+            std::erase(checkpoint_others, o.resume_path);  // the one input it may replace
+            checkOutputPath(checkpoint_path, "checkpoint", checkpoint_others);
+        }
+        others.push_back(checkpoint_path);
+        if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON", others);
+        others.push_back(o.stats_json);
+        if (!report_csv.empty()) checkOutputPath(report_csv, "report", others);
+    };
     if (!o.report_dir.empty()) {
         std::error_code error;
         std::filesystem::create_directories(o.report_dir, error);
-        checkOutputPath(o.report_dir + "/convergence.csv", "report");
     }
+    checkOutputs({});
+    std::optional<CheckpointLock> checkpoint_lock;  // two bakes sharing one checkpoint: refuse the second now
+    if (!checkpoint_path.empty()) checkpoint_lock.emplace(checkpoint_path);
     BakeSettings settings = settingsFromOptions(o);
     const bool auto_capacity = o.capacity == "auto";
 
-    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
+    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
+    checkOutputs(scene.source_files);  // the buffers and images the scene read
     if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
     const auto setup_start = std::chrono::steady_clock::now();
     const Tracer tracer(scene);
@@ -539,8 +584,16 @@ void runBake(const BakeOptions& o) {
     std::string camera_description;
     const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
     CapacityChoice capacity_choice;
+    std::string capacity_choice_text;  // empty for a fixed --capacity
     if (auto_capacity) {
-        capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
+        if (const auto resumed = autoCapacityOfCheckpoint(o.resume_path)) {
+            // Resuming: the table the first run chose, however many iterations are asked now.
+            capacity_choice.capacity = resumed->first;
+            capacity_choice_text = resumed->second;
+        } else {
+            capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
+            capacity_choice_text = capacity_choice.describe();
+        }
         settings.sharc.capacity = settings.sharc.grid.capacity = capacity_choice.capacity;
         settings.sharc.grow_when_loaded = true;
     }
@@ -548,7 +601,7 @@ void runBake(const BakeOptions& o) {
     Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
     std::vector<std::pair<std::string, std::string>> metadata =
         bakeMetadata(o, scene, lights, settings, baker.cache().radianceScale(), camera_description,
-                     auto_capacity ? &capacity_choice : nullptr, grid_decision.choice, grid_decision.levelsCovered());
+                     capacity_choice_text, grid_decision.choice, grid_decision.levelsCovered());
     const BakeSettingsText resume_settings = resumeSettings(metadata, o);
     if (!o.resume_path.empty()) resumeFromCheckpoint(o.resume_path, resume_settings, baker);
     const uint32_t first_iteration = baker.iterationsDone();
@@ -572,7 +625,7 @@ void runBake(const BakeOptions& o) {
         std::printf("Views: %s; levels %s%s\n", settings.view_region.describe().c_str(),
                     grid_decision.levelsCovered().c_str(), grid_decision.misses.c_str());
         if (auto_capacity) {
-            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice.describe().c_str(), capacity_choice.seconds);
+            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text.c_str(), capacity_choice.seconds);
         }
         std::printf("Left out: %s\n", workLeftOut(scene, lights).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
@@ -604,7 +657,9 @@ void runBake(const BakeOptions& o) {
         Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
                           !o.quiet && Progress::isTerminal());
         uint32_t next_checkpoint = nextReportCheckpoint(0);
-        while (next_checkpoint <= first_iteration) next_checkpoint = nextReportCheckpoint(next_checkpoint);
+        while (next_checkpoint <= first_iteration && next_checkpoint != UINT32_MAX) {
+            next_checkpoint = nextReportCheckpoint(next_checkpoint);
+        }
         while (baker.iterationsDone() < o.iterations) {
             if (g_stop_signal != 0) {
                 stop_reason = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
@@ -715,7 +770,7 @@ void runBake(const BakeOptions& o) {
         }
     }
     if (!o.stats_json.empty()) {
-        std::ofstream json(o.stats_json);
+        std::ostringstream json;
         json << "{\n"
              << "  \"iterations\": " << baker.iterationsDone() << ",\n"
              << "  \"stop_reason\": \"" << stop_reason << "\",\n"
@@ -741,7 +796,7 @@ void runBake(const BakeOptions& o) {
              << "  \"predicted_hit_rate\": " << hitRateJson(prediction) << ",\n"
              << "  \"stability\": " << stabilityJson(stability) << "\n"
              << "}\n";
-        if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
+        writeTextOutput(o.stats_json, "stats JSON", json.str());
     }
     warnAboutHitRate(prediction, coverage);
     if (coverage.unreached_area > 0.3) {
@@ -788,7 +843,7 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc)")->required();
     cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
     cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
-        ->capture_default_str()->check(CLI::NonNegativeNumber);
+        ->capture_default_str()->check(CLI::NonNegativeNumber)->check(kFiniteNumber);
     cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
     cmd->add_option("--scene-scale", o->scene_scale,
@@ -797,7 +852,7 @@ void registerBakeCommand(CLI::App& app) {
                     "(sharcbake info shows it)")->capture_default_str();
     cmd->add_option("--log-base", o->log_base,
                     "SHaRC level logarithm base b (> 1); a power of two (2, the SDK's, or 4) makes the levels "
-                    "nest exactly")->capture_default_str();
+                    "nest exactly")->capture_default_str()->check(kFiniteNumber);
     cmd->add_option("--level-bias", o->level_bias,
                     "SHaRC level bias: sets the finest voxels, b^(1-bias)/S wide, which every camera closer than "
                     "b^(2-bias) uses. auto fits it to the scene's units: the finest level holds the visible surface "
@@ -855,6 +910,7 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--coverage-points", o->coverage_points, "Surface points tested for the coverage report")
         ->capture_default_str();
     addSkyOptions(*cmd, o->sky);
+    addSceneLimitOptions(*cmd, o->limits);
     cmd->add_option("--stats-json", o->stats_json, "Write the bake statistics as JSON");
     cmd->add_option("--checkpoint", o->checkpoint_path,
                     "Save the bake state to this file every --checkpoint-interval iterations and at the end "
@@ -892,7 +948,7 @@ void registerBakeCommand(CLI::App& app) {
                     "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
                     "mean relative error against the known radiance where the scene has one, else the image's mean "
                     "relative error against --reference")
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
     cmd->callback([o] { runBake(*o); });
 }

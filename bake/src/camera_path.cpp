@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -79,6 +80,10 @@ bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pos
 }
 
 std::vector<CameraPose> readCameraPathFile(const std::string& path) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(path, error)) {
+        throw CameraPathError(path + ": not a regular file (missing, a FIFO, a device or a folder)");
+    }
     std::ifstream in(path);
     if (!in) throw CameraPathError(path + ": cannot open the camera path file");
     std::vector<CameraPose> poses;

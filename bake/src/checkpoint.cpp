@@ -3,6 +3,15 @@
 
 #include "command_support.h"
 
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 namespace sharcbake {
 namespace {
 
@@ -172,6 +181,44 @@ void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& setti
     }
     cache.restoreNumerics(numerics);
     baker.resumeAt(data.iterations_done, update);
+}
+
+CheckpointLock::CheckpointLock(const std::string& path) : lock_path_(path + ".lock") {
+    for (int attempt = 0; attempt < 8; ++attempt) {
+        const int fd = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd < 0) {
+            throw CommandError(kExitIo, lock_path_ + ": cannot create the checkpoint lock: " + std::strerror(errno));
+        }
+        if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+            char owner[32] = {};
+            const ssize_t n = ::pread(fd, owner, sizeof owner - 1, 0);
+            ::close(fd);
+            std::string pid = n > 0 ? std::string(owner, size_t(n)) : std::string();
+            pid.resize(std::min(pid.size(), pid.find_first_not_of("0123456789")));
+            throw CommandError(kExitIo, path + ": the checkpoint is in use by another bake (process " +
+                                            (pid.empty() ? std::string("?") : pid) + "); give this one another --checkpoint");
+        }
+        // The holder before us may have removed the file between our open and our lock: only a
+        // lock on the file that is still at the path counts.
+        struct stat held {}, current {};
+        if (::fstat(fd, &held) == 0 && ::stat(lock_path_.c_str(), &current) == 0 && held.st_dev == current.st_dev &&
+            held.st_ino == current.st_ino) {
+            const std::string pid = std::to_string(long(::getpid()));
+            if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) != ssize_t(pid.size())) {
+                // The pid is only for the other bake's message; the lock holds without it.
+            }
+            fd_ = fd;
+            return;
+        }
+        ::close(fd);
+    }
+    throw CommandError(kExitIo, lock_path_ + ": cannot take the checkpoint lock (the file keeps changing)");
+}
+
+CheckpointLock::~CheckpointLock() {
+    if (fd_ < 0) return;
+    ::unlink(lock_path_.c_str());  // while still locked, so no other bake holds a lock on a removed file
+    ::close(fd_);
 }
 
 }  // namespace sharcbake

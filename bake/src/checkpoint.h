@@ -26,4 +26,21 @@ void saveCheckpoint(const std::string& path, const Baker& baker, const BakeSetti
 /// valid checkpoint or was written with other settings (the message lists each difference).
 void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& settings, Baker& baker);
 
+/// Exclusive use of a checkpoint path for one bake, taken before any work: two bakes sharing one
+/// `--checkpoint` would overwrite each other's state, so the second is refused at start
+/// (CommandError kExitIo, naming the other process). The lock is flock() on `path` + ".lock",
+/// removed when the lock is released; a process killed with the lock held releases it with its
+/// file descriptors, and the next bake takes over the stale file.
+class CheckpointLock {
+public:
+    explicit CheckpointLock(const std::string& path);
+    ~CheckpointLock();
+    CheckpointLock(const CheckpointLock&) = delete;
+    CheckpointLock& operator=(const CheckpointLock&) = delete;
+
+private:
+    std::string lock_path_;
+    int fd_ = -1;
+};
+
 }  // namespace sharcbake

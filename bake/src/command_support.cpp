@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "command_support.h"
 
+#include "sharcbake/cache_file.h"
 #include "sharcbake/scene_loader.h"
 
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace sharcbake {
@@ -22,6 +24,15 @@ const char* const kExitCodeHelp =
     "  130  interrupted (SIGINT)\n"
     "  143  terminated (SIGTERM)\n";
 
+const CLI::Validator kFiniteNumber(
+    [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || !std::isfinite(value)) return "expected a finite number, got \"" + text + "\"";
+        return {};
+    },
+    "FINITE");
+
 glm::vec3 parseVec3(const std::string& text, const std::string& option_name) {
     std::istringstream in(text);
     glm::vec3 v;
@@ -34,12 +45,31 @@ glm::vec3 parseVec3(const std::string& text, const std::string& option_name) {
     return v;
 }
 
-void checkOutputPath(const std::string& path, const std::string& what) {
+namespace {
+
+/// True when `a` and `b` name one file: the same device and inode when both exist (links
+/// followed), else the same path once links and "." / ".." are resolved.
+bool sameFile(const std::string& a, const std::string& b) {
+    struct stat sa {}, sb {};
+    const bool a_exists = ::stat(a.c_str(), &sa) == 0, b_exists = ::stat(b.c_str(), &sb) == 0;
+    if (a_exists && b_exists) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    if (a_exists != b_exists) return false;
+    std::error_code ea, eb;
+    const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ea);
+    const std::filesystem::path cb = std::filesystem::weakly_canonical(b, eb);
+    return !ea && !eb && ca == cb;
+}
+
+}  // namespace
+
+void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others) {
     namespace fs = std::filesystem;
+    std::string target, temporary, message;
+    if (prepareOutputFile(path, &target, &temporary, &message) != CacheFileStatus::kOk) {
+        throw CommandError(kExitIo, message + " (the " + what + ")");
+    }
+    const fs::path folder = fs::path(target).has_parent_path() ? fs::path(target).parent_path() : fs::path(".");
     std::error_code error;
-    const fs::path target(path);
-    if (fs::is_directory(target, error)) throw CommandError(kExitIo, path + ": the " + what + " is a directory");
-    const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
     if (!fs::is_directory(folder, error)) {
         throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
                                         " does not exist");
@@ -47,6 +77,19 @@ void checkOutputPath(const std::string& path, const std::string& what) {
     if (::access(folder.c_str(), W_OK) != 0) {
         throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
                                         " is not writable");
+    }
+    for (const std::string& other : others) {
+        if (!other.empty() && sameFile(path, other)) {
+            throw CommandError(kExitUsage, path + ": the " + what + " would overwrite " + other +
+                                               ", which this command also reads or writes; choose another output");
+        }
+    }
+}
+
+void writeTextOutput(const std::string& path, const std::string& what, const std::string& text) {
+    std::string message;
+    if (writeFileAtomically(path, text.data(), text.size(), &message) != CacheFileStatus::kOk) {
+        throw CommandError(kExitIo, "cannot write the " + what + ": " + message);
     }
 }
 
@@ -128,17 +171,30 @@ void addSkyOptions(CLI::App& command, SkyOptions& options) {
         ->check(CLI::ExistingFile);
     command.add_option("--sky-scale", options.scale, "Multiplier for the sky map")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+        ->check(CLI::NonNegativeNumber)
+        ->check(kFiniteNumber);
 }
 
-Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet) {
+void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits) {
+    command.add_option("--max-texture-size", limits.max_texture_size,
+                       "Refuse scene images wider or taller than this many texels (checked before decoding)")
+        ->capture_default_str()
+        ->check(CLI::Range(1u, 1u << 16));
+}
+
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
     std::error_code error;
     if (!std::filesystem::is_regular_file(path, error)) {
-        throw CommandError(kExitIo, path + ": no such file");
+        throw CommandError(kExitIo, path + (std::filesystem::exists(path, error)
+                                                ? ": not a regular file (a FIFO, device or folder)"
+                                                : ": no such file"));
+    }
+    if (!sky.exr_path.empty() && !std::filesystem::is_regular_file(sky.exr_path, error)) {
+        throw CommandError(kExitIo, sky.exr_path + ": --sky-exr is not a regular file");
     }
     Scene scene;
     try {
-        scene = loadGltf(path);
+        scene = loadGltf(path, limits);
         if (!sky.exr_path.empty()) {
             scene.sky.map = loadEquirectExr(sky.exr_path);
             scene.sky.scale = sky.scale;
@@ -148,6 +204,9 @@ Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool q
     }
     if (!sky.uniform.empty()) {
         scene.sky.uniform = parseVec3(sky.uniform, "--sky");
+        if (scene.sky.uniform.x < 0.0f || scene.sky.uniform.y < 0.0f || scene.sky.uniform.z < 0.0f) {
+            throw CommandError(kExitUsage, "--sky: radiance must be >= 0, got \"" + sky.uniform + "\"");
+        }
         scene.sky.map.reset();
     }
     if (!quiet) describeScene(scene);

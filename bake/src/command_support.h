@@ -5,6 +5,7 @@
 #pragma once
 
 #include "sharcbake/scene.h"
+#include "sharcbake/scene_loader.h"
 
 #include <CLI/CLI.hpp>
 #include <glm/glm.hpp>
@@ -12,6 +13,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace sharcbake {
 
@@ -40,12 +42,24 @@ private:
     ExitCode code_;
 };
 
+/// CLI11 check for floating-point options: the value is a finite number. Range checks alone let
+/// "nan" through (every comparison with NaN is false); chain this one after them.
+extern const CLI::Validator kFiniteNumber;
+
 /// Parses "x,y,z" into a vector; throws CommandError(kExitUsage) naming the option.
 glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
 
-/// Fails early (kExitIo) when `path` cannot be written: its folder is missing or not writable,
-/// or it names a folder. Called before long work so that nothing is lost at the end.
-void checkOutputPath(const std::string& path, const std::string& what);
+/// Fails early when `path` cannot take the `what` output, before long work so that nothing is
+/// lost at the end. kExitIo: its folder is missing or not writable, or it exists and is not a
+/// regular file (a folder, a device such as /dev/null, a FIFO, a socket; a symbolic link is
+/// followed, and the output is later written through it). kExitUsage: it is the same file as one
+/// of `others` (the command's inputs and its other outputs), compared by device and inode after
+/// resolving links, or by resolved path when it does not exist yet.
+void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others = {});
+
+/// Writes `text` to `path` atomically with the caches' checked write (writeFileAtomically):
+/// a failed write throws CommandError(kExitIo) naming the file and leaves the old one intact.
+void writeTextOutput(const std::string& path, const std::string& what, const std::string& text);
 
 /// A glTF camera of the scene by name or index, or the first when `selector` is empty; when the
 /// scene has none, one that frames its bounds from +Z with `fov_degrees`. Throws
@@ -76,7 +90,11 @@ void addSkyOptions(CLI::App& command, SkyOptions& options);
 
 /// Loads the scene (kExitIo if the file is missing, kExitInvalidInput if it is malformed) and
 /// applies the sky options over what the scene file says.
-Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet);
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet,
+                          const GltfLoadLimits& limits = {});
+
+/// --max-texture-size, shared by render and bake.
+void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits);
 
 /// One line about the loaded scene (triangles, materials, lights, what was dropped), and the
 /// loader's warnings, on stdout.

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "convergence_report.h"
 
+#include "sharcbake/cache_file.h"
+
 #include "cache_query.h"
 #include "json_text.h"
 #include "path_tracer.h"
@@ -43,15 +45,13 @@ std::string jsonNumber(std::optional<double> value) {
     return value && std::isfinite(*value) ? csvNumber(value) : "null";
 }
 
-std::ofstream openForWriting(const std::string& path) {
-    std::ofstream out(path);
-    if (!out) throw std::runtime_error(path + ": cannot write");
-    return out;
-}
-
-void finishWriting(std::ofstream& out, const std::string& path) {
-    out.close();
-    if (!out) throw std::runtime_error(path + ": write failed");
+/// Writes a finished table with the outputs' atomic, checked write (cache_file.h).
+void finishWriting(const std::ostringstream& out, const std::string& path) {
+    const std::string text = out.str();
+    std::string message;
+    if (writeFileAtomically(path, text.data(), text.size(), &message) != CacheFileStatus::kOk) {
+        throw std::runtime_error(message);
+    }
 }
 
 }  // namespace
@@ -206,7 +206,7 @@ std::optional<double> plainErrorAt(const std::vector<PlainPathTracingRow>& plain
 
 void writeConvergenceTables(const std::string& dir, const ConvergenceReport& report) {
     const std::string csv_path = dir + "/convergence.csv";
-    std::ofstream csv = openForWriting(csv_path);
+    std::ostringstream csv;
     csv << "iteration,bake_seconds,render_seconds,total_seconds,rays,live_voxels,"
            "voxel_mean_relative_error,voxel_rms_relative_error,voxel_max_relative_error,voxel_within_1_percent,"
            "image_relative_mse,image_mean_relative_error,image_relative_bias,image_render_noise_relative_mse,"
@@ -238,7 +238,7 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
     finishWriting(csv, csv_path);
 
     const std::string plain_path = dir + "/plain_path_tracing.csv";
-    std::ofstream plain = openForWriting(plain_path);
+    std::ostringstream plain;
     plain << "samples_per_pixel,seconds,rays,image_relative_mse,image_mean_relative_error,image_relative_bias\n";
     for (const PlainPathTracingRow& p : report.plain) {
         plain << p.samples_per_pixel << ',' << csvNumber(p.seconds) << ',' << p.rays << ','
@@ -248,7 +248,7 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
     finishWriting(plain, plain_path);
 
     const std::string json_path = dir + "/convergence.json";
-    std::ofstream json = openForWriting(json_path);
+    std::ostringstream json;
     json << "{\n  \"scene\": " << jsonString(report.scene) << ",\n"
          << "  \"reference\": " << jsonString(report.reference) << ",\n"
          << "  \"view\": {\"camera\": " << jsonString(report.view.camera.name) << ", \"width\": " << report.view.width

@@ -26,6 +26,7 @@ struct ExportVdbOptions {
 };
 
 void run(const ExportVdbOptions& o) {
+    checkOutputPath(o.output, "VDB", {o.input});
     CacheView view;
     CacheError error;
     const CacheFileStatus status = CacheView::openFile(o.input, &view, &error, CacheView::FileMode::kMap);
@@ -53,6 +54,7 @@ void run(const ExportVdbOptions& o) {
     std::string message;
     const VdbExportStatus result = exportCacheToVdb(view, o.output, options, &grids, &message);
     if (result == VdbExportStatus::kIoError) throw CommandError(kExitIo, message);
+    if (result == VdbExportStatus::kUnrepresentable) throw CommandError(kExitInvalidInput, o.input + ": " + message);
     if (result != VdbExportStatus::kOk) throw CommandError(kExitUsage, message);
     if (o.quiet) return;
     std::printf("%s: %zu grids from %" PRIu64 " cache voxels\n", o.output.c_str(), grids.size(), view.voxelCount());
@@ -93,8 +95,9 @@ void registerExportVdbCommand(CLI::App& app) {
         "Examples:\n"
         "  sharcbake export-vdb out/cornell_box.sharc -o out/cornell_box.vdb\n"
         "  sharcbake export-vdb cache.sharc -o fine.vdb --levels 3,4 --channels density,color --scale 4\n\n"
-        "Exit codes: 1 bad option (or a --levels level the cache lacks), 2 cannot read/write,\n"
-        "3 invalid cache.");
+        "Exit codes: 1 bad option (or a --levels level the cache lacks), or an output that is the\n"
+        "input; 2 cannot read/write (an existing output that is not a regular file included);\n"
+        "3 invalid cache, or one OpenVDB cannot hold (no voxels, a voxel size out of its range).");
     cmd->add_option("cache", o->input, "Cache file (.sharc)")->required();
     cmd->add_option("-o,--output", o->output, "Output OpenVDB file (.vdb)")->required();
     cmd->add_option("--levels", o->levels, "Comma-separated SHaRC levels to export (default: all present)")
@@ -105,7 +108,7 @@ void registerExportVdbCommand(CLI::App& app) {
         ->check(CLI::IsMember({"density", "color", "radiance", "samples"}));
     cmd->add_option("--scale", o->scale, "Display scale for the density and color grids")
         ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("--split-normals", o->split_normals, "One grid set per normal octant instead of merging them");
     cmd->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
     cmd->callback([o] { run(*o); });

@@ -7,6 +7,7 @@
 #include "sharcbake/runtime.h"
 
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -30,7 +31,32 @@ std::string fourcc(uint32_t type) {
     return s;
 }
 
+/// Text from the file for the terminal: control characters (ESC, BEL, CR, ..., DEL and the C1
+/// controls U+0080-U+009F) become \xNN escapes, so a crafted cache cannot drive the terminal.
+std::string printable(std::string_view text) {
+    std::string out;
+    for (size_t i = 0; i < text.size(); ++i) {
+        const unsigned char c = static_cast<unsigned char>(text[i]);
+        const bool c1 = c == 0xC2 && i + 1 < text.size() && static_cast<unsigned char>(text[i + 1]) >= 0x80 &&
+                        static_cast<unsigned char>(text[i + 1]) <= 0x9F;
+        if (c < 0x20 || c == 0x7F || c1 || c == '\\') {
+            char buf[8];
+            if (c == '\\') {
+                out += "\\\\";
+                continue;
+            }
+            std::snprintf(buf, sizeof buf, "\\x%02X", c1 ? static_cast<unsigned char>(text[++i]) : c);
+            out += c1 ? "\\xC2" + std::string(buf) : std::string(buf);
+        } else {
+            out += char(c);
+        }
+    }
+    return out;
+}
+
+/// A JSON number; null where the value is not finite (JSON has no inf or nan).
 std::string num(double v) {
+    if (!std::isfinite(v)) return "null";
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.9g", v);
     return buf;
@@ -84,23 +110,21 @@ void printText(const std::string& path, const CacheView& v) {
     const std::string_view covered = v.metadata("levels_covered", &has_levels);
     const std::string_view rate = v.metadata("predicted_hit_rate", &has_rate);
     if (has_region && has_levels) {
-        std::printf("Baked for views: %.*s; levels %.*s\n", int(region.size()), region.data(), int(covered.size()),
-                    covered.data());
+        std::printf("Baked for views: %s; levels %s\n", printable(region).c_str(), printable(covered).c_str());
     }
-    if (has_rate) std::printf("Predicted hit rate: %.*s\n", int(rate.size()), rate.data());
+    if (has_rate) std::printf("Predicted hit rate: %s\n", printable(rate).c_str());
     // What the bake left out because the scene had no use for it (bake's "left_out" metadata),
     // next to what the file leaves out by design (empty slots, absent levels, above).
     for (size_t i = 0; i < v.metadataCount(); ++i) {
         if (v.metadataKey(i) == "left_out") {
-            std::printf("Left out by the bake: %.*s\n", int(v.metadataValue(i).size()), v.metadataValue(i).data());
+            std::printf("Left out by the bake: %s\n", printable(v.metadataValue(i)).c_str());
         } else if (v.metadataKey(i) == "capacity_choice") {
-            std::printf("Table capacity %.*s\n", int(v.metadataValue(i).size()), v.metadataValue(i).data());
+            std::printf("Table capacity %s\n", printable(v.metadataValue(i)).c_str());
         }
     }
     std::printf("Metadata (%zu):\n", v.metadataCount());
     for (size_t i = 0; i < v.metadataCount(); ++i) {
-        std::printf("  %.*s: %.*s\n", int(v.metadataKey(i).size()), v.metadataKey(i).data(),
-                    int(v.metadataValue(i).size()), v.metadataValue(i).data());
+        std::printf("  %s: %s\n", printable(v.metadataKey(i)).c_str(), printable(v.metadataValue(i)).c_str());
     }
 }
 

@@ -94,7 +94,7 @@ void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
 }
 
 void runMerge(const MergeOptions& o) {
-    checkOutputPath(o.output_path, "merged cache");
+    checkOutputPath(o.output_path, "merged cache", o.inputs);
     std::vector<CacheData> inputs(o.inputs.size());
     for (size_t i = 0; i < o.inputs.size(); ++i) {
         std::string message;

@@ -46,6 +46,7 @@ struct RenderOptions {
     uint32_t seed = 0;
     unsigned threads = 0;
     SkyOptions sky;
+    GltfLoadLimits limits;
     float exposure = 0.0f;
     std::string tone_map = "aces";
     bool no_png = false;
@@ -114,11 +115,22 @@ glm::vec3 levelColor(uint32_t level) {
 }
 
 /// Per-bucket occupancy of the cache's keys re-inserted into a table of the bake's capacity.
+/// The capacity and bucket size come from the file, so they are bounded first: each pixel scans
+/// one bucket, and a crafted bucket size of 2^32 made an 8x8 image take 35 s.
 class BucketOccupancy {
 public:
+    static constexpr uint32_t kMaxBucketSize = 1024;
+    static constexpr uint32_t kMaxCapacity = 1u << 28;  // 2 GiB of keys
+
     explicit BucketOccupancy(const CacheData& data) {
         capacity_ = data.bake_capacity > 0 ? data.bake_capacity : kHashGridDefaultCapacity;
         bucket_size_ = data.bucket_size > 0 ? data.bucket_size : kHashGridBucketSize;
+        if (bucket_size_ > kMaxBucketSize || capacity_ > kMaxCapacity) {
+            throw CommandError(kExitInvalidInput,
+                               "--debug-view occupancy: the cache's bucket size " + std::to_string(bucket_size_) +
+                                   " or table capacity " + std::to_string(capacity_) + " is beyond what the view shows (" +
+                                   std::to_string(kMaxBucketSize) + ", " + std::to_string(kMaxCapacity) + ")");
+        }
         if (HashGridTable::create(capacity_, &table_, bucket_size_) != HashGridStatus::kOk) {
             throw CommandError(kExitInvalidInput, "the cache's table capacity or bucket size is invalid");
         }
@@ -183,13 +195,32 @@ ToneMap parseToneMap(const std::string& name) {
 }
 
 void runRender(const RenderOptions& o) {
-    checkOutputPath(o.output_path, "image");
-    if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON");
+    // The PNG preview's name derives from the output's; it must name neither the EXR nor an input.
+    const std::string png_path =
+        o.no_png ? std::string() : std::filesystem::path(o.output_path).replace_extension(".png").string();
+    const std::vector<std::string> inputs = {o.scene_path, o.cache_path, o.sky.exr_path};
+    auto checkOutputs = [&](const std::vector<std::string>& more_inputs) {
+        std::vector<std::string> others = inputs;
+        others.insert(others.end(), more_inputs.begin(), more_inputs.end());
+        checkOutputPath(o.output_path, "image", others);
+        others.push_back(o.output_path);
+        if (!png_path.empty()) {
+            if (png_path == o.output_path) {
+                throw CommandError(kExitUsage, o.output_path + ": the EXR output would be overwritten by its own "
+                                                               ".png preview; name it .exr or pass --no-png");
+            }
+            checkOutputPath(png_path, "PNG preview", others);
+            others.push_back(png_path);
+        }
+        if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON", others);
+    };
+    checkOutputs({});
     const auto start = std::chrono::steady_clock::now();
     const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
     tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
-    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet);
+    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
+    checkOutputs(scene.source_files);  // the buffers and textures the scene read
     const Camera chosen = chooseCamera(scene, o);
     if (!o.quiet && chosen.name == "automatic") {
         std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
@@ -325,8 +356,7 @@ void runRender(const RenderOptions& o) {
     try {
         writeExr(o.output_path, image, metadata);
         if (!o.no_png) {
-            writePng(std::filesystem::path(o.output_path).replace_extension(".png").string(), image,
-                     o.exposure, parseToneMap(o.tone_map));
+            writePng(png_path, image, o.exposure, parseToneMap(o.tone_map));
         }
     } catch (const ImageError& e) {
         throw CommandError(kExitIo, e.what());
@@ -364,7 +394,7 @@ void runRender(const RenderOptions& o) {
         std::printf("Wrote %s%s\n", o.output_path.c_str(), o.no_png ? "" : " and its .png preview");
     }
     if (!o.stats_json.empty()) {
-        std::ofstream json(o.stats_json);
+        std::ostringstream json;
         json << "{\n  \"width\": " << width << ",\n  \"height\": " << height
              << ",\n  \"samples_per_pixel\": " << o.spp << ",\n  \"threads\": " << threads
              << ",\n  \"seconds\": {\"total\": " << total_seconds << ", \"bvh_build\": " << build_seconds
@@ -378,7 +408,7 @@ void runRender(const RenderOptions& o) {
         }
         if (o.debug_view == "cache") json << ",\n  \"debug_missing\": " << debug_missing.load();
         json << "\n}\n";
-        if (!json) throw CommandError(kExitIo, o.stats_json + ": cannot write");
+        writeTextOutput(o.stats_json, "stats JSON", json.str());
     }
 }
 
@@ -421,7 +451,7 @@ void registerRenderCommand(CLI::App& app) {
     cmd->add_option("--up", options->up, "Up vector for --look-at")->capture_default_str();
     cmd->add_option("--fov", options->fov_degrees, "Vertical field of view in degrees for --look-at")
         ->capture_default_str()
-        ->check(CLI::Range(0.1f, 179.0f));
+        ->check(CLI::Range(0.1f, 179.0f))->check(kFiniteNumber);
     cmd->add_option("--resolution", options->resolution,
                     "Image size \"WxH\", or \"W\" with the height from the camera's aspect ratio "
                     "(default 512)");
@@ -433,7 +463,8 @@ void registerRenderCommand(CLI::App& app) {
     cmd->add_option("--seed", options->seed, "Random seed")->capture_default_str();
     cmd->add_option("--threads", options->threads, "Worker threads (0 = all cores)")->capture_default_str();
     addSkyOptions(*cmd, options->sky);
-    cmd->add_option("--exposure", options->exposure, "PNG preview exposure in stops")->capture_default_str();
+    addSceneLimitOptions(*cmd, options->limits);
+    cmd->add_option("--exposure", options->exposure, "PNG preview exposure in stops")->capture_default_str()->check(kFiniteNumber);
     cmd->add_option("--tonemap", options->tone_map, "PNG preview tone map")
         ->capture_default_str()
         ->check(CLI::IsMember({"aces", "reinhard", "clamp"}));

@@ -10,12 +10,19 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <string_view>
+#include <unordered_set>
 
 #include <cerrno>
+#include <climits>
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace sharcbake {
@@ -135,15 +142,15 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         return fail(CacheFileStatus::kInvalidData, message,
                     std::string("grid parameters: ") + toString(validateHashGridParameters(data.gridParameters())));
     }
+    std::unordered_set<std::string_view> keys;  // linear, not quadratic, in the entry count
+    keys.reserve(data.metadata.size());
     for (size_t i = 0; i < data.metadata.size(); ++i) {
         const auto& [key, value] = data.metadata[i];
         if (key.empty() || key.size() > 0xFFFFFFFFu || value.size() > 0xFFFFFFFFu) {
             return fail(CacheFileStatus::kInvalidData, message, "metadata keys must be non-empty");
         }
-        for (size_t j = 0; j < i; ++j) {
-            if (data.metadata[j].first == key) {
-                return fail(CacheFileStatus::kInvalidData, message, "duplicate metadata key \"" + key + "\"");
-            }
+        if (!keys.insert(key).second) {
+            return fail(CacheFileStatus::kInvalidData, message, "duplicate metadata key \"" + key + "\"");
         }
     }
     std::vector<CacheLevel> levels;
@@ -220,32 +227,124 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     return CacheFileStatus::kOk;
 }
 
-CacheFileStatus writeFileAtomically(const std::string& path, const std::string& temporary,
-                                    const std::vector<uint8_t>& bytes, std::string* message) {
-    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+namespace {
+
+std::string folderOf(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    if (slash == std::string::npos) return ".";
+    return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+/// Removes "<name>.tmp-PID" files beside `target` whose process no longer runs.
+void removeStaleTemporaries(const std::string& target) {
+    const std::string folder = folderOf(target);
+    const size_t slash = target.find_last_of('/');
+    const std::string prefix = (slash == std::string::npos ? target : target.substr(slash + 1)) + ".tmp-";
+    DIR* dir = ::opendir(folder.c_str());
+    if (!dir) return;
+    while (const dirent* entry = ::readdir(dir)) {
+        const std::string name = entry->d_name;
+        if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+        const std::string digits = name.substr(prefix.size());
+        if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+        const long pid = std::strtol(digits.c_str(), nullptr, 10);
+        if (pid <= 0 || pid == long(::getpid())) continue;
+        if (::kill(pid_t(pid), 0) != 0 && errno == ESRCH) ::unlink((folder + "/" + name).c_str());
+    }
+    ::closedir(dir);
+}
+
+}  // namespace
+
+CacheFileStatus prepareOutputFile(const std::string& path, std::string* target, std::string* temporary,
+                                  std::string* message) {
+    if (!target || !temporary) return fail(CacheFileStatus::kInvalidArgument, message, "prepareOutputFile: null output");
+    // Follow symbolic links one hop at a time (the last target may not exist yet).
+    std::string resolved = path;
+    for (int hops = 0;; ++hops) {
+        struct stat link_info {};
+        if (::lstat(resolved.c_str(), &link_info) != 0 || !S_ISLNK(link_info.st_mode)) break;
+        if (hops == 40) return fail(CacheFileStatus::kIoError, message, path + ": too many levels of symbolic links");
+        std::string link(size_t(PATH_MAX), '\0');
+        const ssize_t n = ::readlink(resolved.c_str(), link.data(), link.size());
+        if (n <= 0 || size_t(n) >= link.size()) {
+            return fail(CacheFileStatus::kIoError, message, path + ": cannot read the symbolic link");
+        }
+        link.resize(size_t(n));
+        resolved = link[0] == '/' ? link : folderOf(resolved) + "/" + link;
+    }
+    struct stat info {};
+    if (::stat(resolved.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
+        const char* kind = S_ISDIR(info.st_mode) ? "a folder"
+                           : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode) ? "a device"
+                           : S_ISFIFO(info.st_mode)                          ? "a FIFO"
+                                                                             : "not a regular file";
+        return fail(CacheFileStatus::kIoError, message,
+                    path + ": is " + std::string(kind) + "; outputs are written only to regular files");
+    }
+    removeStaleTemporaries(resolved);
+    *target = resolved;
+    *temporary = resolved + ".tmp-" + std::to_string(long(::getpid()));
+    return CacheFileStatus::kOk;
+}
+
+CacheFileStatus commitOutputFile(const std::string& temporary, const std::string& target, std::string* message) {
+    const int fd = ::open(temporary.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        ::unlink(temporary.c_str());
+        return fail(CacheFileStatus::kIoError, message, temporary + ": cannot reopen: " + std::strerror(errno));
+    }
+    struct stat old_info {};
+    const bool keep_mode = ::stat(target.c_str(), &old_info) == 0;
+    const bool moded = !keep_mode || ::fchmod(fd, old_info.st_mode & 07777) == 0;
+    const bool synced = ::fsync(fd) == 0;
+    const bool closed = ::close(fd) == 0;
+    if (!synced || !closed || !moded) {
+        ::unlink(temporary.c_str());
+        return fail(CacheFileStatus::kIoError, message,
+                    temporary + ": " + (moded ? "fsync or close failed (disk full?)" : "cannot keep the mode of " + target));
+    }
+    if (std::rename(temporary.c_str(), target.c_str()) != 0) {
+        const int err = errno;
+        ::unlink(temporary.c_str());
+        return fail(CacheFileStatus::kIoError, message,
+                    target + ": cannot rename the temporary file into place: " + std::strerror(err));
+    }
+    // Make the rename itself durable; best effort (not every file system allows it).
+    const int dir_fd = ::open(folderOf(target).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dir_fd >= 0) {
+        (void)::fsync(dir_fd);
+        ::close(dir_fd);
+    }
+    return CacheFileStatus::kOk;
+}
+
+CacheFileStatus writeFileAtomically(const std::string& path, const void* data, size_t size, std::string* message) {
+    std::string target, temporary;
+    const CacheFileStatus prepared = prepareOutputFile(path, &target, &temporary, message);
+    if (prepared != CacheFileStatus::kOk) return prepared;
+    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd < 0) return fail(CacheFileStatus::kIoError, message, temporary + ": cannot create: " + std::strerror(errno));
+    const uint8_t* bytes = static_cast<const uint8_t*>(data);
     size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    while (done < size) {
+        const ssize_t n = ::write(fd, bytes + done, size - done);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) {
+            const int err = n < 0 ? errno : ENOSPC;
             ::close(fd);
-            std::remove(temporary.c_str());
-            return fail(CacheFileStatus::kIoError, message, temporary + ": write failed (disk full?)");
+            ::unlink(temporary.c_str());
+            return fail(CacheFileStatus::kIoError, message,
+                        path + ": write failed after " + std::to_string(done) + " of " + std::to_string(size) +
+                            " bytes: " + std::strerror(err) + "; the previous file is untouched");
         }
         done += size_t(n);
     }
-    const bool synced = ::fsync(fd) == 0;
-    const bool closed = ::close(fd) == 0;
-    if (!synced || !closed) {
-        std::remove(temporary.c_str());
-        return fail(CacheFileStatus::kIoError, message, temporary + ": fsync or close failed");
+    if (::close(fd) != 0) {
+        ::unlink(temporary.c_str());
+        return fail(CacheFileStatus::kIoError, message, temporary + ": close failed: " + std::strerror(errno));
     }
-    if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-        std::remove(temporary.c_str());
-        return fail(CacheFileStatus::kIoError, message, path + ": cannot rename the temporary file into place");
-    }
-    return CacheFileStatus::kOk;
+    return commitOutputFile(temporary, target, message);
 }
 
 CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, std::string* message) {
@@ -255,8 +354,7 @@ CacheFileStatus writeCacheFile(const std::string& path, const CacheData& data, s
         if (message) *message = path + ": " + *message;
         return encoded;
     }
-    // A per-process temporary name: two bakes writing the same output do not write one file.
-    const CacheFileStatus written = writeFileAtomically(path, path + ".tmp-" + std::to_string(::getpid()), bytes, message);
+    const CacheFileStatus written = writeFileAtomically(path, bytes.data(), bytes.size(), message);
     if (written != CacheFileStatus::kOk) return written;
     // Re-open what landed on disk and validate it (KTX habit); keep the file for the bug report.
     CacheView view;

@@ -13,8 +13,11 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <string_view>
+#include <unordered_set>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace sharcbake {
@@ -64,6 +67,8 @@ struct ByteReader {
 
 
 bool validSettingsText(const std::vector<std::pair<std::string, std::string>>& settings, std::string* problem) {
+    std::unordered_set<std::string_view> keys;  // linear, not quadratic, in the entry count
+    keys.reserve(settings.size());
     for (size_t i = 0; i < settings.size(); ++i) {
         const auto& [key, value] = settings[i];
         if (key.empty() || !isValidUtf8(reinterpret_cast<const uint8_t*>(key.data()), key.size()) ||
@@ -71,18 +76,16 @@ bool validSettingsText(const std::vector<std::pair<std::string, std::string>>& s
             *problem = "setting " + std::to_string(i) + ": keys must be non-empty and text valid UTF-8";
             return false;
         }
-        for (size_t j = 0; j < i; ++j) {
-            if (settings[j].first == key) {
-                *problem = "duplicate setting \"" + key + "\"";
-                return false;
-            }
+        if (!keys.insert(key).second) {
+            *problem = "duplicate setting \"" + key + "\"";
+            return false;
         }
     }
     return true;
 }
 
 template <typename Value>
-bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::vector<std::string>& seen,
+bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::unordered_set<std::string_view>& seen,
                  std::string* problem) {
     for (const auto& [name, value] : list) {
         (void)value;
@@ -90,21 +93,23 @@ bool uniqueNames(const std::vector<std::pair<std::string, Value>>& list, std::ve
             *problem = "counter names must be non-empty UTF-8";
             return false;
         }
-        for (const std::string& other : seen) {
-            if (other == name) {
-                *problem = "duplicate counter \"" + name + "\"";
-                return false;
-            }
+        if (!seen.insert(name).second) {
+            *problem = "duplicate counter \"" + name + "\"";
+            return false;
         }
-        seen.push_back(name);
     }
     return true;
 }
 
 /// Rules C8-C11 on the decoded data (shared by the writer, which refuses what a reader rejects).
 bool validateContent(const CheckpointData& data, std::string* problem) {
-    if (data.capacity == 0 || data.bucket_size == 0) {
-        *problem = "C8: capacity and bucket size must be >= 1";
+    if (data.capacity == 0 || data.bucket_size == 0 || data.bucket_size > data.capacity) {
+        *problem = "C8: capacity and bucket size must be >= 1, the bucket size <= the capacity";
+        return false;
+    }
+    if (data.iterations_done > kCheckpointMaxIterations) {
+        *problem = "C8: iterations_done " + std::to_string(data.iterations_done) + " is above " +
+                   std::to_string(kCheckpointMaxIterations);
         return false;
     }
     if (!std::isfinite(data.radiance_scale) || !(data.radiance_scale > 0.0)) {
@@ -144,7 +149,7 @@ bool validateContent(const CheckpointData& data, std::string* problem) {
         *problem = "C10: " + text_problem;
         return false;
     }
-    std::vector<std::string> seen;
+    std::unordered_set<std::string_view> seen;
     if (!uniqueNames(data.counts, seen, &text_problem) || !uniqueNames(data.amounts, seen, &text_problem)) {
         *problem = "C11: " + text_problem;
         return false;
@@ -251,7 +256,7 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
     if (major != kCheckpointVersionMajor) {
         return fail(S::kUnsupportedVersion, message,
                     "C3: checkpoint version " + std::to_string(major) + "." + std::to_string(minor) +
-                        " is not supported (this reader reads 1.x)");
+                        " is not supported (this reader reads " + std::to_string(kCheckpointVersionMajor) + ".x)");
     }
     // C4: declared size and header/table geometry.
     const uint64_t file_size = load64(40);
@@ -389,12 +394,16 @@ CacheFileStatus writeCheckpointFile(const std::string& path, const CheckpointDat
         if (message) *message = path + ": " + *message;
         return encoded;
     }
-    // A fixed temporary name: a process killed mid-write leaves one stale file that the next
-    // write replaces, never a growing litter, and never a half-written checkpoint at `path`.
-    return writeFileAtomically(path, path + ".partial", bytes, message);
+    // A per-process temporary beside the target; one left by a killed process is removed by the
+    // next write (prepareOutputFile), and a half-written checkpoint never appears at `path`.
+    return writeFileAtomically(path, bytes.data(), bytes.size(), message);
 }
 
 CacheFileStatus readCheckpointFile(const std::string& path, CheckpointData* data, std::string* message) {
+    struct stat info {};
+    if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
+        return fail(CacheFileStatus::kIoError, message, path + ": not a regular file (a FIFO, device or folder)");
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in) return fail(CacheFileStatus::kIoError, message, path + ": cannot open");
     const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

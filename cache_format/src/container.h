@@ -108,10 +108,4 @@ private:
     std::vector<Section> sections_;
 };
 
-/// Puts `bytes` at `path` so that readers see the old file or the new one, never a part: write
-/// to `temporary`, fsync (durable before the rename, so a power cut cannot leave an empty file
-/// under the final name), rename. On failure `temporary` is removed and `path` is untouched.
-CacheFileStatus writeFileAtomically(const std::string& path, const std::string& temporary,
-                                    const std::vector<uint8_t>& bytes, std::string* message);
-
 }  // namespace sharcbake

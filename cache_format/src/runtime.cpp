@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string_view>
+#include <unordered_set>
 #include <new>
 
 #if defined(__SSE2__)
@@ -202,12 +204,13 @@ CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, Cac
     if (error) *error = CacheError{};
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "openFile: null output view");
     out->reset();
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    // O_NONBLOCK: opening a FIFO does not wait for a writer (it is then refused as not regular).
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) return fail(error, CacheFileStatus::kIoError, 0, path + ": cannot open: " + std::strerror(errno));
     struct stat st;
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         ::close(fd);
-        return fail(error, CacheFileStatus::kIoError, 0, path + ": not a regular file");
+        return fail(error, CacheFileStatus::kIoError, 0, path + ": not a regular file (a FIFO, device or folder)");
     }
     const size_t size = size_t(st.st_size);
     CacheView view;
@@ -530,6 +533,8 @@ CacheFileStatus CacheView::parse(CacheError* error) {
         if (count > n / 8) return fail(error, S::kCorrupt, 18, "META: entry count exceeds the section");
         uint64_t at = 8;
         metadata_.reserve(count);
+        std::unordered_set<std::string_view> keys;  // linear, not quadratic, in the entry count
+        keys.reserve(count);
         for (uint32_t i = 0; i < count; ++i) {
             if (n - at < 8) return fail(error, S::kCorrupt, 18, "META: entry " + std::to_string(i) + " truncated");
             const uint32_t klen = load<uint32_t>(m + at), vlen = load<uint32_t>(m + at + 4);
@@ -543,10 +548,8 @@ CacheFileStatus CacheView::parse(CacheError* error) {
             std::string_view key(reinterpret_cast<const char*>(m + at), klen);
             std::string_view value(reinterpret_cast<const char*>(m + at + klen), vlen);
             at += uint64_t(klen) + vlen;
-            for (const auto& kv : metadata_) {
-                if (kv.first == key) {
-                    return fail(error, S::kCorrupt, 18, "META: duplicate key \"" + std::string(key) + "\"");
-                }
+            if (!keys.insert(key).second) {
+                return fail(error, S::kCorrupt, 18, "META: duplicate key \"" + std::string(key) + "\"");
             }
             metadata_.emplace_back(key, value);
         }

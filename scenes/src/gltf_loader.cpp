@@ -8,6 +8,7 @@
 /// because a bad scene must fail loudly at load time rather than render wrong hours later.
 #include "sharcbake/scene_loader.h"
 
+#include <stb_image.h>
 #include <tiny_gltf.h>
 
 #include <glm/gtc/matrix_inverse.hpp>
@@ -18,9 +19,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -43,7 +46,41 @@ const std::array<const char*, 5> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_materials_ior", "KHR_mesh_quantization"};
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+/// Text from the scene file for a message: control characters and bytes >= 0x7F are shown as
+/// \xNN, so a crafted name cannot drive the terminal.
+std::string printable(const std::string& s) {
+    std::string out;
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c < 0x20 || c >= 0x7F) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02X", c);
+            out += buf;
+        } else {
+            out += ch;
+        }
+    }
+    return out;
+}
+
+std::string quoted(const std::string& s) {
+    std::string out(1, '\'');
+    out += printable(s);
+    out += '\'';
+    return out;
+}
+
+/// tinygltf's error text without bytes of the files it read: the JSON parser quotes what it
+/// read last ("last read: '...'"), which for a file that is not glTF is its raw content.
+std::string parserMessage(std::string err) {
+    for (size_t at = err.find("last read: '"); at != std::string::npos; at = err.find("last read: '", at + 1)) {
+        const size_t start = at + 12;
+        const size_t end = err.find('\'', start);
+        err.replace(start - 1, end == std::string::npos ? std::string::npos : end - start + 2, "(bytes not shown)");
+    }
+    if (err.size() > 2000) err = err.substr(0, 2000) + "...";
+    return printable(err);
+}
 
 /// sRGB transfer function to linear (IEC 61966-2-1).
 float srgbToLinear(float c) {
@@ -161,7 +198,9 @@ Material defaultMaterial() {
 
 class GltfLoader {
 public:
-    explicit GltfLoader(std::string path) : path_(std::move(path)) { scene_.source_path = path_; }
+    GltfLoader(std::string path, const GltfLoadLimits& limits) : path_(std::move(path)), limits_(limits) {
+        scene_.source_path = path_;
+    }
 
     Scene load() {
         parseFile();
@@ -179,6 +218,7 @@ public:
 
 private:
     std::string path_;
+    GltfLoadLimits limits_;
     tinygltf::Model model_;
     Scene scene_;
     int default_material_ = -1;
@@ -215,24 +255,114 @@ private:
         return in.gcount() == 4 && std::memcmp(magic, "glTF", 4) == 0;
     }
 
+    /// What readAndRecordFile needs: the list it records into and the scene's folder.
+    struct FileAccess {
+        std::vector<std::string>* files;
+        std::filesystem::path folder;  ///< canonical
+    };
+
+    /// Reads one file for tinygltf. Untrusted scenes: only regular files (a FIFO or a device
+    /// would block or never end), and a buffer or image only from the scene's folder or below
+    /// (a URI with "../" or an absolute path is refused, so a scene cannot read /etc/passwd).
     static bool readAndRecordFile(std::vector<unsigned char>* out, std::string* err, const std::string& path,
-                                  void* files) {
+                                  void* user) {
+        auto& access = *static_cast<FileAccess*>(user);
+        std::error_code error;
+        if (!std::filesystem::is_regular_file(path, error)) {
+            if (err) *err += "File is not a regular file: " + path + "\n";
+            return false;
+        }
+        if (!access.files->empty()) {
+            const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, error);
+            const auto [end, unused] = std::mismatch(access.folder.begin(), access.folder.end(), resolved.begin(),
+                                                     resolved.end());
+            (void)unused;
+            if (error || end != access.folder.end()) {
+                if (err) {
+                    *err += "File " + path + " is outside the scene's folder " + access.folder.string() +
+                            "; untrusted scenes may not read it\n";
+                }
+                return false;
+            }
+        }
         if (!tinygltf::ReadWholeFile(out, err, path, nullptr)) return false;
-        auto& list = *static_cast<std::vector<std::string>*>(files);
+        auto& list = *access.files;
         const std::string file = std::filesystem::path(path).lexically_normal().string();
         if (std::find(list.begin(), list.end(), file) == list.end()) list.push_back(file);
         return true;
     }
 
+    /// The deepest JSON nesting the loader accepts; real glTF files nest about 10 deep. The JSON
+    /// parser recurses per level, so 20,000 nested arrays would overflow its stack.
+    static constexpr int kMaxJsonNesting = 256;
+
+    /// The largest |coordinate| of a vertex in world space (metres) the loader accepts.
+    static constexpr double kMaxWorldCoordinate = 1e9;
+
+    /// Refuses absurd nesting in the glTF's JSON (the file, or a GLB's JSON chunk) before parsing.
+    void checkJsonNesting() {
+        std::ifstream in(path_, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        size_t begin = 0, end = bytes.size();
+        if (bytes.size() >= 20 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
+            uint32_t length = 0;
+            std::memcpy(&length, bytes.data() + 12, 4);
+            begin = 20;
+            end = std::min<size_t>(bytes.size(), begin + length);
+        }
+        int depth = 0;
+        bool in_string = false;
+        for (size_t i = begin; i < end; ++i) {
+            const char c = bytes[i];
+            if (in_string) {
+                if (c == '\\') ++i;
+                else if (c == '"') in_string = false;
+            } else if (c == '"') {
+                in_string = true;
+            } else if (c == '[' || c == '{') {
+                if (++depth > kMaxJsonNesting) {
+                    fail("JSON nested more than " + std::to_string(kMaxJsonNesting) + " levels deep (at byte " +
+                         std::to_string(i) + "); refused before parsing");
+                }
+            } else if (c == ']' || c == '}') {
+                --depth;
+            }
+        }
+    }
+
+    /// tinygltf's image decoder behind a size check on the image header, so a small file that
+    /// declares a huge image is refused before its texels are allocated.
+    static bool loadImageBounded(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
+                                 int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
+        const uint32_t max_side = static_cast<const GltfLoadLimits*>(user)->max_texture_size;
+        int width = 0, height = 0, channels = 0;
+        if (stbi_info_from_memory(bytes, size, &width, &height, &channels) &&
+            (uint64_t(width) > max_side || uint64_t(height) > max_side)) {
+            if (err) {
+                *err += "image " + std::to_string(index) + " is " + std::to_string(width) + "x" +
+                        std::to_string(height) + " texels, above the limit of " + std::to_string(max_side) +
+                        " per side (raise it with --max-texture-size)\n";
+            }
+            return false;
+        }
+        return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, nullptr);
+    }
+
     void parseFile() {
         if (!std::filesystem::exists(path_)) fail("file not found");
+        std::error_code error;
+        if (!std::filesystem::is_regular_file(path_, error)) fail("not a regular file");
+        FileAccess access{&scene_.source_files,
+                          std::filesystem::weakly_canonical(path_, error).parent_path()};
         tinygltf::TinyGLTF parser;
         // tinygltf's own file access, recording each file it reads (the glTF or GLB, external
         // buffers, images): Scene::source_files is then exactly what the scene was loaded from,
         // with tinygltf's URI decoding and its handling of missing images.
+        parser.SetImageLoader(&loadImageBounded, &limits_);
         parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
                                                     &readAndRecordFile, &tinygltf::WriteWholeFile,
-                                                    &scene_.source_files});
+                                                    &access});
+        checkJsonNesting();
         std::string err;
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.
@@ -243,7 +373,7 @@ private:
             if (!line.empty()) warn("tinygltf: " + line);
         if (!ok) {
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
-            fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : err));
+            fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }
     }
 
@@ -364,7 +494,16 @@ private:
         if (acc.type != expectedType)
             fail(label + ": has type " + std::to_string(acc.type) + ", expected " + std::to_string(expectedType));
         const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
-        std::vector<double> out(acc.count * components, 0.0);
+        // Bound the allocation before making it: an 8 KB file must not cost gigabytes. Elements in
+        // a bufferView take at least a byte each; a zero-filled accessor gets the same allowance.
+        uint64_t buffer_bytes = 0;
+        for (const tinygltf::Buffer& b : model_.buffers) buffer_bytes += b.data.size();
+        const uint64_t max_elements = std::max<uint64_t>(uint64_t(1) << 16, buffer_bytes);
+        if (components <= 0 || acc.count > max_elements) {
+            fail(label + ": count " + std::to_string(acc.count) + " is more than the scene's buffers can hold (" +
+                 std::to_string(max_elements) + " elements at most)");
+        }
+        std::vector<double> out(acc.count * size_t(components), 0.0);
         // Without a bufferView the accessor is all zeros (plus any sparse substitutions).
         if (acc.bufferView >= 0) {
             ElementLayout layout =
@@ -432,21 +571,42 @@ private:
         return roots;
     }
 
-    void visitNode(int index, const glm::dmat4& parent) {
-        if (index < 0 || static_cast<size_t>(index) >= model_.nodes.size())
-            fail("node " + std::to_string(index) + " does not exist");
-        if (on_path_.empty()) on_path_.assign(model_.nodes.size(), false);
-        if (on_path_[index]) fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
-        on_path_[index] = true;
-
-        const tinygltf::Node& node = model_.nodes[index];
-        const glm::dmat4 world = parent * localTransform(node);
-        if (node.mesh >= 0) addMesh(node.mesh, world, index);
-        if (node.camera >= 0) addCamera(node, world);
-        addNodeLight(node, world);
-        for (int child : node.children) visitNode(child, world);
-
-        on_path_[index] = false;
+    /// Depth-first over the hierarchy under `root` with an explicit stack, not recursion, so a
+    /// crafted chain of 20,000 nested nodes cannot overflow the call stack.
+    void visitNode(int root, const glm::dmat4& parent) {
+        struct Frame {
+            int index;
+            glm::dmat4 world;
+            size_t next_child;
+        };
+        std::vector<Frame> stack;
+        const auto enter = [&](int index, const glm::dmat4& parent_world) {
+            if (index < 0 || static_cast<size_t>(index) >= model_.nodes.size())
+                fail("node " + std::to_string(index) + " does not exist");
+            if (on_path_.empty()) on_path_.assign(model_.nodes.size(), false);
+            if (on_path_[index])
+                fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
+            on_path_[index] = true;
+            const tinygltf::Node& node = model_.nodes[index];
+            const glm::dmat4 world = parent_world * localTransform(node);
+            if (node.mesh >= 0) addMesh(node.mesh, world, index);
+            if (node.camera >= 0) addCamera(node, world);
+            addNodeLight(node, world);
+            stack.push_back(Frame{index, world, 0});
+        };
+        enter(root, parent);
+        while (!stack.empty()) {
+            Frame& top = stack.back();
+            const std::vector<int>& children = model_.nodes[top.index].children;
+            if (top.next_child < children.size()) {
+                const int child = children[top.next_child++];
+                const glm::dmat4 world = top.world;  // `top` moves when the stack grows
+                enter(child, world);
+            } else {
+                on_path_[top.index] = false;
+                stack.pop_back();
+            }
+        }
     }
 
     // ---------------------------------------------------------------- geometry
@@ -535,7 +695,16 @@ private:
     /// perpendicular under non-uniform scale). A mirroring transform (negative determinant)
     /// turns counter-clockwise triangles clockwise, so their winding is flipped back.
     void transformToWorld(PrimitiveGeometry& geo, const glm::dmat4& world, const std::string& label) {
-        for (glm::vec3& p : geo.positions) p = glm::vec3(world * glm::dvec4(glm::dvec3(p), 1.0));
+        for (size_t i = 0; i < geo.positions.size(); ++i) {
+            const glm::dvec3 p = glm::dvec3(world * glm::dvec4(glm::dvec3(geo.positions[i]), 1.0));
+            // Embree's BVH needs bounded coordinates (it asserts near 1e19); 1e9 m is far beyond any scene.
+            if (!(std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
+                  std::abs(p.z) <= kMaxWorldCoordinate)) {
+                fail(label + ": vertex " + std::to_string(i) + " lies at (" + std::to_string(p.x) + ", " +
+                     std::to_string(p.y) + ", " + std::to_string(p.z) + ") after the node transforms, beyond +-1e9 m");
+            }
+            geo.positions[i] = glm::vec3(p);
+        }
         const glm::dmat3 linear(world);
         const double det = glm::determinant(linear);
         if (det == 0.0 || !std::isfinite(det))
@@ -965,6 +1134,6 @@ private:
 
 }  // namespace
 
-Scene loadGltf(const std::string& path) { return GltfLoader(path).load(); }
+Scene loadGltf(const std::string& path, const GltfLoadLimits& limits) { return GltfLoader(path, limits).load(); }
 
 }  // namespace sharcbake

@@ -22,6 +22,11 @@
 #include <string>
 #include <vector>
 
+#include <csignal>
+#include <chrono>
+
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace sharcbake {
@@ -473,6 +478,80 @@ TEST(CacheFile, IoErrors) {
     EXPECT_EQ(CacheView::openFile("/tmp", &view, &error), CacheFileStatus::kIoError);
     std::string message;
     EXPECT_EQ(writeCacheFile("/nonexistent/dir/x.sharc", goldenData(), &message), CacheFileStatus::kIoError);
+}
+
+// Issue 19: validating metadata was quadratic in the entry count (71 s for a 2.2 MB cache).
+// 200,000 entries: linear takes well under a second; quadratic would take minutes.
+TEST(CacheFile, ManyMetadataEntriesValidateInLinearTime) {
+    CacheData data = goldenData();
+    data.metadata.clear();
+    for (int i = 0; i < 200000; ++i) data.metadata.emplace_back(std::string(1, 'k').append(std::to_string(i)), "v");
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<uint8_t> bytes = encode(data);
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(openBytes(bytes, &error, &view), CacheFileStatus::kOk) << error.message;
+    EXPECT_EQ(view.metadataCount(), 200000u);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_LT(seconds, 10.0);
+    data.metadata.emplace_back("k7", "again");
+    std::vector<uint8_t> refused;
+    std::string message;
+    EXPECT_EQ(encodeCacheFile(data, &refused, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("duplicate metadata key \"k7\""), std::string::npos) << message;
+}
+
+// Issue 19: the one atomic write every output uses never destroys the previous file or a device.
+TEST(CacheFile, AtomicWriteKeepsTheOldFileOnAShortWrite) {
+    const std::string path = tempPath("atomic.bin");
+    const std::string old_bytes = "the previous file";
+    std::string message;
+    ASSERT_EQ(writeFileAtomically(path, old_bytes.data(), old_bytes.size(), &message), CacheFileStatus::kOk) << message;
+    // A file size limit makes write() fail with EFBIG, as a full disk fails with ENOSPC.
+    struct rlimit saved {};
+    ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+    const auto previous_handler = std::signal(SIGXFSZ, SIG_IGN);
+    struct rlimit small = saved;
+    small.rlim_cur = 4096;
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+    const std::vector<uint8_t> big(1 << 20, 7);
+    const CacheFileStatus status = writeFileAtomically(path, big.data(), big.size(), &message);
+    ::setrlimit(RLIMIT_FSIZE, &saved);
+    std::signal(SIGXFSZ, previous_handler);
+    EXPECT_EQ(status, CacheFileStatus::kIoError);
+    EXPECT_NE(message.find("write failed"), std::string::npos) << message;
+    const std::vector<uint8_t> after = readBytes(path);
+    EXPECT_EQ(std::string(after.begin(), after.end()), old_bytes);
+    EXPECT_NE(::access((path + ".tmp-" + std::to_string(::getpid())).c_str(), F_OK), 0) << "temporary left behind";
+    // Devices and FIFOs are refused, not replaced.
+    EXPECT_EQ(writeFileAtomically("/dev/null", "x", 1, &message), CacheFileStatus::kIoError);
+    EXPECT_NE(message.find("a device"), std::string::npos) << message;
+    std::remove(path.c_str());
+}
+
+// A symbolic link stays a link (its target is replaced), the target's mode is kept, and a
+// temporary left by a process that no longer runs is removed.
+TEST(CacheFile, AtomicWriteFollowsLinksKeepsModeAndCleansStaleTemporaries) {
+    const std::string target = tempPath("linked_target.bin"), link = tempPath("link.bin");
+    std::remove(target.c_str());
+    std::remove(link.c_str());
+    ASSERT_EQ(::symlink(target.c_str(), link.c_str()), 0);
+    std::string message;
+    ASSERT_EQ(writeFileAtomically(link, "one", 3, &message), CacheFileStatus::kOk) << message;
+    ASSERT_EQ(::chmod(target.c_str(), 0600), 0);
+    const std::string stale = target + ".tmp-999999999";  // no such process (pids are < 2^22)
+    std::ofstream(stale) << "left by a killed writer";
+    ASSERT_EQ(writeFileAtomically(link, "two", 3, &message), CacheFileStatus::kOk) << message;
+    struct stat info {};
+    ASSERT_EQ(::lstat(link.c_str(), &info), 0);
+    EXPECT_TRUE(S_ISLNK(info.st_mode));
+    ASSERT_EQ(::stat(target.c_str(), &info), 0);
+    EXPECT_EQ(info.st_mode & 0777, 0600u);
+    const std::vector<uint8_t> bytes = readBytes(target);
+    EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "two");
+    EXPECT_NE(::access(stale.c_str(), F_OK), 0) << "the stale temporary was not removed";
+    std::remove(link.c_str());
+    std::remove(target.c_str());
 }
 
 // ------------------------------------------------------------------------------------------------

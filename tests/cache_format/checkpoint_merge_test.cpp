@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <vector>
@@ -107,6 +110,48 @@ TEST(CheckpointFile, WriterRefusesStateAReaderWouldReject) {
     data.settings.push_back(data.settings[0]);  // duplicate key
     EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
     EXPECT_NE(message.find("duplicate"), std::string::npos) << message;
+}
+
+// The checkpoint golden (format 2.0): written when SHARCBAKE_UPDATE_GOLDENS is set; otherwise the
+// writer must reproduce it byte for byte and the reader must read it back. Goldens are kept forever.
+const std::string kCheckpointGoldenPath = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v2.0.ckpt";
+
+TEST(CheckpointGolden, WriterReproducesGolden) {
+    std::vector<uint8_t> bytes;
+    std::string message;
+    ASSERT_EQ(encodeCheckpoint(smallCheckpoint(), &bytes, &message), CacheFileStatus::kOk) << message;
+    if (std::getenv("SHARCBAKE_UPDATE_GOLDENS")) {
+        std::ofstream out(kCheckpointGoldenPath, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+        ASSERT_TRUE(out.good());
+    }
+    std::ifstream in(kCheckpointGoldenPath, std::ios::binary);
+    const std::vector<uint8_t> golden((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(golden.empty()) << kCheckpointGoldenPath << " is missing; run with SHARCBAKE_UPDATE_GOLDENS=1";
+    EXPECT_EQ(bytes, golden) << "the writer no longer reproduces " << kCheckpointGoldenPath
+                             << "; if intended, add a golden for the new checkpoint version";
+}
+
+TEST(CheckpointGolden, GoldenReadsBack) {
+    CheckpointData read;
+    std::string message;
+    ASSERT_EQ(readCheckpointFile(kCheckpointGoldenPath, &read, &message), CacheFileStatus::kOk) << message;
+    expectEqual(smallCheckpoint(), read);
+}
+
+// Issue 19: a CRC-valid checkpoint may not carry counters the bake cannot honour (rule C8).
+TEST(CheckpointFile, CountersAreBounded) {
+    std::vector<uint8_t> bytes;
+    std::string message;
+    CheckpointData data = smallCheckpoint();
+    data.iterations_done = kCheckpointMaxIterations;
+    EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kOk) << message;
+    data.iterations_done = 0xFFFFFFFFu;
+    EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("C8"), std::string::npos) << message;
+    data = smallCheckpoint();
+    data.bucket_size = data.capacity + 1;
+    EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
 }
 
 TEST(CheckpointFile, ACacheFileIsNotACheckpoint) {

@@ -5,13 +5,15 @@
 #       of the cache_format tests, run with ctest (round trip, golden, reject tests, lookups...);
 #   (b) with clang++: tests/cache_format/fuzz_cache_file.cpp + cache_format/src/*.cpp under
 #       -fsanitize=fuzzer,address,undefined, run for FUZZ_SECONDS (default 60) on a copy of the
-#       golden seed corpus; any crash, leak, sanitizer report or timeout fails the test.
+#       golden seed corpus, then fuzz_checkpoint_file.cpp for CHECKPOINT_FUZZ_SECONDS (default
+#       30) on the golden checkpoint; any crash, leak, sanitizer report or timeout fails the test.
 # Without clang++ (b) is skipped: exit 77 (ctest SKIP_RETURN_CODE).
 # Usage: sanitized_runtime_test.sh SOURCE_DIR WORK_DIR
 set -euo pipefail
 SRC=$(cd "$1" && pwd)
 WORK=$2
 FUZZ_SECONDS=${FUZZ_SECONDS:-60}
+CHECKPOINT_FUZZ_SECONDS=${CHECKPOINT_FUZZ_SECONDS:-30}
 JOBS=$(nproc 2>/dev/null || echo 2)
 mkdir -p "$WORK"
 WORK=$(cd "$WORK" && pwd)
@@ -33,24 +35,31 @@ if [ -z "$CXX_FUZZ" ]; then
     echo "SKIP: clang++ not found; the sanitized tests passed, the fuzzer did not run (apt-get install clang libclang-rt-14-dev)"
     exit 77
 fi
-rm -rf "$WORK/fuzz" && mkdir -p "$WORK/fuzz/corpus" "$WORK/fuzz/artifacts"
-"$CXX_FUZZ" -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-    -ffp-contract=off -I"$SRC/cache_format/include" \
-    "$SRC/tests/cache_format/fuzz_cache_file.cpp" "$SRC"/cache_format/src/*.cpp -o "$WORK/fuzz/fuzz_cache_file"
-cp "$SRC"/tests/cache_format/golden/*.sharc "$WORK/fuzz/corpus/"
-# Every seed first (as a plain regression run), then the bounded fuzzing run.
-"$WORK/fuzz/fuzz_cache_file" -runs=0 "$WORK/fuzz/corpus"
-set +e
-"$WORK/fuzz/fuzz_cache_file" "$WORK/fuzz/corpus" -max_total_time="$FUZZ_SECONDS" -timeout=10 \
-    -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 -artifact_prefix="$WORK/fuzz/artifacts/" \
-    >"$WORK/fuzz/fuzz.log" 2>&1
-rc=$?
-set -e
-grep -E '^(stat::|Done )' "$WORK/fuzz/fuzz.log" || true
-if [ $rc -ne 0 ] || ls "$WORK/fuzz/artifacts/" | grep -q .; then
-    tail -n 60 "$WORK/fuzz/fuzz.log"
-    echo "FAIL: the fuzzer found a problem (exit $rc); reproducer(s) in $WORK/fuzz/artifacts/:"
-    ls -l "$WORK/fuzz/artifacts/"
-    exit 1
-fi
-echo "OK: sanitized tests passed; fuzzed ${FUZZ_SECONDS}s without a finding"
+rm -rf "$WORK/fuzz" && mkdir -p "$WORK/fuzz"
+# fuzz NAME SEED_GLOB SECONDS: build tests/cache_format/fuzz_NAME.cpp, run its seeds, then fuzz.
+fuzz() {
+    local name=$1 seeds=$2 seconds=$3 dir="$WORK/fuzz/$1"
+    mkdir -p "$dir/corpus" "$dir/artifacts"
+    "$CXX_FUZZ" -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+        -ffp-contract=off -I"$SRC/cache_format/include" \
+        "$SRC/tests/cache_format/fuzz_$name.cpp" "$SRC"/cache_format/src/*.cpp -o "$dir/fuzz_$name"
+    cp $seeds "$dir/corpus/"
+    # Every seed first (as a plain regression run), then the bounded fuzzing run.
+    "$dir/fuzz_$name" -runs=0 "$dir/corpus"
+    set +e
+    "$dir/fuzz_$name" "$dir/corpus" -max_total_time="$seconds" -timeout=10 \
+        -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 -artifact_prefix="$dir/artifacts/" \
+        >"$dir/fuzz.log" 2>&1
+    local rc=$?
+    set -e
+    grep -E '^(stat::|Done )' "$dir/fuzz.log" || true
+    if [ $rc -ne 0 ] || ls "$dir/artifacts/" | grep -q .; then
+        tail -n 60 "$dir/fuzz.log"
+        echo "FAIL: fuzz_$name found a problem (exit $rc); reproducer(s) in $dir/artifacts/:"
+        ls -l "$dir/artifacts/"
+        exit 1
+    fi
+}
+fuzz cache_file "$SRC/tests/cache_format/golden/*.sharc" "$FUZZ_SECONDS"
+fuzz checkpoint_file "$SRC/tests/cache_format/golden/*.ckpt" "$CHECKPOINT_FUZZ_SECONDS"
+echo "OK: sanitized tests passed; fuzzed caches ${FUZZ_SECONDS}s and checkpoints ${CHECKPOINT_FUZZ_SECONDS}s without a finding"

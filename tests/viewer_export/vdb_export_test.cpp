@@ -234,5 +234,22 @@ TEST_F(VdbExportTest, Errors) {
               VdbExportStatus::kIoError);
 }
 
+// Issue 19: a valid cache that VDB cannot hold is kUnrepresentable (export-vdb exit 3), not a
+// usage error; nothing is written.
+TEST(VdbExportUnrepresentable, EmptyCache) {
+    CacheData data;
+    data.bake_capacity = 16;
+    std::vector<uint8_t> bytes;
+    std::string message;
+    ASSERT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kOk) << message;
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, &error), CacheFileStatus::kOk) << error.message;
+    const std::string out = ::testing::TempDir() + "sharcbake_empty_" + std::to_string(::getpid()) + ".vdb";
+    EXPECT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kUnrepresentable);
+    EXPECT_NE(message.find("no voxels"), std::string::npos) << message;
+    EXPECT_NE(::access(out.c_str(), F_OK), 0) << "a file was written";
+}
+
 }  // namespace
 }  // namespace sharcbake

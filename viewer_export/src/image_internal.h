@@ -10,10 +10,9 @@
 
 namespace sharcbake::detail {
 
-/// Writes @p size bytes to @p path so that a crash never leaves a torn file: the bytes go to
-/// "<path>.tmp-<pid>" in the same directory, are flushed to disk (fsync), and the temporary is
-/// then renamed over @p path. On failure the temporary is removed and ImageError is thrown,
-/// naming @p path and the reason.
+/// Writes @p size bytes to @p path with sharcbake::writeFileAtomically (cache_file.h): never a
+/// torn file, a symlink stays a link, a device or FIFO is refused. Throws ImageError naming
+/// @p path and the reason.
 void writeFileAtomically(const std::string& path, const void* data, size_t size);
 
 /// Throws ImageError (naming @p path) unless @p image has positive dimensions and exactly

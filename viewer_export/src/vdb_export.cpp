@@ -2,14 +2,19 @@
 // .sharc -> OpenVDB: see vdb_export.h for the grid layout and the octant merge rule.
 #include "sharcbake/vdb_export.h"
 
+#include "sharcbake/cache_file.h"
+
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <unordered_map>
 #include <utility>
+
+#include <unistd.h>
 
 namespace sharcbake {
 namespace {
@@ -140,7 +145,7 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
                                                                (list.empty() ? "none" : list) + ")");
         }
     }
-    if (levels.empty()) return fail(VdbExportStatus::kInvalidArgument, "the cache holds no voxels: nothing to export");
+    if (levels.empty()) return fail(VdbExportStatus::kUnrepresentable, "the cache holds no voxels: nothing to export");
 
     openvdb::initialize();
     const HashGridParameters params = cache.gridParameters();
@@ -148,12 +153,17 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
     for (const uint32_t l : levels) {
         const float s = voxelSize(l, params);
         if (!std::isfinite(s) || s <= 0.0f) {
-            return fail(VdbExportStatus::kInvalidArgument, "level " + std::to_string(l) + " has no finite voxel size");
+            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + " has no finite voxel size");
         }
         // VDB voxel centres sit at index × s; the cache voxel g spans [g·s, (g+1)·s).
-        auto xform = openvdb::math::Transform::createLinearTransform(double(s));
-        xform->postTranslate(openvdb::Vec3d(0.5 * double(s)));
-        transforms[l] = xform;
+        try {
+            auto xform = openvdb::math::Transform::createLinearTransform(double(s));
+            xform->postTranslate(openvdb::Vec3d(0.5 * double(s)));
+            transforms[l] = xform;
+        } catch (const std::exception& e) {
+            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + ": voxel size " +
+                                                               std::to_string(s) + " is out of OpenVDB's range: " + e.what());
+        }
     }
 
     openvdb::GridPtrVec grids;
@@ -223,12 +233,31 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
                         openvdb::StringMetadata(std::string(cache.metadataValue(i))));
     }
 
+    // The caches' output rules (cache_file.h): the grids go to a temporary beside the target, which
+    // is read back in full (OpenVDB does not report write errors: a full disk leaves a truncated
+    // file) and only then renamed over the target. A device or FIFO is never replaced, and on
+    // failure the previous file is intact. (io::File, not io::Stream: vdb_render needs the grid
+    // offsets that only a file archive stores.)
+    std::string target, temporary, problem;
+    if (prepareOutputFile(out_path, &target, &temporary, &problem) != CacheFileStatus::kOk) {
+        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
+    }
     try {
-        openvdb::io::File file(out_path);
+        openvdb::io::File file(temporary);
         file.write(grids, meta);
         file.close();
+        openvdb::io::File check(temporary);
+        check.open(false);
+        const openvdb::GridPtrVecPtr read_back = check.getGrids();
+        check.close();
+        if (!read_back || read_back->size() != grids.size()) throw std::runtime_error("the grids do not read back");
     } catch (const std::exception& e) {
-        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + e.what());
+        ::unlink(temporary.c_str());
+        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + " (disk full?): " + e.what() +
+                                                   "; the previous file is untouched");
+    }
+    if (commitOutputFile(temporary, target, &problem) != CacheFileStatus::kOk) {
+        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
     }
     return VdbExportStatus::kOk;
 }

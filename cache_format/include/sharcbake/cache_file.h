@@ -67,6 +67,25 @@ enum class CacheFileStatus : uint32_t {
 
 const char* toString(CacheFileStatus status);
 
+/// Where an output named `path` really goes. `target` is `path`, or the file a symbolic link at
+/// `path` points to (so the link stays a link and its target is replaced); `temporary` is the
+/// per-process file beside `target` that the bytes are written to first. Fails (kIoError, saying
+/// what) when `path` is a dangling link or exists and is not a regular file: a device such as
+/// /dev/null, a FIFO, a socket or a folder is never replaced. Also removes temporaries of the same
+/// naming (`target` + ".tmp-PID") left by processes that no longer run (killed during a write).
+CacheFileStatus prepareOutputFile(const std::string& path, std::string* target, std::string* temporary,
+                                  std::string* message);
+
+/// Puts a finished `temporary` in place of `target` (both from prepareOutputFile): fsync, the
+/// mode of the file it replaces (if any), rename, fsync of the folder. On failure `temporary` is
+/// removed and `target` is untouched.
+CacheFileStatus commitOutputFile(const std::string& temporary, const std::string& target, std::string* message);
+
+/// prepareOutputFile, every byte of `data` written to the temporary (a short write, e.g. a full
+/// disk, fails with kIoError), then commitOutputFile: readers see the old file or the new one,
+/// never a part, and nothing of the old file is lost on failure.
+CacheFileStatus writeFileAtomically(const std::string& path, const void* data, size_t size, std::string* message);
+
 /// Writes `data` to `path` atomically (temporary file beside it, then rename) in the current
 /// format version, then re-opens the file and validates it (SPEC §F.10). Voxels must be sorted by
 /// key, unique, non-zero, with finite radiance >= 0 and finite weight > 0 (only live voxels).

@@ -47,13 +47,17 @@ struct CheckpointData {
     std::vector<std::pair<std::string, double>> amounts;
 };
 
+/// The most iterations a checkpoint may record (rule C8; the bake's --iterations limit), so a
+/// crafted counter cannot make a resumed bake loop for ever.
+inline constexpr uint32_t kCheckpointMaxIterations = 1u << 30;
+
 /// Serialises `data` (SPEC §C) into `bytes`; refuses data a reader would reject (kInvalidData).
 CacheFileStatus encodeCheckpoint(const CheckpointData& data, std::vector<uint8_t>* bytes, std::string* message);
 
 /// Parses and fully validates checkpoint bytes (SPEC §C.4); the message names the rule ("C7: ...").
 CacheFileStatus decodeCheckpoint(const uint8_t* bytes, size_t size, CheckpointData* data, std::string* message);
 
-/// Writes atomically: a temporary file beside `path` (`path` + ".partial"), flushed to disk, then
+/// Writes atomically (writeFileAtomically): a temporary file beside `path`, flushed to disk, then
 /// renamed over `path`. A process killed at any moment leaves the previous checkpoint intact.
 CacheFileStatus writeCheckpointFile(const std::string& path, const CheckpointData& data, std::string* message);
 

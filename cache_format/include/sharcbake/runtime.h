@@ -104,7 +104,10 @@ public:
     /// On failure `*out` is reset and `error` (optional) says which rule failed.
     static CacheFileStatus openMemory(const void* data, size_t size, CacheView* out, CacheError* error);
 
-    /// @brief Reads (or maps) a file, then validates it as openMemory(). I/O errors: kIoError.
+    /// @brief Reads (or maps) a file, then validates it as openMemory(). I/O errors: kIoError;
+    /// a path that is not a regular file (a FIFO, a device) is refused without blocking.
+    /// kMap: the process gets SIGBUS if the file is truncated while the view is open (POSIX
+    /// mmap); for files that others may change or that come from untrusted places, use kRead.
     static CacheFileStatus openFile(const std::string& path, CacheView* out, CacheError* error,
                                     FileMode mode = FileMode::kRead);
 

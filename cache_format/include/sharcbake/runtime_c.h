@@ -43,6 +43,8 @@ typedef struct sharcbake_packed_data {
 } sharcbake_packed_data;
 
 /** Reads (map = 0) or maps (map != 0) a file and validates it. *out is NULL on failure.
+ * A mapped file truncated while open raises SIGBUS on access: map only files nobody changes;
+ * untrusted or shared files should be read (map = 0).
  *  `rule` (optional) receives the SPEC validation rule number (0 if none). */
 sharcbake_status sharcbake_cache_open_file(const char* path, int map, sharcbake_cache** out, uint32_t* rule,
                                            char* message, size_t message_size);

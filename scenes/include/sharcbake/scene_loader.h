@@ -5,6 +5,7 @@
 
 #include "sharcbake/scene.h"
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -21,7 +22,15 @@ public:
 /// default scene (or scene 0) into world space. Degenerate triangles are dropped and counted
 /// in Scene::stats; anything that would make the scene wrong (missing buffer, index out of
 /// range, NaN/Inf vertex, unsupported required extension) throws SceneLoadError.
-Scene loadGltf(const std::string& path);
+/// Bounds for untrusted scenes. Buffers and images are read only from the scene's folder or below;
+/// an accessor without a bufferView holds at most max(65,536, bytes of the scene's buffers)
+/// elements; JSON nesting deeper than 256 and world coordinates beyond +-1e9 m are refused.
+struct GltfLoadLimits {
+    /// Images wider or taller than this are refused before they are decoded (a 249 KB PNG of
+    /// 16000x16000 texels would cost 4.9 GB).
+    uint32_t max_texture_size = 8192;
+};
+Scene loadGltf(const std::string& path, const GltfLoadLimits& limits = {});
 
 /// Reads an equirectangular (lat-long) environment map from an OpenEXR file into a linear
 /// texture. Throws SceneLoadError with the file name on failure.

@@ -52,11 +52,16 @@ struct VdbGridInfo {
     float voxel_size = 0.0f;
 };
 
-enum class VdbExportStatus { kOk, kInvalidArgument, kIoError };
+enum class VdbExportStatus {
+    kOk,
+    kInvalidArgument,  ///< the request: a level the cache lacks, a scale that is not finite
+    kIoError,
+    kUnrepresentable,  ///< a valid cache VDB cannot hold: no voxels, a voxel size out of VDB's range
+};
 
 /// @brief Writes the grids of `cache` to `out_path` (.vdb). kInvalidArgument: a requested level
-/// is not in the cache, the scale is not finite, or nothing would be written; kIoError: the file
-/// could not be written. `grids` (optional) receives what was written; `message` the reason.
+/// is not in the cache or the scale is not finite; kUnrepresentable: the cache holds no voxels or
+/// a voxel size OpenVDB cannot take; kIoError: the file could not be written. `grids` (optional) receives what was written; `message` the reason.
 VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_path, const VdbExportOptions& options,
                                  std::vector<VdbGridInfo>* grids, std::string* message);
 
