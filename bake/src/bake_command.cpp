@@ -74,6 +74,8 @@ struct BakeOptions {
     std::string report_camera;
     std::string report_resolution;
     uint32_t report_spp = 16;
+    uint32_t report_probes = ProbeSettings{}.probes;
+    uint32_t report_probe_spp = ProbeSettings{}.reference_samples;
     double target_error = 0.0;
 };
 
@@ -210,10 +212,11 @@ CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer
 std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const Scene& scene, const Tracer& tracer,
                                                     const LightSampler& lights, std::string& reference_description) {
     if (o.report_dir.empty() && o.target_error <= 0.0) return nullptr;
-    if (o.reference_path.empty() && !scene.known_radiance) {
+    if (o.reference_path.empty() && !scene.known_radiance && o.report_probes == 0) {
         throw CommandError(kExitUsage, std::string(o.report_dir.empty() ? "--target-error" : "--report") +
-                                           ": nothing to measure the error against: give --reference EXR (a converged "
-                                           "render of the evaluation camera), or bake a scene with a known radiance "
+                                           ": nothing to measure the error against with --report-probes 0: give "
+                                           "--reference EXR (a converged render of the evaluation camera), leave the "
+                                           "probes on, or bake a scene with a known radiance "
                                            "(extras.sharcbake.expected_radiance, like the furnace rooms)");
     }
     EvaluationView view;
@@ -241,12 +244,19 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
     } else {
         parseImageSize(o.report_resolution.empty() ? "128" : o.report_resolution, "--report-resolution",
                        view.camera.aspect_ratio, view.width, view.height);
-        reference_description = "known radiance";
+        reference_description = scene.known_radiance ? "known radiance" : "probe reference";
     }
     const Camera unfitted = view.camera;
     view.camera = fitCameraToImage(view.camera, view.width, view.height);
     warnAboutCameraFit(unfitted, view.camera, view.width, view.height);
-    return std::make_unique<ConvergenceEvaluator>(scene, tracer, lights, view, std::move(reference));
+    ProbeSettings probes;
+    probes.probes = o.report_probes;
+    probes.reference_samples = o.report_probe_spp;
+    probes.view_position = view.camera.position;
+    // --target-error reads the probes at each checkpoint only where nothing better is known.
+    const bool probes_during_bake = o.target_error > 0.0 && !scene.known_radiance;
+    return std::make_unique<ConvergenceEvaluator>(scene, tracer, lights, view, std::move(reference), probes,
+                                                  probes_during_bake);
 }
 
 std::string percent(std::optional<double> value) {
@@ -271,20 +281,112 @@ std::string general(std::optional<double> value) {
     return text;
 }
 
+/// "3.1% +- 0.4%" for a probe measure's relative RMS error and its 95% interval (the interval
+/// of the RMS from that of the mean square: d(sqrt x) = dx / (2 sqrt x)).
+std::string probeRms(const ProbeError& e) {
+    if (e.probes == 0) return "-";
+    const double rms = e.rmsError();
+    const double half_width = rms > 0.0 ? e.relative_mse_ci / (2.0 * rms) : std::sqrt(e.relative_mse_ci);
+    char text[48];
+    std::snprintf(text, sizeof text, "%.3g%% +- %.2g%%", 100.0 * rms, 100.0 * half_width);
+    return text;
+}
+
+/// The probe measure's headline: where the cache started, where it ended, its bias floor, and
+/// the regions and levels that stand out.
+void printProbeSummary(const ConvergenceReport& report, const CacheProbes& probes) {
+    const std::optional<ProbeFloorFit>& fit = report.probe_floor;
+    const ConvergenceRow* first = nullptr;
+    for (const ConvergenceRow& r : report.rows) {
+        if (r.probes && r.probes->view.probes > 0) {
+            first = &r;
+            break;
+        }
+    }
+    const ConvergenceRow& last = report.rows.back();
+    if (!first || !last.probes) return;
+    const ProbeError& end = last.probes->view;
+    std::printf("  probes: %llu surface points, references of %u path samples (%.2f s); %llu of the points have "
+                "no voxel at the level the evaluation camera looks them up at\n",
+                (unsigned long long)probes.referencedPoints(), probes.settings().reference_samples,
+                probes.referenceSeconds(), (unsigned long long)end.not_live);
+    std::printf("  the cache's RMS error at the camera's levels: %s after %u iterations, %s after %u; of the last, "
+                "voxel noise %.3g%%, bias %.3g%% (signed %+.2f%% +- %.2f%%)\n",
+                probeRms(first->probes->view).c_str(), first->iteration, probeRms(end).c_str(), last.iteration,
+                100.0 * std::sqrt(std::max(0.0, end.relative_variance)), 100.0 * end.biasFloor(),
+                100.0 * end.relative_bias, 100.0 * end.relative_bias_ci);
+    if (fit) {
+        const double low = std::sqrt(std::max(0.0, fit->floor_squared - fit->floor_squared_ci));
+        const double high = std::sqrt(fit->floor_squared + fit->floor_squared_ci);
+        std::printf("  bias floor (fitted over %zu checkpoints): %.3g%% (95%%: %.3g%% to %.3g%%); the cache is at "
+                    "%.2gx its floor: %s\n",
+                    fit->checkpoints, 100.0 * fit->floor(), 100.0 * low, 100.0 * high,
+                    fit->floor() > 0.0 ? end.rmsError() / fit->floor() : 0.0,
+                    end.rmsError() <= 1.25 * fit->floor() ? "converged, more iterations would not help"
+                                                          : "more iterations would still lower its noise");
+    }
+    // Every level at the same points: what cameras at other distances would get.
+    std::string by_level;
+    for (const ProbeLevelError& level : last.probes->levels) {
+        if (level.error.probes == 0) continue;
+        char text[96];
+        std::snprintf(text, sizeof text, "%s%u: %.3g%% (bias %.3g%%)", by_level.empty() ? "" : ", ", level.level,
+                      100.0 * level.error.rmsError(), 100.0 * level.error.biasFloor());
+        by_level += text;
+    }
+    if (!by_level.empty()) std::printf("    RMS error by level at all points: %s\n", by_level.c_str());
+    if (end.leaks > 0) {
+        std::printf("    %llu of the probes (%.2g%%) are leaks, the cache more than %gx off (worst %.3gx), left out of "
+                    "the measures above:\n",
+                    (unsigned long long)end.leaks, 100.0 * double(end.leaks) / double(end.leaks + end.probes),
+                    kProbeLeakRatio, end.worst_leak);
+        for (const ProbeLeak& leak : last.probes->worst_leaks) {
+            std::printf("      at (%.4g, %.4g, %.4g) facing (%.2g, %.2g, %.2g), %s, level %u: cache %.3g, reference "
+                        "%.3g (grey)\n",
+                        leak.position.x, leak.position.y, leak.position.z, leak.normal.x, leak.normal.y,
+                        leak.normal.z, leak.material.empty() ? "(unnamed material)" : leak.material.c_str(),
+                        leak.level, (leak.cache.x + leak.cache.y + leak.cache.z) / 3.0,
+                        (leak.reference.x + leak.reference.y + leak.reference.z) / 3.0);
+        }
+    }
+    for (const ProbeRegionError& region : last.probes->regions) {
+        if (!region.standsOut()) continue;
+        std::printf("    material %s stands out: signed bias %+.2f%% +- %.2f%% over %llu probes\n",
+                    region.material.empty() ? "(unnamed)" : region.material.c_str(),
+                    100.0 * region.error.relative_bias, 100.0 * region.error.relative_bias_ci,
+                    (unsigned long long)region.error.probes);
+    }
+}
+
 /// The convergence table of --report / --target-error, and the comparison at equal time.
-void printConvergence(const ConvergenceReport& report) {
+void printConvergence(const ConvergenceReport& report, const CacheProbes& probes) {
     std::printf("Convergence (%s; evaluation %.2f s, not counted in the bake):\n", report.reference.c_str(),
                 report.evaluation_seconds);
     // relMSE less the render's noise is the cache's own error: the column a longer bake lowers.
-    std::printf("  %10s %10s %12s %12s %12s %12s %20s\n", "iteration", "bake s", "live voxels", "voxel error",
-                "image error", "image relMSE", "less render noise");
+    std::printf("  %10s %10s %12s %18s %12s %12s %12s %20s\n", "iteration", "bake s", "live voxels", "probe RMS",
+                "voxel error", "image error", "image relMSE", "less render noise");
     for (const ConvergenceRow& r : report.rows) {
-        std::printf("  %10u %10.3f %12llu %12s %12s %12s %20s\n", r.iteration, r.bake_seconds,
-                    (unsigned long long)r.live_voxels,
+        std::printf("  %10u %10.3f %12llu %18s %12s %12s %12s %20s\n", r.iteration, r.bake_seconds,
+                    (unsigned long long)r.live_voxels, r.probes ? probeRms(r.probes->view).c_str() : "-",
                     percent(r.voxel ? std::optional<double>(r.voxel->mean_relative) : std::nullopt).c_str(),
                     percent(r.image ? std::optional<double>(r.image->mean_relative_error) : std::nullopt).c_str(),
                     general(r.image ? std::optional<double>(r.image->relative_mse) : std::nullopt).c_str(),
                     cacheRelativeMse(r).c_str());
+    }
+    printProbeSummary(report, probes);
+    const ConvergenceRow& end = report.rows.back();
+    if (end.image) {
+        std::printf("  image at the end: mean relative error %s; over %dx%d-pixel tiles %s (most render noise "
+                    "averaged out); over the %llu pixels seen through the cache %s\n",
+                    percent(end.image->mean_relative_error).c_str(), kComparisonTile, kComparisonTile,
+                    percent(end.image->tile_mean_relative_error).c_str(),
+                    (unsigned long long)end.image->masked_pixels,
+                    percent(end.image->masked_mean_relative_error).c_str());
+    }
+    if (report.reference_floor) {
+        std::printf("  the reference's own floor: relative MSE %.2g +- %.1g (its noise and what differs between the "
+                    "renderers): image errors below it cannot be told from the reference's\n",
+                    report.reference_floor->rest, report.reference_floor->rest_standard_error);
     }
     if (!report.plain.empty()) {
         const ConvergenceRow& last = report.rows.back();
@@ -687,6 +789,12 @@ void runBake(const BakeOptions& o) {
     }
     // The end point of every curve is the cache that is written.
     if (evaluator && (report.rows.empty() || report.rows.back().iteration != baker.iterationsDone())) evaluate();
+    if (evaluator) {
+        const auto probes_start = std::chrono::steady_clock::now();
+        evaluator->finishProbes(report.rows);
+        report.probe_floor = fitProbeFloor(report.rows);
+        evaluation_seconds += secondsSince(probes_start);
+    }
     // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
     // from here, a finished one can be extended with a larger --iterations.
     if (!checkpoint_path.empty()) saveCheckpoint(checkpoint_path, baker, resume_settings);
@@ -750,11 +858,12 @@ void runBake(const BakeOptions& o) {
             // Plain path tracing of the same view for as long as the bake plus its last render took.
             const ConvergenceRow& last = report.rows.back();
             const auto plain_start = std::chrono::steady_clock::now();
-            report.plain = evaluator->plainPathTracing(last.bake_seconds + last.render_seconds, 1u << 16);
+            report.plain = evaluator->plainPathTracing(last.bake_seconds + last.render_seconds, 1u << 16,
+                                                      &report.reference_floor);
             evaluation_seconds += secondsSince(plain_start);
         }
         report.evaluation_seconds = evaluation_seconds;
-        if (!o.quiet) printConvergence(report);
+        if (!o.quiet) printConvergence(report, evaluator->probes());
         if (!o.report_dir.empty()) {
             try {
                 writeConvergenceTables(o.report_dir, report);
@@ -932,8 +1041,9 @@ void registerBakeCommand(CLI::App& app) {
                     "Measure error against run time: at checkpoints 1, 2, 3, 4, 6, 8, 11, 16, ... iterations (two "
                     "per octave), measure the cache, then plain path tracing of the same view; write "
                     "DIR/convergence.csv, plain_path_tracing.csv, convergence.json and convergence.png "
-                    "(gnuplot). Evaluation time is not counted in the bake's time. Needs --reference or a scene "
-                    "with a known radiance");
+                    "(gnuplot). Evaluation time is not counted in the bake's time. Works on any scene: the "
+                    "cache is measured against a path-traced probe reference (--report-probes); --reference adds "
+                    "an image comparison, a scene with a known radiance an exact voxel error");
     cmd->add_option("--reference", o->reference_path,
                     "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
                     "the image error is a render through the cache against it; its size is the evaluation size");
@@ -944,10 +1054,17 @@ void registerBakeCommand(CLI::App& app) {
                     "halves whose difference splits the image error into the render's own noise and the cache's "
                     "error (the \"less render noise\" column)")
         ->capture_default_str()->check(CLI::Range(1u, 1u << 16));
+    cmd->add_option("--report-probes", o->report_probes,
+                    "Surface points (spread by area over surfaces the cache reached) at which the report compares "
+                    "the cache's voxels, at every level, with a path-traced reference; 0 = no probe measure")
+        ->capture_default_str()->check(CLI::Range(0u, 1u << 16));
+    cmd->add_option("--report-probe-spp", o->report_probe_spp,
+                    "Path samples of each probe's reference; its noise is estimated and taken out of the error")
+        ->capture_default_str()->check(CLI::Range(2u, 1u << 20));
     cmd->add_option("--target-error", o->target_error,
                     "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
-                    "mean relative error against the known radiance where the scene has one, else the image's mean "
-                    "relative error against --reference")
+                    "mean relative error against the known radiance where the scene has one, else the probes' mean "
+                    "relative error (over the probes live at the time), else the image's against --reference")
         ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
     cmd->callback([o] { runBake(*o); });

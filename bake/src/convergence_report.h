@@ -3,6 +3,9 @@
 /// @brief Error against run time during a bake (`bake --report`, `--target-error`).
 ///
 /// At checkpoints spaced logarithmically in iterations the bake is paused and measured:
+/// - probe error: the cache's voxels against a path-traced reference at surface points, per
+///   level and per material, split into the voxels' noise and the bias floor (cache_probes.h);
+///   works on any scene;
 /// - voxel error: every live voxel against the scene's known radiance (furnace rooms);
 /// - image error: a render through the cache as it stands (what `render --cache` would give
 ///   with a cache file written now) against a reference image of the same camera;
@@ -10,6 +13,7 @@
 /// so both can be compared at equal time. Evaluation time is kept out of the bake's time.
 #pragma once
 
+#include "cache_probes.h"
 #include "image_error.h"
 #include "lights.h"
 #include "path_tracer.h"
@@ -18,6 +22,8 @@
 #include "sharcbake/scene.h"
 #include "tracer.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -53,9 +59,14 @@ struct ConvergenceRow {
     /// --report-spp, not with bake time) and the rest: the cache's own error, plus the
     /// reference's noise (none without a --report-spp of at least 2).
     std::optional<RelativeMseSplit> image_split;
+    /// The cache against the probe reference. Filled for every row once the bake is over, over
+    /// the probes of the final cache (ConvergenceEvaluator::finishProbes); during the bake only
+    /// where --target-error needs it, over the probes live at the time.
+    std::optional<ProbeMeasure> probes;
+    size_t probe_record = SIZE_MAX;  ///< the cache's values at the probes (CacheProbes::record)
 
     /// The error --target-error compares: the voxel mean relative error where the scene has a
-    /// known radiance, else the image's mean relative error.
+    /// known radiance, else the probes' mean relative error, else the image's.
     std::optional<double> primaryError() const;
 };
 
@@ -82,20 +93,36 @@ class ConvergenceEvaluator {
 public:
     /// @param reference the image to compare with (same size as the view), or none: then the
     ///        image measure uses the scene's known radiance in every pixel, or is left out.
+    /// @param probe_settings probes.probes == 0 leaves the probe measure out.
+    /// @param probes_during_bake measure the probes at every checkpoint (for --target-error);
+    ///        otherwise only finishProbes() does.
     ConvergenceEvaluator(const Scene& scene, const Tracer& tracer, const LightSampler& lights, EvaluationView view,
-                         std::optional<Image> reference);
+                         std::optional<Image> reference, ProbeSettings probe_settings = {},
+                         bool probes_during_bake = false);
 
     bool measuresVoxels() const { return known_radiance_.has_value(); }
     bool measuresImage() const { return reference_.has_value(); }
+    bool measuresProbes() const { return probes_.enabled(); }
+    bool measuresAnything() const { return measuresVoxels() || measuresImage() || measuresProbes(); }
     const EvaluationView& view() const { return view_; }
+    const CacheProbes& probes() const { return probes_; }
 
     /// Measures the cache as it stands (the row's iteration, time, rays and voxel count are
     /// the caller's to fill).
-    ConvergenceRow evaluate(const SharcCache& cache) const;
+    ConvergenceRow evaluate(const SharcCache& cache);
+
+    /// Measures every row's probes over the probes of the last row's cache (the one written),
+    /// so that every checkpoint is measured on the same points.
+    void finishProbes(std::vector<ConvergenceRow>& rows);
 
     /// Plain path tracing of the view at 1, 2, 4, ... samples per pixel, each level adding
     /// samples to the last, until it has run `until_seconds` or reached `max_samples_per_pixel`.
-    std::vector<PlainPathTracingRow> plainPathTracing(double until_seconds, uint32_t max_samples_per_pixel) const;
+    /// `reference_floor`, when given, receives the reference's own floor: the last render's
+    /// relative MSE against the reference less that render's noise (from its two independent
+    /// halves), i.e. the reference's noise plus whatever differs between the renderers (pixel
+    /// filter, materials). No image error below it can be told apart from the reference's.
+    std::vector<PlainPathTracingRow> plainPathTracing(double until_seconds, uint32_t max_samples_per_pixel,
+                                                      std::optional<RelativeMseSplit>* reference_floor = nullptr) const;
 
 private:
     /// The view path traced at `samples_per_pixel`, through `cache` when given (paths end on
@@ -108,7 +135,32 @@ private:
     EvaluationView view_;
     std::optional<glm::vec3> known_radiance_;
     std::optional<Image> reference_;
+    /// Pixels whose centre ray hits a surface that does not emit (ImageComparison's mask).
+    std::vector<uint8_t> cache_mask_;
+    CacheProbes probes_;
+    bool probes_during_bake_ = false;
 };
+
+/// The cache's bias floor, fitted over the checkpoints: mean square error at the probes
+/// mse_k = floor^2 + noise_scale * v_k, v_k the voxel-noise estimate of checkpoint k (which
+/// falls with the voxels' sample counts). The estimate divides the per-sample variance of a
+/// reference path by the voxel's sample count; the cache's own samples end on the cache and are
+/// less noisy, so the fit scales it (noise_scale, at most 1) rather than trusting it.
+/// Weighted by each checkpoint's interval; checkpoints share voxels, so the floor's interval
+/// is a lower bound of its uncertainty.
+struct ProbeFloorFit {
+    double floor_squared = 0.0;     ///< relative MSE that more iterations do not remove
+    double floor_squared_ci = 0.0;  ///< 95% half-width
+    double noise_scale = 1.0;
+    size_t checkpoints = 0;         ///< used by the fit
+
+    double floor() const { return std::sqrt(std::max(0.0, floor_squared)); }
+};
+
+/// Fits the floor over the rows with probes; the rows' voxel noise (ProbeError::
+/// relative_variance, all levels and materials) is scaled by the fitted noise_scale. Nothing
+/// when fewer than 3 rows have probes.
+std::optional<ProbeFloorFit> fitProbeFloor(std::vector<ConvergenceRow>& rows);
 
 /// Everything `--report DIR` writes.
 struct ConvergenceReport {
@@ -117,6 +169,8 @@ struct ConvergenceReport {
     EvaluationView view;
     std::vector<ConvergenceRow> rows;
     std::vector<PlainPathTracingRow> plain;
+    std::optional<RelativeMseSplit> reference_floor;  ///< see plainPathTracing()
+    std::optional<ProbeFloorFit> probe_floor;
     double evaluation_seconds = 0.0;  ///< all evaluation time, kept out of the bake's
     std::optional<double> target_error;
 };

@@ -1,8 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "coverage.h"
 
-#include "distribution.h"
-#include "sampling.h"
+#include "surface_points.h"
 
 #include <algorithm>
 #include <set>
@@ -23,14 +22,7 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
                                uint32_t points) {
     CoverageReport report;
     if (scene.empty() || points == 0) return report;
-    std::vector<float> areas(scene.triangles.size());
-    for (size_t t = 0; t < scene.triangles.size(); ++t) {
-        const glm::uvec3 tri = scene.triangles[t];
-        areas[t] = 0.5f * glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
-                                                 scene.positions[tri.z] - scene.positions[tri.x]));
-        report.total_area += double(areas[t]);
-    }
-    const Distribution1D by_area(areas);
+    report.total_area = surfaceArea(scene);
     const HashGridParameters& grid = cache.settings().grid;
 
     auto reached = [&](glm::vec3 p, glm::vec3 n) {
@@ -42,18 +34,10 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
         return false;
     };
     uint32_t unreached = 0;
-    for (uint32_t i = 0; i < points; ++i) {
-        // Stratified in the area CDF, then uniform in the triangle.
-        const float u = (float(i) + bitsToUnitFloat(hashUint32(i * 3 + 1))) / float(points);
-        const uint32_t t = uint32_t(by_area.sampleDiscrete(std::min(u, kOneMinusEpsilon)));
-        const glm::vec2 b = sampleUniformTriangle({bitsToUnitFloat(hashUint32(i * 3 + 2)),
-                                                   bitsToUnitFloat(hashUint32(i * 3 + 3))});
-        const glm::uvec3 tri = scene.triangles[t];
-        const glm::vec3 p0 = scene.positions[tri.x], p1 = scene.positions[tri.y], p2 = scene.positions[tri.z];
-        const glm::vec3 p = (1.0f - b.x - b.y) * p0 + b.x * p1 + b.y * p2;
-        const glm::vec3 n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-        const bool double_sided = scene.materials[scene.triangle_materials[t]].double_sided;
-        if (!reached(p, n) && !(double_sided && reached(p, -n))) ++unreached;
+    for (const SurfacePoint& point : sampleSurfacePoints(scene, points)) {
+        if (!reached(point.position, point.normal) && !(point.double_sided && reached(point.position, -point.normal))) {
+            ++unreached;
+        }
     }
     report.points = points;
     report.unreached_area = double(unreached) / double(points);

@@ -19,26 +19,69 @@ void requireSameSize(const Image& image, const Image& reference) {
     }
 }
 
+bool finite(glm::vec3 x) { return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z); }
+
+/// Mean relative error of the kComparisonTile^2 tile means (non-finite pixels left out of both).
+double tileMeanRelativeError(const Image& image, const Image& reference) {
+    double sum = 0.0;
+    uint64_t terms = 0;
+    for (int ty = 0; ty < image.height; ty += kComparisonTile) {
+        for (int tx = 0; tx < image.width; tx += kComparisonTile) {
+            glm::dvec3 x(0.0), r(0.0);
+            int pixels = 0;
+            for (int y = ty; y < std::min(ty + kComparisonTile, image.height); ++y) {
+                for (int px = tx; px < std::min(tx + kComparisonTile, image.width); ++px) {
+                    const size_t i = size_t(y) * size_t(image.width) + size_t(px);
+                    if (!finite(image.pixels[i])) continue;
+                    x += glm::dvec3(image.pixels[i]);
+                    r += glm::dvec3(reference.pixels[i]);
+                    ++pixels;
+                }
+            }
+            if (pixels == 0) continue;
+            x /= double(pixels);
+            r /= double(pixels);
+            for (int c = 0; c < 3; ++c) sum += std::abs(x[c] - r[c]) / (std::abs(r[c]) + kEpsilon);
+            terms += 3;
+        }
+    }
+    return terms ? sum / double(terms) : 0.0;
+}
+
 }  // namespace
 
-ImageComparison compareImages(const Image& image, const Image& reference) {
+ImageComparison compareImages(const Image& image, const Image& reference, const std::vector<uint8_t>* mask) {
     requireSameSize(image, reference);
+    if (mask && mask->size() != reference.pixels.size()) {
+        throw std::invalid_argument("the image mask has " + std::to_string(mask->size()) + " pixels, the images " +
+                                    std::to_string(reference.pixels.size()));
+    }
     ImageComparison e;
     double sum_image = 0.0, sum_reference = 0.0;
     const size_t n = image.pixels.size();
     for (size_t i = 0; i < n; ++i) {
         const glm::vec3 x = image.pixels[i];
         const glm::vec3 r = reference.pixels[i];
-        if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) {
+        const bool masked = !mask || (*mask)[i] != 0;
+        e.masked_pixels += masked ? 1 : 0;
+        if (!finite(x)) {
             ++e.non_finite_pixels;
             e.relative_mse += 3.0;
             e.mean_relative_error += 3.0;
+            e.masked_relative_mse += masked ? 3.0 : 0.0;
+            e.masked_mean_relative_error += masked ? 3.0 : 0.0;
             continue;
         }
         for (int c = 0; c < 3; ++c) {
             const double d = double(x[c]) - double(r[c]);
-            e.relative_mse += d * d / (double(r[c]) * double(r[c]) + kEpsilon);
-            e.mean_relative_error += std::abs(d) / (std::abs(double(r[c])) + kEpsilon);
+            const double squared = d * d / (double(r[c]) * double(r[c]) + kEpsilon);
+            const double relative = std::abs(d) / (std::abs(double(r[c])) + kEpsilon);
+            e.relative_mse += squared;
+            e.mean_relative_error += relative;
+            if (masked) {
+                e.masked_relative_mse += squared;
+                e.masked_mean_relative_error += relative;
+            }
             sum_image += double(x[c]);
             sum_reference += double(r[c]);
         }
@@ -46,6 +89,10 @@ ImageComparison compareImages(const Image& image, const Image& reference) {
     const double count = 3.0 * double(std::max<size_t>(n, 1));
     e.relative_mse /= count;
     e.mean_relative_error /= count;
+    const double masked_count = 3.0 * double(std::max<uint64_t>(e.masked_pixels, 1));
+    e.masked_relative_mse /= masked_count;
+    e.masked_mean_relative_error /= masked_count;
+    e.tile_mean_relative_error = tileMeanRelativeError(image, reference);
     e.relative_bias = sum_reference > 0.0 ? (sum_image - sum_reference) / sum_reference : 0.0;
     return e;
 }

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace sharcbake {
 
@@ -15,15 +16,31 @@ namespace sharcbake {
 /// - mean relative error: |x - r| / (|r| + epsilon);
 /// - mean (signed) bias relative to the reference mean: (mean x - mean r) / mean r.
 /// epsilon = 1e-2 keeps black reference pixels from dominating.
+/// Two more see past per-pixel noise and past pixels the cache plays no part in:
+/// - tile mean relative error: both images averaged over kComparisonTile^2-pixel tiles first,
+///   which divides a render's noise variance by the tile's pixel count and keeps what is smooth
+///   (a cache's bias, a light leak);
+/// - masked: only the pixels of the mask (for a render through a cache: pixels whose camera ray
+///   hits a surface that does not emit, where everything but emission comes from the cache).
 struct ImageComparison {
     double relative_mse = 0.0;
     double mean_relative_error = 0.0;
     double relative_bias = 0.0;
     uint64_t non_finite_pixels = 0;  ///< pixels of the test image with NaN/Inf (counted as error 1)
+    double tile_mean_relative_error = 0.0;
+    double masked_relative_mse = 0.0;         ///< as relative_mse, over the mask (all pixels without one)
+    double masked_mean_relative_error = 0.0;  ///< as mean_relative_error, over the mask
+    uint64_t masked_pixels = 0;               ///< pixels in the mask
 };
 
-/// Compares `image` with `reference`. Throws std::invalid_argument if the sizes differ.
-ImageComparison compareImages(const Image& image, const Image& reference);
+/// Tile edge, in pixels, of ImageComparison::tile_mean_relative_error (partial tiles at the
+/// right and bottom edges count as tiles).
+constexpr int kComparisonTile = 8;
+
+/// Compares `image` with `reference`; `mask` (width x height, non-zero = include), when given,
+/// selects the pixels of the masked measures. Throws std::invalid_argument if sizes differ.
+ImageComparison compareImages(const Image& image, const Image& reference,
+                              const std::vector<uint8_t>* mask = nullptr);
 
 /// The relative MSE of a Monte Carlo render made of two independent renders `a` and `b` (of
 /// `a_samples` and `b_samples` samples per pixel; the render is their sample-weighted mean c),

@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file surface_points.h
+/// @brief Points spread over a scene's surfaces by area, for measures that must not depend on
+/// where a camera went (coverage, the probe reference of the error report).
+#pragma once
+
+#include "sharcbake/scene.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace sharcbake {
+
+struct SurfacePoint {
+    glm::vec3 position;
+    glm::vec3 normal;  ///< geometric, unit, the triangle's front side
+    uint32_t triangle = 0;
+    bool double_sided = false;  ///< the material is seen from both sides
+};
+
+/// `count` points, stratified in the scene's area and uniform within each triangle. The same
+/// scene, count and seed give the same points. Empty for an empty scene; degenerate triangles
+/// (no area) are never picked.
+std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count, uint32_t seed = 0);
+
+/// The scene's total surface area (world units squared).
+double surfaceArea(const Scene& scene);
+
+}  // namespace sharcbake
