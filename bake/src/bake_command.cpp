@@ -351,8 +351,8 @@ void printProbeSummary(const ConvergenceReport& report, const CacheProbes& probe
     }
     for (const ProbeRegionError& region : last.probes->regions) {
         if (!region.standsOut()) continue;
-        std::printf("    material %s stands out: signed bias %+.2f%% +- %.2f%% over %llu probes\n",
-                    region.material.empty() ? "(unnamed)" : region.material.c_str(),
+        std::printf("    %s stands out: signed bias %+.2f%% +- %.2f%% over %llu probes\n",
+                    region.name.c_str(),
                     100.0 * region.error.relative_bias, 100.0 * region.error.relative_bias_ci,
                     (unsigned long long)region.error.probes);
     }

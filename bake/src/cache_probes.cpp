@@ -93,8 +93,10 @@ CacheProbes::CacheProbes(const Scene& scene, const Tracer& tracer, const LightSa
     for (uint32_t i = 0; i < points.size(); ++i) {
         Candidate c;
         c.point = points[i];
-        // Double-sided surfaces: either side, at random (a one-sided back is never seen).
-        const bool back = points[i].double_sided && (hashCombine(settings_.seed, i) & 1u) != 0;
+        // Double-sided surfaces: the side that faces the view (a one-sided back is never seen;
+        // the outside of a closed double-sided room faces the void, where no lookup comes from).
+        const bool back = points[i].double_sided &&
+                          glm::dot(points[i].normal, settings_.view_position - points[i].position) < 0.0f;
         c.normal = back ? -points[i].normal : points[i].normal;
         if (!isOpen(scene, tracer, c.point.position + ray_offset_ * c.normal, c.normal, open_distance)) continue;
         c.material = scene.triangle_materials[points[i].triangle];
@@ -177,28 +179,47 @@ void CacheProbes::computeReferences(const std::vector<Pair>& pairs) {
         const Frame frame(candidate.normal);
         TraceCounters counters;
         // Sums in a fixed order by one task: the reference does not depend on the thread count.
-        glm::dvec3 sum(0.0), sum_squares(0.0);
-        uint32_t samples = 0;
-        for (uint32_t s = 0; s < settings_.reference_samples; ++s) {
-            PixelSampler sampler(settings_.seed, c, s);
-            const glm::vec3 towards_viewer = frame.toWorld(sampleCosineHemisphere(sampler.next2D()));
-            sampler.startDimension(PathTracer::kFirstBounceDimension);
-            Ray ray;
-            ray.origin = candidate.point.position + ray_offset_ * towards_viewer;
-            ray.direction = -towards_viewer;
-            ray.t_max = 2.0f * ray_offset_;
-            const glm::dvec3 L(path_tracer.radiance(ray, sampler, counters));
-            if (!std::isfinite(L.x) || !std::isfinite(L.y) || !std::isfinite(L.z)) continue;
-            sum += L;
-            sum_squares += L * L;
-            ++samples;
+        const uint32_t batches = std::min(kReferenceBatches, std::max(settings_.reference_samples, 1u));
+        const uint32_t per_batch = std::max(settings_.reference_samples / batches, 1u);
+        glm::dvec3 sum(0.0), sum_squares(0.0), batch_sum(0.0), batch_squares(0.0);
+        uint32_t samples = 0, used_batches = 0;
+        for (uint32_t batch = 0; batch < batches; ++batch) {
+            glm::dvec3 in_batch(0.0);
+            uint32_t batch_samples = 0;
+            for (uint32_t s = 0; s < per_batch; ++s) {
+                // Each batch scrambles the sequence with a hash of its own: independent batches.
+                PixelSampler sampler(settings_.seed, c * kReferenceBatches + batch, s);
+                const glm::vec3 towards_viewer = frame.toWorld(sampleCosineHemisphere(sampler.next2D()));
+                sampler.startDimension(PathTracer::kFirstBounceDimension);
+                Ray ray;
+                ray.origin = candidate.point.position + ray_offset_ * towards_viewer;
+                ray.direction = -towards_viewer;
+                ray.t_max = 2.0f * ray_offset_;
+                const glm::dvec3 L(path_tracer.radiance(ray, sampler, counters));
+                if (!std::isfinite(L.x) || !std::isfinite(L.y) || !std::isfinite(L.z)) continue;
+                in_batch += L;
+                sum_squares += L * L;
+                ++batch_samples;
+            }
+            if (batch_samples == 0) continue;
+            sum += in_batch;
+            samples += batch_samples;
+            const glm::dvec3 batch_mean = in_batch / double(batch_samples);
+            batch_sum += batch_mean;
+            batch_squares += batch_mean * batch_mean;
+            ++used_batches;
         }
         Reference& reference = references_[c];
         if (samples > 0) {
             reference.mean = sum / double(samples);
             if (samples > 1) {
-                reference.sample_variance = glm::max(
-                    (sum_squares - sum * reference.mean) / double(samples - 1), glm::dvec3(0.0));
+                reference.sample_variance =
+                    glm::max((sum_squares - sum * reference.mean) / double(samples - 1), glm::dvec3(0.0));
+            }
+            if (used_batches > 1) {
+                const glm::dvec3 batch_mean = batch_sum / double(used_batches);
+                const glm::dvec3 spread = (batch_squares - batch_sum * batch_mean) / double(used_batches - 1);
+                reference.mean_variance = glm::max(spread / double(used_batches), glm::dvec3(0.0));
             }
         }
         reference.done = true;
@@ -222,7 +243,6 @@ ProbeError CacheProbes::errorOf(const std::vector<Pair>& pairs, const Record& re
     std::vector<double> absolute, squared, signed_error;
     double variance_sum = 0.0, reference_noise_sum = 0.0;
     const size_t n = candidates_.size();
-    const double samples = double(std::max(settings_.reference_samples, 1u));
     for (const Pair& pair : pairs) {
         const auto level = std::lower_bound(record.levels.begin(), record.levels.end(), pair.level);
         const Value* value = nullptr;
@@ -243,9 +263,8 @@ ProbeError CacheProbes::errorOf(const std::vector<Pair>& pairs, const Record& re
             abs_sum += std::abs(d);
             square_sum += d * d;
             signed_sum += d;
-            const double relative_sample_variance = reference.sample_variance[ch] / (grey * grey);
-            noise += relative_sample_variance / samples;
-            variance += relative_sample_variance / double(value->sample_weight);
+            noise += reference.mean_variance[ch] / (grey * grey);
+            variance += reference.sample_variance[ch] / (grey * grey) / double(value->sample_weight);
         }
         if (abs_sum / 3.0 > kProbeLeakRatio) {
             ++e.leaks;
@@ -315,7 +334,20 @@ ProbeMeasure CacheProbes::measure(size_t index, size_t population_index) {
             return pair.view_level && candidates_[pair.candidate].material == material;
         });
         if (in_region.empty()) continue;
-        m.regions.push_back(ProbeRegionError{scene_.materials[material].name, errorOf(in_region, record, grey_floor)});
+        m.regions.push_back(ProbeRegionError{"material '" + scene_.materials[material].name + "'",
+                                             errorOf(in_region, record, grey_floor)});
+    }
+    const glm::vec3 centre = 0.5f * (scene_.bounds_min + scene_.bounds_max);
+    for (uint32_t octant = 0; octant < 8; ++octant) {
+        const std::vector<Pair> in_octant = select([&](const Pair& pair) {
+            const glm::vec3 p = candidates_[pair.candidate].point.position;
+            const uint32_t of = (p.x >= centre.x ? 1u : 0u) | (p.y >= centre.y ? 2u : 0u) | (p.z >= centre.z ? 4u : 0u);
+            return pair.view_level && of == octant;
+        });
+        if (in_octant.empty()) continue;
+        const std::string name = std::string("octant x") + (octant & 1u ? "+" : "-") + " y" + (octant & 2u ? "+" : "-") +
+                                 " z" + (octant & 4u ? "+" : "-");
+        m.regions.push_back(ProbeRegionError{name, errorOf(in_octant, record, grey_floor)});
     }
     return m;
 }

@@ -86,9 +86,9 @@ std::string probeMeasureJson(const ProbeMeasure& m) {
         json += std::string(i ? ", " : "") + "{\"level\": " + std::to_string(m.levels[i].level) +
                 ", \"error\": " + probeErrorJson(m.levels[i].error) + "}";
     }
-    json += "], \"materials\": [";
+    json += "], \"regions\": [";
     for (size_t i = 0; i < m.regions.size(); ++i) {
-        json += std::string(i ? ", " : "") + "{\"material\": " + jsonString(m.regions[i].material) +
+        json += std::string(i ? ", " : "") + "{\"name\": " + jsonString(m.regions[i].name) +
                 ", \"stands_out\": " + (m.regions[i].standsOut() ? "true" : "false") +
                 ", \"error\": " + probeErrorJson(m.regions[i].error) + "}";
     }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 namespace sharcbake {
 namespace {
@@ -27,6 +28,37 @@ TEST(CompareImages, ExactOnAConstantOffset) {
     EXPECT_NEAR(e.mean_relative_error, 0.5 / (2.0 + 1e-2), 1e-9);
     EXPECT_NEAR(e.relative_bias, 0.25, 1e-9);
     EXPECT_EQ(e.non_finite_pixels, 0u);
+}
+
+// Noise that alternates pixel by pixel averages out over 8x8 tiles; a bias does not. A mask
+// that keeps only the unbiased half measures nothing there.
+TEST(CompareImages, TilesAverageNoiseAwayAndTheMaskSelectsPixels) {
+    const int width = 16, height = 8;
+    const Image reference = filled(width, height, glm::vec3(2.0f));
+    Image image = reference;
+    std::vector<uint8_t> right_half(size_t(width) * size_t(height), 0);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const size_t i = size_t(y) * size_t(width) + size_t(x);
+            const float noise = (x + y) % 2 == 0 ? 0.5f : -0.5f;
+            // Left tile: noise around a 10% bias. Right tile: exact.
+            image.pixels[i] = x < 8 ? glm::vec3(2.2f + noise) : glm::vec3(2.0f);
+            right_half[i] = x >= 8 ? 1 : 0;
+        }
+    }
+    const ImageComparison e = compareImages(image, reference, &right_half);
+    // Per pixel, the left tile is off by 0.7 or 0.3 (mean 0.5); over its tile, by 0.2.
+    EXPECT_NEAR(e.mean_relative_error, 0.5 * (0.5 / 2.01), 1e-6);
+    EXPECT_NEAR(e.tile_mean_relative_error, 0.5 * (0.2 / 2.01), 1e-6);
+    EXPECT_EQ(e.masked_pixels, uint64_t(width * height / 2));
+    EXPECT_NEAR(e.masked_mean_relative_error, 0.0, 1e-9);
+    EXPECT_NEAR(e.masked_relative_mse, 0.0, 1e-9);
+    // Without a mask the masked measures are the plain ones.
+    const ImageComparison all = compareImages(image, reference);
+    EXPECT_EQ(all.masked_pixels, uint64_t(width * height));
+    EXPECT_NEAR(all.masked_mean_relative_error, all.mean_relative_error, 1e-12);
+    std::vector<uint8_t> wrong_size(3, 1);
+    EXPECT_THROW(compareImages(image, reference, &wrong_size), std::invalid_argument);
 }
 
 TEST(CompareImages, RefusesDifferentSizes) {

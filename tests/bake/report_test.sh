@@ -21,9 +21,14 @@ folder, condition = sys.argv[1], sys.argv[2]
 columns = ["iteration", "bake_seconds", "render_seconds", "total_seconds", "rays", "live_voxels",
            "voxel_mean_relative_error", "voxel_rms_relative_error", "voxel_max_relative_error",
            "voxel_within_1_percent", "image_relative_mse", "image_mean_relative_error", "image_relative_bias",
-           "image_render_noise_relative_mse", "image_cache_relative_mse", "image_cache_relative_mse_standard_error"]
+           "image_render_noise_relative_mse", "image_cache_relative_mse", "image_cache_relative_mse_standard_error",
+           "image_tile_mean_relative_error", "image_masked_mean_relative_error", "image_masked_relative_mse",
+           "probe_pairs", "probe_not_live", "probe_mean_relative_error", "probe_rms_error", "probe_relative_mse",
+           "probe_relative_mse_ci95", "probe_voxel_noise", "probe_bias_squared", "probe_relative_bias",
+           "probe_relative_bias_ci95", "probe_reference_noise", "probe_leaks"]
 plain_columns = ["samples_per_pixel", "seconds", "rays", "image_relative_mse", "image_mean_relative_error",
-                 "image_relative_bias"]
+                 "image_relative_bias", "image_tile_mean_relative_error", "image_masked_mean_relative_error",
+                 "image_masked_relative_mse"]
 def read(name, expected):
     with open(folder + "/" + name) as f:
         reader = csv.DictReader(f)
@@ -34,6 +39,13 @@ plain = read("plain_path_tracing.csv", plain_columns)
 report = json.load(open(folder + "/convergence.json"))
 assert len(report["checkpoints"]) == len(rows) and len(report["plain_path_tracing"]) == len(plain)
 assert open(folder + "/convergence.png", "rb").read(8) == b"\x89PNG\r\n\x1a\n", "convergence.png is not a PNG"
+# Probe rows: the RMS is the root of the mean square, which splits into voxel noise and bias.
+for r in rows:
+    if r["probe_rms_error"] is None: continue
+    assert r["probe_pairs"] > 0 and r["probe_relative_mse_ci95"] >= 0 and r["probe_reference_noise"] >= 0, r
+    assert abs(r["probe_rms_error"] - max(0, r["probe_relative_mse"]) ** 0.5) <= 1e-4 * r["probe_rms_error"] + 1e-6, r
+    assert abs(r["probe_relative_mse"] - r["probe_voxel_noise"] - r["probe_bias_squared"]) <= 1e-4 + 1e-3 * r["probe_relative_mse"], r
+probe_rows = [r for r in rows if r["probe_rms_error"] is not None]
 iterations = [r["iteration"] for r in rows]
 assert iterations == sorted(set(iterations)) and iterations[0] == 1, iterations
 assert all(r["bake_seconds"] >= 0 and r["rays"] > 0 for r in rows) and rows[-1]["live_voxels"] > 0
@@ -56,10 +68,10 @@ small="--resolution 160x160 --voxel-budget 1024 --capacity 262144 --report-resol
 
 # Usage errors come before any work.
 expect 1 "--report without anything to measure against" \
-    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/none"
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/none" --report-probes 0
 grep -q "reference" "$work/err.txt" || fail "the message does not say to give --reference"
 expect 1 "--target-error without anything to measure against" \
-    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --target-error 0.1
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --target-error 0.1 --report-probes 0
 expect 2 "missing --reference" \
     "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/r" --reference "$work/none.exr"
 expect 1 "--report-resolution different from the reference" sh -c \
@@ -100,5 +112,25 @@ check_report "$work/cornell" "Cornell box: image error falls" \
      rows[-1]["image_render_noise_relative_mse"] < 0.75 * rows[0]["image_render_noise_relative_mse"] and
      rows[-1]["voxel_mean_relative_error"] is None and len(plain) >= 2'
 grep -q "plain path tracing" "$work/out.txt" || fail "the summary does not compare with plain path tracing"
+
+# Any scene, no reference: the probes measure the cache itself. With the defaults the Cornell
+# box's error at the probes falls with bake time and flattens at the bias floor the report states:
+# the last checkpoints lie within a factor 1.5 of one another and the end within 2x the floor.
+expect 0 "Cornell box bake with --report and no reference" \
+    "$sharcbake" bake "$cornell" -o "$work/probes.sharc" --report "$work/probes"
+check_report "$work/probes" "Cornell box: probe error falls and flattens at the stated floor" \
+    'len(probe_rows) >= 10 and probe_rows[0]["probe_rms_error"] > 2 * probe_rows[-1]["probe_rms_error"] and
+     max(r["probe_rms_error"] for r in probe_rows[-3:]) < 1.5 * min(r["probe_rms_error"] for r in probe_rows[-3:]) and
+     report["probe_floor"]["bias_floor"] > 0 and probe_rows[-1]["probe_rms_error"] < 2 * report["probe_floor"]["bias_floor"] and
+     probe_rows[-1]["probe_pairs"] >= 1000 and report["reference"] == "probe reference" and len(plain) == 0'
+grep -q "bias floor (fitted over" "$work/out.txt" || fail "the summary does not state the bias floor"
+
+# --target-error on a scene without a known radiance stops on the probes' mean relative error.
+expect 0 "Cornell box bake with --target-error on the probes" \
+    "$sharcbake" bake "$cornell" -o "$work/probe_target.sharc" --iterations 100000 --target-error 0.3 \
+    --report-probes 512 --report "$work/probe_target"
+check_report "$work/probe_target" "--target-error on the probes: stopped early with the target met" \
+    'rows[-1]["iteration"] < 100000 and report["target_error"] == 0.3 and
+     report["checkpoints"][-1]["probes"]["view"]["mean_relative_error"] <= 0.3 + 0.05'
 
 finish "report"

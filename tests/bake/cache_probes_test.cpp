@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: Apache-2.0
+// The probe reference of `bake --report`: its references are right where the answer is known,
+// its noise is taken out, and a cache biased in one region is caught in that region.
+#include "baker.h"
+#include "cache_probes.h"
+#include "camera_path.h"
+#include "lights.h"
+#include "sharcbake/scene_loader.h"
+#include "tracer.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+
+namespace sharcbake {
+namespace {
+
+std::string scenePath(const std::string& name) {
+    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
+}
+
+/// A short bake with coarse voxels, as the furnace tests make it.
+struct ShortBake {
+    Scene scene;
+    std::unique_ptr<Tracer> tracer;
+    std::unique_ptr<LightSampler> lights;
+    std::unique_ptr<CameraPath> path;
+    CacheData data;
+
+    ShortBake(const std::string& name, uint32_t iterations, float scene_scale = 5.0f, int resolution = 96) {
+        scene = loadGltf(scenePath(name));
+        tracer = std::make_unique<Tracer>(scene);
+        lights = std::make_unique<LightSampler>(scene);
+        path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
+        BakeSettings settings;
+        settings.width = settings.height = resolution;
+        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+        settings.sharc.grid.scene_scale = scene_scale;
+        Baker baker(*tracer, *lights, *path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        for (uint32_t i = 0; i < iterations; ++i) baker.runIteration();
+        data = toCacheData(baker.cache());
+    }
+
+    ProbeSettings probeSettings(uint32_t probes, uint32_t samples) const {
+        ProbeSettings settings;
+        settings.probes = probes;
+        settings.reference_samples = samples;
+        settings.view_position = scene.cameras.at(0).position;
+        return settings;
+    }
+};
+
+const ProbeRegionError* region(const ProbeMeasure& m, const std::string& name) {
+    for (const ProbeRegionError& r : m.regions) {
+        if (r.name == name) return &r;
+    }
+    return nullptr;
+}
+
+// In the rho = 0.9 furnace every surface leaves radiance 10. A cache that holds exactly 10 in
+// every voxel is right everywhere, so what the probes measure is their references' own error:
+// no bias beyond its interval, and a mean square that is only the references' noise, which
+// the measure takes out. Then the half of the room below x = 0 is made 5% too bright: its
+// octants show +5% and stand out, the others do not move.
+TEST(CacheProbes, FurnaceReferencesAreExactAndABiasedRegionStandsOut) {
+    ShortBake bake("furnace_rho090", 8);
+    CacheData exact = bake.data;
+    for (CacheVoxel& v : exact.voxels) v.radiance[0] = v.radiance[1] = v.radiance[2] = 10.0f;
+    CacheData biased = exact;
+    const HashGridParameters grid = biased.gridParameters();
+    const float centre_x = 0.5f * (bake.scene.bounds_min.x + bake.scene.bounds_max.x);
+    for (CacheVoxel& v : biased.voxels) {
+        if (voxelCenter(v.key, grid).x < centre_x) v.radiance[0] = v.radiance[1] = v.radiance[2] = 10.5f;
+    }
+    CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, bake.probeSettings(256, 256));
+    ASSERT_TRUE(probes.enabled());
+    const size_t exact_record = probes.record(exact);
+    const size_t biased_record = probes.record(biased);
+    const ProbeMeasure m = probes.measure(exact_record, exact_record);
+    ASSERT_GE(m.view.probes, 128u);
+    EXPECT_EQ(m.view.leaks, 0u);
+    EXPECT_GT(m.view.reference_noise, 0.0);
+    EXPECT_LT(std::abs(m.view.relative_bias), std::max(m.view.relative_bias_ci, 0.005)) << m.view.relative_bias;
+    // (C - R)^2 less Var(R) has expectation 0 here: within its interval, and far below the noise.
+    EXPECT_LT(std::abs(m.view.relative_mse), m.view.relative_mse_ci + 1e-6) << m.view.relative_mse;
+    EXPECT_LT(std::abs(m.view.relative_mse), 0.5 * m.view.reference_noise);
+    for (const ProbeRegionError& r : m.regions) EXPECT_FALSE(r.standsOut()) << r.name;
+
+    const ProbeMeasure b = probes.measure(biased_record, exact_record);
+    int standing_out = 0;
+    for (const ProbeRegionError& r : b.regions) {
+        if (r.name.rfind("octant x-", 0) == 0) {
+            EXPECT_NEAR(r.error.relative_bias, 0.05, std::max(0.01, r.error.relative_bias_ci)) << r.name;
+            EXPECT_TRUE(r.standsOut()) << r.name;
+            ++standing_out;
+        } else if (r.name.rfind("octant x+", 0) == 0) {
+            EXPECT_LT(std::abs(r.error.relative_bias), r.error.relative_bias_ci + 0.005) << r.name;
+            EXPECT_FALSE(r.standsOut()) << r.name;
+        }
+    }
+    EXPECT_GE(standing_out, 2);
+    // The references are computed once and kept.
+    const uint64_t referenced = probes.referencedPoints();
+    EXPECT_EQ(probes.measure(exact_record, exact_record).view.relative_mse, m.view.relative_mse);
+    EXPECT_EQ(probes.referencedPoints(), referenced);
+}
+
+// A baked Cornell box whose red wall (x = -0.5) is made 5% too bright: the red region's signed
+// bias rises by 5% of the cache's value (C / R near 1 + the region's own bias), measured tightly
+// enough to tell 5% from nothing, and the green wall opposite does not move.
+TEST(CacheProbes, ACornellBoxBiasedByFivePercentOnOneWallShowsIt) {
+    ShortBake bake("cornell_box", 256, 50.0f, 256);
+    CacheData biased = bake.data;
+    const HashGridParameters grid = biased.gridParameters();
+    for (CacheVoxel& v : biased.voxels) {
+        if (voxelCenter(v.key, grid).x < -0.4f) {
+            for (float& c : v.radiance) c *= 1.05f;
+        }
+    }
+    CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, bake.probeSettings(2048, 256));
+    const size_t unbiased_record = probes.record(bake.data);
+    const size_t biased_record = probes.record(biased);
+    const ProbeMeasure before = probes.measure(unbiased_record, unbiased_record);
+    const ProbeMeasure after = probes.measure(biased_record, unbiased_record);
+
+    const ProbeRegionError* red_before = region(before, "material 'red'");
+    const ProbeRegionError* red_after = region(after, "material 'red'");
+    const ProbeRegionError* green_before = region(before, "material 'green'");
+    const ProbeRegionError* green_after = region(after, "material 'green'");
+    ASSERT_TRUE(red_before && red_after && green_before && green_after);
+    for (const ProbeRegionError& r : before.regions) {
+        std::printf("%s: %llu probes, bias %+.4f +- %.4f, RMS %.3f\n", r.name.c_str(),
+                    (unsigned long long)r.error.probes, r.error.relative_bias, r.error.relative_bias_ci,
+                    r.error.rmsError());
+    }
+    EXPECT_GE(red_after->error.probes, 200u);
+    const double shift = red_after->error.relative_bias - red_before->error.relative_bias;
+    EXPECT_NEAR(shift, 0.05 * (1.0 + red_before->error.relative_bias), 0.01) << shift;
+    EXPECT_LT(red_after->error.relative_bias_ci, 0.025) << "too few probes to tell a 5% bias from none";
+    EXPECT_TRUE(red_after->standsOut()) << red_after->error.relative_bias;
+    EXPECT_EQ(green_after->error.relative_bias, green_before->error.relative_bias);
+}
+
+TEST(CacheProbes, NoProbesMeansNoWork) {
+    ShortBake bake("furnace_rho050", 2);
+    ProbeSettings settings = bake.probeSettings(0, 16);
+    CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, settings);
+    EXPECT_FALSE(probes.enabled());
+    const size_t record = probes.record(bake.data);
+    EXPECT_EQ(probes.measure(record, record).view.probes, 0u);
+    EXPECT_EQ(probes.referencedPoints(), 0u);
+}
+
+}  // namespace
+}  // namespace sharcbake
