@@ -52,7 +52,8 @@ demo: build
 	@echo "(bake statistics), cornell_box_cached.exr/.png (paths ending on the cache),"
 	@echo "cornell_box_cache_view.exr/.png (the cache seen from the camera) and"
 	@echo "cornell_box_reference.exr/.png (plain path tracing, 1024 spp; the error above is against it)."
-	@echo "Error against run time: $(OUT_DIR)/report/convergence.png (tables: convergence.csv,"
+	@echo "Error against run time: $(OUT_DIR)/report/convergence.png, first panel the cache against its"
+	@echo "probe reference, falling to its bias floor (tables: convergence.csv,"
 	@echo "plain_path_tracing.csv, convergence.json; README.md, 'Error against run time', explains them)."
 
 test: build

@@ -310,9 +310,10 @@ void printProbeSummary(const ConvergenceReport& report, const CacheProbes& probe
                 "no voxel at the level the evaluation camera looks them up at\n",
                 (unsigned long long)probes.referencedPoints(), probes.settings().reference_samples,
                 probes.referenceSeconds(), (unsigned long long)end.not_live);
-    std::printf("  the cache's RMS error at the camera's levels: %s after %u iterations, %s after %u; of the last, "
+    std::printf("  the cache's RMS error at the camera's levels: %s after %u iteration%s, %s after %u; of the last, "
                 "voxel noise %.3g%%, bias %.3g%% (signed %+.2f%% +- %.2f%%)\n",
-                probeRms(first->probes->view).c_str(), first->iteration, probeRms(end).c_str(), last.iteration,
+                probeRms(first->probes->view).c_str(), first->iteration, first->iteration == 1 ? "" : "s",
+                probeRms(end).c_str(), last.iteration,
                 100.0 * std::sqrt(std::max(0.0, end.relative_variance)), 100.0 * end.biasFloor(),
                 100.0 * end.relative_bias, 100.0 * end.relative_bias_ci);
     if (fit) {
