@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The glTF BRDF: energy (white furnace), sampling against evaluation, pdf consistency.
-#include "bsdf.h"
-#include "sampling.h"
+#include "tracing/bsdf.h"
+#include "tracing/sampling.h"
 
 #include <gtest/gtest.h>
 

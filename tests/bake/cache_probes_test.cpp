@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // The probe reference of `bake --report`: its references are right where the answer is known,
 // its noise is taken out, and a cache biased in one region is caught in that region.
-#include "baker.h"
-#include "cache_probes.h"
-#include "camera_path.h"
-#include "lights.h"
+#include "sharc/baker.h"
+#include "reports/cache_probes.h"
+#include "sharc/camera_path.h"
+#include "tracing/lights.h"
 #include "sharcbake/scene_loader.h"
-#include "tracer.h"
+#include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
 

@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: Apache-2.0
 // `render --cache`: SHaRC's query eligibility tests, BakedCache lookups, and a cached render of
 // the rho = 0.9 furnace, whose every surface has outgoing radiance Le / (1 - rho) = 10.
-#include "baker.h"
-#include "cache_query.h"
-#include "camera_path.h"
-#include "lights.h"
-#include "path_tracer.h"
-#include "render.h"
+#include "sharc/baker.h"
+#include "sharc/cache_query.h"
+#include "sharc/camera_path.h"
+#include "tracing/lights.h"
+#include "tracing/path_tracer.h"
+#include "tracing/render.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene_loader.h"
-#include "surface.h"
-#include "tracer.h"
+#include "tracing/surface.h"
+#include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
 

@@ -2,14 +2,14 @@
 // Analytic checks on the furnace rooms, where every surface's outgoing radiance is exactly
 // Le / (1 - rho): the reference path tracer's image and the baked cache's voxels must match it.
 // Also: renders and bakes are identical for any thread count.
-#include "baker.h"
-#include "camera_path.h"
-#include "lights.h"
-#include "path_tracer.h"
-#include "render.h"
+#include "sharc/baker.h"
+#include "sharc/camera_path.h"
+#include "tracing/lights.h"
+#include "tracing/path_tracer.h"
+#include "tracing/render.h"
 #include "sharcbake/runtime.h"
 #include "sharcbake/scene_loader.h"
-#include "tracer.h"
+#include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

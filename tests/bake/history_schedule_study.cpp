@@ -3,7 +3,7 @@
 // exactly 10) baked with each schedule; the mean relative error of the voxels with at least 32
 // samples, and the share within 2%, at power-of-two iteration counts. A study, not a test.
 // Usage: history_schedule_study [SCENES_DIR]   (prints one line per schedule)
-#include "baker.h"
+#include "sharc/baker.h"
 #include "sharcbake/scene_loader.h"
 
 #include <chrono>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Image error measures (sharcbake compare, bake --report): exact values on small images, and the
 // render-noise estimate against the true variance of a simulated Monte Carlo render.
-#include "image_error.h"
+#include "reports/image_error.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The bake's cache: fixed-point accumulation, history schedules, table pressure.
-#include "sharc_cache.h"
+#include "sharc/sharc_cache.h"
 
 #include <gtest/gtest.h>
 

@@ -4,16 +4,15 @@
 // radiance, on the Cornell box against the single bake. A bake resumed from a checkpoint is the
 // uninterrupted bake, byte for byte. A growing table (--capacity auto) bakes the same voxels as
 // a large fixed one, and resumes across its growth.
-#include "baker.h"
-#include "capacity.h"
-#include "camera_path.h"
-#include "checkpoint.h"
-#include "command_support.h"
-#include "lights.h"
+#include "sharc/baker.h"
+#include "sharc/capacity.h"
+#include "sharc/camera_path.h"
+#include "sharc/checkpoint.h"
+#include "tracing/lights.h"
 #include "sharcbake/cache_merge.h"
 #include "sharcbake/format.h"
 #include "sharcbake/scene_loader.h"
-#include "tracer.h"
+#include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
 
@@ -174,8 +173,8 @@ TEST(Checkpoint, ResumedBakeIsTheUninterruptedBake) {
 
     // Other settings, or a baker that already ran, are refused.
     std::unique_ptr<Baker> other = cornell.baker(1, 3);
-    EXPECT_THROW(resumeFromCheckpoint(file, {{"scene_hash", "test"}, {"seed", "1"}}, *other), CommandError);
-    EXPECT_THROW(resumeFromCheckpoint(file, settings, *uninterrupted), CommandError);
+    EXPECT_THROW(resumeFromCheckpoint(file, {{"scene_hash", "test"}, {"seed", "1"}}, *other), CheckpointError);
+    EXPECT_THROW(resumeFromCheckpoint(file, settings, *uninterrupted), CheckpointError);
     std::filesystem::remove(file);
 }
 

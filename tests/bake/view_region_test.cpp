@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Level coverage: --view-region parsing, the level each deposit goes to, the coarser levels built
 // when the cache is written, and the level-bias fit to the scene's units.
-#include "grid_fit.h"
-#include "view_region.h"
+#include "sharc/grid_fit.h"
+#include "sharc/view_region.h"
 
 #include <gtest/gtest.h>
 

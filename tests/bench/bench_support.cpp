@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "bench_support.h"
 
-#include "render.h"
-#include "sampling.h"
-#include "stopwatch.h"
-#include "surface.h"
+#include "tracing/render.h"
+#include "tracing/sampling.h"
+#include "support/stopwatch.h"
+#include "tracing/surface.h"
 
 #include <tbb/parallel_for.h>
 

@@ -5,12 +5,12 @@
 /// packets), one measured bake, and a synthetic .sharc cache for the runtime benchmarks.
 #pragma once
 
-#include "baker.h"
-#include "camera_path.h"
-#include "lights.h"
+#include "sharc/baker.h"
+#include "sharc/camera_path.h"
+#include "tracing/lights.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene.h"
-#include "tracer.h"
+#include "tracing/tracer.h"
 
 #include <cstdint>
 #include <string>

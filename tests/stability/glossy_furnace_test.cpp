@@ -6,7 +6,7 @@
 // furnaces are pure Lambert (specularFactor 0); these cases exercise glTF's default layer
 // (F0 0.04), a half metal, a rough metal and Blender's black specular colour (F0 0, F90 1: a
 // grazing-only layer), through plain path tracing and through the cache.
-#include "render.h"
+#include "tracing/render.h"
 #include "stability_support.h"
 
 #include <gtest/gtest.h>

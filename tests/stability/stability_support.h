@@ -5,16 +5,16 @@
 /// assert on (area-weighted mean of the cache over the scene's surfaces, finiteness).
 #pragma once
 
-#include "baker.h"
-#include "camera_path.h"
-#include "coverage.h"
-#include "distribution.h"
-#include "lights.h"
-#include "path_tracer.h"
-#include "sampling.h"
+#include "sharc/baker.h"
+#include "sharc/camera_path.h"
+#include "sharc/coverage.h"
+#include "tracing/distribution.h"
+#include "tracing/lights.h"
+#include "tracing/path_tracer.h"
+#include "tracing/sampling.h"
 #include "sharcbake/scene_loader.h"
-#include "stability_report.h"
-#include "tracer.h"
+#include "reports/stability_report.h"
+#include "tracing/tracer.h"
 
 #include <tbb/parallel_for.h>
 

@@ -1,0 +1,1097 @@
+// SPDX-License-Identifier: Apache-2.0
+// `sharcbake bake`: the SHaRC bake from a roaming virtual camera into a .sharc cache file.
+#include "sharc/baker.h"
+#include "sharc/camera_path.h"
+#include "sharc/capacity.h"
+#include "sharc/checkpoint.h"
+#include "cli/command_support.h"
+#include "cli/commands.h"
+#include "reports/convergence_report.h"
+#include "sharc/coverage.h"
+#include "sharc/grid_fit.h"
+#include "sharc/hit_rate.h"
+#include "support/json_text.h"
+#include "support/progress.h"
+#include "tracing/render.h"
+#include "reports/stability_report.h"
+#include "support/stopwatch.h"
+#include "sharcbake/cache_file.h"
+#include "tracing/tracer.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <memory>
+#include <sstream>
+
+namespace sharcbake {
+namespace {
+
+struct BakeOptions {
+    std::string scene_path;
+    std::string output_path;
+    uint32_t iterations = 512;
+    double time_budget = 0.0;
+    unsigned threads = 0;
+    uint32_t seed = 0;
+    std::string scene_scale = "auto";  // a number, or "auto": the SDK sample's 50
+    float log_base = kHashGridDefaultLogarithmBase;
+    std::string level_bias = "auto";   // a number, or "auto": fitted to the scene (grid_fit.h)
+    uint64_t voxel_budget = kDefaultVoxelBudget;
+    std::string view_region = "free";
+    uint32_t prediction_views = 32;
+    std::string capacity = "4194304";  // the SDK default, or "auto"
+    uint32_t update_stride = 5;
+    std::string resolution = "1280x720";
+    uint32_t max_bounces = 8;
+    uint32_t propagation_depth = 2;
+    std::string resampling = "random";
+    std::string history = "ramp:8";
+    std::string camera_source = "explore";
+    std::string camera_path;
+    uint32_t explore_points = 64;
+    uint32_t iterations_per_leg = 8;
+    uint32_t coverage_points = 20000;
+    SkyOptions sky;
+    GltfLoadLimits limits;
+    std::string stats_json;
+    std::string checkpoint_path;
+    uint32_t checkpoint_interval = 32;
+    std::string resume_path;
+    std::string shard = "0/1";
+    bool quiet = false;
+    // Error against run time (convergence_report.h).
+    std::string report_dir;
+    std::string reference_path;
+    std::string report_camera;
+    std::string report_resolution;
+    uint32_t report_spp = 16;
+    uint32_t report_probes = ProbeSettings{}.probes;
+    uint32_t report_probe_spp = ProbeSettings{}.reference_samples;
+    double target_error = 0.0;
+};
+
+/// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
+/// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
+/// second signal aborts promptly.
+std::atomic<int> g_stop_signal{0};
+/// A second signal while the first is being honoured ends the process at once (the default action).
+extern "C" void onStopSignal(int signal) {
+    if (g_stop_signal.exchange(signal) != 0) {
+        std::signal(signal, SIG_DFL);
+        std::raise(signal);
+    }
+}
+
+/// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
+/// its external buffers and images: Scene::source_files), so a cache records which scene it was
+/// baked from, geometry included.
+std::string sceneContentHash(const std::vector<std::string>& files) {
+    uint64_t hash = 0xcbf29ce484222325ull;
+    std::vector<char> buffer(1 << 16);
+    for (const std::string& file : files) {
+        std::ifstream in(file, std::ios::binary);
+        if (!in) throw CommandError(kExitIo, file + ": cannot read (a file of the scene)");
+        while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) {
+            for (std::streamsize i = 0; i < in.gcount(); ++i) hash = (hash ^ uint8_t(buffer[size_t(i)])) * 0x100000001b3ull;
+        }
+    }
+    char text[32];
+    std::snprintf(text, sizeof text, "fnv1a64:%016llx", (unsigned long long)hash);
+    return text;
+}
+
+/// The sky the bake used where it is not the scene file's own (that one is in scene_hash): a
+/// uniform radiance as parsed, or a map by the hash of its bytes and its scale. Shards baked
+/// under different skies must not merge.
+std::string skyDescription(const SkyOptions& sky) {
+    if (!sky.uniform.empty()) {
+        const glm::vec3 radiance = parseVec3(sky.uniform, "--sky");
+        char text[96];
+        std::snprintf(text, sizeof text, "uniform %.9g,%.9g,%.9g", radiance.x, radiance.y, radiance.z);
+        return text;
+    }
+    if (!sky.exr_path.empty()) {
+        char scale[32];
+        std::snprintf(scale, sizeof scale, "%.9g", sky.scale);
+        return "map " + sceneContentHash({sky.exr_path}) + " x " + scale;
+    }
+    return "scene";
+}
+
+void parseSize(const std::string& text, const char* option, int& width, int& height) {
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> width >> x >> height) || x != 'x' || width <= 0 || height <= 0 || !(in >> std::ws).eof() ||
+        int64_t(width) * height > (int64_t(1) << 26)) {
+        throw CommandError(kExitUsage, std::string(option) + ": expected WxH with positive integers, got \"" + text + "\"");
+    }
+}
+
+/// Parses a --capacity number (16 .. 2^28).
+uint32_t parseCapacity(const std::string& text) {
+    std::istringstream in(text);
+    long long value = 0;
+    if (!(in >> value) || !(in >> std::ws).eof() || value < 16 || value > (1ll << 28)) {
+        throw CommandError(kExitUsage, "--capacity: expected \"auto\" or a slot count in [16, 268435456], got \"" +
+                                           text + "\"");
+    }
+    return uint32_t(value);
+}
+
+/// What the tracer skips because the scene has no use for it, "; "-separated (cache metadata
+/// "left_out", printed by `info`).
+std::string workLeftOut(const Scene& scene, const LightSampler& lights) {
+    std::string list;
+    auto add = [&](const char* item) { list += (list.empty() ? "" : "; ") + std::string(item); };
+    if (!lights.hasLights()) {
+        add("light sampling and shadow rays (no lights, no emissive surfaces, black sky)");
+    } else if (!lights.hasSky()) {
+        add("sky lookups and sky sampling (black sky)");
+    }
+    if (scene.textures.empty()) add("texture fetches and UV interpolation (no textures)");
+    return list.empty() ? "nothing" : list;
+}
+
+/// Parses --shard "i/N" (0 <= i < N).
+void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
+    char slash = 0;
+    long long i = -1, n = -1;
+    std::istringstream in(text);
+    if (!(in >> i >> slash >> n) || slash != '/' || !(in >> std::ws).eof() || n < 1 || n > (1 << 16) || i < 0 || i >= n) {
+        throw CommandError(kExitUsage, "--shard: expected \"i/N\" with 0 <= i < N <= 65536, got \"" + text + "\"");
+    }
+    index = uint32_t(i);
+    count = uint32_t(n);
+}
+
+/// The roaming camera the options ask for.
+CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer& tracer, std::string& description) {
+    const float diagonal = glm::length(scene.bounds_max - scene.bounds_min);
+    if (!o.camera_path.empty()) {
+        std::vector<CameraPose> poses;
+        try {
+            poses = readCameraPathFile(o.camera_path);
+        } catch (const CameraPathError& e) {
+            throw CommandError(kExitInvalidInput, e.what());
+        }
+        description = "path file " + o.camera_path + " (" + std::to_string(poses.size()) + " waypoints)";
+        return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
+    }
+    if (o.camera_source == "gltf") {
+        if (scene.cameras.empty()) {
+            throw CommandError(kExitInvalidInput, o.scene_path + ": --camera-source gltf, but the scene has no camera");
+        }
+        std::vector<CameraPose> poses;
+        for (const Camera& c : scene.cameras) poses.push_back(CameraPose{c.position, c.forward, c.up, c.yfov});
+        description = "glTF cameras (" + std::to_string(poses.size()) + " waypoints)";
+        return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
+    }
+    ExplorationResult explored;
+    std::optional<CameraPath> path = exploringCameraPath(tracer, scene, o.explore_points, o.seed, &explored);
+    if (!path) {
+        throw CommandError(kExitInvalidInput,
+                           o.scene_path + ": found no free space to place the camera in (tried " +
+                               std::to_string(explored.candidates) +
+                               " points); give a --camera-path or --camera-source gltf");
+    }
+    description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
+                  std::to_string(explored.candidates) + " tried)";
+    return std::move(*path);
+}
+
+/// Runs a checkpoint step (lock, save, resume) and reports its failure as the command line
+/// does: `prefix` names the option or output, I/O failures exit 2, invalid checkpoints 3.
+template <typename Step>
+void checkpointStep(const std::string& prefix, Step&& step) {
+    try {
+        step();
+    } catch (const CheckpointError& e) {
+        switch (e.kind()) {
+            case CheckpointError::Kind::kInvalid: throw CommandError(kExitInvalidInput, prefix + e.what());
+            case CheckpointError::Kind::kInUse:
+                throw CommandError(kExitIo, prefix + e.what() + "; give this one another --checkpoint");
+            case CheckpointError::Kind::kIo: break;
+        }
+        throw CommandError(kExitIo, prefix + e.what());
+    }
+}
+
+/// The evaluator --report and --target-error need, or none when neither is asked for.
+std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const Scene& scene, const Tracer& tracer,
+                                                    const LightSampler& lights, std::string& reference_description) {
+    if (o.report_dir.empty() && o.target_error <= 0.0) return nullptr;
+    if (o.reference_path.empty() && !scene.known_radiance && o.report_probes == 0) {
+        throw CommandError(kExitUsage, std::string(o.report_dir.empty() ? "--target-error" : "--report") +
+                                           ": nothing to measure the error against with --report-probes 0: give "
+                                           "--reference EXR (a converged render of the evaluation camera), leave the "
+                                           "probes on, or bake a scene with a known radiance "
+                                           "(extras.sharcbake.expected_radiance, like the furnace rooms)");
+    }
+    EvaluationView view;
+    view.camera = sceneCamera(scene, o.report_camera, "--report-camera", 45.0f);
+    view.samples_per_pixel = o.report_spp;
+    std::optional<Image> reference;
+    if (!o.reference_path.empty()) {
+        try {
+            reference = readExr(o.reference_path);
+        } catch (const ImageError& e) {
+            throw CommandError(kExitIo, std::string("--reference: ") + e.what());
+        }
+        view.width = reference->width;
+        view.height = reference->height;
+        if (!o.report_resolution.empty()) {
+            int width = 0, height = 0;
+            parseImageSize(o.report_resolution, "--report-resolution", view.camera.aspect_ratio, width, height);
+            if (width != view.width || height != view.height) {
+                throw CommandError(kExitUsage, "--report-resolution " + o.report_resolution + " differs from the " +
+                                                   std::to_string(view.width) + "x" + std::to_string(view.height) +
+                                                   " reference " + o.reference_path);
+            }
+        }
+        reference_description = o.reference_path;
+    } else {
+        parseImageSize(o.report_resolution.empty() ? "128" : o.report_resolution, "--report-resolution",
+                       view.camera.aspect_ratio, view.width, view.height);
+        reference_description = scene.known_radiance ? "known radiance" : "probe reference";
+    }
+    const Camera unfitted = view.camera;
+    view.camera = fitCameraToImage(view.camera, view.width, view.height);
+    warnAboutCameraFit(unfitted, view.camera, view.width, view.height);
+    ProbeSettings probes;
+    probes.probes = o.report_probes;
+    probes.reference_samples = o.report_probe_spp;
+    probes.view_position = view.camera.position;
+    // --target-error reads the probes at each checkpoint only where nothing better is known.
+    const bool probes_during_bake = o.target_error > 0.0 && !scene.known_radiance;
+    return std::make_unique<ConvergenceEvaluator>(scene, tracer, lights, view, std::move(reference), probes,
+                                                  probes_during_bake);
+}
+
+std::string percent(std::optional<double> value) {
+    if (!value) return "-";
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g%%", 100.0 * *value);
+    return text;
+}
+
+/// The cache's part of an evaluation's relative MSE with its standard error, e.g. "1.5e-05 +- 2e-05".
+std::string cacheRelativeMse(const ConvergenceRow& row) {
+    if (!row.image_split) return "-";
+    char text[48];
+    std::snprintf(text, sizeof text, "%.2g +- %.1g", row.image_split->rest, row.image_split->rest_standard_error);
+    return text;
+}
+
+std::string general(std::optional<double> value) {
+    if (!value) return "-";
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", *value);
+    return text;
+}
+
+/// "3.1% +- 0.4%" for a probe measure's relative RMS error and its 95% interval (the interval
+/// of the RMS from that of the mean square: d(sqrt x) = dx / (2 sqrt x)).
+std::string probeRms(const ProbeError& e) {
+    if (e.probes == 0) return "-";
+    const double rms = e.rmsError();
+    const double half_width = rms > 0.0 ? e.relative_mse_ci / (2.0 * rms) : std::sqrt(e.relative_mse_ci);
+    char text[48];
+    std::snprintf(text, sizeof text, "%.3g%% +- %.2g%%", 100.0 * rms, 100.0 * half_width);
+    return text;
+}
+
+/// The probe measure's headline: where the cache started, where it ended, its bias floor, and
+/// the regions and levels that stand out.
+void printProbeSummary(const ConvergenceReport& report, const CacheProbes& probes) {
+    const std::optional<ProbeFloorFit>& fit = report.probe_floor;
+    const ConvergenceRow* first = nullptr;
+    for (const ConvergenceRow& r : report.rows) {
+        if (r.probes && r.probes->view.probes > 0) {
+            first = &r;
+            break;
+        }
+    }
+    const ConvergenceRow& last = report.rows.back();
+    if (!first || !last.probes) return;
+    const ProbeError& end = last.probes->view;
+    std::printf("  probes: %llu surface points, references of %u path samples (%.2f s); %llu of the points have "
+                "no voxel at the level the evaluation camera looks them up at\n",
+                (unsigned long long)probes.referencedPoints(), probes.settings().reference_samples,
+                probes.referenceSeconds(), (unsigned long long)end.not_live);
+    std::printf("  the cache's RMS error at the camera's levels: %s after %u iteration%s, %s after %u; of the last, "
+                "voxel noise %.3g%%, bias %.3g%% (signed %+.2f%% +- %.2f%%)\n",
+                probeRms(first->probes->view).c_str(), first->iteration, first->iteration == 1 ? "" : "s",
+                probeRms(end).c_str(), last.iteration,
+                100.0 * std::sqrt(std::max(0.0, end.relative_variance)), 100.0 * end.biasFloor(),
+                100.0 * end.relative_bias, 100.0 * end.relative_bias_ci);
+    if (fit) {
+        const double low = std::sqrt(std::max(0.0, fit->floor_squared - fit->floor_squared_ci));
+        const double high = std::sqrt(fit->floor_squared + fit->floor_squared_ci);
+        std::printf("  bias floor (fitted over %zu checkpoints): %.3g%% (95%%: %.3g%% to %.3g%%); the cache is at "
+                    "%.2gx its floor: %s\n",
+                    fit->checkpoints, 100.0 * fit->floor(), 100.0 * low, 100.0 * high,
+                    fit->floor() > 0.0 ? end.rmsError() / fit->floor() : 0.0,
+                    end.rmsError() <= 1.25 * fit->floor() ? "converged, more iterations would not help"
+                                                          : "more iterations would still lower its noise");
+    }
+    // Every level at the same points: what cameras at other distances would get.
+    std::string by_level;
+    for (const ProbeLevelError& level : last.probes->levels) {
+        if (level.error.probes == 0) continue;
+        char text[96];
+        std::snprintf(text, sizeof text, "%s%u: %.3g%% (bias %.3g%%)", by_level.empty() ? "" : ", ", level.level,
+                      100.0 * level.error.rmsError(), 100.0 * level.error.biasFloor());
+        by_level += text;
+    }
+    if (!by_level.empty()) std::printf("    RMS error by level at all points: %s\n", by_level.c_str());
+    if (end.leaks > 0) {
+        std::printf("    %llu of the probes (%.2g%%) are leaks, the cache more than %gx off (worst %.3gx), left out of "
+                    "the measures above:\n",
+                    (unsigned long long)end.leaks, 100.0 * double(end.leaks) / double(end.leaks + end.probes),
+                    kProbeLeakRatio, end.worst_leak);
+        for (const ProbeLeak& leak : last.probes->worst_leaks) {
+            std::printf("      at (%.4g, %.4g, %.4g) facing (%.2g, %.2g, %.2g), %s, level %u: cache %.3g, reference "
+                        "%.3g (grey)\n",
+                        leak.position.x, leak.position.y, leak.position.z, leak.normal.x, leak.normal.y,
+                        leak.normal.z, leak.material.empty() ? "(unnamed material)" : leak.material.c_str(),
+                        leak.level, (leak.cache.x + leak.cache.y + leak.cache.z) / 3.0,
+                        (leak.reference.x + leak.reference.y + leak.reference.z) / 3.0);
+        }
+    }
+    for (const ProbeRegionError& region : last.probes->regions) {
+        if (!region.standsOut()) continue;
+        std::printf("    %s stands out: signed bias %+.2f%% +- %.2f%% over %llu probes\n",
+                    region.name.c_str(),
+                    100.0 * region.error.relative_bias, 100.0 * region.error.relative_bias_ci,
+                    (unsigned long long)region.error.probes);
+    }
+}
+
+/// The convergence table of --report / --target-error, and the comparison at equal time.
+void printConvergence(const ConvergenceReport& report, const CacheProbes& probes) {
+    std::printf("Convergence (%s; evaluation %.2f s, not counted in the bake):\n", report.reference.c_str(),
+                report.evaluation_seconds);
+    // relMSE less the render's noise is the cache's own error: the column a longer bake lowers.
+    std::printf("  %10s %10s %12s %18s %12s %12s %12s %20s\n", "iteration", "bake s", "live voxels", "probe RMS",
+                "voxel error", "image error", "image relMSE", "less render noise");
+    for (const ConvergenceRow& r : report.rows) {
+        std::printf("  %10u %10.3f %12llu %18s %12s %12s %12s %20s\n", r.iteration, r.bake_seconds,
+                    (unsigned long long)r.live_voxels, r.probes ? probeRms(r.probes->view).c_str() : "-",
+                    percent(r.voxel ? std::optional<double>(r.voxel->mean_relative) : std::nullopt).c_str(),
+                    percent(r.image ? std::optional<double>(r.image->mean_relative_error) : std::nullopt).c_str(),
+                    general(r.image ? std::optional<double>(r.image->relative_mse) : std::nullopt).c_str(),
+                    cacheRelativeMse(r).c_str());
+    }
+    printProbeSummary(report, probes);
+    const ConvergenceRow& end = report.rows.back();
+    if (end.image) {
+        std::printf("  image at the end: mean relative error %s; over %dx%d-pixel tiles %s (most render noise "
+                    "averaged out); over the %llu pixels seen through the cache %s\n",
+                    percent(end.image->mean_relative_error).c_str(), kComparisonTile, kComparisonTile,
+                    percent(end.image->tile_mean_relative_error).c_str(),
+                    (unsigned long long)end.image->masked_pixels,
+                    percent(end.image->masked_mean_relative_error).c_str());
+    }
+    if (report.reference_floor) {
+        std::printf("  the reference's own floor: relative MSE %.2g +- %.1g (its noise and what differs between the "
+                    "renderers): image errors below it cannot be told from the reference's\n",
+                    report.reference_floor->rest, report.reference_floor->rest_standard_error);
+    }
+    if (!report.plain.empty()) {
+        const ConvergenceRow& last = report.rows.back();
+        const double total = last.bake_seconds + last.render_seconds;
+        const std::optional<double> plain = plainErrorAt(report.plain, total);
+        std::printf("  at %.2f s (bake + render through the cache): cache %s, plain path tracing %s "
+                    "(%u spp took %.2f s)\n",
+                    total, percent(last.image->mean_relative_error).c_str(), percent(plain).c_str(),
+                    report.plain.back().samples_per_pixel, report.plain.back().seconds);
+    }
+}
+
+/// A finite float option ("--scene-scale 25"); usage error otherwise.
+float parseFiniteFloat(const std::string& text, const char* option) {
+    char* end = nullptr;
+    const float value = std::strtof(text.c_str(), &end);
+    if (text.empty() || !end || *end != '\0' || !std::isfinite(value)) {
+        throw CommandError(kExitUsage, std::string(option) + ": expected \"auto\" or a number, got \"" + text + "\"");
+    }
+    return value;
+}
+
+/// The bake's settings from its options (usage errors for malformed ones).
+BakeSettings settingsFromOptions(const BakeOptions& o) {
+    BakeSettings settings;
+    parseSize(o.resolution, "--resolution", settings.width, settings.height);
+    settings.update_stride = o.update_stride;
+    settings.seed = o.seed;
+    parseShard(o.shard, settings.shard_index, settings.shard_count);
+    settings.path.max_bounces = o.max_bounces;
+    settings.sharc.propagation_depth = o.propagation_depth;
+    settings.sharc.resample_at_end = o.resampling == "end";
+    // --capacity auto starts from the SDK's default; the bake replaces it after a pre-pass.
+    const uint32_t capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
+    settings.sharc.capacity = capacity;
+    settings.sharc.grid.scene_scale =
+        o.scene_scale == "auto" ? kHashGridDefaultSceneScale : parseFiniteFloat(o.scene_scale, "--scene-scale");
+    settings.sharc.grid.logarithm_base = o.log_base;
+    // --level-bias auto is fitted once the scene is loaded (fitGrid); 0 until then.
+    settings.sharc.grid.level_bias = o.level_bias == "auto" ? 0.0f : parseFiniteFloat(o.level_bias, "--level-bias");
+    try {
+        settings.view_region = parseViewRegion(o.view_region);
+    } catch (const std::invalid_argument& e) {
+        throw CommandError(kExitUsage, std::string("--view-region: ") + e.what());
+    }
+    settings.sharc.grid.capacity = capacity;
+    if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
+        throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
+                                           o.history + "\"");
+    }
+    const HashGridStatus grid_status = validateHashGridParameters(settings.sharc.grid);
+    if (grid_status != HashGridStatus::kOk) {
+        throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(grid_status));
+    }
+    return settings;
+}
+
+/// The levels of a cache's voxels, ascending.
+std::vector<uint32_t> levelsOf(const CacheData& data) {
+    std::vector<uint32_t> levels;
+    for (const CacheVoxel& v : data.voxels) levels.push_back(decodeHashGridKey(v.key).level);
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    return levels;
+}
+
+/// "98.7% of 131072 lookups from 33 views (lowest: camera 'Main' 97.1%)"
+std::string describeHitRate(const HitRatePrediction& p) {
+    char text[256];
+    std::snprintf(text, sizeof text, "%.1f%% of %llu lookups from %zu views", 100.0 * p.rate(),
+                  (unsigned long long)p.eligible, p.views.size());
+    std::string result = text;
+    if (const ViewHitRate* worst = p.worst()) {
+        std::snprintf(text, sizeof text, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
+        result += text;
+    }
+    return result;
+}
+
+std::string hitRateJson(const HitRatePrediction& p) {
+    std::ostringstream json;
+    json << "{\"rate\": " << p.rate() << ", \"lookups\": " << p.eligible << ", \"hits\": " << p.hits
+         << ", \"views\": [";
+    for (size_t i = 0; i < p.views.size(); ++i) {
+        const ViewHitRate& v = p.views[i];
+        json << (i ? ", " : "") << "{\"name\": " << jsonString(v.view.camera.name) << ", \"declared\": "
+             << (v.view.declared ? "true" : "false") << ", \"position\": [" << v.view.camera.position.x << ", "
+             << v.view.camera.position.y << ", " << v.view.camera.position.z << "], \"rate\": " << v.rate()
+             << ", \"lookups\": " << v.eligible << "}";
+    }
+    json << "]}";
+    return json.str();
+}
+
+/// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
+void warnAboutHitRate(const HitRatePrediction& p, const CoverageReport& coverage) {
+    constexpr double kWanted = 0.95;
+    const ViewHitRate* worst = p.worst();
+    if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
+    char lowest[192] = "";
+    if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
+    const char* remedy = coverage.unreached_area > 0.05
+                             ? "The roaming camera never reached part of the surface: give more --iterations, a "
+                               "--camera-path through the places the views see, or --camera-source gltf."
+                             : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
+                               "holds the views (free, the default, holds every camera position).";
+    std::fprintf(stderr,
+                 "warning: the cache answers %.1f%% of SHaRC's lookups from its views%s; a runtime traces the rest. "
+                 "%s Engines can also fall back to the nearest level the file holds (lookupNearestLevel; render "
+                 "--cache-lookup nearest shows it)\n",
+                 100.0 * p.rate(), lowest, remedy);
+}
+
+/// What the grid step decided, for the output, the metadata and the stats.
+struct GridDecision {
+    std::string choice;                 ///< "auto: level bias 3.5: ..." or "given: ..."
+    std::vector<std::string> warnings;  ///< units that do not fit the scene, each with the fix
+    uint32_t finest_level = 1;
+    uint32_t coarsest_level = 0;
+    std::string misses;  ///< which camera distances find no voxel, or empty
+    std::string levelsCovered() const {
+        if (coarsest_level == 0) return "the bake camera's";
+        return std::to_string(finest_level) + "-" + std::to_string(coarsest_level);
+    }
+};
+
+/// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
+/// or checks the given one against the scene.
+GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& settings) {
+    ViewRegion& region = settings.view_region;
+    if (region.kind == ViewRegion::Kind::Points && region.source == "gltf") {
+        if (scene.cameras.empty()) {
+            throw CommandError(kExitInvalidInput, o.scene_path + ": --view-region gltf, but the scene has no camera");
+        }
+        for (const Camera& c : scene.cameras) region.points.push_back(c.position);
+        region.source = "the glTF cameras";
+    } else if (region.kind == ViewRegion::Kind::Points && region.source == "path") {
+        if (o.camera_path.empty()) throw CommandError(kExitUsage, "--view-region path needs --camera-path FILE");
+        try {
+            for (const CameraPose& pose : readCameraPathFile(o.camera_path)) region.points.push_back(pose.position);
+        } catch (const CameraPathError& e) {
+            throw CommandError(kExitInvalidInput, e.what());
+        }
+        region.source = "waypoints of " + o.camera_path;
+    }
+    GridDecision decision;
+    HashGridParameters& grid = settings.sharc.grid;
+    if (o.level_bias == "auto") {
+        const GridFit fit = fitLevelBias(scene, grid, o.voxel_budget);
+        grid.level_bias = fit.level_bias;
+        decision.choice = "auto, " + fit.reason;
+    } else {
+        char text[96];
+        std::snprintf(text, sizeof text, "given: level bias %g, finest voxels %.4g wide", double(grid.level_bias),
+                      double(voxelSize(kHashGridLevelMin, grid)));
+        decision.choice = text;
+    }
+    const HashGridStatus status = validateHashGridParameters(grid);
+    if (status != HashGridStatus::kOk) throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(status));
+    const DepositLevels levels = levelsFor(scene, settings);
+    decision.finest_level = levels.finestLevel();
+    decision.coarsest_level = levels.coarsestLevel();
+    if (region.kind == ViewRegion::Kind::Distance && decision.finest_level > kHashGridLevelMin) {
+        // Level L starts at camera distance b^(L - bias).
+        char text[160];
+        std::snprintf(text, sizeof text, "; cameras nearer than %g to a surface ask for finer levels and miss there "
+                      "(the runtime's nearest-level lookup falls back)",
+                      std::pow(double(grid.logarithm_base), double(decision.finest_level) - double(grid.level_bias)));
+        decision.misses = text;
+    }
+    if (o.level_bias != "auto") decision.warnings = checkGridForScene(scene, grid, decision.finest_level, o.voxel_budget);
+    if (o.scene_scale != "auto") {
+        const std::string warning = checkSceneScale(grid.scene_scale);
+        if (!warning.empty()) decision.warnings.push_back(warning);
+    }
+    return decision;
+}
+
+/// The cache's metadata: everything that reproduces the bake, and nothing that varies between
+/// runs (timings go to --stats-json), so the same scene, settings and seed give the same file
+/// byte for byte. "iterations" is filled in after the bake.
+std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions& o, const Scene& scene,
+                                                              const LightSampler& lights,
+                                                              const BakeSettings& settings, double radiance_scale,
+                                                              const std::string& camera_description,
+                                                              const std::string& capacity_choice,
+                                                              const std::string& grid_choice,
+                                                              const std::string& levels_covered) {
+    std::vector<std::pair<std::string, std::string>> metadata = {
+        {"writer", "sharcbake " SHARCBAKE_VERSION},
+        {"scene", o.scene_path},
+        {"scene_hash", sceneContentHash(scene.source_files)},
+        {"sky", skyDescription(o.sky)},
+        {"iterations", ""},
+        {"seed", std::to_string(o.seed)},
+        {"history", settings.sharc.history.describe()},
+        {"resolution", o.resolution},
+        {"update_stride", std::to_string(o.update_stride)},
+        {"max_bounces", std::to_string(o.max_bounces)},
+        {"camera", camera_description},
+        {"radiance_scale", std::to_string(radiance_scale)},
+        {"scene_scale", std::to_string(settings.sharc.grid.scene_scale)},
+        {"log_base", std::to_string(settings.sharc.grid.logarithm_base)},
+        {"level_bias", std::to_string(settings.sharc.grid.level_bias)},
+        {"grid_choice", grid_choice},
+        {"view_region", settings.view_region.describe()},
+        {"levels_covered", levels_covered},
+        {"capacity", std::to_string(settings.sharc.capacity)},
+        {"left_out", workLeftOut(scene, lights)},
+    };
+    if (!capacity_choice.empty()) metadata.emplace_back("capacity_choice", capacity_choice);
+    if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
+    return metadata;
+}
+
+/// What a resume must match: the metadata without the scene's path (the hash names the scene)
+/// and the iteration count, plus the options that change the work but are not recorded in the
+/// cache.
+/// With --capacity auto and --resume: the starting capacity and its description that the first
+/// run chose (its checkpoint's settings), so the resumed bake uses that table whatever
+/// --iterations now says (the pre-pass depends on it). Nothing when the checkpoint cannot be
+/// read or was not an auto bake; resumeFromCheckpoint then reports what is wrong.
+std::optional<std::pair<uint32_t, std::string>> autoCapacityOfCheckpoint(const std::string& path) {
+    CheckpointData data;
+    std::string message;
+    if (path.empty() || readCheckpointFile(path, &data, &message) != CacheFileStatus::kOk) return std::nullopt;
+    std::string capacity, choice;
+    for (const auto& [key, value] : data.settings) {
+        if (key == "capacity") capacity = value;
+        if (key == "capacity_choice") choice = value;
+    }
+    char* end = nullptr;
+    const unsigned long slots = std::strtoul(capacity.c_str(), &end, 10);
+    if (choice.empty() || capacity.empty() || *end != '\0' || slots < 16 || slots > (1ul << 28)) return std::nullopt;
+    return std::make_pair(uint32_t(slots), choice);
+}
+
+BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::string>>& metadata,
+                                const BakeOptions& o) {
+    BakeSettingsText settings;
+    for (const auto& entry : metadata) {
+        if (entry.first != "scene" && entry.first != "iterations") settings.push_back(entry);
+    }
+    settings.emplace_back("shard", o.shard);
+    settings.emplace_back("camera_options", o.camera_source + "|" + o.camera_path + "|" +
+                                                std::to_string(o.explore_points) + "|" +
+                                                std::to_string(o.iterations_per_leg));
+    return settings;
+}
+
+void runBake(const BakeOptions& o) {
+    const auto start = std::chrono::steady_clock::now();
+    const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
+    tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+
+    // No output may be an input or another output; --resume F keeps checkpointing into F.
+    const std::vector<std::string> inputs = {o.scene_path, o.resume_path, o.sky.exr_path};
+    const std::string checkpoint_path = !o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path;
+    const std::string report_csv = o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv";
+    auto checkOutputs = [&](const std::vector<std::string>& more_inputs) {
+        std::vector<std::string> others = inputs;
+        others.insert(others.end(), more_inputs.begin(), more_inputs.end());
+        checkOutputPath(o.output_path, "cache", others);
+        others.push_back(o.output_path);
+        if (!checkpoint_path.empty()) {
+            std::vector<std::string> checkpoint_others = others;
+            std::erase(checkpoint_others, o.resume_path);  // the one input it may replace
+            checkOutputPath(checkpoint_path, "checkpoint", checkpoint_others);
+        }
+        others.push_back(checkpoint_path);
+        if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON", others);
+        others.push_back(o.stats_json);
+        if (!report_csv.empty()) checkOutputPath(report_csv, "report", others);
+    };
+    if (!o.report_dir.empty()) {
+        std::error_code error;
+        std::filesystem::create_directories(o.report_dir, error);
+    }
+    checkOutputs({});
+    std::optional<CheckpointLock> checkpoint_lock;  // two bakes sharing one checkpoint: refuse the second now
+    if (!checkpoint_path.empty()) {
+        checkpointStep("", [&] { checkpoint_lock.emplace(checkpoint_path); });
+    }
+    BakeSettings settings = settingsFromOptions(o);
+    const bool auto_capacity = o.capacity == "auto";
+
+    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
+    checkOutputs(scene.source_files);  // the buffers and images the scene read
+    if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
+    const auto setup_start = std::chrono::steady_clock::now();
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);
+    if (!o.quiet && !lights.hasLights()) {
+        std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
+                             "the cache will be black\n");
+    }
+    const GridDecision grid_decision = decideGrid(o, scene, settings);
+    for (const std::string& warning : grid_decision.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    std::string camera_description;
+    const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
+    CapacityChoice capacity_choice;
+    std::string capacity_choice_text;  // empty for a fixed --capacity
+    if (auto_capacity) {
+        if (const auto resumed = autoCapacityOfCheckpoint(o.resume_path)) {
+            // Resuming: the table the first run chose, however many iterations are asked now.
+            capacity_choice.capacity = resumed->first;
+            capacity_choice_text = resumed->second;
+        } else {
+            capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
+            capacity_choice_text = capacity_choice.describe();
+        }
+        settings.sharc.capacity = settings.sharc.grid.capacity = capacity_choice.capacity;
+        settings.sharc.grow_when_loaded = true;
+    }
+    const double max_radiance = estimateMaxRadiance(scene);
+    Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
+    std::vector<std::pair<std::string, std::string>> metadata =
+        bakeMetadata(o, scene, lights, settings, baker.cache().radianceScale(), camera_description,
+                     capacity_choice_text, grid_decision.choice, grid_decision.levelsCovered());
+    const BakeSettingsText resume_settings = resumeSettings(metadata, o);
+    if (!o.resume_path.empty()) {
+        checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o.resume_path, resume_settings, baker); });
+    }
+    const uint32_t first_iteration = baker.iterationsDone();
+    ConvergenceReport report;
+    report.scene = o.scene_path;
+    if (o.target_error > 0.0) report.target_error = o.target_error;
+    const std::unique_ptr<ConvergenceEvaluator> evaluator = makeEvaluator(o, scene, tracer, lights, report.reference);
+    if (evaluator) report.view = evaluator->view();
+    const double setup_seconds = secondsSince(setup_start);
+    if (!o.quiet) {
+        if (settings.shard_count > 1) {
+            std::printf("Shard %u of %u: iterations k*%u + %u of the unsharded bake\n", settings.shard_index,
+                        settings.shard_count, settings.shard_count, settings.shard_index);
+        }
+        if (!o.resume_path.empty()) {
+            std::printf("Resumed from %s after %u iterations\n", o.resume_path.c_str(), first_iteration);
+        }
+        std::printf("Camera: %s\n", camera_description.c_str());
+        std::printf("Grid: scene scale %g, log base %g, %s\n", double(settings.sharc.grid.scene_scale),
+                    double(settings.sharc.grid.logarithm_base), grid_decision.choice.c_str());
+        std::printf("Views: %s; levels %s%s\n", settings.view_region.describe().c_str(),
+                    grid_decision.levelsCovered().c_str(), grid_decision.misses.c_str());
+        if (auto_capacity) {
+            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text.c_str(), capacity_choice.seconds);
+        }
+        std::printf("Left out: %s\n", workLeftOut(scene, lights).c_str());
+        std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
+                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, settings.sharc.capacity,
+                    settings.sharc.history.describe().c_str(), threads);
+        std::fflush(stdout);
+    }
+
+    g_stop_signal = 0;
+    auto previous_interrupt_handler = std::signal(SIGINT, onStopSignal);
+    auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
+    const auto bake_start = std::chrono::steady_clock::now();
+    // Evaluation pauses the bake; its time is kept out of the bake's time and time budget.
+    double evaluation_seconds = 0.0;
+    const auto bakeSeconds = [&] { return secondsSince(bake_start) - evaluation_seconds; };
+    const auto evaluate = [&] {
+        const double bake_time = bakeSeconds();
+        const auto evaluation_start = std::chrono::steady_clock::now();
+        ConvergenceRow row = evaluator->evaluate(baker.cache());
+        row.iteration = baker.iterationsDone();
+        row.bake_seconds = bake_time;
+        row.rays = baker.counters().segments + baker.counters().shadow_rays;
+        evaluation_seconds += secondsSince(evaluation_start);
+        report.rows.push_back(row);
+        return row;
+    };
+    const char* stop_reason = "iterations";
+    {
+        Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
+                          !o.quiet && Progress::isTerminal());
+        uint32_t next_checkpoint = nextReportCheckpoint(0);
+        while (next_checkpoint <= first_iteration && next_checkpoint != UINT32_MAX) {
+            next_checkpoint = nextReportCheckpoint(next_checkpoint);
+        }
+        while (baker.iterationsDone() < o.iterations) {
+            if (g_stop_signal != 0) {
+                stop_reason = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
+                break;
+            }
+            if (o.time_budget > 0.0 && bakeSeconds() >= o.time_budget) {
+                stop_reason = "time budget";
+                break;
+            }
+            baker.runIteration();
+            progress.advance();
+            if (!checkpoint_path.empty() && baker.iterationsDone() % o.checkpoint_interval == 0) {
+                checkpointStep("checkpoint: ", [&] { saveCheckpoint(checkpoint_path, baker, resume_settings); });
+            }
+            if (evaluator && baker.iterationsDone() == next_checkpoint) {
+                next_checkpoint = nextReportCheckpoint(next_checkpoint);
+                const std::optional<double> error = evaluate().primaryError();
+                if (o.target_error > 0.0 && error && *error <= o.target_error) {
+                    stop_reason = "target error";
+                    break;
+                }
+            }
+        }
+        progress.finish();
+    }
+    // The end point of every curve is the cache that is written.
+    if (evaluator && (report.rows.empty() || report.rows.back().iteration != baker.iterationsDone())) evaluate();
+    if (evaluator) {
+        const auto probes_start = std::chrono::steady_clock::now();
+        evaluator->finishProbes(report.rows);
+        report.probe_floor = fitProbeFloor(report.rows);
+        evaluation_seconds += secondsSince(probes_start);
+    }
+    // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
+    // from here, a finished one can be extended with a larger --iterations.
+    if (!checkpoint_path.empty()) {
+        checkpointStep("checkpoint: ", [&] { saveCheckpoint(checkpoint_path, baker, resume_settings); });
+    }
+    std::signal(SIGINT, previous_interrupt_handler);
+    std::signal(SIGTERM, previous_terminate_handler);
+    const double bake_seconds = bakeSeconds();
+
+    const auto finish_start = std::chrono::steady_clock::now();
+    const SharcCache& cache = baker.cache();
+    const std::vector<uint32_t> levels = levelsPresent(cache);
+    const CoverageReport coverage = measureCoverage(scene, cache, levels, o.coverage_points);
+    CacheData data = toCacheData(cache);
+    // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
+    const HitRatePrediction prediction =
+        predictHitRate(tracer, data, settings.view_region,
+                       predictionViews(tracer, settings.view_region, o.prediction_views, o.seed));
+    metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction));
+    for (auto& entry : metadata) {
+        if (entry.first == "iterations") entry.second = std::to_string(baker.iterationsDone());
+        if (entry.first == "capacity") entry.second = std::to_string(cache.capacity());  // grown?
+    }
+    metadata.emplace_back("stop_reason", stop_reason);
+    data.metadata = std::move(metadata);
+    std::string message;
+    const CacheFileStatus status = writeCacheFile(o.output_path, data, &message);
+    if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
+    const double finish_seconds = secondsSince(finish_start);
+
+    const UpdateCounters& c = baker.counters();
+    const StabilityReport stability = makeStabilityReport(cache, c, scene.bounds_min, scene.bounds_max, levels);
+    const StageSeconds& stage = baker.seconds();
+    const double rays_per_second = double(c.segments + c.shadow_rays) / std::max(stage.update, 1e-9);
+    const uint64_t live = data.voxels.size();
+    const double occupancy = double(cache.liveEntries()) / double(cache.capacity());
+    std::string level_list;
+    for (uint32_t l : levelsOf(data)) level_list += (level_list.empty() ? "" : ",") + std::to_string(l);
+
+    if (!o.quiet) {
+        std::printf("Baked %u iterations in %.2f s (stopped by %s)\n", baker.iterationsDone(), bake_seconds, stop_reason);
+        std::printf("  time: update %.2f s, commit %.2f s, resolve %.2f s; setup %.2f s, coverage+write %.2f s\n",
+                    stage.update, stage.commit, stage.resolve, setup_seconds, finish_seconds);
+        std::printf("  paths %llu, segments %llu, shadow rays %llu: %.3g rays/s, %.3g segments/s\n",
+                    (unsigned long long)c.paths, (unsigned long long)c.segments, (unsigned long long)c.shadow_rays,
+                    rays_per_second, double(c.segments) / std::max(stage.update, 1e-9));
+        std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n", (unsigned long long)live,
+                    100.0 * occupancy, cache.capacity(), level_list.c_str());
+        std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
+                    100.0 * coverage.unreached_area, coverage.points);
+        std::printf("  predicted hit rate: %s\n", describeHitRate(prediction).c_str());
+        for (const ViewHitRate& v : prediction.views) {
+            if (v.view.declared) {
+                std::printf("    %s: %.1f%% of %llu lookups\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
+                            (unsigned long long)v.eligible);
+            }
+        }
+        printStabilitySection(stdout, stability);
+        std::printf("Wrote %s (%llu voxels)\n", o.output_path.c_str(), (unsigned long long)live);
+    }
+    if (evaluator) {
+        if (!o.report_dir.empty() && evaluator->measuresImage()) {
+            // Plain path tracing of the same view for as long as the bake plus its last render took.
+            const ConvergenceRow& last = report.rows.back();
+            const auto plain_start = std::chrono::steady_clock::now();
+            report.plain = evaluator->plainPathTracing(last.bake_seconds + last.render_seconds, 1u << 16,
+                                                      &report.reference_floor);
+            evaluation_seconds += secondsSince(plain_start);
+        }
+        report.evaluation_seconds = evaluation_seconds;
+        if (!o.quiet) printConvergence(report, evaluator->probes());
+        if (!o.report_dir.empty()) {
+            try {
+                writeConvergenceTables(o.report_dir, report);
+            } catch (const std::runtime_error& e) {
+                throw CommandError(kExitIo, e.what());
+            }
+            const std::string plot_problem = plotConvergence(o.report_dir, report);
+            if (!plot_problem.empty()) std::fprintf(stderr, "warning: no convergence plot: %s\n", plot_problem.c_str());
+            if (!o.quiet) {
+                std::printf("Wrote %s/convergence.csv, plain_path_tracing.csv, convergence.json%s\n",
+                            o.report_dir.c_str(), plot_problem.empty() ? ", convergence.png" : "");
+            }
+        }
+    }
+    if (!o.stats_json.empty()) {
+        std::ostringstream json;
+        json << "{\n"
+             << "  \"iterations\": " << baker.iterationsDone() << ",\n"
+             << "  \"stop_reason\": \"" << stop_reason << "\",\n"
+             << "  \"threads\": " << threads << ",\n"
+             << "  \"seconds\": {\"total\": " << secondsSince(start) << ", \"setup\": " << setup_seconds
+             << ", \"bake\": " << bake_seconds << ", \"update\": " << stage.update << ", \"commit\": " << stage.commit
+             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds
+             << ", \"evaluation\": " << evaluation_seconds << "},\n"
+             << "  \"paths\": " << c.paths << ",\n  \"segments\": " << c.segments << ",\n"
+             << "  \"shadow_rays\": " << c.shadow_rays << ",\n  \"rays_per_second\": " << rays_per_second << ",\n"
+             << "  \"resampled_paths\": " << c.resampled << ",\n"
+             << "  \"live_voxels\": " << live << ",\n  \"capacity\": " << cache.capacity() << ",\n"
+             << "  \"occupancy\": " << occupancy << ",\n  \"levels\": [" << level_list << "],\n"
+             << "  \"coverage\": {\"points\": " << coverage.points << ", \"unreached_area_fraction\": "
+             << coverage.unreached_area << "},\n"
+             << "  \"grid\": {\"scene_scale\": " << settings.sharc.grid.scene_scale
+             << ", \"log_base\": " << settings.sharc.grid.logarithm_base
+             << ", \"level_bias\": " << settings.sharc.grid.level_bias << ", \"level_bias_auto\": "
+             << (o.level_bias == "auto" ? "true" : "false") << ", \"finest_voxel_size\": "
+             << voxelSize(kHashGridLevelMin, settings.sharc.grid) << "},\n"
+             << "  \"view_region\": " << jsonString(settings.view_region.describe()) << ",\n"
+             << "  \"levels_covered\": " << jsonString(grid_decision.levelsCovered()) << ",\n"
+             << "  \"predicted_hit_rate\": " << hitRateJson(prediction) << ",\n"
+             << "  \"stability\": " << stabilityJson(stability) << "\n"
+             << "}\n";
+        writeTextOutput(o.stats_json, "stats JSON", json.str());
+    }
+    warnAboutHitRate(prediction, coverage);
+    if (coverage.unreached_area > 0.3) {
+        // Not a stability problem, so not in that section, but the cache is missing much of the scene.
+        std::fprintf(stderr,
+                     "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
+                     "tested; hidden sides count too): cameras that see it will miss. Give more --iterations, "
+                     "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
+                     100.0 * coverage.unreached_area, coverage.points);
+    }
+    if (auto_capacity && cache.numerics().failed_inserts > 0) {
+        // The table doubles between iterations; one iteration filled it faster than that.
+        std::fprintf(stderr,
+                     "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no slot "
+                     "within an iteration; bake with a fixed --capacity %llu\n",
+                     settings.sharc.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts, 2ull * cache.capacity());
+    }
+    if (g_stop_signal == SIGTERM) {
+        throw CommandError(kExitTerminated, "terminated (SIGTERM); the cache and checkpoint written hold the iterations done");
+    }
+    if (g_stop_signal != 0) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
+}
+
+}  // namespace
+
+void registerBakeCommand(CLI::App& app) {
+    auto o = std::make_shared<BakeOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "bake",
+        "Bake a SHaRC radiance cache.\n\n"
+        "A virtual camera roams the scene; every iteration traces sparse update paths from it\n"
+        "(one random pixel per --update-stride block), deposits each path vertex's radiance into\n"
+        "its hash-grid voxel, and resolves the voxels. The result is written as a .sharc file.\n"
+        "Same scene, options and --seed give a byte-identical cache for any --threads.\n\n"
+        "SHaRC picks a lookup's level from the runtime camera's distance, so each vertex is cached\n"
+        "at every level a camera of --view-region (default: anywhere) can ask for there, on a grid\n"
+        "whose finest level is fitted to the scene's units (--level-bias auto). After the bake the\n"
+        "share of SHaRC's exact lookups the cache answers from the scene's cameras and sampled\n"
+        "viewpoints is printed as the predicted hit rate (a warning below 95%).\n\n"
+        "Examples:\n"
+        "  sharcbake bake scenes/cornell_box/cornell_box.gltf -o out/cornell_box.sharc --iterations 512\n"
+        "  sharcbake bake level.gltf -o level.sharc --view-region distance:0.5 --voxel-budget 1000000");
+    cmd->add_option("scene", o->scene_path, "glTF 2.0 scene (.gltf or .glb)")->required();
+    cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc)")->required();
+    cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
+    cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
+        ->capture_default_str()->check(CLI::NonNegativeNumber)->check(kFiniteNumber);
+    cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+    cmd->add_option("--scene-scale", o->scene_scale,
+                    "SHaRC scene scale S: a voxel at camera distance d is about d/S wide, in any units (larger = "
+                    "finer). auto = 50, the SDK sample's value. Copy it into the engine's SHaRC parameters "
+                    "(sharcbake info shows it)")->capture_default_str();
+    cmd->add_option("--log-base", o->log_base,
+                    "SHaRC level logarithm base b (> 1); a power of two (2, the SDK's, or 4) makes the levels "
+                    "nest exactly")->capture_default_str()->check(kFiniteNumber);
+    cmd->add_option("--level-bias", o->level_bias,
+                    "SHaRC level bias: sets the finest voxels, b^(1-bias)/S wide, which every camera closer than "
+                    "b^(2-bias) uses. auto fits it to the scene's units: the finest level holds the visible surface "
+                    "in about --voxel-budget voxels. A number is checked against the scene (warning when it spans "
+                    "too few or too many voxels)")
+        ->capture_default_str();
+    cmd->add_option("--voxel-budget", o->voxel_budget,
+                    "Voxels for the whole visible surface at the finest level (--level-bias auto); each coarser "
+                    "level adds about a quarter of the one below")
+        ->capture_default_str()->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
+    cmd->add_option("--view-region", o->view_region,
+                    "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
+                    "level such a camera can ask for there. free: anywhere (every level from the finest up); gltf: "
+                    "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "
+                    "distance:MIN[:MAX]: never nearer than MIN to what it looks up; bake-camera: only the "
+                    "roaming camera's own levels (the SDK's rule, no coverage)")
+        ->capture_default_str();
+    cmd->add_option("--prediction-views", o->prediction_views,
+                    "Viewpoints of the region, besides the glTF cameras, from which the bake predicts its hit rate")
+        ->capture_default_str()->check(CLI::Range(0u, 4096u));
+    cmd->add_option("--capacity", o->capacity,
+                    "Hash table slots (>= 16; a power of two is SDK-friendly), or \"auto\": sized from the scene "
+                    "to start by a short pre-pass (4x the voxels that 16 sampled iterations reach, next power of two), doubled between iterations whenever a quarter is occupied")
+        ->capture_default_str();
+    cmd->add_option("--update-stride", o->update_stride, "One update path per NxN pixel block")
+        ->capture_default_str()->check(CLI::Range(1u, 64u));
+    cmd->add_option("--resolution", o->resolution, "Virtual camera image size WxH")->capture_default_str();
+    cmd->add_option("--max-bounces", o->max_bounces, "Surface interactions per update path")
+        ->capture_default_str()->check(CLI::Range(1u, 1024u));
+    cmd->add_option("--propagation-depth", o->propagation_depth,
+                    "Path vertices that receive the radiance found after them (SHARC_PROPAGATION_DEPTH); cache "
+                    "resampling ends a path at a random depth up to this, so deeper paths carry more bounces per "
+                    "iteration")
+        ->capture_default_str()->check(CLI::Range(1u, 16u));
+    cmd->add_option("--resampling", o->resampling,
+                    "Where update paths end on the cache: random (the SDK's: a random depth up to "
+                    "--propagation-depth) or end (only once --propagation-depth vertices wait, or at the last "
+                    "vertex --max-bounces allows: that many bounces per iteration)")
+        ->capture_default_str()->check(CLI::IsMember({"random", "end"}));
+    cmd->add_option("--history", o->history,
+                    "How voxels forget early (biased) iterations: ramp:P (iteration k weighs k^P), "
+                    "window:A (SHaRC's exponential window of A iterations) or average")
+        ->capture_default_str();
+    cmd->add_option("--camera-source", o->camera_source,
+                    "Where the roaming camera goes: explore (free space reachable from the glTF cameras) "
+                    "or gltf (along the glTF cameras)")
+        ->capture_default_str()->check(CLI::IsMember({"explore", "gltf"}));
+    cmd->add_option("--camera-path", o->camera_path,
+                    "Camera path file (overrides --camera-source): one waypoint per line, "
+                    "\"px py pz tx ty tz [fov_degrees]\", '#' comments");
+    cmd->add_option("--explore-points", o->explore_points, "Free-space points the exploring camera visits")
+        ->capture_default_str()->check(CLI::Range(1u, 4096u));
+    cmd->add_option("--iterations-per-leg", o->iterations_per_leg,
+                    "Iterations between consecutive waypoints (gltf / path file)")->capture_default_str()->check(CLI::Range(1u, 1u << 20));
+    cmd->add_option("--coverage-points", o->coverage_points, "Surface points tested for the coverage report")
+        ->capture_default_str();
+    addSkyOptions(*cmd, o->sky);
+    addSceneLimitOptions(*cmd, o->limits);
+    cmd->add_option("--stats-json", o->stats_json, "Write the bake statistics as JSON");
+    cmd->add_option("--checkpoint", o->checkpoint_path,
+                    "Save the bake state to this file every --checkpoint-interval iterations and at the end "
+                    "(atomic: temporary file, then rename), so a killed bake can --resume");
+    cmd->add_option("--checkpoint-interval", o->checkpoint_interval,
+                    "Iterations between checkpoints (counted in iterations, not seconds, so the files are "
+                    "reproducible)")
+        ->capture_default_str()->check(CLI::Range(1u, 1u << 30));
+    cmd->add_option("--resume", o->resume_path,
+                    "Continue the bake saved in this checkpoint. Give the same scene and options as the "
+                    "first run (--iterations may grow): the cache is byte-identical to an uninterrupted bake. "
+                    "Checkpoints keep going to this file unless --checkpoint names another");
+    cmd->add_option("--shard", o->shard,
+                    "Bake share i of N (0 <= i < N) of the work of one bake of N x --iterations: iteration k "
+                    "does iteration k*N+i of that bake (its camera pose and samples). Combine the N caches "
+                    "with 'sharcbake merge'")
+        ->capture_default_str();
+    cmd->add_option("--report", o->report_dir,
+                    "Measure error against run time: at checkpoints 1, 2, 3, 4, 6, 8, 11, 16, ... iterations (two "
+                    "per octave), measure the cache, then plain path tracing of the same view; write "
+                    "DIR/convergence.csv, plain_path_tracing.csv, convergence.json and convergence.png "
+                    "(gnuplot). Evaluation time is not counted in the bake's time. Works on any scene: the "
+                    "cache is measured against a path-traced probe reference (--report-probes); --reference adds "
+                    "an image comparison, a scene with a known radiance an exact voxel error");
+    cmd->add_option("--reference", o->reference_path,
+                    "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
+                    "the image error is a render through the cache against it; its size is the evaluation size");
+    cmd->add_option("--report-camera", o->report_camera, "Evaluation camera: glTF camera name or index (default: the first)");
+    cmd->add_option("--report-resolution", o->report_resolution,
+                    "Evaluation image size \"W\" or \"WxH\" when there is no --reference (default 128 wide)");
+    cmd->add_option("--report-spp", o->report_spp, "Samples per pixel of the evaluation render through the cache, rendered as two independent "
+                    "halves whose difference splits the image error into the render's own noise and the cache's "
+                    "error (the \"less render noise\" column)")
+        ->capture_default_str()->check(CLI::Range(1u, 1u << 16));
+    cmd->add_option("--report-probes", o->report_probes,
+                    "Surface points (spread by area over surfaces the cache reached) at which the report compares "
+                    "the cache's voxels, at every level, with a path-traced reference; 0 = no probe measure")
+        ->capture_default_str()->check(CLI::Range(0u, 1u << 16));
+    cmd->add_option("--report-probe-spp", o->report_probe_spp,
+                    "Path samples of each probe's reference; its noise is estimated and taken out of the error")
+        ->capture_default_str()->check(CLI::Range(2u, 1u << 20));
+    cmd->add_option("--target-error", o->target_error,
+                    "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
+                    "mean relative error against the known radiance where the scene has one, else the probes' mean "
+                    "relative error (over the probes live at the time), else the image's against --reference")
+        ->check(CLI::PositiveNumber)->check(kFiniteNumber);
+    cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
+    cmd->callback([o] { runBake(*o); });
+}
+
+}  // namespace sharcbake

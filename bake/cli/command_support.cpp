@@ -1,0 +1,233 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "cli/command_support.h"
+
+#include "sharcbake/cache_file.h"
+#include "sharcbake/scene_loader.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace sharcbake {
+
+const char* const kExitCodeHelp =
+    "Exit status:\n"
+    "  0    success\n"
+    "  1    usage error (bad command line)\n"
+    "  2    I/O error (a file could not be read or written)\n"
+    "  3    invalid input (a scene or cache file is malformed)\n"
+    "  4    runtime failure\n"
+    "  130  interrupted (SIGINT)\n"
+    "  143  terminated (SIGTERM)\n";
+
+const CLI::Validator kFiniteNumber(
+    [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || !std::isfinite(value)) return "expected a finite number, got \"" + text + "\"";
+        return {};
+    },
+    "FINITE");
+
+glm::vec3 parseVec3(const std::string& text, const std::string& option_name) {
+    std::istringstream in(text);
+    glm::vec3 v;
+    char comma1 = 0, comma2 = 0;
+    if (!(in >> v.x >> comma1 >> v.y >> comma2 >> v.z) || comma1 != ',' || comma2 != ',' ||
+        !(in >> std::ws).eof() || !std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+        throw CommandError(kExitUsage, option_name + ": expected three finite numbers \"x,y,z\", got \"" +
+                                           text + "\"");
+    }
+    return v;
+}
+
+namespace {
+
+/// True when `a` and `b` name one file: the same device and inode when both exist (links
+/// followed), else the same path once links and "." / ".." are resolved.
+bool sameFile(const std::string& a, const std::string& b) {
+    struct stat sa {}, sb {};
+    const bool a_exists = ::stat(a.c_str(), &sa) == 0, b_exists = ::stat(b.c_str(), &sb) == 0;
+    if (a_exists && b_exists) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    if (a_exists != b_exists) return false;
+    std::error_code ea, eb;
+    const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ea);
+    const std::filesystem::path cb = std::filesystem::weakly_canonical(b, eb);
+    return !ea && !eb && ca == cb;
+}
+
+}  // namespace
+
+void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others) {
+    namespace fs = std::filesystem;
+    std::string target, temporary, message;
+    if (prepareOutputFile(path, &target, &temporary, &message) != CacheFileStatus::kOk) {
+        throw CommandError(kExitIo, message + " (the " + what + ")");
+    }
+    const fs::path folder = fs::path(target).has_parent_path() ? fs::path(target).parent_path() : fs::path(".");
+    std::error_code error;
+    if (!fs::is_directory(folder, error)) {
+        throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
+                                        " does not exist");
+    }
+    if (::access(folder.c_str(), W_OK) != 0) {
+        throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
+                                        " is not writable");
+    }
+    for (const std::string& other : others) {
+        if (!other.empty() && sameFile(path, other)) {
+            throw CommandError(kExitUsage, path + ": the " + what + " would overwrite " + other +
+                                               ", which this command also reads or writes; choose another output");
+        }
+    }
+}
+
+void writeTextOutput(const std::string& path, const std::string& what, const std::string& text) {
+    std::string message;
+    if (writeFileAtomically(path, text.data(), text.size(), &message) != CacheFileStatus::kOk) {
+        throw CommandError(kExitIo, "cannot write the " + what + ": " + message);
+    }
+}
+
+Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
+                   float fov_degrees) {
+    if (!selector.empty()) {
+        for (const Camera& c : scene.cameras) {
+            if (c.name == selector) return c;
+        }
+        char* end = nullptr;
+        const unsigned long index = std::strtoul(selector.c_str(), &end, 10);
+        if (end && *end == '\0' && index < scene.cameras.size()) return scene.cameras[index];
+        std::string names;
+        for (size_t i = 0; i < scene.cameras.size(); ++i) {
+            names += (i ? ", " : "") + std::to_string(i) + " '" + scene.cameras[i].name + "'";
+        }
+        throw CommandError(kExitUsage, option_name + " " + selector + ": no such camera in the scene (" +
+                                           (names.empty() ? "it has none" : "it has " + names) + ")");
+    }
+    if (!scene.cameras.empty()) return scene.cameras.front();
+    // Frame the bounding sphere with the given field of view from the front, to the right and
+    // above (26.5 degrees of elevation, 24 of azimuth): no axis-aligned plane of a glTF scene
+    // (+Y up) is seen edge-on, so a lone floor or wall is never a black line.
+    Camera c;
+    c.name = "automatic";
+    c.yfov = glm::radians(fov_degrees);
+    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
+    const float radius = std::max(0.5f * glm::length(scene.bounds_max - scene.bounds_min), 1e-3f);
+    const glm::vec3 toward_camera = glm::normalize(glm::vec3(0.45f, 0.55f, 1.0f));
+    c.position = center + toward_camera * (1.1f * radius / std::sin(0.5f * c.yfov));
+    c.forward = -toward_camera;
+    c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
+    return c;
+}
+
+std::string describeCamera(const Camera& camera) {
+    const glm::vec3 target = camera.position + camera.forward;
+    char text[256];
+    std::snprintf(text, sizeof text, "'%s' at (%g, %g, %g) looking at (%g, %g, %g), up (%g, %g, %g), vertical fov %.3g deg",
+                  camera.name.c_str(), camera.position.x, camera.position.y, camera.position.z, target.x, target.y,
+                  target.z, camera.up.x, camera.up.y, camera.up.z, double(glm::degrees(camera.yfov)));
+    return text;
+}
+
+void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, int height) {
+    if (fitted.yfov == camera.yfov || !camera.aspect_ratio) return;
+    std::fprintf(stderr,
+                 "warning: camera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
+                 "fit Auto frames it (the field of view of the camera's longer side spans the image's longer side; "
+                 "vertical field of view %.3g deg instead of %.3g). Give only the width (--resolution %d) for the "
+                 "camera's own frame\n",
+                 camera.name.c_str(), double(*camera.aspect_ratio), width, height, double(width) / double(height),
+                 double(glm::degrees(fitted.yfov)), double(glm::degrees(camera.yfov)), width);
+}
+
+void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
+                    int& width, int& height) {
+    width = 0;
+    height = 0;
+    char x = 0;
+    std::istringstream in(text);
+    if (!(in >> width) || width <= 0 || (in >> x && (x != 'x' || !(in >> height) || height <= 0)) ||
+        !(in >> std::ws).eof()) {
+        throw CommandError(kExitUsage, option_name + ": expected W or WxH with positive integers, got \"" + text + "\"");
+    }
+    if (height == 0) height = std::max(1, int(std::lround(float(width) / aspect.value_or(1.0f))));
+    if (int64_t(width) * int64_t(height) > (int64_t(1) << 28)) {
+        throw CommandError(kExitUsage, option_name + ": image too large");
+    }
+}
+
+void addSkyOptions(CLI::App& command, SkyOptions& options) {
+    command.add_option("--sky", options.uniform,
+                       "Uniform sky radiance \"r,g,b\" (linear), replacing the scene's sky "
+                       "(scenes may set one in scene extras: sharcbake.sky_radiance)");
+    command.add_option("--sky-exr", options.exr_path,
+                       "Equirectangular EXR environment map for the sky (+Y up, Blender's "
+                       "orientation)")
+        ->check(CLI::ExistingFile);
+    command.add_option("--sky-scale", options.scale, "Multiplier for the sky map")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber)
+        ->check(kFiniteNumber);
+}
+
+void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits) {
+    command.add_option("--max-texture-size", limits.max_texture_size,
+                       "Refuse scene images wider or taller than this many texels (checked before decoding)")
+        ->capture_default_str()
+        ->check(CLI::Range(1u, 1u << 16));
+}
+
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(path, error)) {
+        throw CommandError(kExitIo, path + (std::filesystem::exists(path, error)
+                                                ? ": not a regular file (a FIFO, device or folder)"
+                                                : ": no such file"));
+    }
+    if (!sky.exr_path.empty() && !std::filesystem::is_regular_file(sky.exr_path, error)) {
+        throw CommandError(kExitIo, sky.exr_path + ": --sky-exr is not a regular file");
+    }
+    Scene scene;
+    try {
+        scene = loadGltf(path, limits);
+        if (!sky.exr_path.empty()) {
+            scene.sky.map = loadEquirectExr(sky.exr_path);
+            scene.sky.scale = sky.scale;
+        }
+    } catch (const SceneLoadError& e) {
+        throw CommandError(kExitInvalidInput, e.what());
+    }
+    if (!sky.uniform.empty()) {
+        scene.sky.uniform = parseVec3(sky.uniform, "--sky");
+        if (scene.sky.uniform.x < 0.0f || scene.sky.uniform.y < 0.0f || scene.sky.uniform.z < 0.0f) {
+            throw CommandError(kExitUsage, "--sky: radiance must be >= 0, got \"" + sky.uniform + "\"");
+        }
+        scene.sky.map.reset();
+    }
+    if (!quiet) describeScene(scene);
+    return scene;
+}
+
+void describeScene(const Scene& scene) {
+    std::printf("Scene %s: %llu triangles, %zu materials, %zu textures, %zu punctual lights, "
+                "%zu cameras, sky %s\n",
+                scene.source_path.c_str(), (unsigned long long)scene.triangles.size(),
+                scene.materials.size(), scene.textures.size(), scene.lights.size(),
+                scene.cameras.size(),
+                scene.sky.map ? "map" : (scene.sky.isBlack() ? "black" : "uniform"));
+    if (scene.stats.degenerate_triangles_dropped > 0 || scene.stats.primitives_skipped > 0) {
+        std::printf("  dropped %llu degenerate triangles, skipped %llu non-triangle primitives\n",
+                    (unsigned long long)scene.stats.degenerate_triangles_dropped,
+                    (unsigned long long)scene.stats.primitives_skipped);
+    }
+    for (const std::string& warning : scene.stats.warnings) {
+        std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    }
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: Apache-2.0
+// `sharcbake compare`: error of an image against a reference EXR (any renderer's, same camera
+// and resolution).
+#include "cli/command_support.h"
+#include "cli/commands.h"
+#include "reports/image_error.h"
+
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace sharcbake {
+namespace {
+
+struct CompareOptions {
+    std::string image_path;
+    std::string reference_path;
+    bool json = false;
+};
+
+void runCompare(const CompareOptions& o) {
+    Image image, reference;
+    try {
+        image = readExr(o.image_path);
+        reference = readExr(o.reference_path);
+    } catch (const sharcbake::ImageError& e) {
+        throw CommandError(kExitIo, e.what());
+    }
+    ImageComparison error;
+    try {
+        error = compareImages(image, reference);
+    } catch (const std::invalid_argument& e) {
+        throw CommandError(kExitInvalidInput, o.image_path + ": " + e.what());
+    }
+    if (o.json) {
+        std::printf("{\"relative_mse\": %.9g, \"mean_relative_error\": %.9g, \"relative_bias\": %.9g, "
+                    "\"non_finite_pixels\": %llu}\n",
+                    error.relative_mse, error.mean_relative_error, error.relative_bias,
+                    (unsigned long long)error.non_finite_pixels);
+    } else {
+        std::printf("relative MSE %.6g, mean relative error %.4f%%, bias %+.4f%%, non-finite pixels %llu\n",
+                    error.relative_mse, 100.0 * error.mean_relative_error, 100.0 * error.relative_bias,
+                    (unsigned long long)error.non_finite_pixels);
+    }
+}
+
+}  // namespace
+
+void registerCompareCommand(CLI::App& app) {
+    auto o = std::make_shared<CompareOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "compare",
+        "Error of an image against a reference image.\n\n"
+        "Both are linear EXRs of the same camera and resolution; the reference may come from any\n"
+        "renderer. Prints relative MSE ((x-r)^2/(r^2+0.01)), mean relative error\n"
+        "(|x-r|/(|r|+0.01)) and the relative bias of the image mean, averaged over pixels and\n"
+        "channels.\n\n"
+        "Example:\n"
+        "  sharcbake compare out/cached.exr out/reference.exr");
+    cmd->add_option("image", o->image_path, "Image to measure (.exr)")->required();
+    cmd->add_option("reference", o->reference_path, "Reference image (.exr)")->required();
+    cmd->add_flag("--json", o->json, "Print the measures as one JSON object");
+    cmd->callback([o] { runCompare(*o); });
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: Apache-2.0
+// sharcbake: command-line entry point. Each subcommand lives in its own *_command.cpp; this
+// file only maps outcomes to the documented exit codes.
+#include "cli/command_support.h"
+#include "cli/commands.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+int main(int argc, char** argv) {
+    using namespace sharcbake;
+    CLI::App app{
+        "sharcbake " SHARCBAKE_VERSION
+        ": offline baker for SHaRC-style world-space radiance caches.\n\n"
+        "Loads a static glTF 2.0 scene, traces it on the CPU with Embree and bakes a spatially\n"
+        "hashed radiance cache. Run 'sharcbake <command> --help' for each command's options.",
+        "sharcbake"};
+    app.require_subcommand(1);
+    app.footer(kExitCodeHelp);
+    app.set_version_flag("--version", "sharcbake " SHARCBAKE_VERSION);
+    registerRenderCommand(app);
+    registerBakeCommand(app);
+    registerInfoCommand(app);
+    registerCompareCommand(app);
+    registerExportVdbCommand(app);
+    registerMergeCommand(app);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        // CLI11 prints help/version itself (exit 0) and usage errors (nonzero -> our code 1).
+        const int code = app.exit(e);
+        return code == 0 ? kExitOk : kExitUsage;
+    } catch (const CommandError& e) {
+        std::fprintf(stderr, "sharcbake: error: %s\n", e.what());
+        return e.code();
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "sharcbake: error: %s\n", e.what());
+        return kExitRuntime;
+    }
+    return kExitOk;
+}

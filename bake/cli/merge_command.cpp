@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: Apache-2.0
+// `sharcbake merge`: shards baked independently (bake --shard i/N, e.g. a scheduler's job
+// array) combined into one cache, voxel by voxel, weighted by samples (cache_merge.h).
+#include "cli/command_support.h"
+#include "cli/commands.h"
+#include "sharcbake/cache_merge.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+namespace {
+
+struct MergeOptions {
+    std::vector<std::string> inputs;
+    std::string output_path;
+    bool quiet = false;
+};
+
+/// Metadata that must be equal for two caches to estimate the same radiance: the scene's files,
+/// the sky, and the path length (grid parameters and format version are checked by mergeCaches).
+/// Caches baked before bakes recorded "sky" lack it: those may still merge with each other.
+const std::vector<std::string> kMustAgree = {"scene_hash", "sky", "max_bounces"};
+
+/// Metadata that describes one bake, not the merge: recomputed or dropped.
+bool describesOneBake(const std::string& key) {
+    return key == "writer" || key == "iterations" || key == "shard" || key == "stop_reason";
+}
+
+const std::string* findMetadata(const CacheData& data, const std::string& key) {
+    for (const auto& entry : data.metadata) {
+        if (entry.first == key) return &entry.second;
+    }
+    return nullptr;
+}
+
+uint64_t iterationsOf(const CacheData& data) {
+    const std::string* text = findMetadata(data, "iterations");
+    return text ? std::strtoull(text->c_str(), nullptr, 10) : 0;
+}
+
+/// The merged file's metadata: what every input agrees on, the summed iterations, and which
+/// inputs went in. Independent of the order of `inputs` (which is canonical here).
+std::vector<std::pair<std::string, std::string>> mergedMetadata(const std::vector<CacheData>& inputs) {
+    std::vector<std::pair<std::string, std::string>> metadata = {{"writer", "sharcbake " SHARCBAKE_VERSION}};
+    for (const auto& [key, value] : inputs[0].metadata) {
+        if (describesOneBake(key)) continue;
+        const bool shared = std::all_of(inputs.begin(), inputs.end(), [&](const CacheData& d) {
+            const std::string* other = findMetadata(d, key);
+            return other && *other == value;
+        });
+        if (shared) metadata.emplace_back(key, value);
+    }
+    uint64_t iterations = 0;
+    std::string shards;
+    for (const CacheData& d : inputs) {
+        iterations += iterationsOf(d);
+        if (const std::string* shard = findMetadata(d, "shard")) shards += (shards.empty() ? "" : ",") + *shard;
+    }
+    metadata.emplace_back("iterations", std::to_string(iterations));
+    metadata.emplace_back("merged_inputs", std::to_string(inputs.size()));
+    if (!shards.empty()) metadata.emplace_back("merged_shards", shards);
+    return metadata;
+}
+
+/// A job array whose task failed leaves a shard out: the merge is still valid (fewer samples),
+/// but say so, once per shard count, naming the missing shards.
+void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
+    std::map<uint32_t, std::set<uint32_t>> present;  // shard count -> indices given
+    for (const CacheData& d : inputs) {
+        const std::string* shard = findMetadata(d, "shard");
+        unsigned index = 0, count = 0;
+        if (shard && std::sscanf(shard->c_str(), "%u/%u", &index, &count) == 2 && index < count) {
+            present[count].insert(index);
+        }
+    }
+    for (const auto& [count, indices] : present) {
+        std::string missing;
+        uint32_t missing_count = 0;
+        for (uint32_t i = 0; i < count; ++i) {
+            if (indices.count(i)) continue;
+            if (++missing_count <= 8) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
+        }
+        if (missing_count > 0) {
+            std::fprintf(stderr, "warning: %u of %u shards missing (%s%s); the merge holds the work of the others\n",
+                         missing_count, count, missing.c_str(), missing_count > 8 ? ", ..." : "");
+        }
+    }
+}
+
+void runMerge(const MergeOptions& o) {
+    checkOutputPath(o.output_path, "merged cache", o.inputs);
+    std::vector<CacheData> inputs(o.inputs.size());
+    for (size_t i = 0; i < o.inputs.size(); ++i) {
+        std::string message;
+        const CacheFileStatus status = readCacheFile(o.inputs[i], &inputs[i], &message);
+        if (status != CacheFileStatus::kOk) {
+            throw CommandError(status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput,
+                               message + " [" + toString(status) + "]");
+        }
+    }
+    // Canonical order (by metadata, then size), so the output does not depend on the order of
+    // the command line; and two inputs with the same metadata are the same bake listed twice.
+    std::vector<size_t> order(inputs.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        if (inputs[a].metadata != inputs[b].metadata) return inputs[a].metadata < inputs[b].metadata;
+        return inputs[a].voxels.size() < inputs[b].voxels.size();
+    });
+    for (size_t k = 1; k < order.size(); ++k) {
+        if (inputs[order[k - 1]].metadata == inputs[order[k]].metadata) {
+            throw CommandError(kExitInvalidInput, o.inputs[order[k - 1]] + " and " + o.inputs[order[k]] +
+                                                      " are the same bake (same seed, shard and settings); "
+                                                      "merging it twice would count its samples twice");
+        }
+    }
+    std::vector<CacheData> sorted;
+    std::vector<std::string> sorted_paths;
+    for (size_t i : order) {
+        sorted.push_back(std::move(inputs[i]));
+        sorted_paths.push_back(o.inputs[i]);
+    }
+    CacheData merged;
+    std::string message;
+    std::vector<std::string> must_agree = kMustAgree;
+    if (std::none_of(sorted.begin(), sorted.end(), [](const CacheData& d) { return findMetadata(d, "sky"); })) {
+        must_agree.erase(std::find(must_agree.begin(), must_agree.end(), "sky"));
+    }
+    if (mergeCaches(sorted, must_agree, &merged, &message) != CacheFileStatus::kOk) {
+        // mergeCaches numbers inputs in canonical order: name the files instead.
+        for (size_t i = sorted_paths.size(); i-- > 0;) {
+            const std::string tag = "input " + std::to_string(i + 1);
+            for (size_t at = message.find(tag); at != std::string::npos; at = message.find(tag, at + 1)) {
+                message.replace(at, tag.size(), sorted_paths[i]);
+            }
+        }
+        throw CommandError(kExitInvalidInput, "cannot merge: " + message);
+    }
+    merged.metadata = mergedMetadata(sorted);
+    warnAboutMissingShards(sorted);
+    const CacheFileStatus status = writeCacheFile(o.output_path, merged, &message);
+    if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
+    if (!o.quiet) {
+        size_t input_voxels = 0;
+        for (const CacheData& d : sorted) input_voxels += d.voxels.size();
+        std::printf("Merged %zu caches (%zu voxels in all, %s iterations) into %s: %zu voxels\n", sorted.size(),
+                    input_voxels, findMetadata(merged, "iterations")->c_str(), o.output_path.c_str(),
+                    merged.voxels.size());
+    }
+}
+
+}  // namespace
+
+void registerMergeCommand(CLI::App& app) {
+    auto o = std::make_shared<MergeOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "merge",
+        "Merge caches baked as shards of one bake into a single cache.\n\n"
+        "Each voxel gets the sample-weighted mean of the inputs that hold it, and their summed\n"
+        "sample weight. The inputs must come from the same scene files (scene_hash) and sky with the\n"
+        "same grid parameters and --max-bounces; otherwise merge refuses (exit 3). The output does not\n"
+        "depend on the order of the inputs.\n\n"
+        "Example (4 shards, e.g. a Slurm job array or GNU parallel, then one merge):\n"
+        "  for i in 0 1 2 3; do sharcbake bake scene.gltf --shard $i/4 -o shard$i.sharc; done\n"
+        "  sharcbake merge shard0.sharc shard1.sharc shard2.sharc shard3.sharc -o scene.sharc");
+    cmd->add_option("inputs", o->inputs, "Caches to merge (.sharc)")->required()->check(CLI::ExistingFile);
+    cmd->add_option("-o,--output", o->output_path, "Merged cache (.sharc)")->required();
+    cmd->add_flag("-q,--quiet", o->quiet, "No summary output");
+    cmd->callback([o] { runMerge(*o); });
+}
+
+}  // namespace sharcbake

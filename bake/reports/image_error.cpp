@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "reports/image_error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace sharcbake {
+
+namespace {
+
+constexpr double kEpsilon = 1e-2;
+
+void requireSameSize(const Image& image, const Image& reference) {
+    if (image.width != reference.width || image.height != reference.height) {
+        throw std::invalid_argument("image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                    " but the reference is " + std::to_string(reference.width) + "x" +
+                                    std::to_string(reference.height));
+    }
+}
+
+bool finite(glm::vec3 x) { return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z); }
+
+/// Mean relative error of the kComparisonTile^2 tile means (non-finite pixels left out of both).
+double tileMeanRelativeError(const Image& image, const Image& reference) {
+    double sum = 0.0;
+    uint64_t terms = 0;
+    for (int ty = 0; ty < image.height; ty += kComparisonTile) {
+        for (int tx = 0; tx < image.width; tx += kComparisonTile) {
+            glm::dvec3 x(0.0), r(0.0);
+            int pixels = 0;
+            for (int y = ty; y < std::min(ty + kComparisonTile, image.height); ++y) {
+                for (int px = tx; px < std::min(tx + kComparisonTile, image.width); ++px) {
+                    const size_t i = size_t(y) * size_t(image.width) + size_t(px);
+                    if (!finite(image.pixels[i])) continue;
+                    x += glm::dvec3(image.pixels[i]);
+                    r += glm::dvec3(reference.pixels[i]);
+                    ++pixels;
+                }
+            }
+            if (pixels == 0) continue;
+            x /= double(pixels);
+            r /= double(pixels);
+            for (int c = 0; c < 3; ++c) sum += std::abs(x[c] - r[c]) / (std::abs(r[c]) + kEpsilon);
+            terms += 3;
+        }
+    }
+    return terms ? sum / double(terms) : 0.0;
+}
+
+}  // namespace
+
+ImageComparison compareImages(const Image& image, const Image& reference, const std::vector<uint8_t>* mask) {
+    requireSameSize(image, reference);
+    if (mask && mask->size() != reference.pixels.size()) {
+        throw std::invalid_argument("the image mask has " + std::to_string(mask->size()) + " pixels, the images " +
+                                    std::to_string(reference.pixels.size()));
+    }
+    ImageComparison e;
+    double sum_image = 0.0, sum_reference = 0.0;
+    const size_t n = image.pixels.size();
+    for (size_t i = 0; i < n; ++i) {
+        const glm::vec3 x = image.pixels[i];
+        const glm::vec3 r = reference.pixels[i];
+        const bool masked = !mask || (*mask)[i] != 0;
+        e.masked_pixels += masked ? 1 : 0;
+        if (!finite(x)) {
+            ++e.non_finite_pixels;
+            e.relative_mse += 3.0;
+            e.mean_relative_error += 3.0;
+            e.masked_relative_mse += masked ? 3.0 : 0.0;
+            e.masked_mean_relative_error += masked ? 3.0 : 0.0;
+            continue;
+        }
+        for (int c = 0; c < 3; ++c) {
+            const double d = double(x[c]) - double(r[c]);
+            const double squared = d * d / (double(r[c]) * double(r[c]) + kEpsilon);
+            const double relative = std::abs(d) / (std::abs(double(r[c])) + kEpsilon);
+            e.relative_mse += squared;
+            e.mean_relative_error += relative;
+            if (masked) {
+                e.masked_relative_mse += squared;
+                e.masked_mean_relative_error += relative;
+            }
+            sum_image += double(x[c]);
+            sum_reference += double(r[c]);
+        }
+    }
+    const double count = 3.0 * double(std::max<size_t>(n, 1));
+    e.relative_mse /= count;
+    e.mean_relative_error /= count;
+    const double masked_count = 3.0 * double(std::max<uint64_t>(e.masked_pixels, 1));
+    e.masked_relative_mse /= masked_count;
+    e.masked_mean_relative_error /= masked_count;
+    e.tile_mean_relative_error = tileMeanRelativeError(image, reference);
+    e.relative_bias = sum_reference > 0.0 ? (sum_image - sum_reference) / sum_reference : 0.0;
+    return e;
+}
+
+RelativeMseSplit splitRelativeMse(const Image& a, uint32_t a_samples, const Image& b, uint32_t b_samples,
+                                  const Image& reference) {
+    requireSameSize(a, reference);
+    requireSameSize(b, reference);
+    const double n = double(a_samples) + double(b_samples);
+    const double a_weight = double(a_samples) / n, b_weight = double(b_samples) / n;
+    const double noise_weight = a_weight * b_weight;
+    RelativeMseSplit split;
+    double sum_rest_squares = 0.0;
+    for (size_t i = 0; i < reference.pixels.size(); ++i) {
+        // Per pixel (its channels together, as they share the pixel's samples), so that the
+        // standard error counts independent terms.
+        double pixel_total = 0.0, pixel_noise = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            const double x = double(a.pixels[i][c]), y = double(b.pixels[i][c]), r = double(reference.pixels[i][c]);
+            const double mean = a_weight * x + b_weight * y;
+            if (!std::isfinite(mean)) {
+                pixel_total += 1.0;  // as compareImages counts a non-finite pixel
+                continue;
+            }
+            const double scale = 1.0 / (r * r + kEpsilon);
+            pixel_total += (mean - r) * (mean - r) * scale;
+            pixel_noise += noise_weight * (x - y) * (x - y) * scale;
+        }
+        split.total += pixel_total / 3.0;
+        split.noise += pixel_noise / 3.0;
+        const double pixel_rest = (pixel_total - pixel_noise) / 3.0;
+        sum_rest_squares += pixel_rest * pixel_rest;
+    }
+    const double count = double(std::max<size_t>(reference.pixels.size(), 1));
+    split.total /= count;
+    split.noise /= count;
+    split.rest = split.total - split.noise;
+    const double variance = std::max(0.0, sum_rest_squares / count - split.rest * split.rest);
+    split.rest_standard_error = std::sqrt(variance / std::max(count - 1.0, 1.0));
+    return split;
+}
+
+}  // namespace sharcbake

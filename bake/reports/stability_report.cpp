@@ -1,0 +1,188 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "reports/stability_report.h"
+
+#include "tracing/tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace sharcbake {
+namespace {
+
+double channelSum(const glm::dvec3& v) { return v.x + v.y + v.z; }
+
+/// Distance from `x` to the next float32 towards +infinity (the spacing of floats there).
+double floatSpacing(double x) {
+    const float f = float(std::abs(x));
+    return double(std::nextafter(f, std::numeric_limits<float>::infinity())) - double(f);
+}
+
+std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
+    char text[512];
+    std::snprintf(text, sizeof text, pattern, a, b, c, d);
+    return text;
+}
+
+void addWarnings(StabilityReport& r) {
+    if (r.failed_inserts > 0) {
+        r.warnings.push_back(format("%.0f deposits found their hash bucket full and were dropped: %.3g%% of the "
+                                    "deposited energy is missing from the cache; raise --capacity (%.1f%% of the "
+                                    "slots are in use)",
+                                    double(r.failed_inserts), 100.0 * r.share(r.failed_insert_energy),
+                                    r.capacity ? 100.0 * double(r.occupied_slots) / double(r.capacity) : 0.0));
+    }
+    if (r.clamped_deposits > 0) {
+        r.warnings.push_back(format("%.0f deposits exceeded the fixed-point ceiling and were clamped, removing "
+                                    "%.3g%% of the deposited energy (a radiance far above the brightest emitter: "
+                                    "check for extreme emission or path weights)",
+                                    double(r.clamped_deposits), 100.0 * r.share(r.clamped_energy)));
+    }
+    if (r.saturated_sums > 0) {
+        r.warnings.push_back(format("%.0f deposits met a voxel sum already at its 72-bit ceiling (2^72 fixed-point "
+                                    "units in one iteration); those voxels are darker than they should be",
+                                    double(r.saturated_sums)));
+    }
+    if (r.non_finite_dropped > 0) {
+        r.warnings.push_back(format("%.0f NaN/Inf radiance values were dropped (a material, light or sky produced "
+                                    "them); the cache holds none",
+                                    double(r.non_finite_dropped)));
+    }
+    if (r.orphan_sums > 0) {
+        r.warnings.push_back(format("%.0f voxel sums had radiance but no sample and were dropped (a bug in the "
+                                    "update pass)",
+                                    double(r.orphan_sums)));
+    }
+    if (r.grid_coordinates_wrap) {
+        r.warnings.push_back(format("the scene reaches grid cell %.0f at level %.0f, beyond the key's 17-bit range "
+                                    "(+-65536): keys stay unique near the camera, but voxel positions decoded from "
+                                    "keys (export-vdb, info) wrap; move the scene towards the origin or lower "
+                                    "--scene-scale",
+                                    double(r.max_grid_coordinate), double(r.finest_level)));
+    }
+    if (r.finest_voxel_size > 0.0 && r.ray_offset > r.finest_voxel_size) {
+        r.warnings.push_back(format("the tracer moves ray origins %.3g off surfaces at the scene's far corner (256 "
+                                    "float32 steps there, its self-intersection guard), more than the finest voxel "
+                                    "(%.3g): light leaks through walls thinner than that; move the scene towards "
+                                    "the origin",
+                                    r.ray_offset, r.finest_voxel_size));
+    }
+    if (r.float_spacing > kPositionBiasWarningFactor * double(kHashGridPositionBias)) {
+        r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g) is %.0f times SHaRC's position "
+                                    "bias (1e-4): surfaces lying on voxel boundaries split between two voxels, which "
+                                    "then average light from both sides; move the scene towards the origin",
+                                    r.float_spacing, r.float_spacing / double(kHashGridPositionBias)));
+    }
+    if (r.precisionShare() > kPrecisionWarningShare) {
+        r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g from the origin) is %.3g, "
+                                    "%.3g%% of the finest voxel (%.3g): hit points there jitter between voxels; "
+                                    "move the scene towards the origin or lower --scene-scale",
+                                    r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(),
+                                    r.finest_voxel_size));
+    }
+}
+
+}  // namespace
+
+StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounters& update, glm::vec3 bounds_min,
+                                    glm::vec3 bounds_max, const std::vector<uint32_t>& levels) {
+    const NumericsCounters& n = cache.numerics();
+    StabilityReport r;
+    r.deposits = n.deposits;
+    r.deposited_energy = channelSum(n.deposited_energy);
+    r.clamped_deposits = n.clamped_deposits;
+    r.clamped_energy = channelSum(n.clamped_energy);
+    r.saturated_sums = n.saturated_sums;
+    r.failed_inserts = n.failed_inserts;
+    r.failed_insert_energy = channelSum(n.failed_insert_energy);
+    r.non_finite_dropped = n.non_finite_deposits + update.non_finite;
+    r.negative_clamped = n.negative_deposits;
+    r.resample_emission_clamped = update.clamped_propagation;
+    r.orphan_sums = n.orphan_sums;
+    r.radiance_scale = cache.radianceScale();
+    r.capacity = cache.capacity();
+    r.occupied_slots = cache.liveEntries();
+    r.capacity_power_of_two = r.capacity != 0 && (r.capacity & (r.capacity - 1)) == 0;
+
+    const glm::vec3 extent = glm::max(glm::abs(bounds_min), glm::abs(bounds_max));
+    r.far_corner_distance = double(std::max({extent.x, extent.y, extent.z}));
+    r.float_spacing = floatSpacing(r.far_corner_distance);
+    const glm::vec3 corner(float(r.far_corner_distance));
+    r.ray_offset = double(glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner));
+    const HashGridParameters& grid = cache.settings().grid;
+    for (uint32_t level : levels) {
+        const double size = double(voxelSize(level, grid));
+        if (!(size > 0.0)) continue;
+        if (r.finest_level == 0) {  // levels ascend: the first is the finest
+            r.finest_level = level;
+            r.finest_voxel_size = size;
+        }
+        // Positions are biased before quantisation, exactly as the key does it.
+        const double cell = std::floor((r.far_corner_distance + double(kHashGridPositionBias)) / size);
+        r.max_grid_coordinate = std::max(r.max_grid_coordinate, int64_t(std::min(cell, 9.0e18)));
+    }
+    constexpr int64_t kMaxSignedCoordinate = int64_t(1) << (kHashGridPositionBits - 1);
+    r.grid_coordinates_wrap = r.max_grid_coordinate >= kMaxSignedCoordinate;
+    addWarnings(r);
+    return r;
+}
+
+void printStabilitySection(std::FILE* out, const StabilityReport& r) {
+    std::fprintf(out, "Stability:\n");
+    std::fprintf(out, "  energy: %llu deposits, %.6g deposited (fixed-point scale %g)\n", (unsigned long long)r.deposits,
+                 r.deposited_energy, r.radiance_scale);
+    std::fprintf(out, "  clamped: %llu deposits, %.3g energy (%.3g%%); saturated sums %llu\n",
+                 (unsigned long long)r.clamped_deposits, r.clamped_energy, 100.0 * r.share(r.clamped_energy),
+                 (unsigned long long)r.saturated_sums);
+    std::fprintf(out, "  failed inserts: %llu deposits, %.3g energy (%.3g%%); %llu of %u slots in use%s\n",
+                 (unsigned long long)r.failed_inserts, r.failed_insert_energy, 100.0 * r.share(r.failed_insert_energy),
+                 (unsigned long long)r.occupied_slots, r.capacity,
+                 r.capacity_power_of_two ? "" : " (not a power of two: fine here, SHaRC recommends one)");
+    std::fprintf(out, "  dropped or replaced: NaN/Inf %llu, negative %llu, resampled below emission %llu, "
+                      "orphan sums %llu\n",
+                 (unsigned long long)r.non_finite_dropped, (unsigned long long)r.negative_clamped,
+                 (unsigned long long)r.resample_emission_clamped, (unsigned long long)r.orphan_sums);
+    if (r.finest_level > 0) {
+        std::fprintf(out, "  coordinates: far corner %.6g, float32 spacing %.3g = %.3g%% of the finest voxel "
+                          "(%.3g, level %u), ray offset %.3g; grid cells up to %lld of +-65536\n",
+                     r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(), r.finest_voxel_size,
+                     r.finest_level, r.ray_offset, (long long)r.max_grid_coordinate);
+    }
+    for (const std::string& w : r.warnings) std::fprintf(out, "  warning: %s\n", w.c_str());
+    if (r.warnings.empty()) std::fprintf(out, "  no problems found\n");
+}
+
+std::string stabilityJson(const StabilityReport& r) {
+    std::ostringstream json;
+    json.precision(9);
+    json << "{\"deposits\": " << r.deposits << ", \"deposited_energy\": " << r.deposited_energy
+         << ", \"radiance_scale\": " << r.radiance_scale << ", \"clamped_deposits\": " << r.clamped_deposits
+         << ", \"clamped_energy\": " << r.clamped_energy << ", \"clamped_energy_share\": " << r.share(r.clamped_energy)
+         << ", \"saturated_sums\": " << r.saturated_sums << ", \"failed_inserts\": " << r.failed_inserts
+         << ", \"failed_insert_energy\": " << r.failed_insert_energy
+         << ", \"failed_insert_energy_share\": " << r.share(r.failed_insert_energy)
+         << ", \"non_finite_dropped\": " << r.non_finite_dropped << ", \"negative_clamped\": " << r.negative_clamped
+         << ", \"resample_emission_clamped\": " << r.resample_emission_clamped
+         << ", \"orphan_sums\": " << r.orphan_sums << ", \"capacity\": " << r.capacity
+         << ", \"occupied_slots\": " << r.occupied_slots
+         << ", \"capacity_power_of_two\": " << (r.capacity_power_of_two ? "true" : "false")
+         << ", \"far_corner_distance\": " << r.far_corner_distance << ", \"float_spacing\": " << r.float_spacing
+         << ", \"ray_offset\": " << r.ray_offset
+         << ", \"finest_level\": " << r.finest_level << ", \"finest_voxel_size\": " << r.finest_voxel_size
+         << ", \"float_spacing_share_of_finest_voxel\": " << r.precisionShare()
+         << ", \"max_grid_coordinate\": " << r.max_grid_coordinate
+         << ", \"grid_coordinates_wrap\": " << (r.grid_coordinates_wrap ? "true" : "false") << ", \"warnings\": [";
+    for (size_t i = 0; i < r.warnings.size(); ++i) {
+        json << (i ? ", " : "") << '"';
+        for (char c : r.warnings[i]) {
+            if (c == '"' || c == '\\') json << '\\';
+            json << c;
+        }
+        json << '"';
+    }
+    json << "]}";
+    return json.str();
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,78 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file stability_report.h
+/// @brief What happened numerically in a bake, for the "Stability" section of `sharcbake bake`
+/// and the "stability" object of --stats-json: energy the fixed-point accumulation clamped or
+/// saturated, NaN/Inf samples dropped, failed inserts and the energy they lost, and whether
+/// float32 positions and SHaRC's 17-bit grid coordinates hold at the scene's extent.
+/// Every problem found becomes one warning line that says what it costs and what to change.
+#pragma once
+
+#include "sharc/sharc_cache.h"
+#include "sharc/sharc_update.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// Float32 spacing at the scene's far corner above this share of the finest voxel makes hit
+/// points jitter between voxels (sharc_algorithm.md 10.9: about 20 % at 1e5 units, S = 50).
+inline constexpr double kPrecisionWarningShare = 0.05;
+
+/// Float32 spacing above this multiple of SHaRC's 1e-4 position bias (beyond ~16k units from
+/// the origin) no longer keeps surfaces that lie on voxel boundaries on one side of them
+/// (sharc_algorithm.md 10.9); the bias is part of the bit-exact key and cannot follow the scene.
+inline constexpr double kPositionBiasWarningFactor = 16.0;
+
+struct StabilityReport {
+    // Energy (radiance x weight summed over deposits, all channels).
+    uint64_t deposits = 0;
+    double deposited_energy = 0.0;     ///< every finite deposit, before any change
+    uint64_t clamped_deposits = 0;     ///< single deposits above the fixed-point ceiling
+    double clamped_energy = 0.0;       ///< removed by that ceiling
+    uint64_t saturated_sums = 0;       ///< deposits into a voxel sum already at its ceiling
+    uint64_t failed_inserts = 0;       ///< deposits dropped because their bucket was full
+    double failed_insert_energy = 0.0;
+    // Values replaced or dropped.
+    uint64_t non_finite_dropped = 0;   ///< NaN/Inf radiance (update pass + commit)
+    uint64_t negative_clamped = 0;     ///< negative channel values set to 0
+    uint64_t resample_emission_clamped = 0;  ///< cached means below their own emission share
+    uint64_t orphan_sums = 0;          ///< radiance without a sample, dropped at resolve
+    double radiance_scale = 0.0;       ///< fixed-point units per unit radiance
+
+    // Table.
+    uint32_t capacity = 0;
+    uint64_t occupied_slots = 0;
+    bool capacity_power_of_two = true;
+
+    // Coordinates, for the levels present in the cache.
+    double far_corner_distance = 0.0;  ///< largest |coordinate| of the scene bounds
+    double float_spacing = 0.0;        ///< float32 spacing (ulp) at that coordinate
+    double ray_offset = 0.0;           ///< how far the tracer moves ray origins off a surface there
+    uint32_t finest_level = 0;         ///< 0 when the cache is empty
+    double finest_voxel_size = 0.0;
+    int64_t max_grid_coordinate = 0;   ///< largest |cell index| the scene reaches, at any level present
+    bool grid_coordinates_wrap = false;  ///< beyond the 17-bit signed key field
+
+    std::vector<std::string> warnings;
+
+    double share(double energy) const { return deposited_energy > 0.0 ? energy / deposited_energy : 0.0; }
+    double precisionShare() const { return finest_voxel_size > 0.0 ? float_spacing / finest_voxel_size : 0.0; }
+};
+
+/// Builds the report and its warnings from a finished bake's counters and the scene's bounds.
+/// `levels` are the levels present in the cache (levelsPresent()).
+StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounters& update, glm::vec3 bounds_min,
+                                    glm::vec3 bounds_max, const std::vector<uint32_t>& levels);
+
+/// The "Stability" section of the bake summary: one line per group, then each warning.
+void printStabilitySection(std::FILE* out, const StabilityReport& report);
+
+/// The "stability" object of --stats-json (a JSON object, no trailing newline).
+std::string stabilityJson(const StabilityReport& report);
+
+}  // namespace sharcbake

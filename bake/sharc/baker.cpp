@@ -1,0 +1,128 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sharc/baker.h"
+
+#include "tracing/render.h"
+#include "support/stopwatch.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+
+namespace sharcbake {
+namespace {
+
+/// Paths per chunk: each chunk is traced by one task and owns its deposit list, so the commit
+/// can replay all deposits in path order whatever thread traced them.
+constexpr uint32_t kPathsPerChunk = 64;
+
+}  // namespace
+
+DepositLevels levelsFor(const Scene& scene, const BakeSettings& settings) {
+    return DepositLevels(settings.sharc.grid, settings.view_region, scene.bounds_min, scene.bounds_max);
+}
+
+SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels) {
+    sharc.coarsest_level = levels.coarsestLevel();
+    return sharc;
+}
+
+double estimateMaxRadiance(const Scene& scene) {
+    double max_radiance = 0.0;
+    for (const Material& m : scene.materials) {
+        if (m.isEmissive()) max_radiance = std::max(max_radiance, double(maxComponent(m.emissive) * m.emissive_strength));
+    }
+    max_radiance = std::max(max_radiance, double(maxComponent(scene.sky.uniform)));
+    if (scene.sky.map) {
+        for (const glm::vec4& t : scene.sky.map->texels) {
+            max_radiance = std::max(max_radiance, double(maxComponent(glm::vec3(t)) * scene.sky.scale));
+        }
+    }
+    for (const PunctualLight& light : scene.lights) {
+        const double peak = double(maxComponent(light.intensity));
+        max_radiance = std::max(max_radiance, light.type == LightType::Directional ? peak / kPi : peak * 1e4 / kPi);
+    }
+    return max_radiance;
+}
+
+Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath& camera_path,
+             const BakeSettings& settings, double radiance_scale)
+    : tracer_(tracer),
+      lights_(lights),
+      camera_path_(camera_path),
+      settings_(settings),
+      levels_(levelsFor(tracer.scene(), settings)),
+      cache_(withCoverage(settings.sharc, levels_), radiance_scale),
+      update_(tracer, lights, cache_, settings.path) {
+    const uint32_t stride = std::max(1u, settings_.update_stride);
+    blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
+    blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
+}
+
+void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<Deposit>>& chunk_deposits,
+                             UpdateCounters& counters) const {
+    const CameraPose pose = camera_path_.poseAt(work_iteration);
+    const CameraRays camera(toCamera(pose), settings_.width, settings_.height);
+    const Float3 camera_position{pose.position.x, pose.position.y, pose.position.z};
+    const uint32_t stride = std::max(1u, settings_.update_stride);
+    const uint32_t paths = pathsPerIteration();
+    chunk_deposits.resize((paths + kPathsPerChunk - 1) / kPathsPerChunk);
+
+    // Every chunk of paths traced by one task into its own deposit list.
+    tbb::enumerable_thread_specific<UpdateCounters> thread_counters;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk_deposits.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        UpdateCounters& local = thread_counters.local();
+        for (size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
+            std::vector<Deposit>& deposits = chunk_deposits[chunk];
+            deposits.clear();
+            const uint32_t first = uint32_t(chunk) * kPathsPerChunk;
+            const uint32_t last = std::min(paths, first + kPathsPerChunk);
+            for (uint32_t block = first; block < last; ++block) {
+                // One random pixel (and sub-pixel position) per block, new every iteration.
+                PixelSampler sampler(settings_.seed, block, work_iteration);
+                const glm::vec2 u = sampler.next2D() * float(stride);
+                const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
+                const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
+                const Ray ray = camera.generate(x, y, glm::fract(u));
+                update_.trace(ray, sampler, levels_, camera_position, deposits, local);
+            }
+        }
+    });
+    for (const UpdateCounters& c : thread_counters) {
+        counters.paths += c.paths;
+        counters.segments += c.segments;
+        counters.shadow_rays += c.shadow_rays;
+        counters.resampled += c.resampled;
+        counters.sky_misses += c.sky_misses;
+        counters.non_finite += c.non_finite;
+        counters.clamped_propagation += c.clamped_propagation;
+    }
+}
+
+void Baker::runIteration() {
+    const uint32_t iteration = iteration_;
+    const uint32_t work_iteration = workIteration(iteration);
+    auto start = std::chrono::steady_clock::now();
+    traceUpdatePaths(work_iteration, chunk_deposits_, counters_);
+    seconds_.update += secondsSince(start);
+
+    // Commit: new keys inserted in chunk order, so the same slots and sums on every run.
+    start = std::chrono::steady_clock::now();
+    cache_.commitChunks(chunk_deposits_, work_iteration);
+    seconds_.commit += secondsSince(start);
+
+    start = std::chrono::steady_clock::now();
+    cache_.resolve(iteration);
+    if (settings_.sharc.grow_when_loaded) {
+        uint64_t capacity = cache_.capacity();
+        while (double(cache_.occupiedSlots()) > kGrowAtLoad * double(capacity) && capacity < kMaxCacheCapacity) {
+            capacity *= 2;
+        }
+        if (capacity > cache_.capacity()) cache_.grow(uint32_t(std::min<uint64_t>(capacity, kMaxCacheCapacity)));
+    }
+    seconds_.resolve += secondsSince(start);
+    ++iteration_;
+}
+
+}  // namespace sharcbake

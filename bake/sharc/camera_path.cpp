@@ -1,0 +1,241 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sharc/camera_path.h"
+
+#include "tracing/sampling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+namespace sharcbake {
+namespace {
+
+/// Uniform random numbers for values that are not per-pixel samples (camera placement).
+float hashToUnitFloat(uint32_t seed, uint32_t a, uint32_t b) {
+    return bitsToUnitFloat(hashCombine(hashCombine(hashUint32(seed), a), b));
+}
+
+/// Axis directions plus the eight diagonals: enough to tell a closed solid from open space.
+constexpr int kProbeCount = 14;
+glm::vec3 probeDirection(int i) {
+    static const glm::vec3 kDirections[kProbeCount] = {
+        {1, 0, 0},  {-1, 0, 0}, {0, 1, 0},   {0, -1, 0},  {0, 0, 1},   {0, 0, -1},  {1, 1, 1},
+        {1, 1, -1}, {1, -1, 1}, {1, -1, -1}, {-1, 1, 1}, {-1, 1, -1}, {-1, -1, 1}, {-1, -1, -1}};
+    return glm::normalize(kDirections[i]);
+}
+
+/// A point is in free space when most probe rays that hit something hit a surface's front
+/// (the side its winding faces): inside a closed solid every ray sees back faces. Points closer
+/// to a surface than `clearance` are rejected so the camera does not sit on a wall.
+bool isFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance) {
+    int hits = 0, back_hits = 0;
+    for (int i = 0; i < kProbeCount; ++i) {
+        const glm::vec3 d = probeDirection(i);
+        RayHit hit;
+        if (!tracer.intersect(Ray{p, d}, hit)) continue;
+        if (hit.t < clearance) return false;
+        const Scene& scene = tracer.scene();
+        const glm::uvec3 tri = scene.triangles[hit.triangle];
+        const glm::vec3 n = glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
+                                       scene.positions[tri.z] - scene.positions[tri.x]);
+        ++hits;
+        if (glm::dot(n, d) > 0.0f) ++back_hits;
+    }
+    return hits == 0 || 2 * back_hits < hits;
+}
+
+bool visible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
+    const glm::vec3 d = b - a;
+    const float length = glm::length(d);
+    if (length <= 0.0f) return true;
+    return !tracer.occluded(Ray{a, d / length, length});
+}
+
+}  // namespace
+
+Camera toCamera(const CameraPose& pose) {
+    Camera camera;
+    camera.position = pose.position;
+    camera.forward = pose.forward;
+    camera.up = pose.up;
+    camera.yfov = pose.yfov;
+    return camera;
+}
+
+bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pose) {
+    const glm::vec3 d = target - eye;
+    const float length = glm::length(d);
+    if (!(length > 0.0f) || !std::isfinite(length)) return false;
+    pose.position = eye;
+    pose.forward = d / length;
+    glm::vec3 up(0.0f, 1.0f, 0.0f);
+    if (std::abs(glm::dot(up, pose.forward)) > 0.999f) up = glm::vec3(0.0f, 0.0f, -1.0f);
+    const glm::vec3 right = glm::normalize(glm::cross(pose.forward, up));
+    pose.up = glm::cross(right, pose.forward);
+    pose.yfov = yfov;
+    return true;
+}
+
+std::vector<CameraPose> readCameraPathFile(const std::string& path) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(path, error)) {
+        throw CameraPathError(path + ": not a regular file (missing, a FIFO, a device or a folder)");
+    }
+    std::ifstream in(path);
+    if (!in) throw CameraPathError(path + ": cannot open the camera path file");
+    std::vector<CameraPose> poses;
+    std::string line;
+    for (int line_number = 1; std::getline(in, line); ++line_number) {
+        const size_t first = line.find_first_not_of(" \t\r");
+        if (first == std::string::npos || line[first] == '#') continue;
+        std::istringstream fields(line);
+        float v[6];
+        for (float& value : v) {
+            if (!(fields >> value) || !std::isfinite(value)) {
+                throw CameraPathError(path + ":" + std::to_string(line_number) +
+                                      ": expected \"px py pz tx ty tz [fov_degrees]\"");
+            }
+        }
+        float fov_degrees = 90.0f;
+        if (!(fields >> fov_degrees)) {
+            fov_degrees = 90.0f;
+            fields.clear();
+        } else if (!(fov_degrees > 0.0f && fov_degrees < 180.0f)) {
+            throw CameraPathError(path + ":" + std::to_string(line_number) +
+                                  ": field of view must be in (0, 180) degrees");
+        }
+        std::string rest;
+        if (fields >> rest) {
+            throw CameraPathError(path + ":" + std::to_string(line_number) + ": unexpected \"" + rest + "\"");
+        }
+        CameraPose pose;
+        if (!makeLookAtPose({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, fov_degrees * kPi / 180.0f, pose)) {
+            throw CameraPathError(path + ":" + std::to_string(line_number) +
+                                  ": the eye and the target are the same point");
+        }
+        poses.push_back(pose);
+    }
+    if (poses.empty()) throw CameraPathError(path + ": the camera path file has no waypoint");
+    return poses;
+}
+
+ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts,
+                                   uint32_t count, uint32_t seed) {
+    const Scene& scene = tracer.scene();
+    ExplorationResult result;
+    if (scene.empty() || count == 0) return result;
+
+    // Bounds, widened on flat axes so a ground plane still leaves room above it.
+    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
+    const float diagonal = glm::length(scene.bounds_max - scene.bounds_min);
+    const glm::vec3 half = glm::max(0.5f * (scene.bounds_max - scene.bounds_min), glm::vec3(0.05f * diagonal));
+    const float clearance = 0.01f * diagonal;
+
+    // Candidates: the starts first, then stratified random points (8x more than needed).
+    std::vector<glm::vec3> free_points;
+    std::vector<bool> is_start;
+    for (const glm::vec3& s : starts) {
+        ++result.candidates;
+        if (isFreeSpace(tracer, s, 0.0f)) {
+            free_points.push_back(s);
+            is_start.push_back(true);
+        }
+    }
+    const uint32_t tries = 8 * count;
+    for (uint32_t i = 0; i < tries; ++i) {
+        const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
+        const glm::vec3 p = center + (2.0f * u - 1.0f) * half;
+        ++result.candidates;
+        if (isFreeSpace(tracer, p, clearance)) {
+            free_points.push_back(p);
+            is_start.push_back(false);
+        }
+    }
+    result.free = uint32_t(free_points.size());
+    if (free_points.empty()) return result;
+
+    // Connected sets under mutual visibility (union-find over all pairs; a few thousand rays).
+    const size_t n = free_points.size();
+    std::vector<size_t> parent(n);
+    std::iota(parent.begin(), parent.end(), size_t(0));
+    auto root = [&](size_t a) {
+        while (parent[a] != a) a = parent[a] = parent[parent[a]];
+        return a;
+    };
+    for (size_t a = 0; a < n; ++a) {
+        for (size_t b = a + 1; b < n; ++b) {
+            if (root(a) != root(b) && visible(tracer, free_points[a], free_points[b])) parent[root(b)] = root(a);
+        }
+    }
+    // Keep the sets that hold a start; with no start in free space, keep the largest set.
+    std::vector<bool> keep_root(n, false);
+    bool any_start = false;
+    for (size_t i = 0; i < n; ++i) {
+        if (is_start[i]) keep_root[root(i)] = any_start = true;
+    }
+    if (!any_start) {
+        std::vector<size_t> size(n, 0);
+        for (size_t i = 0; i < n; ++i) ++size[root(i)];
+        keep_root[size_t(std::max_element(size.begin(), size.end()) - size.begin())] = true;
+    }
+    for (size_t i = 0; i < n && result.points.size() < count; ++i) {
+        if (keep_root[root(i)]) result.points.push_back(free_points[i]);
+    }
+    return result;
+}
+
+CameraPath::CameraPath(std::vector<CameraPose> waypoints, bool random_directions,
+                       uint32_t iterations_per_leg, float position_jitter, uint32_t seed)
+    : waypoints_(std::move(waypoints)),
+      random_directions_(random_directions),
+      iterations_per_leg_(std::max(1u, iterations_per_leg)),
+      position_jitter_(position_jitter),
+      seed_(seed) {
+    if (waypoints_.empty()) throw CameraPathError("the camera path has no waypoint");
+}
+
+CameraPose CameraPath::poseAt(uint32_t iteration) const {
+    const size_t n = waypoints_.size();
+    CameraPose pose;
+    if (random_directions_) {
+        // Exploration: every waypoint in turn, looking in a fresh uniformly random direction.
+        pose = waypoints_[iteration % n];
+        const glm::vec3 d = sampleUniformSphere({hashToUnitFloat(seed_, iteration, 10),
+                                                 hashToUnitFloat(seed_, iteration, 11)});
+        makeLookAtPose(pose.position, pose.position + d, pose.yfov, pose);
+    } else {
+        // Glide from waypoint k to k+1 over iterations_per_leg iterations, looping.
+        const uint32_t leg = iteration / iterations_per_leg_;
+        const float t = float(iteration % iterations_per_leg_) / float(iterations_per_leg_);
+        const CameraPose& a = waypoints_[leg % n];
+        const CameraPose& b = waypoints_[(leg + 1) % n];
+        glm::vec3 forward = (1.0f - t) * a.forward + t * b.forward;
+        if (glm::length(forward) < 1e-4f) forward = a.forward;
+        const glm::vec3 position = (1.0f - t) * a.position + t * b.position;
+        makeLookAtPose(position, position + glm::normalize(forward), (1.0f - t) * a.yfov + t * b.yfov, pose);
+    }
+    if (position_jitter_ > 0.0f) {
+        const glm::vec3 u(hashToUnitFloat(seed_, iteration, 20), hashToUnitFloat(seed_, iteration, 21),
+                          hashToUnitFloat(seed_, iteration, 22));
+        pose.position += (2.0f * u - 1.0f) * position_jitter_;
+    }
+    return pose;
+}
+
+std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
+                                              uint32_t seed, ExplorationResult* explored) {
+    std::vector<glm::vec3> starts;
+    for (const Camera& c : scene.cameras) starts.push_back(c.position);
+    if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
+    const ExplorationResult result = exploreFreeSpace(tracer, starts, points, seed);
+    if (explored) *explored = result;
+    if (result.points.empty()) return std::nullopt;
+    std::vector<CameraPose> poses;
+    for (const glm::vec3& p : result.points) poses.push_back(CameraPose{p});
+    return CameraPath(std::move(poses), true, 1, 0.0f, seed);
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file camera_path.h
+/// @brief The virtual camera that roams the scene during a bake.
+///
+/// SHaRC picks a voxel's level from its distance to the camera, so the cache only holds the
+/// levels some camera position asked for. The bake therefore moves the camera through the
+/// places a player (or the runtime's camera) will be: along the glTF cameras, along a path file,
+/// or through the scene's free space found automatically.
+#pragma once
+
+#include "tracing/tracer.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <stdexcept>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// One camera placement: where it is and where it looks.
+struct CameraPose {
+    glm::vec3 position{0.0f};
+    glm::vec3 forward{0.0f, 0.0f, -1.0f};  ///< unit
+    glm::vec3 up{0.0f, 1.0f, 0.0f};        ///< unit, orthogonal to forward
+    float yfov = 1.5707963f;               ///< vertical field of view, radians
+};
+
+/// Where the waypoints come from.
+enum class CameraPathSource : uint8_t {
+    Explore,      ///< free-space points reachable from the glTF cameras (or the scene centre)
+    GltfCameras,  ///< the scene's glTF cameras, in file order, as a loop
+    File          ///< a camera path file (format in readCameraPathFile)
+};
+
+class CameraPathError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Reads a camera path file: one waypoint per line, "px py pz tx ty tz [fov_degrees]" (eye
+/// position and the point it looks at, world units; the field of view defaults to 90).
+/// Blank lines and lines starting with '#' are ignored. Throws CameraPathError naming the file
+/// and line on malformed input or when the file has no waypoint.
+std::vector<CameraPose> readCameraPathFile(const std::string& path);
+
+/// The pinhole camera of a pose (no name, no aspect ratio of its own).
+Camera toCamera(const CameraPose& pose);
+
+/// Builds a pose looking from `eye` towards `target` with +Y up (a different up when the view
+/// is vertical). Returns false if eye == target.
+bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pose);
+
+/// What free-space exploration found, for the bake's report.
+struct ExplorationResult {
+    std::vector<glm::vec3> points;  ///< reachable free-space positions, the order they are visited
+    uint32_t candidates = 0;        ///< points tried
+    uint32_t free = 0;              ///< not inside geometry
+};
+
+/// Finds up to `count` positions inside the scene's bounds that are not inside geometry and are
+/// reachable, by unoccluded straight segments, from `starts` (the glTF cameras; the scene centre
+/// if there are none or none is in free space, in which case the largest connected set wins).
+/// Deterministic for a given seed.
+ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts,
+                                   uint32_t count, uint32_t seed);
+
+/// The camera of each bake iteration.
+class CameraPath {
+public:
+    /// Waypoints visited as a loop. With `random_directions` the camera looks in a new random
+    /// direction every iteration (exploration); otherwise it looks where the waypoints look,
+    /// moving between consecutive waypoints over `iterations_per_leg` iterations.
+    CameraPath(std::vector<CameraPose> waypoints, bool random_directions, uint32_t iterations_per_leg,
+               float position_jitter, uint32_t seed);
+
+    /// The pose of bake iteration `iteration`, including its jitter (a pure function of the
+    /// iteration and the seed).
+    CameraPose poseAt(uint32_t iteration) const;
+
+    const std::vector<CameraPose>& waypoints() const { return waypoints_; }
+
+private:
+    std::vector<CameraPose> waypoints_;
+    bool random_directions_;
+    uint32_t iterations_per_leg_;
+    float position_jitter_;
+    uint32_t seed_;
+};
+
+/// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's
+/// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
+/// new random direction. std::nullopt when no free space was found; `explored` (if given)
+/// receives the search's counts either way.
+std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
+                                              uint32_t seed, ExplorationResult* explored = nullptr);
+
+}  // namespace sharcbake

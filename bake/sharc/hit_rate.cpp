@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sharc/hit_rate.h"
+
+#include "sharc/camera_path.h"
+#include "tracing/render.h"
+#include "tracing/sampling.h"
+#include "tracing/surface.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace sharcbake {
+namespace {
+
+/// A view looking along a hashed direction from `position`.
+PredictionView sampledView(const std::string& name, glm::vec3 position, uint32_t hash) {
+    const glm::vec3 direction =
+        sampleUniformSphere({bitsToUnitFloat(hashUint32(hash)), bitsToUnitFloat(hashUint32(hash ^ 0x9E3779B9u))});
+    CameraPose pose;
+    pose.position = position;
+    (void)makeLookAtPose(position, position + direction, glm::radians(75.0f), pose);
+    PredictionView view{toCamera(pose), false};
+    view.camera.name = name;
+    return view;
+}
+
+}  // namespace
+
+const ViewHitRate* HitRatePrediction::worst() const {
+    const ViewHitRate* worst = nullptr;
+    for (const ViewHitRate& v : views) {
+        if (v.eligible >= 100 && (!worst || v.rate() < worst->rate())) worst = &v;
+    }
+    return worst;
+}
+
+std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
+                                            uint32_t seed) {
+    const Scene& scene = tracer.scene();
+    std::vector<PredictionView> views;
+    std::vector<glm::vec3> starts;
+    for (const Camera& c : scene.cameras) {
+        PredictionView view{c, true};
+        view.camera.name = "camera '" + c.name + "'";
+        views.push_back(view);
+        starts.push_back(c.position);
+    }
+    std::vector<glm::vec3> points;
+    switch (region.kind) {
+    case ViewRegion::Kind::FreeSpace:
+    case ViewRegion::Kind::Distance:
+    case ViewRegion::Kind::BakeCamera:
+        points = exploreFreeSpace(tracer, starts, samples, seed ^ 0x5EED0001u).points;
+        break;
+    case ViewRegion::Kind::Points:
+        for (uint32_t i = 0; i < samples && !region.points.empty(); ++i) {
+            points.push_back(region.points[size_t(i) * region.points.size() / samples]);
+        }
+        break;
+    case ViewRegion::Kind::Box:
+        for (uint32_t i = 0; i < samples; ++i) {
+            const glm::vec3 u(bitsToUnitFloat(hashUint32(seed + 3 * i)), bitsToUnitFloat(hashUint32(seed + 3 * i + 1)),
+                              bitsToUnitFloat(hashUint32(seed + 3 * i + 2)));
+            points.push_back(region.box_min + u * (region.box_max - region.box_min));
+        }
+        break;
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+        views.push_back(sampledView("region sample " + std::to_string(i), points[i],
+                                    hashCombine(hashUint32(seed), uint32_t(i))));
+    }
+    return views;
+}
+
+HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, const ViewRegion& region,
+                                 const std::vector<PredictionView>& views, int width, int height) {
+    HitRatePrediction prediction;
+    BakedCache baked(cache, glm::vec3(0.0f));
+    const float min_distance2 =
+        region.kind == ViewRegion::Kind::Distance ? region.min_distance * region.min_distance : 0.0f;
+    for (size_t v = 0; v < views.size(); ++v) {
+        const Camera& camera = views[v].camera;
+        baked.setCamera(camera.position);
+        const CameraRays rays(camera, width, height);
+        tbb::parallel_for(tbb::blocked_range<int>(0, width * height, 256), [&](const tbb::blocked_range<int>& r) {
+            for (int pixel = r.begin(); pixel != r.end(); ++pixel) {
+                PixelSampler sampler(uint32_t(v) * 0x9E3779B1u, uint32_t(pixel), 0);
+                const Ray primary = rays.generate(pixel % width, pixel / width, sampler.next2D());
+                RayHit first;
+                if (!tracer.intersect(primary, first)) continue;
+                const SurfaceHit a = makeSurfaceHit(tracer.scene(), first, primary.direction);
+                // A diffuse bounce, as most runtime paths take; SHaRC queries the hit it reaches.
+                const glm::vec3 direction = Frame(a.geometric_normal).toWorld(sampleCosineHemisphere(sampler.next2D()));
+                const Ray bounce{offsetRayOrigin(a.position, a.geometric_normal), direction};
+                RayHit second;
+                if (!tracer.intersect(bounce, second)) continue;
+                const SurfaceHit b = makeSurfaceHit(tracer.scene(), second, bounce.direction);
+                const glm::vec3 to_camera = b.position - camera.position;
+                if (glm::dot(to_camera, to_camera) < min_distance2) continue;  // nearer than declared
+                glm::vec3 radiance;
+                (void)baked.lookup(CacheQuery{b.position, b.geometric_normal, second.t, 1.0f}, radiance);
+            }
+        });
+        ViewHitRate rate;
+        rate.view = views[v];
+        rate.hits = baked.hits();
+        rate.eligible = baked.hits() + baked.misses();
+        prediction.hits += rate.hits;
+        prediction.eligible += rate.eligible;
+        prediction.views.push_back(rate);
+    }
+    return prediction;
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,53 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file hit_rate.h
+/// @brief The share of a runtime's cache lookups a baked cache answers, predicted by replaying
+/// SHaRC's query from views: the first secondary hit of a diffuse bounce from every pixel, keyed
+/// with the view's camera as the level-of-detail centre, with SHaRC's eligibility tests
+/// (cacheQueryEligible), looked up exactly as the SDK looks up (no fallback).
+#pragma once
+
+#include "sharc/cache_query.h"
+#include "tracing/tracer.h"
+#include "sharc/view_region.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sharcbake {
+
+/// A camera to predict from; its name says which ("camera 'Main'", "region sample 3").
+struct PredictionView {
+    Camera camera;
+    bool declared = false;  ///< a camera the scene or the user declared (not a region sample)
+};
+
+struct ViewHitRate {
+    PredictionView view;
+    uint64_t eligible = 0;  ///< lookups that pass SHaRC's eligibility tests
+    uint64_t hits = 0;
+    double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
+};
+
+struct HitRatePrediction {
+    std::vector<ViewHitRate> views;
+    uint64_t eligible = 0;
+    uint64_t hits = 0;
+    double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
+    /// The lowest rate of a view with at least 100 eligible lookups (nullptr when none).
+    const ViewHitRate* worst() const;
+};
+
+/// Views to predict from: the scene's glTF cameras (declared), and `samples` viewpoints of the
+/// region looking in hashed directions: free-space points reachable from the cameras for
+/// FreeSpace and Distance, the region's points, random points of its box. Deterministic.
+std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
+                                            uint32_t seed);
+
+/// Replays the lookups of `width` x `height` pixels (one diffuse bounce each) from every view.
+/// For a Distance region, lookups nearer the camera than its minimum are not counted (they are
+/// outside what was declared). The counts do not depend on the thread count.
+HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, const ViewRegion& region,
+                                 const std::vector<PredictionView>& views, int width = 64, int height = 64);
+
+}  // namespace sharcbake

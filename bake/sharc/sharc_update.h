@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file sharc_update.h
+/// @brief SHaRC's update pass on the CPU: one update path from the virtual camera, depositing
+/// each vertex's local radiance into its voxel and propagating it back along the path
+/// (sharc_algorithm.md section 4).
+#pragma once
+
+#include "tracing/lights.h"
+#include "tracing/path_tracer.h"
+#include "sharc/sharc_cache.h"
+#include "tracing/tracer.h"
+#include "sharc/view_region.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace sharcbake {
+
+struct UpdatePathSettings {
+    uint32_t max_bounces = 8;        ///< surface interactions per update path
+    uint32_t russian_roulette_start = 2;
+};
+
+/// Counters of the update pass, per thread and then summed.
+struct UpdateCounters {
+    uint64_t paths = 0;
+    uint64_t segments = 0;           ///< closest-hit rays (path segments)
+    uint64_t shadow_rays = 0;
+    uint64_t resampled = 0;          ///< paths ended by cache resampling
+    uint64_t sky_misses = 0;
+    uint64_t non_finite = 0;         ///< NaN/Inf local radiance values replaced by 0
+    uint64_t clamped_propagation = 0;  ///< resampled values whose emission share exceeded the voxel mean
+};
+
+class UpdatePathTracer {
+public:
+    UpdatePathTracer(const Tracer& tracer, const LightSampler& lights, const SharcCache& cache,
+                     UpdatePathSettings settings);
+
+    /// Traces one update path and appends its deposits, in path order, to `out`. Reads the
+    /// cache's resolved entries (the previous iteration's state) but never writes the cache.
+    /// `levels` picks each vertex's voxel (the finest level a runtime camera of the view region
+    /// can ask for there); `camera` is this iteration's camera position (the level-of-detail
+    /// centre when the region is the bake camera itself).
+    void trace(const Ray& camera_ray, PixelSampler& sampler, const DepositLevels& levels, const Float3& camera,
+               std::vector<Deposit>& out, UpdateCounters& counters) const;
+
+private:
+    const Tracer& tracer_;
+    const LightSampler& lights_;
+    const SharcCache& cache_;
+    UpdatePathSettings settings_;
+};
+
+}  // namespace sharcbake

@@ -1,0 +1,240 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "tracing/lights.h"
+
+#include "tracing/sampling.h"
+
+#include <cmath>
+#include <limits>
+
+namespace sharcbake {
+namespace {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+glm::vec3 textureMean(const Texture& texture) {
+    glm::dvec3 sum(0.0);
+    for (const glm::vec4& t : texture.texels) sum += glm::dvec3(t);
+    return texture.texels.empty() ? glm::vec3(1.0f) : glm::vec3(sum / double(texture.texels.size()));
+}
+
+/// glTF's recommended smooth range cut-off: (clamp(1 - (d/range)^4, 0, 1))^2.
+float rangeWindow(float distance, float range) {
+    if (range <= 0.0f) return 1.0f;
+    const float ratio = distance / range;
+    const float w = glm::clamp(1.0f - ratio * ratio * ratio * ratio, 0.0f, 1.0f);
+    return w * w;
+}
+
+/// KHR_lights_punctual's spot attenuation: squared linear ramp between the cone cosines.
+float spotAttenuation(const PunctualLight& light, glm::vec3 light_to_point) {
+    const float cos_outer = std::cos(light.outer_cone_angle);
+    const float cos_inner = std::cos(light.inner_cone_angle);
+    const float scale = 1.0f / std::max(1e-3f, cos_inner - cos_outer);
+    const float t = glm::clamp((glm::dot(light.direction, light_to_point) - cos_outer) * scale, 0.0f, 1.0f);
+    return t * t;
+}
+
+}  // namespace
+
+glm::vec2 directionToEquirect(glm::vec3 d) {
+    const float u = 0.5f + std::atan2(d.z, d.x) * (0.5f * kInvPi);
+    const float v = std::acos(glm::clamp(d.y, -1.0f, 1.0f)) * kInvPi;
+    return {u - std::floor(u), v};
+}
+
+glm::vec3 equirectToDirection(glm::vec2 uv) {
+    const float phi = (uv.x - 0.5f) * 2.0f * kPi;
+    const float theta = uv.y * kPi;
+    const float sin_theta = std::sin(theta);
+    return {sin_theta * std::cos(phi), std::cos(theta), sin_theta * std::sin(phi)};
+}
+
+LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
+    std::vector<float> powers;
+    const glm::vec3 extent = scene.bounds_max - scene.bounds_min;
+    const float radius = std::max(0.5f * glm::length(extent), 1e-3f);
+    const float disk_area = kPi * radius * radius;
+
+    // Area lights. Power = pi * area * luminance(mean emitted radiance) per emitting side.
+    std::vector<glm::vec3> texture_means(scene.textures.size(), glm::vec3(-1.0f));
+    for (uint32_t t = 0; t < scene.triangles.size(); ++t) {
+        const Material& m = scene.materials[scene.triangle_materials[t]];
+        if (!m.isEmissive()) continue;
+        glm::vec3 emission = m.emissive * m.emissive_strength;
+        if (m.emissive_texture.isSet()) {
+            glm::vec3& mean = texture_means[size_t(m.emissive_texture.texture)];
+            if (mean.x < 0.0f) mean = textureMean(scene.textures[size_t(m.emissive_texture.texture)]);
+            emission *= mean;
+        }
+        const glm::uvec3 tri = scene.triangles[t];
+        const float area = 0.5f * glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
+                                                         scene.positions[tri.z] - scene.positions[tri.x]));
+        const float power = kPi * area * luminance(emission) * (m.double_sided ? 2.0f : 1.0f);
+        if (!(power > 0.0f)) continue;
+        if (triangle_area_.empty()) {
+            triangle_area_.assign(scene.triangles.size(), 0.0f);
+            triangle_pmf_.assign(scene.triangles.size(), 0.0f);
+        }
+        triangle_area_[t] = area;
+        entries_.push_back({Kind::Triangle, t});
+        powers.push_back(power);
+        ++emissive_triangle_count_;
+    }
+
+    for (uint32_t i = 0; i < scene.lights.size(); ++i) {
+        const PunctualLight& light = scene.lights[i];
+        const float lum = luminance(light.intensity);
+        float power = 0.0f;
+        switch (light.type) {
+            case LightType::Point: power = 4.0f * kPi * lum; break;
+            case LightType::Spot: {
+                const float cos_mid = 0.5f * (std::cos(light.inner_cone_angle) + std::cos(light.outer_cone_angle));
+                power = 2.0f * kPi * (1.0f - cos_mid) * lum;
+                break;
+            }
+            case LightType::Directional: power = lum * disk_area; break;
+        }
+        if (!(power > 0.0f)) continue;
+        entries_.push_back({Kind::Punctual, i});
+        powers.push_back(power);
+    }
+
+    if (!scene.sky.isBlack()) {
+        float mean_luminance = luminance(scene.sky.uniform);
+        if (scene.sky.map) {
+            const Texture& map = *scene.sky.map;
+            std::vector<float> weights(size_t(map.width) * size_t(map.height));
+            double sum = 0.0;
+            for (int y = 0; y < map.height; ++y) {
+                // Rows near the poles cover less solid angle.
+                const float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(map.height));
+                for (int x = 0; x < map.width; ++x) {
+                    const float lum = std::max(0.0f, luminance(glm::vec3(map.texels[size_t(y) * size_t(map.width) + size_t(x)])));
+                    weights[size_t(y) * size_t(map.width) + size_t(x)] = lum * sin_theta;
+                    sum += double(lum * sin_theta);
+                }
+            }
+            sky_map_distribution_ = Distribution2D(weights, map.width, map.height);
+            mean_luminance = float(sum / std::max(1.0, double(map.width) * double(map.height)) * (kPi / 2.0)) *
+                             scene.sky.scale;
+        }
+        if (mean_luminance > 0.0f) {
+            has_sky_ = true;
+            entries_.push_back({Kind::Sky, 0});
+            powers.push_back(kPi * mean_luminance * disk_area);
+        }
+    }
+
+    if (entries_.empty()) return;
+    selection_ = Distribution1D(powers);
+    for (size_t e = 0; e < entries_.size(); ++e) {
+        if (entries_[e].kind == Kind::Triangle) triangle_pmf_[entries_[e].index] = selection_.pmf(e);
+        if (entries_[e].kind == Kind::Sky) sky_pmf_ = selection_.pmf(e);
+    }
+}
+
+bool LightSampler::sample(const SurfaceHit& at, float u_select, glm::vec2 u, LightSample& out) const {
+    if (selection_.empty()) return false;
+    const size_t e = selection_.sampleDiscrete(u_select);
+    const float pmf = selection_.pmf(e);
+    switch (entries_[e].kind) {
+        case Kind::Triangle: return sampleTriangle(entries_[e].index, pmf, at, u, out);
+        case Kind::Punctual: return samplePunctual(scene_.lights[entries_[e].index], pmf, at, out);
+        case Kind::Sky: return sampleSky(pmf, at, u, out);
+    }
+    return false;
+}
+
+bool LightSampler::sampleTriangle(uint32_t triangle, float pmf, const SurfaceHit& at, glm::vec2 u,
+                                  LightSample& out) const {
+    const glm::vec2 b = sampleUniformTriangle(u);
+    const SurfaceHit point = makeSurfacePoint(scene_, triangle, b.x, b.y);
+    const glm::vec3 to_light = point.position - at.position;
+    const float distance2 = glm::dot(to_light, to_light);
+    if (!(distance2 > 0.0f)) return false;
+    const float distance = std::sqrt(distance2);
+    const glm::vec3 wi = to_light / distance;
+    const float cos_light = -glm::dot(point.face_normal, wi);
+    const ShadingMaterial material = evaluateMaterial(scene_, point);
+    if (cos_light == 0.0f || (cos_light < 0.0f && !material.double_sided)) return false;
+    out.wi = wi;
+    out.distance = distance;
+    out.radiance = material.emission;
+    out.pdf = pmf * distance2 / (triangle_area_[triangle] * std::abs(cos_light));
+    out.is_delta = false;
+    return out.pdf > 0.0f && std::isfinite(out.pdf);
+}
+
+bool LightSampler::samplePunctual(const PunctualLight& light, float pmf, const SurfaceHit& at,
+                                  LightSample& out) const {
+    out.is_delta = true;
+    out.pdf = pmf;
+    if (light.type == LightType::Directional) {
+        out.wi = -light.direction;
+        out.distance = kInfinity;
+        out.radiance = light.intensity;
+        return true;
+    }
+    const glm::vec3 to_light = light.position - at.position;
+    const float distance2 = glm::dot(to_light, to_light);
+    if (!(distance2 > 0.0f)) return false;
+    const float distance = std::sqrt(distance2);
+    out.wi = to_light / distance;
+    out.distance = distance;
+    float scale = rangeWindow(distance, light.range) / distance2;
+    if (light.type == LightType::Spot) scale *= spotAttenuation(light, -out.wi);
+    out.radiance = light.intensity * scale;
+    return scale > 0.0f;
+}
+
+bool LightSampler::sampleSky(float pmf, const SurfaceHit& at, glm::vec2 u, LightSample& out) const {
+    if (scene_.sky.map) {
+        float uv_pdf = 0.0f;
+        const glm::vec2 uv = sky_map_distribution_.sample(u, &uv_pdf);
+        const float sin_theta = std::sin(uv.y * kPi);
+        if (!(uv_pdf > 0.0f) || sin_theta <= 0.0f) return false;
+        out.wi = equirectToDirection(uv);
+        out.pdf = pmf * uv_pdf / (2.0f * kPi * kPi * sin_theta);
+    } else {
+        // A uniform sky is best sampled by the cosine lobe of the receiving surface.
+        out.wi = Frame(at.shading_normal).toWorld(sampleCosineHemisphere(u));
+        out.pdf = pmf * std::max(0.0f, glm::dot(out.wi, at.shading_normal)) * kInvPi;
+    }
+    out.distance = kInfinity;
+    out.radiance = skyRadiance(out.wi);
+    out.is_delta = false;
+    return out.pdf > 0.0f;
+}
+
+float LightSampler::pdfEmitter(glm::vec3 from, const SurfaceHit& emitter) const {
+    if (triangle_pmf_.empty()) return 0.0f;
+    const float pmf = triangle_pmf_[emitter.triangle];
+    if (pmf <= 0.0f) return 0.0f;
+    const glm::vec3 to_light = emitter.position - from;
+    const float distance2 = glm::dot(to_light, to_light);
+    const float cos_light = std::abs(glm::dot(emitter.face_normal, to_light)) / std::sqrt(distance2);
+    if (!(cos_light > 0.0f)) return 0.0f;
+    return pmf * distance2 / (triangle_area_[emitter.triangle] * cos_light);
+}
+
+float LightSampler::skyDirectionPdf(glm::vec3 shading_normal, glm::vec3 direction) const {
+    if (scene_.sky.map) {
+        const glm::vec2 uv = directionToEquirect(direction);
+        const float sin_theta = std::sin(uv.y * kPi);
+        if (sin_theta <= 0.0f) return 0.0f;
+        return sky_map_distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_theta);
+    }
+    return std::max(0.0f, glm::dot(direction, shading_normal)) * kInvPi;
+}
+
+float LightSampler::pdfSky(glm::vec3 shading_normal, glm::vec3 direction) const {
+    return has_sky_ ? sky_pmf_ * skyDirectionPdf(shading_normal, direction) : 0.0f;
+}
+
+glm::vec3 LightSampler::skyRadiance(glm::vec3 direction) const {
+    const Sky& sky = scene_.sky;
+    if (sky.map) return glm::vec3(sky.map->sample(directionToEquirect(direction))) * sky.scale;
+    return sky.uniform;
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,126 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "tracing/path_tracer.h"
+
+#include "tracing/bsdf.h"
+#include "tracing/surface.h"
+
+#include <cmath>
+
+namespace sharcbake {
+
+glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, const SurfaceHit& hit,
+                              const GltfBsdf& bsdf, glm::vec3 wo, float u_select, glm::vec2 u_point,
+                              TraceCounters& counters) {
+    LightSample light;
+    if (!lights.sample(hit, u_select, u_point, light)) return glm::vec3(0.0f);
+    const GltfBsdf::Evaluation e = bsdf.evaluate(wo, light.wi);
+    if (maxComponent(e.f_cos) <= 0.0f) return glm::vec3(0.0f);
+
+    Ray shadow{offsetRayOrigin(hit.position, hit.geometric_normal), light.wi, light.distance};
+    if (std::isfinite(light.distance)) {
+        // Aim from the offset origin at the light point itself. Going `distance` along wi from
+        // the offset origin would end up to one offset beyond the light and hit the emitter,
+        // wherever the offset is not small against the distance: near the light, and
+        // everywhere in a scene modelled at millimetre scale (the offset is absolute there).
+        const glm::vec3 to_light = hit.position + light.wi * light.distance - shadow.origin;
+        const float length = glm::length(to_light);
+        if (!(length > 0.0f)) return glm::vec3(0.0f);
+        shadow.direction = to_light / length;
+        shadow.t_max = length * (1.0f - 1e-4f);
+    }
+    counters.shadow_rays.fetch_add(1, std::memory_order_relaxed);
+    if (tracer.occluded(shadow)) return glm::vec3(0.0f);
+
+    const float weight = light.is_delta ? 1.0f : powerHeuristic(light.pdf, e.pdf);
+    return e.f_cos * light.radiance * (weight / light.pdf);
+}
+
+float emissionMisWeight(const LightSampler& lights, uint32_t bounce, float previous_bsdf_pdf,
+                        glm::vec3 previous_position, const SurfaceHit& emitter) {
+    if (bounce == 0) return 1.0f;
+    return powerHeuristic(previous_bsdf_pdf, lights.pdfEmitter(previous_position, emitter));
+}
+
+glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
+                               TraceCounters& counters) const {
+    glm::vec3 result(0.0f);
+    glm::vec3 throughput(1.0f);
+    Ray ray = camera_ray;
+    // State of the previous vertex, for MIS when the BSDF-sampled ray finds a light.
+    float previous_bsdf_pdf = 0.0f;
+    glm::vec3 previous_position = ray.origin;
+    glm::vec3 previous_shading_normal(0.0f);
+    float cone_roughness = 0.0f;  // SHaRC's path spread: +1 per diffuse bounce, +roughness per glossy
+
+    for (uint32_t bounce = 0;; ++bounce) {
+        sampler.startDimension(kFirstBounceDimension + bounce * kDimensionsPerBounce);
+        RayHit ray_hit;
+        counters.closest_hit_rays.fetch_add(1, std::memory_order_relaxed);
+        if (!tracer_.intersect(ray, ray_hit)) {
+            if (lights_.hasSky()) {
+                const glm::vec3 sky = lights_.skyRadiance(ray.direction);
+                const float weight = bounce == 0 ? 1.0f
+                                                 : powerHeuristic(previous_bsdf_pdf,
+                                                                  lights_.pdfSky(previous_shading_normal, ray.direction));
+                result += throughput * sky * weight;
+            }
+            break;
+        }
+        const SurfaceHit hit = makeSurfaceHit(tracer_.scene(), ray_hit, ray.direction);
+        const ShadingMaterial material = evaluateMaterial(tracer_.scene(), hit);
+        const glm::vec3 wo = -ray.direction;
+
+        const glm::vec3 emitted = emittedRadiance(hit, material);
+        const bool emits = maxComponent(emitted) > 0.0f;
+        const float emission_weight =
+            emits ? emissionMisWeight(lights_, bounce, previous_bsdf_pdf, previous_position, hit) : 0.0f;
+        if (emits) result += throughput * emitted * emission_weight;
+
+        // A cached value is the full outgoing radiance, emission included. The emission's
+        // BSDF-sampled share was added above; the share next-event estimation covered at the
+        // previous vertex must not be added twice, so only the reflected part is taken here.
+        if (cache_ && bounce > 0) {
+            glm::vec3 cached;
+            if (cache_->lookup(CacheQuery{hit.position, hit.geometric_normal, ray_hit.t, cone_roughness},
+                               cached)) {
+                counters.cache_hits.fetch_add(1, std::memory_order_relaxed);
+                result += throughput * glm::max(cached - emitted, glm::vec3(0.0f));
+                break;
+            }
+        }
+        if (bounce >= settings_.max_bounces) break;
+
+        const GltfBsdf bsdf(material, hit);
+        const glm::vec2 u_light_select = sampler.next2D();
+        const glm::vec2 u_light_point = sampler.next2D();
+        if (lights_.hasLights()) {
+            result += throughput * estimateDirectLight(tracer_, lights_, hit, bsdf, wo, u_light_select.x,
+                                                       u_light_point, counters);
+        }
+
+        const glm::vec2 u_lobe_rr = sampler.next2D();
+        // Russian roulette before sampling, from the vertex's albedo (not the sampled weight): a
+        // path survives with its expected throughput, at most the albedo even when the throughput
+        // exceeds 1, so the throughput cannot grow in expectation however long the path.
+        float survive = 1.0f;
+        if (bounce >= settings_.russian_roulette_start) {
+            survive = russianRouletteSurvival(throughput, bsdf.albedo(wo));
+            if (!(survive > 0.0f) || u_lobe_rr.y >= survive) break;
+        }
+        const GltfBsdf::Sample s = bsdf.sample(wo, u_lobe_rr.x, sampler.next2D());
+        if (!s.valid) break;
+        throughput *= s.weight / survive;
+        cone_roughness += s.specular ? bsdf.roughness() : 1.0f;
+        previous_bsdf_pdf = s.pdf;
+        previous_position = hit.position;
+        previous_shading_normal = hit.shading_normal;
+        ray = Ray{offsetRayOrigin(hit.position, hit.geometric_normal), s.wi};
+    }
+    if (!isFiniteColor(result)) {
+        counters.non_finite_samples.fetch_add(1, std::memory_order_relaxed);
+        return glm::vec3(0.0f);
+    }
+    return result;
+}
+
+}  // namespace sharcbake

@@ -1,0 +1,128 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "tracing/tracer.h"
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace sharcbake {
+namespace {
+
+void throwOnEmbreeError(RTCDevice device, const char* what) {
+    const RTCError error = rtcGetDeviceError(device);
+    if (error != RTC_ERROR_NONE) {
+        throw std::runtime_error(std::string("Embree error (code ") + std::to_string(int(error)) +
+                                 ") while " + what);
+    }
+}
+
+void initRayHit(const Ray& ray, RTCRayHit& rayhit) {
+    initEmbreeRay(ray, rayhit.ray);
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+float intAsFloat(int32_t i) {
+    float f;
+    std::memcpy(&f, &i, sizeof f);
+    return f;
+}
+int32_t floatAsInt(float f) {
+    int32_t i;
+    std::memcpy(&i, &f, sizeof i);
+    return i;
+}
+
+}  // namespace
+
+Tracer::Tracer(const Scene& scene) : scene_(scene) {
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw std::runtime_error("Embree: cannot create a device");
+    rtc_scene_ = rtcNewScene(device_);
+    // An offline bake traces billions of rays against one build: spend time on BVH quality.
+    rtcSetSceneBuildQuality(rtc_scene_, RTC_BUILD_QUALITY_HIGH);
+
+    if (!scene.triangles.empty()) {
+        RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Embree may read 16 bytes at the last vertex, so its own allocation (padded) is used.
+        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+            scene.positions.size()));
+        for (size_t i = 0; i < scene.positions.size(); ++i) {
+            vertices[3 * i + 0] = scene.positions[i].x;
+            vertices[3 * i + 1] = scene.positions[i].y;
+            vertices[3 * i + 2] = scene.positions[i].z;
+        }
+        auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+            geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+            scene.triangles.size()));
+        std::memcpy(indices, scene.triangles.data(), scene.triangles.size() * sizeof(glm::uvec3));
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometry(rtc_scene_, geometry);
+        rtcReleaseGeometry(geometry);
+    }
+    rtcCommitScene(rtc_scene_);
+    throwOnEmbreeError(device_, "building the scene");
+}
+
+void initEmbreeRay(const Ray& ray, RTCRay& r) {
+    r.org_x = ray.origin.x;
+    r.org_y = ray.origin.y;
+    r.org_z = ray.origin.z;
+    r.dir_x = ray.direction.x;
+    r.dir_y = ray.direction.y;
+    r.dir_z = ray.direction.z;
+    r.tnear = 0.0f;
+    r.tfar = ray.t_max;
+    r.time = 0.0f;
+    r.mask = 0xffffffffu;
+    r.id = 0;
+    r.flags = 0;
+}
+
+Tracer::~Tracer() {
+    if (rtc_scene_) rtcReleaseScene(rtc_scene_);
+    if (device_) rtcReleaseDevice(device_);
+}
+
+bool Tracer::intersect(const Ray& ray, RayHit& hit) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rayhit;
+    initRayHit(ray, rayhit);
+    rtcIntersect1(rtc_scene_, &context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    hit.triangle = rayhit.hit.primID;
+    hit.t = rayhit.ray.tfar;
+    hit.u = rayhit.hit.u;
+    hit.v = rayhit.hit.v;
+    return true;
+}
+
+bool Tracer::occluded(const Ray& ray) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rayhit;
+    initRayHit(ray, rayhit);
+    rtcOccluded1(rtc_scene_, &context, &rayhit.ray);
+    // Embree marks an occluded ray by setting tfar to -inf.
+    return rayhit.ray.tfar < 0.0f;
+}
+
+glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
+    // Near the origin floats are dense, so a fixed tiny offset is used there; elsewhere the
+    // position is nudged by a number of ULPs proportional to the normal component.
+    constexpr float kOriginRegion = 1.0f / 32.0f;
+    constexpr float kFloatScale = 1.0f / 65536.0f;
+    constexpr float kIntScale = 256.0f;
+    glm::vec3 result;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int32_t offset = int32_t(kIntScale * normal[axis]);
+        const float p = position[axis];
+        const float stepped = intAsFloat(floatAsInt(p) + (p < 0.0f ? -offset : offset));
+        result[axis] = std::abs(p) < kOriginRegion ? p + kFloatScale * normal[axis] : stepped;
+    }
+    return result;
+}
+
+}  // namespace sharcbake
