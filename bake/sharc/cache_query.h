@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file cache_query.h
 /// @brief A baked .sharc cache as a RadianceCache for the path tracer (`render --cache`): SHaRC's
-/// Query (algorithm notes §6) with the application-side eligibility tests of the SDK sample.
+/// Query (docs/sharc_algorithm.md §6) with the application-side eligibility tests of the SDK sample.
 #pragma once
 
 #include "tracing/path_tracer.h"

@@ -3,7 +3,7 @@
 /// @brief The bake's radiance cache: SHaRC's hash grid plus, per slot, a fixed-point
 /// accumulation entry and a resolved entry.
 ///
-/// Offline differences from the real-time SDK (see DESIGN.md section 3), each for a reason:
+/// Offline differences from the real-time SDK (see docs/design.md §3.2), each for a reason:
 /// - Sums are 72-bit fixed point (64-bit atomics plus a carry count), added in a fixed order, so
 ///   a bake is bit-identical for any thread count and cannot wrap (the SDK's 32-bit sums can,
 ///   sharc_algorithm.md 10.1). Rounding to fixed point is dithered, so radiance far below one

@@ -26,7 +26,7 @@ std::string scenePath(const std::string& name) {
     return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
 }
 
-// ---- Eligibility (algorithm notes §6, app-side tests) -------------------------------------------
+// ---- Eligibility (docs/sharc_algorithm.md §6.2, app-side tests) ---------------------------------
 
 TEST(CacheEligibility, SegmentShorterThanTheVoxelDiagonalIsRefused) {
     const float s = 1.0f;

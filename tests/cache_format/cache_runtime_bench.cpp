@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Load and query throughput of the runtime library (DESIGN.md bars: open + validate >= 1 GB/s,
+// Load and query throughput of the runtime library (docs/design.md §5 bars: open + validate >= 1 GB/s,
 // >= 20 M lookups/s per core on a cache with 1 M live entries). Prints one JSON object.
 // Usage: cache_runtime_bench [live_voxels (default 1000000)] [lookups (default 4000000)]
 #include "synthetic_cache.h"

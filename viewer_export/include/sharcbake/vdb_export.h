@@ -2,7 +2,7 @@
 /// @file vdb_export.h
 /// @brief A baked .sharc cache as OpenVDB grids, for vdb_view / vdb_render, Houdini and Blender.
 ///
-/// The cache is read only through the runtime library (CacheView). Grid layout (DESIGN.md §4):
+/// The cache is read only through the runtime library (CacheView). Grid layout (docs/design.md §4.3):
 ///
 ///  * One grid set per SHaRC level present, each with its own transform: a linear transform of
 ///    voxel size s = voxelSize(level) translated by 0.5·s, so VDB index g (the key's grid
