@@ -20,12 +20,12 @@
 namespace sharcbake {
 
 /// Float32 spacing at the scene's far corner above this share of the finest voxel makes hit
-/// points jitter between voxels (sharc_algorithm.md 10.9: about 20 % at 1e5 units, S = 50).
+/// points jitter between voxels (docs/sharc_algorithm.md §10.9: about 20 % at 1e5 units, S = 50).
 inline constexpr double kPrecisionWarningShare = 0.05;
 
 /// Float32 spacing above this multiple of SHaRC's 1e-4 position bias (beyond ~16k units from
 /// the origin) no longer keeps surfaces that lie on voxel boundaries on one side of them
-/// (sharc_algorithm.md 10.9); the bias is part of the bit-exact key and cannot follow the scene.
+/// (docs/sharc_algorithm.md §10.9); the bias is part of the bit-exact key and cannot follow the scene.
 inline constexpr double kPositionBiasWarningFactor = 16.0;
 
 struct StabilityReport {

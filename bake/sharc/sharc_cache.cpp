@@ -259,7 +259,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
                 }
                 // Dithered rounding where it matters: the expected fixed-point value is exactly
                 // value x scale, so light below one step is kept on average; truncation would
-                // drop it for good (sharc_algorithm.md 10.2). Above 2^20 steps, rounding to
+                // drop it for good (docs/sharc_algorithm.md §10.2). Above 2^20 steps, rounding to
                 // nearest is off by at most 2^-21 and the hash is not worth its time.
                 const double scaled = value * radiance_scale_;
                 double fixed;

@@ -6,7 +6,7 @@
 /// Offline differences from the real-time SDK (see docs/design.md §3.2), each for a reason:
 /// - Sums are 72-bit fixed point (64-bit atomics plus a carry count), added in a fixed order, so
 ///   a bake is bit-identical for any thread count and cannot wrap (the SDK's 32-bit sums can,
-///   sharc_algorithm.md 10.1). Rounding to fixed point is dithered, so radiance far below one
+///   docs/sharc_algorithm.md §10.1). Rounding to fixed point is dithered, so radiance far below one
 ///   fixed-point step is kept on average instead of truncated to 0 (10.2).
 /// - Resolved means are float32 and weights double: no fp16 dead zone or saturation (10.5).
 /// - Voxels are never evicted: a static bake keeps everything it has seen.

@@ -2,7 +2,7 @@
 /// @file sharc_update.h
 /// @brief SHaRC's update pass on the CPU: one update path from the virtual camera, depositing
 /// each vertex's local radiance into its voxel and propagating it back along the path
-/// (sharc_algorithm.md section 4).
+/// (docs/sharc_algorithm.md §4).
 #pragma once
 
 #include "tracing/lights.h"

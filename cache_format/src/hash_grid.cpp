@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // SHaRC hash grid: keys, hash, buckets and the CPU key table. Written from the algorithm
-// description (shared/reference/sharc_algorithm.md §2) and cache_format/SPEC.md "Hash grid";
+// description (docs/sharc_algorithm.md §2) and cache_format/SPEC.md "Hash grid";
 // every float operation below is one IEEE-754 binary32 operation in the order SPEC §H.3-§H.5
 // prescribes, because a different order or a fused multiply-add changes keys near cell and level
 // boundaries.

@@ -66,7 +66,7 @@ TEST(StiffFurnace, ShortFeedbackWindowIsWhatMakesStiffTransportConverge) {
 /// outgoing radiance at the same surface points. Voxels must be fine enough (S = 20: 0.1 m near
 /// the camera) not to straddle the doorway: at S = 5 the cache averages room A's lit floor into
 /// room B's and room B comes out ~28 % too bright, for any feedback window (spatial averaging,
-/// a bias by design, sharc_algorithm.md 10.13).
+/// a bias by design, docs/sharc_algorithm.md §10.13).
 TEST(StiffTwoRooms, RoomLitThroughTheDoorwayMatchesThePathTracer) {
     Scene scene = loadGltf(scenePath("two_rooms"));
     BakeConfig config;
