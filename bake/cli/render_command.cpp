@@ -69,13 +69,14 @@ std::string describeLevels(const std::vector<uint32_t>& levels) {
     return text.empty() ? "none" : text;
 }
 
-/// Reads a .sharc file: kExitIo if it cannot be read, kExitInvalidInput if it is not a valid cache.
-CacheData loadCacheForCommand(const std::string& path) {
-    CacheData data;
-    std::string message;
-    const CacheFileStatus status = readCacheFile(path, &data, &message);
-    if (status == CacheFileStatus::kOk) return data;
-    const std::string text = message.empty() ? path + ": " + toString(status) : message;
+/// Opens and validates a .sharc file with the runtime library: kExitIo if it cannot be read,
+/// kExitInvalidInput if it is not a valid cache.
+CacheView openCacheForCommand(const std::string& path) {
+    CacheView view;
+    CacheError error;
+    const CacheFileStatus status = CacheView::openFile(path, &view, &error);
+    if (status == CacheFileStatus::kOk) return view;
+    const std::string text = error.message.empty() ? path + ": " + toString(status) : error.message;
     throw CommandError(status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput, text);
 }
 
@@ -122,9 +123,10 @@ public:
     static constexpr uint32_t kMaxBucketSize = 1024;
     static constexpr uint32_t kMaxCapacity = 1u << 28;  // 2 GiB of keys
 
-    explicit BucketOccupancy(const CacheData& data) {
-        capacity_ = data.bake_capacity > 0 ? data.bake_capacity : kHashGridDefaultCapacity;
-        bucket_size_ = data.bucket_size > 0 ? data.bucket_size : kHashGridBucketSize;
+    explicit BucketOccupancy(const CacheView& cache) {
+        capacity_ = cache.bakeCapacity() > 0 ? cache.bakeCapacity() : kHashGridDefaultCapacity;
+        const uint32_t bucket_size = cache.gridParameters().bucket_size;
+        bucket_size_ = bucket_size > 0 ? bucket_size : kHashGridBucketSize;
         if (bucket_size_ > kMaxBucketSize || capacity_ > kMaxCapacity) {
             throw CommandError(kExitInvalidInput,
                                "--debug-view occupancy: the cache's bucket size " + std::to_string(bucket_size_) +
@@ -134,7 +136,7 @@ public:
         if (HashGridTable::create(capacity_, &table_, bucket_size_) != HashGridStatus::kOk) {
             throw CommandError(kExitInvalidInput, "the cache's table capacity or bucket size is invalid");
         }
-        for (const CacheVoxel& v : data.voxels) (void)table_.insert(v.key);
+        for (uint64_t i = 0; i < cache.voxelCount(); ++i) (void)table_.insert(cache.key(i));
     }
     /// Occupied slots / slots in the key's bucket, in [0, 1].
     float occupancy(uint64_t key) const {
@@ -242,7 +244,7 @@ void runRender(const RenderOptions& o) {
 
     std::unique_ptr<BakedCache> cache;
     if (!o.cache_path.empty()) {
-        cache = std::make_unique<BakedCache>(loadCacheForCommand(o.cache_path), camera.position,
+        cache = std::make_unique<BakedCache>(openCacheForCommand(o.cache_path), camera.position,
                                              o.cache_lookup == "nearest" ? CacheLookup::NearestLevel : CacheLookup::Exact);
     }
     std::unique_ptr<CountingCache> counting_cache;
@@ -257,7 +259,7 @@ void runRender(const RenderOptions& o) {
     ImageRenderSettings settings{width, height, o.spp, o.seed};
     const bool primary_view = !o.debug_view.empty() && o.debug_view != "bounces";
     std::unique_ptr<BucketOccupancy> occupancy;
-    if (o.debug_view == "occupancy") occupancy = std::make_unique<BucketOccupancy>(cache->data());
+    if (o.debug_view == "occupancy") occupancy = std::make_unique<BucketOccupancy>(cache->view());
     std::atomic<uint64_t> debug_hits{0}, debug_missing{0};
 
     // A debug view evaluated at the primary hit (0 where the ray leaves the scene).
@@ -269,7 +271,7 @@ void runRender(const RenderOptions& o) {
         const SurfaceHit hit = makeSurfaceHit(scene, ray_hit, ray.direction);
         const uint64_t key = cache->key(hit.position, hit.geometric_normal);
         if (o.debug_view == "cache") {
-            const CacheVoxel* v = cache->find(key);
+            const std::optional<CacheVoxel> v = cache->find(key);
             if (!v) {
                 debug_missing.fetch_add(1, std::memory_order_relaxed);
                 return glm::vec3(0.0f);
@@ -335,7 +337,7 @@ void runRender(const RenderOptions& o) {
     };
     if (cache) {
         metadata["sharcbake:cache"] = o.cache_path;
-        metadata["sharcbake:cache_voxels"] = std::to_string(cache->data().voxels.size());
+        metadata["sharcbake:cache_voxels"] = std::to_string(cache->view().voxelCount());
         metadata["sharcbake:cache_hits"] = std::to_string(counters.cache_hits.load());
         metadata["sharcbake:cache_misses"] = std::to_string(counters.cache_misses.load());
         metadata["sharcbake:cache_refused"] = std::to_string(cache->refused());

@@ -105,34 +105,28 @@ CacheProbes::CacheProbes(const Scene& scene, const Tracer& tracer, const LightSa
     references_.resize(candidates_.size());
 }
 
-size_t CacheProbes::record(const CacheData& cache) {
+size_t CacheProbes::record(const CacheView& cache) {
     Record r;
     if (!enabled()) {
         records_.push_back(std::move(r));
         return records_.size() - 1;
     }
-    for (const CacheVoxel& v : cache.voxels) r.levels.push_back(decodeHashGridKey(v.key).level);
-    std::sort(r.levels.begin(), r.levels.end());
-    r.levels.erase(std::unique(r.levels.begin(), r.levels.end()), r.levels.end());
-    grid_ = cache.gridParameters();
+    for (const CacheLevel& level : cache.levels()) r.levels.push_back(level.level);
     const glm::vec3 view = settings_.view_position;
-    grid_.camera_position = Float3{view.x, view.y, view.z};
-    const HashGridKeyer keyer(grid_);
+    grid_ = cache.gridParameters(Float3{view.x, view.y, view.z});
     const size_t n = candidates_.size();
     r.values.resize(r.levels.size() * n);
     tbb::parallel_for(size_t(0), n, [&](size_t c) {
-        const glm::vec3 p = candidates_[c].point.position, normal = candidates_[c].normal;
-        candidates_[c].view_level = decodeHashGridKey(keyer.key(Float3{p.x, p.y, p.z},
-                                                                Float3{normal.x, normal.y, normal.z},
-                                                                grid_.camera_position))
-                                        .level;
+        const Float3 p{candidates_[c].point.position.x, candidates_[c].point.position.y,
+                       candidates_[c].point.position.z};
+        const Float3 normal{candidates_[c].normal.x, candidates_[c].normal.y, candidates_[c].normal.z};
+        candidates_[c].view_level = decodeHashGridKey(cache.keyFor(p, normal, grid_.camera_position)).level;
         for (size_t l = 0; l < r.levels.size(); ++l) {
-            const uint64_t key = keyer.keyAtLevel(Float3{p.x, p.y, p.z}, Float3{normal.x, normal.y, normal.z},
-                                                  r.levels[l]);
-            const auto it = std::lower_bound(cache.voxels.begin(), cache.voxels.end(), key,
-                                             [](const CacheVoxel& v, uint64_t k) { return v.key < k; });
-            if (it == cache.voxels.end() || it->key != key || !(it->sample_weight > 0.0f)) continue;
-            r.values[l * n + c] = Value{toVec3(it->radiance), it->sample_weight};
+            const uint64_t index = cache.findKey(hashGridKeyAtLevel(p, normal, r.levels[l], grid_));
+            if (index >= cache.voxelCount()) continue;
+            const CacheVoxel v = cache.voxel(index);
+            if (!(v.sample_weight > 0.0f)) continue;
+            r.values[l * n + c] = Value{toVec3(v.radiance), v.sample_weight};
         }
     });
     records_.push_back(std::move(r));

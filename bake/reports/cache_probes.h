@@ -27,6 +27,7 @@
 
 #include "tracing/lights.h"
 #include "sharcbake/cache_file.h"
+#include "sharcbake/runtime.h"
 #include "sharcbake/scene.h"
 #include "tracing/surface_points.h"
 #include "tracing/tracer.h"
@@ -133,9 +134,9 @@ public:
     bool enabled() const { return settings_.probes > 0 && !candidates_.empty(); }
     const ProbeSettings& settings() const { return settings_; }
 
-    /// Records the cache's value at every candidate, at every level it holds (`cache.voxels`
-    /// sorted by key, as toCacheData and readCacheFile give them). Returns the record's index.
-    size_t record(const CacheData& cache);
+    /// Records the cache's value at every candidate, at every level it holds, read through the
+    /// runtime library. Returns the record's index.
+    size_t record(const CacheView& cache);
     size_t records() const { return records_.size(); }
 
     /// The error of record `index` over the probes chosen from record `population` (usually the

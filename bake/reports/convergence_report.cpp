@@ -195,13 +195,14 @@ ConvergenceRow ConvergenceEvaluator::evaluate(const SharcCache& cache) {
     CacheData data = toCacheData(cache);
     row.live_voxels = data.voxels.size();
     if (known_radiance_) row.voxel = measureVoxelError(data, *known_radiance_);
+    // Every measure reads the cache through the runtime library, as an engine would.
+    const BakedCache baked(data, view_.camera.position);
     if (probes_.enabled()) {
-        row.probe_record = probes_.record(data);
+        row.probe_record = probes_.record(baked.view());
         if (probes_during_bake_) row.probes = probes_.measure(row.probe_record, row.probe_record);
     }
     if (reference_) {
         const auto start = std::chrono::steady_clock::now();
-        const BakedCache baked(std::move(data), view_.camera.position);
         // Two independent halves: their mean is the render, their difference its own noise.
         const uint32_t spp = view_.samples_per_pixel;
         const uint32_t first_half = spp / 2, second_half = spp - spp / 2;

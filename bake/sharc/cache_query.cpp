@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace sharcbake {
@@ -18,22 +20,35 @@ bool cacheQueryEligible(float segment_length, float cone_roughness, float voxel_
     return footprint > s;
 }
 
-BakedCache::BakedCache(CacheData data, glm::vec3 camera_position, CacheLookup mode)
-    : data_(std::move(data)), mode_(mode) {
-    params_ = data_.gridParameters();
-    params_.camera_position = Float3{camera_position.x, camera_position.y, camera_position.z};
-    keyer_ = HashGridKeyer(params_);
-    for (const CacheLevel& level : data_.levels) levels_.push_back(level.level);
-    if (levels_.empty()) {
-        for (const CacheVoxel& v : data_.voxels) levels_.push_back(decodeHashGridKey(v.key).level);
-        std::sort(levels_.begin(), levels_.end());
-        levels_.erase(std::unique(levels_.begin(), levels_.end()), levels_.end());
+BakedCache::BakedCache(CacheView view, glm::vec3 camera_position, CacheLookup mode)
+    : view_(std::move(view)), mode_(mode) {
+    setUp(camera_position);
+}
+
+BakedCache::BakedCache(const CacheData& data, glm::vec3 camera_position, CacheLookup mode) : mode_(mode) {
+    std::string message;
+    CacheFileStatus status;
+    if (std::is_sorted(data.voxels.begin(), data.voxels.end(),
+                       [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; })) {
+        status = encodeCacheFile(data, &bytes_, &message);
+    } else {  // a hand-built CacheData: the file holds voxels sorted by key
+        CacheData sorted = data;
+        sortVoxels(sorted.voxels);
+        status = encodeCacheFile(sorted, &bytes_, &message);
     }
-    // readCacheFile returns sorted voxels; sort anyway so a hand-built CacheData also works.
-    if (!std::is_sorted(data_.voxels.begin(), data_.voxels.end(),
-                        [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; })) {
-        sortVoxels(data_.voxels);
+    if (status != CacheFileStatus::kOk) throw std::invalid_argument("cannot encode the cache: " + message);
+    CacheError error;
+    if (CacheView::openMemory(bytes_.data(), bytes_.size(), &view_, &error) != CacheFileStatus::kOk) {
+        throw std::invalid_argument("the encoded cache does not validate: " + error.message);
     }
+    setUp(camera_position);
+}
+
+void BakedCache::setUp(glm::vec3 camera_position) {
+    params_ = view_.gridParameters(Float3{camera_position.x, camera_position.y, camera_position.z});
+    voxel_sizes_.resize(kHashGridLevelMax + 1);
+    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) voxel_sizes_[level] = voxelSize(level, params_);
+    for (const CacheLevel& level : view_.levels()) levels_.push_back(level.level);
 }
 
 void BakedCache::setCamera(glm::vec3 camera_position) {
@@ -45,35 +60,35 @@ void BakedCache::setCamera(glm::vec3 camera_position) {
 }
 
 uint64_t BakedCache::key(glm::vec3 position, glm::vec3 normal) const {
-    return keyer_.key(Float3{position.x, position.y, position.z}, Float3{normal.x, normal.y, normal.z},
-                      params_.camera_position);
+    return view_.keyFor(Float3{position.x, position.y, position.z}, Float3{normal.x, normal.y, normal.z},
+                        params_.camera_position);
 }
 
-const CacheVoxel* BakedCache::find(uint64_t key) const {
-    const auto it = std::lower_bound(data_.voxels.begin(), data_.voxels.end(), key,
-                                     [](const CacheVoxel& v, uint64_t k) { return v.key < k; });
-    if (it == data_.voxels.end() || it->key != key || !(it->sample_weight > 0.0f)) return nullptr;
-    return &*it;
+std::optional<CacheVoxel> BakedCache::find(uint64_t key) const {
+    const uint64_t index = view_.findKey(key);
+    if (index >= view_.voxelCount()) return std::nullopt;
+    const CacheVoxel v = view_.voxel(index);
+    if (!(v.sample_weight > 0.0f)) return std::nullopt;
+    return v;
 }
 
 bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
     const uint64_t k = key(query.position, query.geometric_normal);
-    const float s = keyer_.voxelSizeAt(decodeHashGridKey(k).level);
-    if (!cacheQueryEligible(query.segment_length, query.cone_roughness, s)) {
+    const uint32_t wanted = decodeHashGridKey(k).level;
+    if (!cacheQueryEligible(query.segment_length, query.cone_roughness, voxel_sizes_[wanted])) {
         refused_.fetch_add(1, std::memory_order_relaxed);
         return false;
     }
-    const CacheVoxel* v = find(k);
+    std::optional<CacheVoxel> v = find(k);
     if (!v && mode_ == CacheLookup::NearestLevel) {
         // The levels present by distance from the camera's, the finer first on ties.
-        const uint32_t wanted = decodeHashGridKey(k).level;
         const Float3 p{query.position.x, query.position.y, query.position.z};
         const Float3 n{query.geometric_normal.x, query.geometric_normal.y, query.geometric_normal.z};
         uint32_t best_distance = UINT32_MAX;
         for (uint32_t level : levels_) {
             const uint32_t distance = level > wanted ? level - wanted : wanted - level;
             if (distance == 0 || distance >= best_distance) continue;
-            if (const CacheVoxel* found = find(keyer_.keyAtLevel(p, n, level))) {
+            if (std::optional<CacheVoxel> found = find(hashGridKeyAtLevel(p, n, level, params_))) {
                 v = found;
                 best_distance = distance;
             }

@@ -7,11 +7,13 @@
 #include "tracing/path_tracer.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
+#include "sharcbake/runtime.h"
 
 #include <glm/glm.hpp>
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace sharcbake {
@@ -30,13 +32,19 @@ enum class CacheLookup : uint8_t {
                    ///< library's lookupNearestLevel: finer first on ties)
 };
 
-/// Read-only view of a baked cache keyed with the render camera's position as the LOD centre.
-/// lookup() is thread-safe; its counters are relaxed atomics.
+/// A baked cache as the path tracer's RadianceCache, keyed with the render camera's position as
+/// the LOD centre. Every lookup goes through the runtime library (CacheView), the code engines
+/// ship: a file is opened by it, and a cache in memory (the bake's own, measured by its report)
+/// is first encoded exactly as the file would be. lookup() is thread-safe; its counters are
+/// relaxed atomics.
 class BakedCache : public RadianceCache {
 public:
-    /// @param data             the cache (voxels sorted by key, as readCacheFile returns them)
-    /// @param camera_position  the render camera's position (the LOD centre of every key)
-    BakedCache(CacheData data, glm::vec3 camera_position, CacheLookup mode = CacheLookup::Exact);
+    /// A cache file opened by the runtime library (`render --cache`).
+    BakedCache(CacheView view, glm::vec3 camera_position, CacheLookup mode = CacheLookup::Exact);
+    /// A cache in memory, encoded as writeCacheFile would write it and opened from those bytes.
+    /// Throws std::invalid_argument with the encoder's or validator's message if it is not a
+    /// valid cache.
+    BakedCache(const CacheData& data, glm::vec3 camera_position, CacheLookup mode = CacheLookup::Exact);
 
     /// Moves the LOD centre to another camera and zeroes the counters (not while lookups run).
     void setCamera(glm::vec3 camera_position);
@@ -46,10 +54,11 @@ public:
 
     /// The key of a surface point (normal facing the incoming ray) with this cache's parameters.
     uint64_t key(glm::vec3 position, glm::vec3 normal) const;
-    /// Binary search of the sorted voxels; nullptr if the key is absent or has no samples.
-    const CacheVoxel* find(uint64_t key) const;
+    /// The voxel of `key`, if the cache holds it with samples.
+    std::optional<CacheVoxel> find(uint64_t key) const;
 
-    const CacheData& data() const { return data_; }
+    const CacheView& view() const { return view_; }
+    /// The cache's grid parameters with the current camera as LOD centre.
     const HashGridParameters& parameters() const { return params_; }
 
     /// Lookups refused by the eligibility tests, and eligible lookups that found no voxel.
@@ -63,9 +72,12 @@ public:
     const std::vector<uint32_t>& levels() const { return levels_; }
 
 private:
-    CacheData data_;
+    void setUp(glm::vec3 camera_position);
+
+    std::vector<uint8_t> bytes_;  ///< the encoded cache the view reads (in-memory constructor)
+    CacheView view_;
     HashGridParameters params_;
-    HashGridKeyer keyer_;  ///< params_ without a logarithm per query
+    std::vector<float> voxel_sizes_;  ///< per level, for the eligibility test
     CacheLookup mode_;
     std::vector<uint32_t> levels_;
     mutable std::atomic<uint64_t> refused_{0};

@@ -3,6 +3,7 @@
 // its noise is taken out, and a cache biased in one region is caught in that region.
 #include "sharc/baker.h"
 #include "reports/cache_probes.h"
+#include "sharc/cache_query.h"
 #include "sharc/camera_path.h"
 #include "tracing/lights.h"
 #include "sharcbake/scene_loader.h"
@@ -75,8 +76,8 @@ TEST(CacheProbes, FurnaceReferencesAreExactAndABiasedRegionStandsOut) {
     }
     CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, bake.probeSettings(256, 256));
     ASSERT_TRUE(probes.enabled());
-    const size_t exact_record = probes.record(exact);
-    const size_t biased_record = probes.record(biased);
+    const size_t exact_record = probes.record(BakedCache(exact, glm::vec3(0.0f)).view());
+    const size_t biased_record = probes.record(BakedCache(biased, glm::vec3(0.0f)).view());
     const ProbeMeasure m = probes.measure(exact_record, exact_record);
     ASSERT_GE(m.view.probes, 128u);
     EXPECT_EQ(m.view.leaks, 0u);
@@ -119,8 +120,8 @@ TEST(CacheProbes, ACornellBoxBiasedByFivePercentOnOneWallShowsIt) {
         }
     }
     CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, bake.probeSettings(2048, 256));
-    const size_t unbiased_record = probes.record(bake.data);
-    const size_t biased_record = probes.record(biased);
+    const size_t unbiased_record = probes.record(BakedCache(bake.data, glm::vec3(0.0f)).view());
+    const size_t biased_record = probes.record(BakedCache(biased, glm::vec3(0.0f)).view());
     const ProbeMeasure before = probes.measure(unbiased_record, unbiased_record);
     const ProbeMeasure after = probes.measure(biased_record, unbiased_record);
 
@@ -147,7 +148,7 @@ TEST(CacheProbes, NoProbesMeansNoWork) {
     ProbeSettings settings = bake.probeSettings(0, 16);
     CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, settings);
     EXPECT_FALSE(probes.enabled());
-    const size_t record = probes.record(bake.data);
+    const size_t record = probes.record(BakedCache(bake.data, glm::vec3(0.0f)).view());
     EXPECT_EQ(probes.measure(record, record).view.probes, 0u);
     EXPECT_EQ(probes.referencedPoints(), 0u);
 }

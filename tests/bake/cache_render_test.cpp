@@ -68,9 +68,10 @@ TEST(BakedCache, LookupAppliesTheTestsAndFindsTheVoxel) {
     v.radiance[1] = 2.0f;
     v.radiance[2] = 3.0f;
     v.sample_weight = 4.0f;
-    CacheVoxel empty;  // a voxel without samples is not usable
-    empty.key = hashGridKey(Float3{p.x, p.y, p.z}, Float3{0.0f, -1.0f, 0.0f}, params);
-    data.voxels = {v, empty};
+    // A voxel without samples is never stored (SPEC: only live voxels), so the other side of the
+    // surface has no voxel.
+    const uint64_t other_side = hashGridKey(Float3{p.x, p.y, p.z}, Float3{0.0f, -1.0f, 0.0f}, params);
+    data.voxels = {v};
     sortVoxels(data.voxels);
     const BakedCache cache(data, camera);
     ASSERT_EQ(cache.key(p, n), key);
@@ -82,12 +83,12 @@ TEST(BakedCache, LookupAppliesTheTestsAndFindsTheVoxel) {
     EXPECT_EQ(cache.refused(), 2u);
     ASSERT_TRUE(cache.lookup(CacheQuery{p, n, 5.0f * s, 1.0f}, radiance));
     EXPECT_EQ(radiance, glm::vec3(1.0f, 2.0f, 3.0f));
-    EXPECT_FALSE(cache.lookup(CacheQuery{p, -n, 5.0f * s, 1.0f}, radiance));  // weight 0
+    EXPECT_FALSE(cache.lookup(CacheQuery{p, -n, 5.0f * s, 1.0f}, radiance));  // the other side
     EXPECT_FALSE(cache.lookup(CacheQuery{p, glm::vec3(-1.0f, 0.0f, 0.0f), 5.0f * s, 1.0f}, radiance));  // absent
     EXPECT_EQ(cache.hits(), 1u);
     EXPECT_EQ(cache.misses(), 2u);
-    EXPECT_EQ(cache.find(empty.key), nullptr);
-    EXPECT_EQ(cache.find(12345u), nullptr);
+    EXPECT_FALSE(cache.find(other_side).has_value());
+    EXPECT_FALSE(cache.find(12345u).has_value());
 }
 
 // ---- The furnace, baked and rendered through the cache --------------------------------------------
@@ -173,7 +174,7 @@ TEST_F(FurnaceCache, CacheSeenFromTheCameraIsTenWhereVoxelsExist) {
             if (!tracer_->intersect(ray, ray_hit)) continue;
             ++hits;
             const SurfaceHit hit = makeSurfaceHit(*scene_, ray_hit, ray.direction);
-            const CacheVoxel* v = cache.find(cache.key(hit.position, hit.geometric_normal));
+            const std::optional<CacheVoxel> v = cache.find(cache.key(hit.position, hit.geometric_normal));
             if (!v) continue;
             ++found;
             sum += v->radiance[0];
