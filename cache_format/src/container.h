@@ -3,7 +3,7 @@
 // and putting a file in place atomically. Internal to cache_format/.
 #pragma once
 
-#include "sharcbake/cache_file.h"
+#include "sharcbake/cache_types.h"
 #include "sharcbake/format.h"
 
 #include <cstdint>

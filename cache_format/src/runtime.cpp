@@ -5,6 +5,7 @@
 #include "sharcbake/runtime.h"
 
 #include "container.h"
+#include "file_bytes.h"
 #include "utf8.h"
 
 #include <algorithm>
@@ -22,10 +23,6 @@
 #include <emmintrin.h>
 #endif
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 namespace sharcbake {
 namespace {
@@ -154,7 +151,7 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
 }
 
 void CacheView::reset() {
-    if (mapping_) ::munmap(mapping_, mapping_size_);
+    releaseFileMapping(mapping_, mapping_size_);
     mapping_ = nullptr;
     mapping_size_ = 0;
     owned_.clear();
@@ -204,45 +201,18 @@ CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, Cac
     if (error) *error = CacheError{};
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "openFile: null output view");
     out->reset();
-    // O_NONBLOCK: opening a FIFO does not wait for a writer (it is then refused as not regular).
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-    if (fd < 0) return fail(error, CacheFileStatus::kIoError, 0, path + ": cannot open: " + std::strerror(errno));
-    struct stat st;
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        ::close(fd);
-        return fail(error, CacheFileStatus::kIoError, 0, path + ": not a regular file (a FIFO, device or folder)");
+    FileBytes bytes;
+    std::string message;
+    if (loadFileBytes(path, mode == FileMode::kMap, &bytes, &message) != CacheFileStatus::kOk) {
+        return fail(error, CacheFileStatus::kIoError, 0, message);
     }
-    const size_t size = size_t(st.st_size);
     CacheView view;
-    try {
-        if (mode == FileMode::kMap && size > 0) {
-            void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
-            if (p == MAP_FAILED) {
-                ::close(fd);
-                return fail(error, CacheFileStatus::kIoError, 0, path + ": mmap failed: " + std::strerror(errno));
-            }
-            view.mapping_ = p;
-            view.mapping_size_ = size;
-            view.data_ = static_cast<const uint8_t*>(p);
-        } else {
-            view.owned_.resize(size);
-            size_t done = 0;
-            while (done < size) {
-                const ssize_t n = ::read(fd, view.owned_.data() + done, size - done);
-                if (n < 0 && errno == EINTR) continue;
-                if (n <= 0) {
-                    ::close(fd);
-                    return fail(error, CacheFileStatus::kIoError, 0, path + ": read failed");
-                }
-                done += size_t(n);
-            }
-            view.data_ = view.owned_.data();
-        }
-    } catch (const std::bad_alloc&) {
-        ::close(fd);
-        return fail(error, CacheFileStatus::kIoError, 0, path + ": out of memory reading the file");
-    }
-    ::close(fd);
+    view.owned_ = std::move(bytes.owned);
+    view.mapping_ = bytes.mapping;
+    view.mapping_size_ = bytes.mapping_size;
+    view.data_ = view.mapping_ ? static_cast<const uint8_t*>(view.mapping_) : view.owned_.data();
+    if (view.owned_.empty() && !view.mapping_) view.data_ = nullptr;
+    const size_t size = bytes.size;
     view.size_ = size;
     if (!view.data_) {
         static const uint8_t kEmpty = 0;

@@ -9,7 +9,7 @@
 /// dependencies. A CacheView is immutable after opening, so concurrent lookups are safe.
 #pragma once
 
-#include "sharcbake/cache_file.h"
+#include "sharcbake/cache_types.h"
 #include "sharcbake/format.h"
 #include "sharcbake/hash_grid.h"
 
