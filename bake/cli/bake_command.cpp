@@ -655,303 +655,393 @@ BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::st
     return settings;
 }
 
-void runBake(const BakeOptions& o) {
-    const auto start = std::chrono::steady_clock::now();
-    const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
-    tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+/// One `sharcbake bake`, phase by phase: the outputs checked and the checkpoint locked before
+/// any work, the scene loaded and the bake set up, the iterations, the cache written, then what
+/// is reported about it. Each phase is a function; the state they share is the members.
+class BakeRun {
+public:
+    explicit BakeRun(const BakeOptions& o)
+        : o_(o),
+          threads_(o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency()),
+          checkpoint_path_(!o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path),
+          report_csv_(o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv") {}
 
-    // No output may be an input or another output; --resume F keeps checkpointing into F.
-    const std::vector<std::string> inputs = {o.scene_path, o.resume_path, o.sky.exr_path};
-    const std::string checkpoint_path = !o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path;
-    const std::string report_csv = o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv";
-    auto checkOutputs = [&](const std::vector<std::string>& more_inputs) {
-        std::vector<std::string> others = inputs;
+    void run() {
+        tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
+        prepareOutputs();
+        setUp();
+        if (!o_.quiet) printPlan();
+        iterate();
+        writeCache();
+        if (!o_.quiet) printSummary();
+        if (evaluator_) writeReport();
+        if (!o_.stats_json.empty()) writeStatsJson();
+        warnAndStop();
+    }
+
+private:
+    /// No output may be an input or another output; --resume F keeps checkpointing into F.
+    void checkOutputs(const std::vector<std::string>& more_inputs) const {
+        std::vector<std::string> others = {o_.scene_path, o_.resume_path, o_.sky.exr_path};
         others.insert(others.end(), more_inputs.begin(), more_inputs.end());
-        checkOutputPath(o.output_path, "cache", others);
-        others.push_back(o.output_path);
-        if (!checkpoint_path.empty()) {
+        checkOutputPath(o_.output_path, "cache", others);
+        others.push_back(o_.output_path);
+        if (!checkpoint_path_.empty()) {
             std::vector<std::string> checkpoint_others = others;
-            std::erase(checkpoint_others, o.resume_path);  // the one input it may replace
-            checkOutputPath(checkpoint_path, "checkpoint", checkpoint_others);
+            std::erase(checkpoint_others, o_.resume_path);  // the one input it may replace
+            checkOutputPath(checkpoint_path_, "checkpoint", checkpoint_others);
         }
-        others.push_back(checkpoint_path);
-        if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON", others);
-        others.push_back(o.stats_json);
-        if (!report_csv.empty()) checkOutputPath(report_csv, "report", others);
-    };
-    if (!o.report_dir.empty()) {
-        std::error_code error;
-        std::filesystem::create_directories(o.report_dir, error);
+        others.push_back(checkpoint_path_);
+        if (!o_.stats_json.empty()) checkOutputPath(o_.stats_json, "stats JSON", others);
+        others.push_back(o_.stats_json);
+        if (!report_csv_.empty()) checkOutputPath(report_csv_, "report", others);
     }
-    checkOutputs({});
-    std::optional<CheckpointLock> checkpoint_lock;  // two bakes sharing one checkpoint: refuse the second now
-    if (!checkpoint_path.empty()) {
-        checkpointStep("", [&] { checkpoint_lock.emplace(checkpoint_path); });
-    }
-    BakeSettings settings = settingsFromOptions(o);
-    const bool auto_capacity = o.capacity == "auto";
 
-    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
-    checkOutputs(scene.source_files);  // the buffers and images the scene read
-    if (scene.empty()) throw CommandError(kExitInvalidInput, o.scene_path + ": the scene has no triangles to bake");
-    const auto setup_start = std::chrono::steady_clock::now();
-    const Tracer tracer(scene);
-    const LightSampler lights(scene);
-    if (!o.quiet && !lights.hasLights()) {
-        std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
-                             "the cache will be black\n");
+    void prepareOutputs() {
+        if (!o_.report_dir.empty()) {
+            std::error_code error;
+            std::filesystem::create_directories(o_.report_dir, error);
+        }
+        checkOutputs({});
+        // Two bakes sharing one checkpoint: refuse the second now.
+        if (!checkpoint_path_.empty()) {
+            checkpointStep("", [&] { checkpoint_lock_.emplace(checkpoint_path_); });
+        }
     }
-    const GridDecision grid_decision = decideGrid(o, scene, settings);
-    for (const std::string& warning : grid_decision.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
-    std::string camera_description;
-    const CameraPath camera_path = makeCameraPath(o, scene, tracer, camera_description);
-    CapacityChoice capacity_choice;
-    std::string capacity_choice_text;  // empty for a fixed --capacity
-    if (auto_capacity) {
-        if (const auto resumed = autoCapacityOfCheckpoint(o.resume_path)) {
+
+    void setUp() {
+        settings_ = settingsFromOptions(o_);
+        scene_ = loadSceneForCommand(o_.scene_path, o_.sky, o_.quiet, o_.limits);
+        checkOutputs(scene_.source_files);  // the buffers and images the scene read
+        if (scene_.empty()) throw CommandError(kExitInvalidInput, o_.scene_path + ": the scene has no triangles to bake");
+        const auto setup_start = std::chrono::steady_clock::now();
+        tracer_.emplace(scene_);
+        lights_.emplace(scene_);
+        if (!o_.quiet && !lights_->hasLights()) {
+            std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
+                                 "the cache will be black\n");
+        }
+        grid_decision_ = decideGrid(o_, scene_, settings_);
+        for (const std::string& warning : grid_decision_.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+        camera_path_.emplace(makeCameraPath(o_, scene_, *tracer_, camera_description_));
+        if (autoCapacity()) chooseAutoCapacity();
+        baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, settings_,
+                                         SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
+        metadata_ = bakeMetadata(o_, scene_, *lights_, settings_, baker_->cache().radianceScale(), camera_description_,
+                                 capacity_choice_text_, grid_decision_.choice, grid_decision_.levelsCovered());
+        resume_settings_ = resumeSettings(metadata_, o_);
+        if (!o_.resume_path.empty()) {
+            checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_); });
+        }
+        first_iteration_ = baker_->iterationsDone();
+        report_.scene = o_.scene_path;
+        if (o_.target_error > 0.0) report_.target_error = o_.target_error;
+        evaluator_ = makeEvaluator(o_, scene_, *tracer_, *lights_, report_.reference);
+        if (evaluator_) report_.view = evaluator_->view();
+        setup_seconds_ = secondsSince(setup_start);
+    }
+
+    bool autoCapacity() const { return o_.capacity == "auto"; }
+
+    void chooseAutoCapacity() {
+        if (const auto resumed = autoCapacityOfCheckpoint(o_.resume_path)) {
             // Resuming: the table the first run chose, however many iterations are asked now.
-            capacity_choice.capacity = resumed->first;
-            capacity_choice_text = resumed->second;
+            capacity_choice_.capacity = resumed->first;
+            capacity_choice_text_ = resumed->second;
         } else {
-            capacity_choice = chooseCapacity(tracer, lights, camera_path, settings, o.iterations);
-            capacity_choice_text = capacity_choice.describe();
+            capacity_choice_ = chooseCapacity(*tracer_, *lights_, *camera_path_, settings_, o_.iterations);
+            capacity_choice_text_ = capacity_choice_.describe();
         }
-        settings.sharc.capacity = settings.sharc.grid.capacity = capacity_choice.capacity;
-        settings.sharc.grow_when_loaded = true;
+        settings_.sharc.capacity = settings_.sharc.grid.capacity = capacity_choice_.capacity;
+        settings_.sharc.grow_when_loaded = true;
     }
-    const double max_radiance = estimateMaxRadiance(scene);
-    Baker baker(tracer, lights, camera_path, settings, SharcCache::chooseRadianceScale(max_radiance));
-    std::vector<std::pair<std::string, std::string>> metadata =
-        bakeMetadata(o, scene, lights, settings, baker.cache().radianceScale(), camera_description,
-                     capacity_choice_text, grid_decision.choice, grid_decision.levelsCovered());
-    const BakeSettingsText resume_settings = resumeSettings(metadata, o);
-    if (!o.resume_path.empty()) {
-        checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o.resume_path, resume_settings, baker); });
-    }
-    const uint32_t first_iteration = baker.iterationsDone();
-    ConvergenceReport report;
-    report.scene = o.scene_path;
-    if (o.target_error > 0.0) report.target_error = o.target_error;
-    const std::unique_ptr<ConvergenceEvaluator> evaluator = makeEvaluator(o, scene, tracer, lights, report.reference);
-    if (evaluator) report.view = evaluator->view();
-    const double setup_seconds = secondsSince(setup_start);
-    if (!o.quiet) {
-        if (settings.shard_count > 1) {
-            std::printf("Shard %u of %u: iterations k*%u + %u of the unsharded bake\n", settings.shard_index,
-                        settings.shard_count, settings.shard_count, settings.shard_index);
+
+    void printPlan() const {
+        if (settings_.shard_count > 1) {
+            std::printf("Shard %u of %u: iterations k*%u + %u of the unsharded bake\n", settings_.shard_index,
+                        settings_.shard_count, settings_.shard_count, settings_.shard_index);
         }
-        if (!o.resume_path.empty()) {
-            std::printf("Resumed from %s after %u iterations\n", o.resume_path.c_str(), first_iteration);
+        if (!o_.resume_path.empty()) {
+            std::printf("Resumed from %s after %u iterations\n", o_.resume_path.c_str(), first_iteration_);
         }
-        std::printf("Camera: %s\n", camera_description.c_str());
-        std::printf("Grid: scene scale %g, log base %g, %s\n", double(settings.sharc.grid.scene_scale),
-                    double(settings.sharc.grid.logarithm_base), grid_decision.choice.c_str());
-        std::printf("Views: %s; levels %s%s\n", settings.view_region.describe().c_str(),
-                    grid_decision.levelsCovered().c_str(), grid_decision.misses.c_str());
-        if (auto_capacity) {
-            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text.c_str(), capacity_choice.seconds);
+        std::printf("Camera: %s\n", camera_description_.c_str());
+        std::printf("Grid: scene scale %g, log base %g, %s\n", double(settings_.sharc.grid.scene_scale),
+                    double(settings_.sharc.grid.logarithm_base), grid_decision_.choice.c_str());
+        std::printf("Views: %s; levels %s%s\n", settings_.view_region.describe().c_str(),
+                    grid_decision_.levelsCovered().c_str(), grid_decision_.misses.c_str());
+        if (autoCapacity()) {
+            std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text_.c_str(), capacity_choice_.seconds);
         }
-        std::printf("Left out: %s\n", workLeftOut(scene, lights).c_str());
+        std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
-                    baker.pathsPerIteration(), settings.width, settings.height, settings.update_stride, settings.sharc.capacity,
-                    settings.sharc.history.describe().c_str(), threads);
+                    baker_->pathsPerIteration(), settings_.width, settings_.height, settings_.update_stride,
+                    settings_.sharc.capacity, settings_.sharc.history.describe().c_str(), threads_);
         std::fflush(stdout);
     }
 
-    g_stop_signal = 0;
-    auto previous_interrupt_handler = std::signal(SIGINT, onStopSignal);
-    auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
-    const auto bake_start = std::chrono::steady_clock::now();
-    // Evaluation pauses the bake; its time is kept out of the bake's time and time budget.
-    double evaluation_seconds = 0.0;
-    const auto bakeSeconds = [&] { return secondsSince(bake_start) - evaluation_seconds; };
-    const auto evaluate = [&] {
+    /// Bake time so far: evaluation pauses the bake, and its time is kept out of the bake's time
+    /// and of --time-budget.
+    double bakeSeconds() const { return secondsSince(bake_start_) - evaluation_seconds_; }
+
+    /// Measures the cache as it stands (convergence_report.h) and returns the row.
+    const ConvergenceRow& evaluate() {
         const double bake_time = bakeSeconds();
         const auto evaluation_start = std::chrono::steady_clock::now();
-        ConvergenceRow row = evaluator->evaluate(baker.cache());
-        row.iteration = baker.iterationsDone();
+        ConvergenceRow row = evaluator_->evaluate(baker_->cache());
+        row.iteration = baker_->iterationsDone();
         row.bake_seconds = bake_time;
-        row.rays = baker.counters().segments + baker.counters().shadow_rays;
-        evaluation_seconds += secondsSince(evaluation_start);
-        report.rows.push_back(row);
-        return row;
-    };
-    const char* stop_reason = "iterations";
-    {
-        Progress progress("Baking", o.iterations - std::min(o.iterations, first_iteration),
-                          !o.quiet && Progress::isTerminal());
-        uint32_t next_checkpoint = nextReportCheckpoint(0);
-        while (next_checkpoint <= first_iteration && next_checkpoint != UINT32_MAX) {
-            next_checkpoint = nextReportCheckpoint(next_checkpoint);
-        }
-        while (baker.iterationsDone() < o.iterations) {
-            if (g_stop_signal != 0) {
-                stop_reason = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
-                break;
-            }
-            if (o.time_budget > 0.0 && bakeSeconds() >= o.time_budget) {
-                stop_reason = "time budget";
-                break;
-            }
-            baker.runIteration();
-            progress.advance();
-            if (!checkpoint_path.empty() && baker.iterationsDone() % o.checkpoint_interval == 0) {
-                checkpointStep("checkpoint: ", [&] { saveCheckpoint(checkpoint_path, baker, resume_settings); });
-            }
-            if (evaluator && baker.iterationsDone() == next_checkpoint) {
+        row.rays = baker_->counters().segments + baker_->counters().shadow_rays;
+        evaluation_seconds_ += secondsSince(evaluation_start);
+        report_.rows.push_back(row);
+        return report_.rows.back();
+    }
+
+    void saveCheckpointNow() {
+        checkpointStep("checkpoint: ", [&] { saveCheckpoint(checkpoint_path_, *baker_, resume_settings_); });
+    }
+
+    /// The iterations, until --iterations, a signal, --time-budget or --target-error stops them;
+    /// then the report's last measures and the checkpoint of the end.
+    void iterate() {
+        g_stop_signal = 0;
+        auto previous_interrupt_handler = std::signal(SIGINT, onStopSignal);
+        auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
+        bake_start_ = std::chrono::steady_clock::now();
+        {
+            Progress progress("Baking", o_.iterations - std::min(o_.iterations, first_iteration_),
+                              !o_.quiet && Progress::isTerminal());
+            uint32_t next_checkpoint = nextReportCheckpoint(0);
+            while (next_checkpoint <= first_iteration_ && next_checkpoint != UINT32_MAX) {
                 next_checkpoint = nextReportCheckpoint(next_checkpoint);
-                const std::optional<double> error = evaluate().primaryError();
-                if (o.target_error > 0.0 && error && *error <= o.target_error) {
-                    stop_reason = "target error";
+            }
+            while (baker_->iterationsDone() < o_.iterations) {
+                if (g_stop_signal != 0) {
+                    stop_reason_ = g_stop_signal == SIGTERM ? "terminated" : "interrupted";
                     break;
                 }
+                if (o_.time_budget > 0.0 && bakeSeconds() >= o_.time_budget) {
+                    stop_reason_ = "time budget";
+                    break;
+                }
+                baker_->runIteration();
+                progress.advance();
+                if (!checkpoint_path_.empty() && baker_->iterationsDone() % o_.checkpoint_interval == 0) {
+                    saveCheckpointNow();
+                }
+                if (evaluator_ && baker_->iterationsDone() == next_checkpoint) {
+                    next_checkpoint = nextReportCheckpoint(next_checkpoint);
+                    const std::optional<double> error = evaluate().primaryError();
+                    if (o_.target_error > 0.0 && error && *error <= o_.target_error) {
+                        stop_reason_ = "target error";
+                        break;
+                    }
+                }
             }
+            progress.finish();
         }
-        progress.finish();
+        if (evaluator_) finishEvaluation();
+        // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
+        // from here, a finished one can be extended with a larger --iterations.
+        if (!checkpoint_path_.empty()) saveCheckpointNow();
+        std::signal(SIGINT, previous_interrupt_handler);
+        std::signal(SIGTERM, previous_terminate_handler);
+        bake_seconds_ = bakeSeconds();
     }
-    // The end point of every curve is the cache that is written.
-    if (evaluator && (report.rows.empty() || report.rows.back().iteration != baker.iterationsDone())) evaluate();
-    if (evaluator) {
+
+    void finishEvaluation() {
+        // The end point of every curve is the cache that is written.
+        if (report_.rows.empty() || report_.rows.back().iteration != baker_->iterationsDone()) evaluate();
         const auto probes_start = std::chrono::steady_clock::now();
-        evaluator->finishProbes(report.rows);
-        report.probe_floor = fitProbeFloor(report.rows);
-        evaluation_seconds += secondsSince(probes_start);
+        evaluator_->finishProbes(report_.rows);
+        report_.probe_floor = fitProbeFloor(report_.rows);
+        evaluation_seconds_ += secondsSince(probes_start);
     }
-    // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
-    // from here, a finished one can be extended with a larger --iterations.
-    if (!checkpoint_path.empty()) {
-        checkpointStep("checkpoint: ", [&] { saveCheckpoint(checkpoint_path, baker, resume_settings); });
+
+    /// Coverage and the predicted hit rate (measured on the cache as written, and recorded in
+    /// its metadata), then the file.
+    void writeCache() {
+        const auto finish_start = std::chrono::steady_clock::now();
+        const SharcCache& cache = baker_->cache();
+        levels_ = levelsPresent(cache);
+        coverage_ = measureCoverage(scene_, cache, levels_, o_.coverage_points);
+        CacheData data = toCacheData(cache);
+        // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
+        prediction_ = predictHitRate(*tracer_, data, settings_.view_region,
+                                     predictionViews(*tracer_, settings_.view_region, o_.prediction_views, o_.seed));
+        metadata_.emplace_back("predicted_hit_rate", describeHitRate(prediction_));
+        for (auto& entry : metadata_) {
+            if (entry.first == "iterations") entry.second = std::to_string(baker_->iterationsDone());
+            if (entry.first == "capacity") entry.second = std::to_string(cache.capacity());  // grown?
+        }
+        metadata_.emplace_back("stop_reason", stop_reason_);
+        data.metadata = metadata_;
+        std::string message;
+        const CacheFileStatus status = writeCacheFile(o_.output_path, data, &message);
+        if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
+        live_voxels_ = data.voxels.size();
+        for (uint32_t l : levelsOf(data)) level_list_ += (level_list_.empty() ? "" : ",") + std::to_string(l);
+        finish_seconds_ = secondsSince(finish_start);
+        stability_ = makeStabilityReport(cache, baker_->counters(), scene_.bounds_min, scene_.bounds_max, levels_);
     }
-    std::signal(SIGINT, previous_interrupt_handler);
-    std::signal(SIGTERM, previous_terminate_handler);
-    const double bake_seconds = bakeSeconds();
 
-    const auto finish_start = std::chrono::steady_clock::now();
-    const SharcCache& cache = baker.cache();
-    const std::vector<uint32_t> levels = levelsPresent(cache);
-    const CoverageReport coverage = measureCoverage(scene, cache, levels, o.coverage_points);
-    CacheData data = toCacheData(cache);
-    // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
-    const HitRatePrediction prediction =
-        predictHitRate(tracer, data, settings.view_region,
-                       predictionViews(tracer, settings.view_region, o.prediction_views, o.seed));
-    metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction));
-    for (auto& entry : metadata) {
-        if (entry.first == "iterations") entry.second = std::to_string(baker.iterationsDone());
-        if (entry.first == "capacity") entry.second = std::to_string(cache.capacity());  // grown?
+    double raysPerSecond() const {
+        const UpdateCounters& c = baker_->counters();
+        return double(c.segments + c.shadow_rays) / std::max(baker_->seconds().update, 1e-9);
     }
-    metadata.emplace_back("stop_reason", stop_reason);
-    data.metadata = std::move(metadata);
-    std::string message;
-    const CacheFileStatus status = writeCacheFile(o.output_path, data, &message);
-    if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
-    const double finish_seconds = secondsSince(finish_start);
+    double occupancy() const {
+        return double(baker_->cache().liveEntries()) / double(baker_->cache().capacity());
+    }
 
-    const UpdateCounters& c = baker.counters();
-    const StabilityReport stability = makeStabilityReport(cache, c, scene.bounds_min, scene.bounds_max, levels);
-    const StageSeconds& stage = baker.seconds();
-    const double rays_per_second = double(c.segments + c.shadow_rays) / std::max(stage.update, 1e-9);
-    const uint64_t live = data.voxels.size();
-    const double occupancy = double(cache.liveEntries()) / double(cache.capacity());
-    std::string level_list;
-    for (uint32_t l : levelsOf(data)) level_list += (level_list.empty() ? "" : ",") + std::to_string(l);
-
-    if (!o.quiet) {
-        std::printf("Baked %u iterations in %.2f s (stopped by %s)\n", baker.iterationsDone(), bake_seconds, stop_reason);
+    void printSummary() const {
+        const UpdateCounters& c = baker_->counters();
+        const StageSeconds& stage = baker_->seconds();
+        std::printf("Baked %u iterations in %.2f s (stopped by %s)\n", baker_->iterationsDone(), bake_seconds_,
+                    stop_reason_);
         std::printf("  time: update %.2f s, commit %.2f s, resolve %.2f s; setup %.2f s, coverage+write %.2f s\n",
-                    stage.update, stage.commit, stage.resolve, setup_seconds, finish_seconds);
+                    stage.update, stage.commit, stage.resolve, setup_seconds_, finish_seconds_);
         std::printf("  paths %llu, segments %llu, shadow rays %llu: %.3g rays/s, %.3g segments/s\n",
                     (unsigned long long)c.paths, (unsigned long long)c.segments, (unsigned long long)c.shadow_rays,
-                    rays_per_second, double(c.segments) / std::max(stage.update, 1e-9));
-        std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n", (unsigned long long)live,
-                    100.0 * occupancy, cache.capacity(), level_list.c_str());
+                    raysPerSecond(), double(c.segments) / std::max(stage.update, 1e-9));
+        std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n",
+                    (unsigned long long)live_voxels_, 100.0 * occupancy(), baker_->cache().capacity(),
+                    level_list_.c_str());
         std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
-                    100.0 * coverage.unreached_area, coverage.points);
-        std::printf("  predicted hit rate: %s\n", describeHitRate(prediction).c_str());
-        for (const ViewHitRate& v : prediction.views) {
+                    100.0 * coverage_.unreached_area, coverage_.points);
+        std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
+        for (const ViewHitRate& v : prediction_.views) {
             if (v.view.declared) {
                 std::printf("    %s: %.1f%% of %llu lookups\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
                             (unsigned long long)v.eligible);
             }
         }
-        printStabilitySection(stdout, stability);
-        std::printf("Wrote %s (%llu voxels)\n", o.output_path.c_str(), (unsigned long long)live);
+        printStabilitySection(stdout, stability_);
+        std::printf("Wrote %s (%llu voxels)\n", o_.output_path.c_str(), (unsigned long long)live_voxels_);
     }
-    if (evaluator) {
-        if (!o.report_dir.empty() && evaluator->measuresImage()) {
+
+    /// Plain path tracing at equal time, the convergence table, and --report's files.
+    void writeReport() {
+        if (!o_.report_dir.empty() && evaluator_->measuresImage()) {
             // Plain path tracing of the same view for as long as the bake plus its last render took.
-            const ConvergenceRow& last = report.rows.back();
+            const ConvergenceRow& last = report_.rows.back();
             const auto plain_start = std::chrono::steady_clock::now();
-            report.plain = evaluator->plainPathTracing(last.bake_seconds + last.render_seconds, 1u << 16,
-                                                      &report.reference_floor);
-            evaluation_seconds += secondsSince(plain_start);
+            report_.plain = evaluator_->plainPathTracing(last.bake_seconds + last.render_seconds, 1u << 16,
+                                                        &report_.reference_floor);
+            evaluation_seconds_ += secondsSince(plain_start);
         }
-        report.evaluation_seconds = evaluation_seconds;
-        if (!o.quiet) printConvergence(report, evaluator->probes());
-        if (!o.report_dir.empty()) {
-            try {
-                writeConvergenceTables(o.report_dir, report);
-            } catch (const std::runtime_error& e) {
-                throw CommandError(kExitIo, e.what());
-            }
-            const std::string plot_problem = plotConvergence(o.report_dir, report);
-            if (!plot_problem.empty()) std::fprintf(stderr, "warning: no convergence plot: %s\n", plot_problem.c_str());
-            if (!o.quiet) {
-                std::printf("Wrote %s/convergence.csv, plain_path_tracing.csv, convergence.json%s\n",
-                            o.report_dir.c_str(), plot_problem.empty() ? ", convergence.png" : "");
-            }
+        report_.evaluation_seconds = evaluation_seconds_;
+        if (!o_.quiet) printConvergence(report_, evaluator_->probes());
+        if (o_.report_dir.empty()) return;
+        try {
+            writeConvergenceTables(o_.report_dir, report_);
+        } catch (const std::runtime_error& e) {
+            throw CommandError(kExitIo, e.what());
+        }
+        const std::string plot_problem = plotConvergence(o_.report_dir, report_);
+        if (!plot_problem.empty()) std::fprintf(stderr, "warning: no convergence plot: %s\n", plot_problem.c_str());
+        if (!o_.quiet) {
+            std::printf("Wrote %s/convergence.csv, plain_path_tracing.csv, convergence.json%s\n", o_.report_dir.c_str(),
+                        plot_problem.empty() ? ", convergence.png" : "");
         }
     }
-    if (!o.stats_json.empty()) {
+
+    void writeStatsJson() const {
+        const UpdateCounters& c = baker_->counters();
+        const StageSeconds& stage = baker_->seconds();
         std::ostringstream json;
         json << "{\n"
-             << "  \"iterations\": " << baker.iterationsDone() << ",\n"
-             << "  \"stop_reason\": \"" << stop_reason << "\",\n"
-             << "  \"threads\": " << threads << ",\n"
-             << "  \"seconds\": {\"total\": " << secondsSince(start) << ", \"setup\": " << setup_seconds
-             << ", \"bake\": " << bake_seconds << ", \"update\": " << stage.update << ", \"commit\": " << stage.commit
-             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds
-             << ", \"evaluation\": " << evaluation_seconds << "},\n"
+             << "  \"iterations\": " << baker_->iterationsDone() << ",\n"
+             << "  \"stop_reason\": \"" << stop_reason_ << "\",\n"
+             << "  \"threads\": " << threads_ << ",\n"
+             << "  \"seconds\": {\"total\": " << secondsSince(start_) << ", \"setup\": " << setup_seconds_
+             << ", \"bake\": " << bake_seconds_ << ", \"update\": " << stage.update << ", \"commit\": " << stage.commit
+             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds_
+             << ", \"evaluation\": " << evaluation_seconds_ << "},\n"
              << "  \"paths\": " << c.paths << ",\n  \"segments\": " << c.segments << ",\n"
-             << "  \"shadow_rays\": " << c.shadow_rays << ",\n  \"rays_per_second\": " << rays_per_second << ",\n"
+             << "  \"shadow_rays\": " << c.shadow_rays << ",\n  \"rays_per_second\": " << raysPerSecond() << ",\n"
              << "  \"resampled_paths\": " << c.resampled << ",\n"
-             << "  \"live_voxels\": " << live << ",\n  \"capacity\": " << cache.capacity() << ",\n"
-             << "  \"occupancy\": " << occupancy << ",\n  \"levels\": [" << level_list << "],\n"
-             << "  \"coverage\": {\"points\": " << coverage.points << ", \"unreached_area_fraction\": "
-             << coverage.unreached_area << "},\n"
-             << "  \"grid\": {\"scene_scale\": " << settings.sharc.grid.scene_scale
-             << ", \"log_base\": " << settings.sharc.grid.logarithm_base
-             << ", \"level_bias\": " << settings.sharc.grid.level_bias << ", \"level_bias_auto\": "
-             << (o.level_bias == "auto" ? "true" : "false") << ", \"finest_voxel_size\": "
-             << voxelSize(kHashGridLevelMin, settings.sharc.grid) << "},\n"
-             << "  \"view_region\": " << jsonString(settings.view_region.describe()) << ",\n"
-             << "  \"levels_covered\": " << jsonString(grid_decision.levelsCovered()) << ",\n"
-             << "  \"predicted_hit_rate\": " << hitRateJson(prediction) << ",\n"
-             << "  \"stability\": " << stabilityJson(stability) << "\n"
+             << "  \"live_voxels\": " << live_voxels_ << ",\n  \"capacity\": " << baker_->cache().capacity() << ",\n"
+             << "  \"occupancy\": " << occupancy() << ",\n  \"levels\": [" << level_list_ << "],\n"
+             << "  \"coverage\": {\"points\": " << coverage_.points << ", \"unreached_area_fraction\": "
+             << coverage_.unreached_area << "},\n"
+             << "  \"grid\": {\"scene_scale\": " << settings_.sharc.grid.scene_scale
+             << ", \"log_base\": " << settings_.sharc.grid.logarithm_base
+             << ", \"level_bias\": " << settings_.sharc.grid.level_bias << ", \"level_bias_auto\": "
+             << (o_.level_bias == "auto" ? "true" : "false") << ", \"finest_voxel_size\": "
+             << voxelSize(kHashGridLevelMin, settings_.sharc.grid) << "},\n"
+             << "  \"view_region\": " << jsonString(settings_.view_region.describe()) << ",\n"
+             << "  \"levels_covered\": " << jsonString(grid_decision_.levelsCovered()) << ",\n"
+             << "  \"predicted_hit_rate\": " << hitRateJson(prediction_) << ",\n"
+             << "  \"stability\": " << stabilityJson(stability_) << "\n"
              << "}\n";
-        writeTextOutput(o.stats_json, "stats JSON", json.str());
+        writeTextOutput(o_.stats_json, "stats JSON", json.str());
     }
-    warnAboutHitRate(prediction, coverage);
-    if (coverage.unreached_area > 0.3) {
-        // Not a stability problem, so not in that section, but the cache is missing much of the scene.
-        std::fprintf(stderr,
-                     "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
-                     "tested; hidden sides count too): cameras that see it will miss. Give more --iterations, "
-                     "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
-                     100.0 * coverage.unreached_area, coverage.points);
+
+    /// Warnings about what the cache lacks, then the exit code of a bake a signal stopped.
+    void warnAndStop() const {
+        const SharcCache& cache = baker_->cache();
+        warnAboutHitRate(prediction_, coverage_);
+        if (coverage_.unreached_area > 0.3) {
+            // Not a stability problem, so not in that section, but the cache is missing much of the scene.
+            std::fprintf(stderr,
+                         "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
+                         "tested; hidden sides count too): cameras that see it will miss. Give more --iterations, "
+                         "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
+                         100.0 * coverage_.unreached_area, coverage_.points);
+        }
+        if (autoCapacity() && cache.numerics().failed_inserts > 0) {
+            // The table doubles between iterations; one iteration filled it faster than that.
+            std::fprintf(stderr,
+                         "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no "
+                         "slot within an iteration; bake with a fixed --capacity %llu\n",
+                         settings_.sharc.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts,
+                         2ull * cache.capacity());
+        }
+        if (g_stop_signal == SIGTERM) {
+            throw CommandError(kExitTerminated,
+                               "terminated (SIGTERM); the cache and checkpoint written hold the iterations done");
+        }
+        if (g_stop_signal != 0) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
     }
-    if (auto_capacity && cache.numerics().failed_inserts > 0) {
-        // The table doubles between iterations; one iteration filled it faster than that.
-        std::fprintf(stderr,
-                     "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no slot "
-                     "within an iteration; bake with a fixed --capacity %llu\n",
-                     settings.sharc.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts, 2ull * cache.capacity());
-    }
-    if (g_stop_signal == SIGTERM) {
-        throw CommandError(kExitTerminated, "terminated (SIGTERM); the cache and checkpoint written hold the iterations done");
-    }
-    if (g_stop_signal != 0) throw CommandError(kExitInterrupted, "interrupted; the cache written holds the iterations done");
-}
+
+    const BakeOptions& o_;
+    const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+    const int threads_;
+    const std::string checkpoint_path_;
+    const std::string report_csv_;
+    std::optional<CheckpointLock> checkpoint_lock_;
+
+    BakeSettings settings_;
+    Scene scene_;
+    std::optional<Tracer> tracer_;
+    std::optional<LightSampler> lights_;
+    GridDecision grid_decision_;
+    std::string camera_description_;
+    std::optional<CameraPath> camera_path_;
+    CapacityChoice capacity_choice_;
+    std::string capacity_choice_text_;  ///< empty for a fixed --capacity
+    std::unique_ptr<Baker> baker_;
+    std::vector<std::pair<std::string, std::string>> metadata_;
+    BakeSettingsText resume_settings_;
+    uint32_t first_iteration_ = 0;
+    double setup_seconds_ = 0.0;
+
+    ConvergenceReport report_;
+    std::unique_ptr<ConvergenceEvaluator> evaluator_;
+    std::chrono::steady_clock::time_point bake_start_;
+    double evaluation_seconds_ = 0.0;
+    double bake_seconds_ = 0.0;
+    const char* stop_reason_ = "iterations";
+
+    std::vector<uint32_t> levels_;
+    CoverageReport coverage_;
+    HitRatePrediction prediction_;
+    uint64_t live_voxels_ = 0;
+    std::string level_list_;
+    StabilityReport stability_;
+    double finish_seconds_ = 0.0;
+};
+
+void runBake(const BakeOptions& o) { BakeRun(o).run(); }
 
 }  // namespace
 

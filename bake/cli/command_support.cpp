@@ -14,6 +14,10 @@
 
 namespace sharcbake {
 
+ExitCode exitCodeFor(CacheFileStatus status) {
+    return status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput;
+}
+
 const char* const kExitCodeHelp =
     "Exit status:\n"
     "  0    success\n"

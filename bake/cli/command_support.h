@@ -4,6 +4,7 @@
 /// carries one, parsing of vector arguments, and scene loading with the sky options.
 #pragma once
 
+#include "sharcbake/cache_types.h"
 #include "sharcbake/scene.h"
 #include "sharcbake/scene_loader.h"
 
@@ -27,6 +28,10 @@ enum ExitCode : int {
     kExitInterrupted = 130,  ///< stopped by SIGINT (128 + 2, as shells report it)
     kExitTerminated = 143    ///< stopped by SIGTERM (128 + 15), e.g. a scheduler's time limit
 };
+
+/// The exit code of a cache or checkpoint file that could not be used: kExitIo when it could not
+/// be read or written, kExitInvalidInput when its content is wrong.
+ExitCode exitCodeFor(CacheFileStatus status);
 
 /// The text appended to the top-level --help.
 extern const char* const kExitCodeHelp;

@@ -31,7 +31,7 @@ void run(const ExportVdbOptions& o) {
     CacheError error;
     const CacheFileStatus status = CacheView::openFile(o.input, &view, &error, CacheView::FileMode::kMap);
     if (status != CacheFileStatus::kOk) {
-        throw CommandError(status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput,
+        throw CommandError(exitCodeFor(status),
                            error.message + " [" + toString(status) + "]");
     }
     VdbExportOptions options;

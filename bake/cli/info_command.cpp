@@ -20,8 +20,6 @@ struct InfoOptions {
     bool json = false;
 };
 
-ExitCode exitCodeFor(CacheFileStatus status) { return status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput; }
-
 std::string fourcc(uint32_t type) {
     std::string s;
     for (int i = 0; i < 4; ++i) {

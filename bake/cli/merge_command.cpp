@@ -100,7 +100,7 @@ void runMerge(const MergeOptions& o) {
         std::string message;
         const CacheFileStatus status = readCacheFile(o.inputs[i], &inputs[i], &message);
         if (status != CacheFileStatus::kOk) {
-            throw CommandError(status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput,
+            throw CommandError(exitCodeFor(status),
                                message + " [" + toString(status) + "]");
         }
     }

@@ -77,7 +77,7 @@ CacheView openCacheForCommand(const std::string& path) {
     const CacheFileStatus status = CacheView::openFile(path, &view, &error);
     if (status == CacheFileStatus::kOk) return view;
     const std::string text = error.message.empty() ? path + ": " + toString(status) : error.message;
-    throw CommandError(status == CacheFileStatus::kIoError ? kExitIo : kExitInvalidInput, text);
+    throw CommandError(exitCodeFor(status), text);
 }
 
 /// Counts the cache lookups of the path being traced on this thread: PathTracer asks the cache
