@@ -196,223 +196,274 @@ ToneMap parseToneMap(const std::string& name) {
     return ToneMap::Clamp;
 }
 
-void runRender(const RenderOptions& o) {
-    // The PNG preview's name derives from the output's; it must name neither the EXR nor an input.
-    const std::string png_path =
-        o.no_png ? std::string() : std::filesystem::path(o.output_path).replace_extension(".png").string();
-    const std::vector<std::string> inputs = {o.scene_path, o.cache_path, o.sky.exr_path};
-    auto checkOutputs = [&](const std::vector<std::string>& more_inputs) {
-        std::vector<std::string> others = inputs;
+/// One `sharcbake render`, phase by phase: outputs checked, the scene, camera and cache set up,
+/// the image (or debug view) rendered, then written and reported.
+class RenderRun {
+public:
+    explicit RenderRun(const RenderOptions& o)
+        : o_(o),
+          // The PNG preview's name derives from the output's; it must name neither the EXR nor an input.
+          png_path_(o.no_png ? std::string()
+                             : std::filesystem::path(o.output_path).replace_extension(".png").string()),
+          threads_(o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency()) {}
+
+    void run() {
+        checkOutputs({});
+        start_ = std::chrono::steady_clock::now();
+        tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
+        setUp();
+        render();
+        warnAboutHitRate();
+        if (o_.debug_view == "bounces") rampBounces();
+        writeImages();
+        if (!o_.quiet) printSummary();
+        if (!o_.stats_json.empty()) writeStatsJson();
+    }
+
+private:
+    void checkOutputs(const std::vector<std::string>& more_inputs) const {
+        std::vector<std::string> others = {o_.scene_path, o_.cache_path, o_.sky.exr_path};
         others.insert(others.end(), more_inputs.begin(), more_inputs.end());
-        checkOutputPath(o.output_path, "image", others);
-        others.push_back(o.output_path);
-        if (!png_path.empty()) {
-            if (png_path == o.output_path) {
-                throw CommandError(kExitUsage, o.output_path + ": the EXR output would be overwritten by its own "
-                                                               ".png preview; name it .exr or pass --no-png");
+        checkOutputPath(o_.output_path, "image", others);
+        others.push_back(o_.output_path);
+        if (!png_path_.empty()) {
+            if (png_path_ == o_.output_path) {
+                throw CommandError(kExitUsage, o_.output_path + ": the EXR output would be overwritten by its own "
+                                                                ".png preview; name it .exr or pass --no-png");
             }
-            checkOutputPath(png_path, "PNG preview", others);
-            others.push_back(png_path);
+            checkOutputPath(png_path_, "PNG preview", others);
+            others.push_back(png_path_);
         }
-        if (!o.stats_json.empty()) checkOutputPath(o.stats_json, "stats JSON", others);
-    };
-    checkOutputs({});
-    const auto start = std::chrono::steady_clock::now();
-    const int threads = o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency();
-    tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-
-    const Scene scene = loadSceneForCommand(o.scene_path, o.sky, o.quiet, o.limits);
-    checkOutputs(scene.source_files);  // the buffers and textures the scene read
-    const Camera chosen = chooseCamera(scene, o);
-    if (!o.quiet && chosen.name == "automatic") {
-        std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
-                    describeCamera(chosen).c_str());
-    }
-    int width = 0, height = 0;
-    parseResolution(o, chosen, width, height);
-    const Camera camera = fitCameraToImage(chosen, width, height);
-    warnAboutCameraFit(chosen, camera, width, height);
-
-    const auto build_start = std::chrono::steady_clock::now();
-    const Tracer tracer(scene);
-    const LightSampler lights(scene);
-    const double build_seconds = secondsSince(build_start);
-    if (!o.quiet && !lights.hasLights()) {
-        std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
-                             "the image will be black\n");
+        if (!o_.stats_json.empty()) checkOutputPath(o_.stats_json, "stats JSON", others);
     }
 
-    std::unique_ptr<BakedCache> cache;
-    if (!o.cache_path.empty()) {
-        cache = std::make_unique<BakedCache>(openCacheForCommand(o.cache_path), camera.position,
-                                             o.cache_lookup == "nearest" ? CacheLookup::NearestLevel : CacheLookup::Exact);
+    void setUp() {
+        scene_ = loadSceneForCommand(o_.scene_path, o_.sky, o_.quiet, o_.limits);
+        checkOutputs(scene_.source_files);  // the buffers and textures the scene read
+        const Camera chosen = chooseCamera(scene_, o_);
+        if (!o_.quiet && chosen.name == "automatic") {
+            std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
+                        describeCamera(chosen).c_str());
+        }
+        parseResolution(o_, chosen, width_, height_);
+        camera_ = fitCameraToImage(chosen, width_, height_);
+        warnAboutCameraFit(chosen, camera_, width_, height_);
+
+        const auto build_start = std::chrono::steady_clock::now();
+        tracer_.emplace(scene_);
+        lights_.emplace(scene_);
+        build_seconds_ = secondsSince(build_start);
+        if (!o_.quiet && !lights_->hasLights()) {
+            std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
+                                 "the image will be black\n");
+        }
+        if (!o_.cache_path.empty()) {
+            cache_ = std::make_unique<BakedCache>(
+                openCacheForCommand(o_.cache_path), camera_.position,
+                o_.cache_lookup == "nearest" ? CacheLookup::NearestLevel : CacheLookup::Exact);
+        }
+        if (o_.debug_view == "bounces") counting_cache_ = std::make_unique<CountingCache>(*cache_);
+        if (o_.debug_view == "occupancy") occupancy_ = std::make_unique<BucketOccupancy>(cache_->view());
     }
-    std::unique_ptr<CountingCache> counting_cache;
-    if (o.debug_view == "bounces") counting_cache = std::make_unique<CountingCache>(*cache);
-    const RadianceCache* path_cache = counting_cache ? static_cast<const RadianceCache*>(counting_cache.get())
-                                                     : static_cast<const RadianceCache*>(cache.get());
 
-    PathTracerSettings path_settings;
-    path_settings.max_bounces = o.max_bounces;
-    const PathTracer path_tracer(tracer, lights, path_settings, path_cache);
-    TraceCounters counters;
-    ImageRenderSettings settings{width, height, o.spp, o.seed};
-    const bool primary_view = !o.debug_view.empty() && o.debug_view != "bounces";
-    std::unique_ptr<BucketOccupancy> occupancy;
-    if (o.debug_view == "occupancy") occupancy = std::make_unique<BucketOccupancy>(cache->view());
-    std::atomic<uint64_t> debug_hits{0}, debug_missing{0};
+    bool primaryView() const { return !o_.debug_view.empty() && o_.debug_view != "bounces"; }
 
-    // A debug view evaluated at the primary hit (0 where the ray leaves the scene).
-    auto primaryView = [&](const Ray& ray) -> glm::vec3 {
+    /// A debug view evaluated at the primary hit (0 where the ray leaves the scene).
+    glm::vec3 debugViewAt(const Ray& ray) {
         RayHit ray_hit;
-        counters.closest_hit_rays.fetch_add(1, std::memory_order_relaxed);
-        if (!tracer.intersect(ray, ray_hit)) return glm::vec3(0.0f);
-        debug_hits.fetch_add(1, std::memory_order_relaxed);
-        const SurfaceHit hit = makeSurfaceHit(scene, ray_hit, ray.direction);
-        const uint64_t key = cache->key(hit.position, hit.geometric_normal);
-        if (o.debug_view == "cache") {
-            const std::optional<CacheVoxel> v = cache->find(key);
+        counters_.closest_hit_rays.fetch_add(1, std::memory_order_relaxed);
+        if (!tracer_->intersect(ray, ray_hit)) return glm::vec3(0.0f);
+        debug_hits_.fetch_add(1, std::memory_order_relaxed);
+        const SurfaceHit hit = makeSurfaceHit(scene_, ray_hit, ray.direction);
+        const uint64_t key = cache_->key(hit.position, hit.geometric_normal);
+        if (o_.debug_view == "cache") {
+            const std::optional<CacheVoxel> v = cache_->find(key);
             if (!v) {
-                debug_missing.fetch_add(1, std::memory_order_relaxed);
+                debug_missing_.fetch_add(1, std::memory_order_relaxed);
                 return glm::vec3(0.0f);
             }
             return glm::vec3(v->radiance[0], v->radiance[1], v->radiance[2]);
         }
-        if (o.debug_view == "hash") {
+        if (o_.debug_view == "hash") {
             const Float3 c = hashDebugColor(key);
             return glm::vec3(c.x, c.y, c.z);
         }
-        if (o.debug_view == "levels") return levelColor(decodeHashGridKey(key).level);
+        if (o_.debug_view == "levels") return levelColor(decodeHashGridKey(key).level);
         // occupancy: green (empty bucket) to red (full)
-        return glm::mix(glm::vec3(0, 1, 0), glm::vec3(1, 0, 0), occupancy->occupancy(key));
-    };
-
-    const auto render_start = std::chrono::steady_clock::now();
-    Image image;
-    {
-        Progress progress(o.debug_view.empty() ? "Rendering" : "Debug view",
-                          uint64_t(width) * uint64_t(height), !o.quiet && Progress::isTerminal());
-        image = renderImage(CameraRays(camera, width, height), settings,
-                            [&](const Ray& ray, PixelSampler& sampler) {
-                                if (primary_view) return primaryView(ray);
-                                if (counting_cache) {
-                                    t_path_lookups = 0;
-                                    (void)path_tracer.radiance(ray, sampler, counters);
-                                    return glm::vec3(float(t_path_lookups));
-                                }
-                                return path_tracer.radiance(ray, sampler, counters);
-                            },
-                            &progress);
-    }
-    const double render_seconds = secondsSince(render_start);
-    const uint64_t rays = counters.closest_hit_rays + counters.shadow_rays;
-    if (cache) counters.cache_misses = cache->misses();
-    const uint64_t eligible = counters.cache_hits + counters.cache_misses;
-    const double hit_rate = eligible > 0 ? double(counters.cache_hits) / double(eligible) : 0.0;
-    if (cache && !primary_view && eligible >= 100 && hit_rate < 0.9) {
-        // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
-        std::fprintf(stderr,
-                     "warning: the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); the "
-                     "rest were traced. It was baked for other views: bake with --view-region free (the default) "
-                     "or a region holding this camera, and check the bake's \"predicted hit rate\"%s\n",
-                     100.0 * hit_rate, describeLevels(cache->levels()).c_str(), o.cache_path.c_str(),
-                     o.cache_lookup == "nearest" ? "" : "; --cache-lookup nearest falls back to the nearest level the file holds");
+        return glm::mix(glm::vec3(0, 1, 0), glm::vec3(1, 0, 0), occupancy_->occupancy(key));
     }
 
-    float max_bounces_seen = 0.0f;
-    if (o.debug_view == "bounces") {
-        for (const glm::vec3& p : image.pixels) max_bounces_seen = std::max(max_bounces_seen, p.x);
-        for (glm::vec3& p : image.pixels) p = heatRamp(max_bounces_seen > 0.0f ? p.x / max_bounces_seen : 0.0f);
-    }
-
-    ImageMetadata metadata{
-        {"sharcbake:software", "sharcbake " SHARCBAKE_VERSION},
-        {"sharcbake:scene", o.scene_path},
-        {"sharcbake:camera", camera.name},
-        {"sharcbake:spp", std::to_string(o.spp)},
-        {"sharcbake:seed", std::to_string(o.seed)},
-        {"sharcbake:max_bounces", std::to_string(o.max_bounces)},
-        {"sharcbake:integrator", cache ? "path tracer, NEE + MIS, paths end on SHaRC cache hits"
-                                       : "path tracer, NEE + MIS"},
-    };
-    if (cache) {
-        metadata["sharcbake:cache"] = o.cache_path;
-        metadata["sharcbake:cache_voxels"] = std::to_string(cache->view().voxelCount());
-        metadata["sharcbake:cache_hits"] = std::to_string(counters.cache_hits.load());
-        metadata["sharcbake:cache_misses"] = std::to_string(counters.cache_misses.load());
-        metadata["sharcbake:cache_refused"] = std::to_string(cache->refused());
-        metadata["sharcbake:cache_lookup"] = o.cache_lookup;
-        metadata["sharcbake:cache_nearest_level_hits"] = std::to_string(cache->nearestLevelHits());
-    }
-    if (!o.debug_view.empty()) {
-        metadata["sharcbake:debug_view"] = o.debug_view;
-        metadata["sharcbake:integrator"] =
-            primary_view ? "debug view at the primary hit, LOD centre = render camera" : metadata["sharcbake:integrator"];
-    }
-    if (primary_view) {
-        metadata["sharcbake:debug_primary_hits"] = std::to_string(debug_hits.load());
-        if (o.debug_view == "cache") metadata["sharcbake:debug_missing"] = std::to_string(debug_missing.load());
-        if (occupancy) metadata["sharcbake:debug_failed_inserts"] = std::to_string(occupancy->failedInserts());
-    }
-    if (o.debug_view == "bounces") metadata["sharcbake:debug_bounces_max"] = std::to_string(max_bounces_seen);
-    try {
-        writeExr(o.output_path, image, metadata);
-        if (!o.no_png) {
-            writePng(png_path, image, o.exposure, parseToneMap(o.tone_map));
+    void render() {
+        const RadianceCache* path_cache = counting_cache_ ? static_cast<const RadianceCache*>(counting_cache_.get())
+                                                          : static_cast<const RadianceCache*>(cache_.get());
+        PathTracerSettings path_settings;
+        path_settings.max_bounces = o_.max_bounces;
+        const PathTracer path_tracer(*tracer_, *lights_, path_settings, path_cache);
+        const bool primary_view = primaryView();
+        const auto render_start = std::chrono::steady_clock::now();
+        {
+            Progress progress(o_.debug_view.empty() ? "Rendering" : "Debug view",
+                              uint64_t(width_) * uint64_t(height_), !o_.quiet && Progress::isTerminal());
+            image_ = renderImage(CameraRays(camera_, width_, height_),
+                                 ImageRenderSettings{width_, height_, o_.spp, o_.seed},
+                                 [&](const Ray& ray, PixelSampler& sampler) {
+                                     if (primary_view) return debugViewAt(ray);
+                                     if (counting_cache_) {
+                                         t_path_lookups = 0;
+                                         (void)path_tracer.radiance(ray, sampler, counters_);
+                                         return glm::vec3(float(t_path_lookups));
+                                     }
+                                     return path_tracer.radiance(ray, sampler, counters_);
+                                 },
+                                 &progress);
         }
-    } catch (const ImageError& e) {
-        throw CommandError(kExitIo, e.what());
+        render_seconds_ = secondsSince(render_start);
+        if (cache_) counters_.cache_misses = cache_->misses();
+        const uint64_t eligible = counters_.cache_hits + counters_.cache_misses;
+        hit_rate_ = eligible > 0 ? double(counters_.cache_hits) / double(eligible) : 0.0;
+        eligible_ = eligible;
     }
-    const double total_seconds = secondsSince(start);
 
-    if (!o.quiet) {
-        std::printf("Rendered %dx%d, %u spp, camera '%s' in %.2f s (BVH build %.2f s, %d threads)\n",
-                    width, height, o.spp, camera.name.c_str(), render_seconds, build_seconds, threads);
-        std::printf("  rays: %llu closest-hit + %llu shadow = %.3g rays/s\n",
-                    (unsigned long long)counters.closest_hit_rays.load(),
-                    (unsigned long long)counters.shadow_rays.load(), double(rays) / render_seconds);
-        if (cache && !primary_view) {
-            std::printf("  cache: %llu hits, %llu misses (hit rate %.1f%% of eligible lookups), %llu lookups "
-                        "refused by the segment/cone tests; %.3f cache hits per path\n",
-                        (unsigned long long)counters.cache_hits.load(), (unsigned long long)counters.cache_misses.load(),
-                        100.0 * hit_rate, (unsigned long long)cache->refused(),
-                        double(counters.cache_hits) / (double(width) * double(height) * double(o.spp)));
-            if (cache->nearestLevelHits() > 0) {
-                std::printf("  of the hits, %llu came from another level than the camera's (--cache-lookup nearest)\n",
-                            (unsigned long long)cache->nearestLevelHits());
+    void warnAboutHitRate() const {
+        if (cache_ && !primaryView() && eligible_ >= 100 && hit_rate_ < 0.9) {
+            // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
+            std::fprintf(stderr,
+                         "warning: the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); "
+                         "the rest were traced. It was baked for other views: bake with --view-region free (the "
+                         "default) or a region holding this camera, and check the bake's \"predicted hit rate\"%s\n",
+                         100.0 * hit_rate_, describeLevels(cache_->levels()).c_str(), o_.cache_path.c_str(),
+                         o_.cache_lookup == "nearest"
+                             ? ""
+                             : "; --cache-lookup nearest falls back to the nearest level the file holds");
+        }
+    }
+
+    void rampBounces() {
+        for (const glm::vec3& p : image_.pixels) max_bounces_seen_ = std::max(max_bounces_seen_, p.x);
+        for (glm::vec3& p : image_.pixels) p = heatRamp(max_bounces_seen_ > 0.0f ? p.x / max_bounces_seen_ : 0.0f);
+    }
+
+    ImageMetadata imageMetadata() const {
+        ImageMetadata metadata{
+            {"sharcbake:software", "sharcbake " SHARCBAKE_VERSION},
+            {"sharcbake:scene", o_.scene_path},
+            {"sharcbake:camera", camera_.name},
+            {"sharcbake:spp", std::to_string(o_.spp)},
+            {"sharcbake:seed", std::to_string(o_.seed)},
+            {"sharcbake:max_bounces", std::to_string(o_.max_bounces)},
+            {"sharcbake:integrator", cache_ ? "path tracer, NEE + MIS, paths end on SHaRC cache hits"
+                                            : "path tracer, NEE + MIS"},
+        };
+        if (cache_) {
+            metadata["sharcbake:cache"] = o_.cache_path;
+            metadata["sharcbake:cache_voxels"] = std::to_string(cache_->view().voxelCount());
+            metadata["sharcbake:cache_hits"] = std::to_string(counters_.cache_hits.load());
+            metadata["sharcbake:cache_misses"] = std::to_string(counters_.cache_misses.load());
+            metadata["sharcbake:cache_refused"] = std::to_string(cache_->refused());
+            metadata["sharcbake:cache_lookup"] = o_.cache_lookup;
+            metadata["sharcbake:cache_nearest_level_hits"] = std::to_string(cache_->nearestLevelHits());
+        }
+        if (!o_.debug_view.empty()) {
+            metadata["sharcbake:debug_view"] = o_.debug_view;
+            if (primaryView()) {
+                metadata["sharcbake:integrator"] = "debug view at the primary hit, LOD centre = render camera";
             }
         }
-        if (o.debug_view == "cache") {
+        if (primaryView()) {
+            metadata["sharcbake:debug_primary_hits"] = std::to_string(debug_hits_.load());
+            if (o_.debug_view == "cache") metadata["sharcbake:debug_missing"] = std::to_string(debug_missing_.load());
+            if (occupancy_) metadata["sharcbake:debug_failed_inserts"] = std::to_string(occupancy_->failedInserts());
+        }
+        if (o_.debug_view == "bounces") metadata["sharcbake:debug_bounces_max"] = std::to_string(max_bounces_seen_);
+        return metadata;
+    }
+
+    void writeImages() {
+        try {
+            writeExr(o_.output_path, image_, imageMetadata());
+            if (!o_.no_png) writePng(png_path_, image_, o_.exposure, parseToneMap(o_.tone_map));
+        } catch (const ImageError& e) {
+            throw CommandError(kExitIo, e.what());
+        }
+        total_seconds_ = secondsSince(start_);
+    }
+
+    uint64_t rays() const { return counters_.closest_hit_rays + counters_.shadow_rays; }
+
+    void printSummary() const {
+        std::printf("Rendered %dx%d, %u spp, camera '%s' in %.2f s (BVH build %.2f s, %d threads)\n", width_, height_,
+                    o_.spp, camera_.name.c_str(), render_seconds_, build_seconds_, threads_);
+        std::printf("  rays: %llu closest-hit + %llu shadow = %.3g rays/s\n",
+                    (unsigned long long)counters_.closest_hit_rays.load(),
+                    (unsigned long long)counters_.shadow_rays.load(), double(rays()) / render_seconds_);
+        if (cache_ && !primaryView()) {
+            std::printf("  cache: %llu hits, %llu misses (hit rate %.1f%% of eligible lookups), %llu lookups "
+                        "refused by the segment/cone tests; %.3f cache hits per path\n",
+                        (unsigned long long)counters_.cache_hits.load(),
+                        (unsigned long long)counters_.cache_misses.load(), 100.0 * hit_rate_,
+                        (unsigned long long)cache_->refused(),
+                        double(counters_.cache_hits) / (double(width_) * double(height_) * double(o_.spp)));
+            if (cache_->nearestLevelHits() > 0) {
+                std::printf("  of the hits, %llu came from another level than the camera's (--cache-lookup nearest)\n",
+                            (unsigned long long)cache_->nearestLevelHits());
+            }
+        }
+        if (o_.debug_view == "cache") {
             std::printf("  debug view 'cache': %llu of %llu primary hits have no cached voxel (written as 0)\n",
-                        (unsigned long long)debug_missing.load(), (unsigned long long)debug_hits.load());
-        } else if (o.debug_view == "bounces") {
+                        (unsigned long long)debug_missing_.load(), (unsigned long long)debug_hits_.load());
+        } else if (o_.debug_view == "bounces") {
             std::printf("  debug view 'bounces': ramp blue (0) to red (%.2f bounces, the largest pixel mean)\n",
-                        double(max_bounces_seen));
+                        double(max_bounces_seen_));
         }
-        if (counters.non_finite_samples > 0) {
+        if (counters_.non_finite_samples > 0) {
             std::printf("  dropped %llu non-finite path samples\n",
-                        (unsigned long long)counters.non_finite_samples.load());
+                        (unsigned long long)counters_.non_finite_samples.load());
         }
-        std::printf("Wrote %s%s\n", o.output_path.c_str(), o.no_png ? "" : " and its .png preview");
+        std::printf("Wrote %s%s\n", o_.output_path.c_str(), o_.no_png ? "" : " and its .png preview");
     }
-    if (!o.stats_json.empty()) {
+
+    void writeStatsJson() const {
         std::ostringstream json;
-        json << "{\n  \"width\": " << width << ",\n  \"height\": " << height
-             << ",\n  \"samples_per_pixel\": " << o.spp << ",\n  \"threads\": " << threads
-             << ",\n  \"seconds\": {\"total\": " << total_seconds << ", \"bvh_build\": " << build_seconds
-             << ", \"render\": " << render_seconds << "},\n  \"closest_hit_rays\": "
-             << counters.closest_hit_rays << ",\n  \"shadow_rays\": " << counters.shadow_rays
-             << ",\n  \"rays_per_second\": " << double(rays) / render_seconds
-             << ",\n  \"non_finite_samples\": " << counters.non_finite_samples;
-        if (cache) {
-            json << ",\n  \"cache_hits\": " << counters.cache_hits << ",\n  \"cache_misses\": " << counters.cache_misses
-                 << ",\n  \"cache_refused\": " << cache->refused() << ",\n  \"cache_hit_rate\": " << hit_rate;
+        json << "{\n  \"width\": " << width_ << ",\n  \"height\": " << height_
+             << ",\n  \"samples_per_pixel\": " << o_.spp << ",\n  \"threads\": " << threads_
+             << ",\n  \"seconds\": {\"total\": " << total_seconds_ << ", \"bvh_build\": " << build_seconds_
+             << ", \"render\": " << render_seconds_ << "},\n  \"closest_hit_rays\": " << counters_.closest_hit_rays
+             << ",\n  \"shadow_rays\": " << counters_.shadow_rays
+             << ",\n  \"rays_per_second\": " << double(rays()) / render_seconds_
+             << ",\n  \"non_finite_samples\": " << counters_.non_finite_samples;
+        if (cache_) {
+            json << ",\n  \"cache_hits\": " << counters_.cache_hits << ",\n  \"cache_misses\": "
+                 << counters_.cache_misses << ",\n  \"cache_refused\": " << cache_->refused()
+                 << ",\n  \"cache_hit_rate\": " << hit_rate_;
         }
-        if (o.debug_view == "cache") json << ",\n  \"debug_missing\": " << debug_missing.load();
+        if (o_.debug_view == "cache") json << ",\n  \"debug_missing\": " << debug_missing_.load();
         json << "\n}\n";
-        writeTextOutput(o.stats_json, "stats JSON", json.str());
+        writeTextOutput(o_.stats_json, "stats JSON", json.str());
     }
-}
+
+    const RenderOptions& o_;
+    const std::string png_path_;
+    const int threads_;
+    std::chrono::steady_clock::time_point start_;
+    Scene scene_;
+    Camera camera_;
+    int width_ = 0, height_ = 0;
+    std::optional<Tracer> tracer_;
+    std::optional<LightSampler> lights_;
+    double build_seconds_ = 0.0;
+    std::unique_ptr<BakedCache> cache_;
+    std::unique_ptr<CountingCache> counting_cache_;
+    std::unique_ptr<BucketOccupancy> occupancy_;
+    TraceCounters counters_;
+    std::atomic<uint64_t> debug_hits_{0}, debug_missing_{0};
+    Image image_;
+    double render_seconds_ = 0.0, total_seconds_ = 0.0;
+    double hit_rate_ = 0.0;
+    uint64_t eligible_ = 0;
+    float max_bounces_seen_ = 0.0f;
+};
+
+void runRender(const RenderOptions& o) { RenderRun(o).run(); }
 
 }  // namespace
 
