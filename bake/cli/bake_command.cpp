@@ -55,7 +55,8 @@ struct BakeOptions {
     uint32_t propagation_depth = 2;
     std::string resampling = "random";
     std::string history = "ramp:8";
-    std::string camera_source = "explore";
+    std::string camera_source_name = "explore";                  ///< as given; parsed into camera_source
+    CameraPathSource camera_source = CameraPathSource::Explore;  ///< --camera-path overrides it
     std::string camera_path;
     uint32_t explore_points = 64;
     uint32_t iterations_per_leg = 8;
@@ -186,7 +187,7 @@ CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer
         description = "path file " + o.camera_path + " (" + std::to_string(poses.size()) + " waypoints)";
         return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
     }
-    if (o.camera_source == "gltf") {
+    if (o.camera_source == CameraPathSource::GltfCameras) {
         if (scene.cameras.empty()) {
             throw CommandError(kExitInvalidInput, o.scene_path + ": --camera-source gltf, but the scene has no camera");
         }
@@ -438,8 +439,7 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     settings.sharc.propagation_depth = o.propagation_depth;
     settings.sharc.resample_at_end = o.resampling == "end";
     // --capacity auto starts from the SDK's default; the bake replaces it after a pre-pass.
-    const uint32_t capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
-    settings.sharc.capacity = capacity;
+    settings.sharc.grid.capacity = o.capacity == "auto" ? 1u << 22 : parseCapacity(o.capacity);
     settings.sharc.grid.scene_scale =
         o.scene_scale == "auto" ? kHashGridDefaultSceneScale : parseFiniteFloat(o.scene_scale, "--scene-scale");
     settings.sharc.grid.logarithm_base = o.log_base;
@@ -450,7 +450,6 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     } catch (const std::invalid_argument& e) {
         throw CommandError(kExitUsage, std::string("--view-region: ") + e.what());
     }
-    settings.sharc.grid.capacity = capacity;
     if (!HistorySchedule::parse(o.history, settings.sharc.history)) {
         throw CommandError(kExitUsage, "--history: expected \"ramp:P\" (0..8), \"window:A\" (A >= 1) or \"average\", got \"" +
                                            o.history + "\"");
@@ -612,7 +611,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
         {"grid_choice", grid_choice},
         {"view_region", settings.view_region.describe()},
         {"levels_covered", levels_covered},
-        {"capacity", std::to_string(settings.sharc.capacity)},
+        {"capacity", std::to_string(settings.sharc.grid.capacity)},
         {"left_out", workLeftOut(scene, lights)},
     };
     if (!capacity_choice.empty()) metadata.emplace_back("capacity_choice", capacity_choice);
@@ -649,7 +648,7 @@ BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::st
         if (entry.first != "scene" && entry.first != "iterations") settings.push_back(entry);
     }
     settings.emplace_back("shard", o.shard);
-    settings.emplace_back("camera_options", o.camera_source + "|" + o.camera_path + "|" +
+    settings.emplace_back("camera_options", std::string(toString(o.camera_source)) + "|" + o.camera_path + "|" +
                                                 std::to_string(o.explore_points) + "|" +
                                                 std::to_string(o.iterations_per_leg));
     return settings;
@@ -752,7 +751,7 @@ private:
             capacity_choice_ = chooseCapacity(*tracer_, *lights_, *camera_path_, settings_, o_.iterations);
             capacity_choice_text_ = capacity_choice_.describe();
         }
-        settings_.sharc.capacity = settings_.sharc.grid.capacity = capacity_choice_.capacity;
+        settings_.sharc.grid.capacity = capacity_choice_.capacity;
         settings_.sharc.grow_when_loaded = true;
     }
 
@@ -775,7 +774,7 @@ private:
         std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
                     baker_->pathsPerIteration(), settings_.width, settings_.height, settings_.update_stride,
-                    settings_.sharc.capacity, settings_.sharc.history.describe().c_str(), threads_);
+                    settings_.sharc.grid.capacity, settings_.sharc.history.describe().c_str(), threads_);
         std::fflush(stdout);
     }
 
@@ -993,7 +992,7 @@ private:
             std::fprintf(stderr,
                          "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no "
                          "slot within an iteration; bake with a fixed --capacity %llu\n",
-                         settings_.sharc.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts,
+                         settings_.sharc.grid.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts,
                          2ull * cache.capacity());
         }
         if (g_stop_signal == SIGTERM) {
@@ -1119,10 +1118,14 @@ void registerBakeCommand(CLI::App& app) {
                     "How voxels forget early (biased) iterations: ramp:P (iteration k weighs k^P), "
                     "window:A (SHaRC's exponential window of A iterations) or average")
         ->capture_default_str();
-    cmd->add_option("--camera-source", o->camera_source,
+    cmd->add_option("--camera-source", o->camera_source_name,
                     "Where the roaming camera goes: explore (free space reachable from the glTF cameras) "
                     "or gltf (along the glTF cameras)")
-        ->capture_default_str()->check(CLI::IsMember({"explore", "gltf"}));
+        ->capture_default_str()
+        ->check(CLI::IsMember({"explore", "gltf"}))
+        ->each([o](const std::string& name) {
+            o->camera_source = name == "gltf" ? CameraPathSource::GltfCameras : CameraPathSource::Explore;
+        });
     cmd->add_option("--camera-path", o->camera_path,
                     "Camera path file (overrides --camera-source): one waypoint per line, "
                     "\"px py pz tx ty tz [fov_degrees]\", '#' comments");

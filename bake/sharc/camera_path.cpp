@@ -11,6 +11,15 @@
 #include <sstream>
 
 namespace sharcbake {
+
+const char* toString(CameraPathSource source) {
+    switch (source) {
+        case CameraPathSource::Explore: return "explore";
+        case CameraPathSource::GltfCameras: return "gltf";
+        case CameraPathSource::File: return "file";
+    }
+    return "explore";
+}
 namespace {
 
 /// Uniform random numbers for values that are not per-pixel samples (camera placement).

@@ -35,6 +35,9 @@ enum class CameraPathSource : uint8_t {
     File          ///< a camera path file (format in readCameraPathFile)
 };
 
+/// "explore", "gltf", "file": the names the command line and the bake's settings use.
+const char* toString(CameraPathSource source);
+
 class CameraPathError : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;

@@ -25,7 +25,7 @@ CapacityChoice chooseCapacity(const Tracer& tracer, const LightSampler& lights, 
     const auto start = std::chrono::steady_clock::now();
     // A table of the smallest size: the pre-pass never commits, it only needs an (empty) cache
     // for the paths to look up.
-    settings.sharc.capacity = settings.sharc.grid.capacity = kHashGridBucketSize;
+    settings.sharc.grid.capacity = kHashGridBucketSize;
     const Baker sampler(tracer, lights, camera_path, settings, 1.0);
 
     CapacityChoice choice;

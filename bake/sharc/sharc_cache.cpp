@@ -111,9 +111,9 @@ double SharcCache::chooseRadianceScale(double max_radiance) {
 SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
     : settings_(settings),
       radiance_scale_(radiance_scale),
-      accumulation_(settings.capacity),
-      resolved_(settings.capacity) {
-    const HashGridStatus status = HashGridTable::create(settings.capacity, &table_);
+      accumulation_(settings.grid.capacity),
+      resolved_(settings.grid.capacity) {
+    const HashGridStatus status = HashGridTable::create(settings.grid.capacity, &table_);
     if (status != HashGridStatus::kOk) {
         throw std::invalid_argument(std::string("hash grid: ") + toString(status));
     }
@@ -450,7 +450,7 @@ void SharcCache::grow(uint32_t capacity) {
     resolved_ = std::move(resolved);
     accumulation_ = ZeroedArray<AccumulationEntry>(capacity);
     occupied_ = occupied;
-    settings_.capacity = settings_.grid.capacity = capacity;
+    settings_.grid.capacity = capacity;
 }
 
 CacheData toCacheData(const SharcCache& cache) {

@@ -52,8 +52,13 @@ struct HistorySchedule {
 };
 
 struct SharcSettings {
-    HashGridParameters grid;  ///< log base, scene scale, level bias (camera set per iteration)
-    uint32_t capacity = 1u << 20;
+    /// Log base, scene scale, level bias (the camera is set per iteration), and the table's
+    /// capacity in slots: one value for the table and the hash's slot computation.
+    HashGridParameters grid = [] {
+        HashGridParameters g;
+        g.capacity = 1u << 20;
+        return g;
+    }();
     HistorySchedule history;
     /// Path vertices that receive radiance propagated back from later ones (SDK default with
     /// cache resampling: 2).

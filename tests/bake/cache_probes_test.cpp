@@ -36,7 +36,7 @@ struct ShortBake {
         path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
         BakeSettings settings;
         settings.width = settings.height = resolution;
-        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+        settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.grid.scene_scale = scene_scale;
         Baker baker(*tracer, *lights, *path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
         for (uint32_t i = 0; i < iterations; ++i) baker.runIteration();

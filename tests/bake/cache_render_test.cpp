@@ -104,7 +104,7 @@ protected:
         const CameraPath path = exploringCameraPath(*tracer_, *scene_, 16, 3).value();
         BakeSettings settings;
         settings.width = settings.height = 128;
-        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+        settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.grid.scene_scale = 5.0f;
         Baker baker(*tracer_, *lights_, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(*scene_)));
         for (uint32_t i = 0; i < 2048; ++i) baker.runIteration();

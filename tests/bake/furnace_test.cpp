@@ -94,7 +94,7 @@ struct SmallBake {
         path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
         BakeSettings settings;
         settings.width = settings.height = resolution;
-        settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+        settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
         settings.sharc.history = history;
         baker = std::make_unique<Baker>(*tracer, *lights, *path, settings,

@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
         for (uint32_t depth : {2u, 8u}) {
             BakeSettings settings;
             settings.width = settings.height = 160;
-            settings.sharc.capacity = settings.sharc.grid.capacity = 1u << 18;
+            settings.sharc.grid.capacity = 1u << 18;
             settings.sharc.grid.scene_scale = 5.0f;
             HistorySchedule::parse(history, settings.sharc.history);
             settings.sharc.propagation_depth = depth;

@@ -11,7 +11,6 @@ namespace {
 
 SharcSettings smallSettings(uint32_t capacity, HistorySchedule history = {}) {
     SharcSettings s;
-    s.capacity = capacity;
     s.grid.capacity = capacity;
     s.history = history;
     return s;

@@ -47,7 +47,7 @@ struct BakeScene {
         settings.width = settings.height = 96;
         settings.shard_index = shard_index;
         settings.shard_count = shard_count;
-        settings.sharc.capacity = settings.sharc.grid.capacity = capacity;
+        settings.sharc.grid.capacity = capacity;
         settings.sharc.grow_when_loaded = grow;
         settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
         return std::make_unique<Baker>(*tracer, *lights, *path, settings,

@@ -256,7 +256,7 @@ BakeSettings benchBakeSettings(int width, int height, uint32_t capacity) {
     BakeSettings settings;
     settings.width = width;
     settings.height = height;
-    settings.sharc.capacity = capacity;
+    settings.sharc.grid.capacity = capacity;
     settings.sharc.grid.capacity = capacity;
     return settings;
 }

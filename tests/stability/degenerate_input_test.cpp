@@ -157,7 +157,7 @@ TEST(DegenerateInput, CameraOnASurfaceGivesFiniteVoxels) {
 
 TEST(DegenerateInput, CapacityZeroIsRefusedAndAnyOtherCapacityWorks) {
     SharcSettings settings;
-    settings.capacity = settings.grid.capacity = 0;
+    settings.grid.capacity = 0;
     EXPECT_THROW(SharcCache(settings, 1.0), std::invalid_argument);
     for (const uint32_t capacity : {50000u, 65537u}) {  // not powers of two: slot = hash mod capacity
         Scene scene = loadGltf(scenePath("furnace_rho050"));

@@ -100,7 +100,7 @@ TEST(Fireflies, TinyBrightEmitterBesideADimLargeOneConservesEnergy) {
 
 SharcSettings oneVoxelSettings() {
     SharcSettings s;
-    s.capacity = s.grid.capacity = 64;
+    s.grid.capacity = 64;
     s.history = {HistorySchedule::Kind::Average, 0.0f};
     return s;
 }

@@ -113,7 +113,7 @@ private:
         settings.width = settings.height = config_.resolution;
         settings.update_stride = config_.update_stride;
         settings.path.max_bounces = config_.max_bounces;
-        settings.sharc.capacity = settings.sharc.grid.capacity = config_.capacity;
+        settings.sharc.grid.capacity = config_.capacity;
         settings.sharc.grid.scene_scale = config_.scene_scale;
         settings.sharc.grid.level_bias = config_.level_bias;
         settings.sharc.history = config_.history;
