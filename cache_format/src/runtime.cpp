@@ -236,7 +236,8 @@ CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, Cac
 }
 
 // The numbered steps follow SPEC §F.10; each failure cites its rule.
-CacheFileStatus CacheView::parse(CacheError* error) {
+/// V1 - V7: identifier, header, version, size, table geometry, header checksum, flags.
+CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
     using S = CacheFileStatus;
     const uint8_t* d = data_;
     const uint64_t size = size_;
@@ -300,6 +301,7 @@ CacheFileStatus CacheView::parse(CacheError* error) {
                         std::to_string(section_count) + " entries of " + std::to_string(entry_size) + " bytes)");
     }
     const uint64_t table_end = table_offset + uint64_t(section_count) * kCacheSectionEntrySize;
+    *table = SectionTable{table_offset, section_count, table_end};
     // V6: header + table checksum.
     {
         uint32_t crc = cacheCrc32(d, kCacheHeaderCrcOffset);
@@ -323,15 +325,27 @@ CacheFileStatus CacheView::parse(CacheError* error) {
         return fail(error, S::kCorrupt, 7, "reserved header fields are not zero");
     }
 
+    return S::kOk;
+}
+
+/// V8 - V11: the sections back to back with zero padding, their checksums and types, the
+/// required ones present.
+CacheFileStatus CacheView::parseSections(const SectionTable& table, CacheError* error, KnownSections* found) {
+    using S = CacheFileStatus;
+    const uint8_t* d = data_;
+    const uint64_t size = size_;
+    *found = KnownSections{};
+    const uint64_t table_offset = table.offset;
+    const uint32_t section_count = table.count;
     // V8, V9, V10: section entries, layout, checksums, types.
     sections_.clear();
     sections_.reserve(section_count);
-    uint64_t expected_offset = align8(table_end);
-    const CacheSectionInfo* grid = nullptr;
-    const CacheSectionInfo* keys = nullptr;
-    const CacheSectionInfo* voxels = nullptr;
-    const CacheSectionInfo* levels = nullptr;
-    const CacheSectionInfo* meta = nullptr;
+    uint64_t expected_offset = align8(table.end);
+    const CacheSectionInfo*& grid = found->grid;
+    const CacheSectionInfo*& keys = found->keys;
+    const CacheSectionInfo*& voxels = found->voxels;
+    const CacheSectionInfo*& levels = found->levels;
+    const CacheSectionInfo*& meta = found->meta;
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint8_t* e = d + table_offset + uint64_t(i) * kCacheSectionEntrySize;
         CacheSectionInfo s;
@@ -393,6 +407,15 @@ CacheFileStatus CacheView::parse(CacheError* error) {
         if (!section->required) return fail(error, S::kCorrupt, 11, std::string("section ") + type + " not marked REQUIRED");
     }
 
+    return S::kOk;
+}
+
+/// V12 - V13: the GRID section's constants and parameters.
+CacheFileStatus CacheView::parseGrid(const CacheSectionInfo& grid_section, CacheError* error, uint64_t* voxel_count,
+                                     uint32_t* level_count) {
+    using S = CacheFileStatus;
+    const CacheSectionInfo* grid = &grid_section;
+    const uint8_t* d = data_;
     // V12: GRID constants.
     if (grid->length < kCacheGridSize || (version_minor_ == 0 && grid->length != kCacheGridSize)) {
         return fail(error, S::kCorrupt, 12, "GRID: length " + std::to_string(grid->length) + ", expected 64");
@@ -407,8 +430,8 @@ CacheFileStatus CacheView::parse(CacheError* error) {
     level_bias_ = load<float>(g + 32);
     bake_capacity_ = load<uint32_t>(g + 36);
     const float position_bias = load<float>(g + 40), normal_bias = load<float>(g + 44);
-    const uint64_t voxel_count = load<uint64_t>(g + 48);
-    const uint32_t level_count = load<uint32_t>(g + 56);
+    *voxel_count = load<uint64_t>(g + 48);
+    *level_count = load<uint32_t>(g + 56);
     if (position_bits != kHashGridPositionBits || level_bits != kHashGridLevelBits ||
         normal_bits != kHashGridNormalBits || position_bias != kHashGridPositionBias ||
         normal_bias != kHashGridNormalBias) {
@@ -432,6 +455,19 @@ CacheFileStatus CacheView::parse(CacheError* error) {
                         ", scene scale " + std::to_string(scene_scale_) + ", level bias " +
                         std::to_string(level_bias_) + ")");
     }
+    return S::kOk;
+}
+
+/// V14 - V17: KEYS, VOXL and LEVL agree with the counts, keys ascend, values are finite, the
+/// level list matches the keys.
+CacheFileStatus CacheView::parseVoxels(const KnownSections& found, uint64_t voxel_count, uint32_t level_count,
+                                       CacheError* error) {
+    using S = CacheFileStatus;
+    const uint8_t* d = data_;
+    const uint64_t size = size_;
+    const CacheSectionInfo* keys = found.keys;
+    const CacheSectionInfo* voxels = found.voxels;
+    const CacheSectionInfo* levels = found.levels;
     // V14: section lengths agree with the counts.
     if (voxel_count > size / 24 || keys->length != voxel_count * 8 || voxels->length != voxel_count * 16 ||
         level_count > kHashGridLevelMax || levels->length != uint64_t(level_count) * 8) {
@@ -491,6 +527,13 @@ CacheFileStatus CacheView::parse(CacheError* error) {
             return fail(error, S::kCorrupt, 17, "LEVL: level " + std::to_string(level) + " has keys but is not listed");
         }
     }
+    return S::kOk;
+}
+
+/// V18: the optional META section.
+CacheFileStatus CacheView::parseMetadata(const CacheSectionInfo* meta, CacheError* error) {
+    using S = CacheFileStatus;
+    const uint8_t* d = data_;
     // V18: metadata.
     metadata_.clear();
     if (meta) {
@@ -525,9 +568,24 @@ CacheFileStatus CacheView::parse(CacheError* error) {
         }
         if (at != n) return fail(error, S::kCorrupt, 18, "META: bytes after the last entry");
     }
+    return S::kOk;
+}
+
+/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V18), and fills the view.
+CacheFileStatus CacheView::parse(CacheError* error) {
+    SectionTable table;
+    KnownSections found;
+    uint64_t voxel_count = 0;
+    uint32_t level_count = 0;
+    CacheFileStatus status = parseHeader(error, &table);
+    if (status == CacheFileStatus::kOk) status = parseSections(table, error, &found);
+    if (status == CacheFileStatus::kOk) status = parseGrid(*found.grid, error, &voxel_count, &level_count);
+    if (status == CacheFileStatus::kOk) status = parseVoxels(found, voxel_count, level_count, error);
+    if (status == CacheFileStatus::kOk) status = parseMetadata(found.meta, error);
+    if (status != CacheFileStatus::kOk) return status;
     // Query acceleration (not validation): voxel sizes and level thresholds.
     keyer_ = HashGridKeyer(gridParameters());
-    return S::kOk;
+    return CacheFileStatus::kOk;
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -187,7 +187,27 @@ public:
 
 private:
     void reset();
+    // Validation, one function per group of SPEC §F.10's rules (runtime.cpp).
+    struct SectionTable {
+        uint64_t offset = 0;
+        uint32_t count = 0;
+        uint64_t end = 0;
+    };
+    struct KnownSections {
+        const CacheSectionInfo* grid = nullptr;
+        const CacheSectionInfo* keys = nullptr;
+        const CacheSectionInfo* voxels = nullptr;
+        const CacheSectionInfo* levels = nullptr;
+        const CacheSectionInfo* meta = nullptr;
+    };
     CacheFileStatus parse(CacheError* error);
+    CacheFileStatus parseHeader(CacheError* error, SectionTable* table);
+    CacheFileStatus parseSections(const SectionTable& table, CacheError* error, KnownSections* found);
+    CacheFileStatus parseGrid(const CacheSectionInfo& grid, CacheError* error, uint64_t* voxel_count,
+                              uint32_t* level_count);
+    CacheFileStatus parseVoxels(const KnownSections& found, uint64_t voxel_count, uint32_t level_count,
+                                CacheError* error);
+    CacheFileStatus parseMetadata(const CacheSectionInfo* meta, CacheError* error);
 
     const uint8_t* data_ = nullptr;
     uint64_t size_ = 0;
