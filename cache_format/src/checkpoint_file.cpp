@@ -235,10 +235,18 @@ CacheFileStatus encodeCheckpoint(const CheckpointData& data, std::vector<uint8_t
 }
 
 // The numbered checks follow SPEC §C.4; each failure cites its rule.
-CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* data, std::string* message) {
+namespace {
+
+/// The four sections a checkpoint must hold, in kSectionOrder (STAT, SLOT, SETT, CNTR).
+struct CheckpointSections {
+    const uint8_t* data[4] = {nullptr, nullptr, nullptr, nullptr};
+    uint64_t length[4] = {0, 0, 0, 0};
+};
+
+/// C1 - C7: identifier, version, header and table geometry, checksums, the sections back to
+/// back with zero padding, the four required ones once each.
+CacheFileStatus readCheckpointFrame(const uint8_t* d, size_t size, CheckpointSections* sections, std::string* message) {
     using S = CacheFileStatus;
-    if (!d && size > 0) return fail(S::kInvalidArgument, message, "decodeCheckpoint: null data");
-    if (!hostIsLittleEndian()) return fail(S::kUnsupportedFeature, message, "big-endian hosts are not supported");
     auto load32 = [&](uint64_t at) { uint32_t v; std::memcpy(&v, d + at, 4); return v; };
     auto load64 = [&](uint64_t at) { uint64_t v; std::memcpy(&v, d + at, 8); return v; };
     // C1: identifier.
@@ -279,8 +287,8 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
     if (load32(24) != 0) return fail(S::kUnsupportedFeature, message, "C5: unknown header flags");
     if (load32(52) != 0 || load32(56) != 0) return fail(S::kCorrupt, message, "C5: reserved header fields are not zero");
     // C6: sections back to back, zero padding, checksums; C7: the four required sections once each.
-    const uint8_t* found[4] = {nullptr, nullptr, nullptr, nullptr};
-    uint64_t found_length[4] = {0, 0, 0, 0};
+    const uint8_t** found = sections->data;
+    uint64_t* found_length = sections->length;
     uint64_t expected = align8(table_end);
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint64_t e = header_size + uint64_t(i) * kCacheSectionEntrySize;
@@ -314,17 +322,34 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
     for (int k = 0; k < 4; ++k) {
         if (!found[k]) return fail(S::kCorrupt, message, "C7: a required section (STAT, SLOT, SETT, CNTR) is missing");
     }
+    return S::kOk;
+}
+
+/// C8: STAT.
+CacheFileStatus readState(const CheckpointSections& sections, CheckpointData& result, uint64_t* slot_count,
+                          std::string* message) {
+    using S = CacheFileStatus;
+    const uint8_t* const* found = sections.data;
+    const uint64_t* found_length = sections.length;
     // C8: STAT.
-    CheckpointData result;
     if (found_length[0] != kStateSize) return fail(S::kCorrupt, message, "C8: STAT must be 32 bytes");
     ByteReader state{found[0], found_length[0]};
     result.iterations_done = state.get<uint32_t>();
     result.capacity = state.get<uint32_t>();
     result.bucket_size = state.get<uint32_t>();
     const uint32_t reserved = state.get<uint32_t>();
-    const uint64_t slot_count = state.get<uint64_t>();
+    *slot_count = state.get<uint64_t>();
     result.radiance_scale = state.get<double>();
     if (reserved != 0) return fail(S::kCorrupt, message, "C8: STAT reserved field is not zero");
+    return S::kOk;
+}
+
+/// C9: SLOT.
+CacheFileStatus readSlots(const CheckpointSections& sections, uint64_t slot_count, CheckpointData& result,
+                          std::string* message) {
+    using S = CacheFileStatus;
+    const uint8_t* const* found = sections.data;
+    const uint64_t* found_length = sections.length;
     // C9: SLOT.
     if (slot_count > result.capacity || found_length[1] != slot_count * kSlotRecordSize) {
         return fail(S::kCorrupt, message, "C9: SLOT holds " + std::to_string(found_length[1]) + " bytes for " +
@@ -343,7 +368,14 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
         for (float& c : s.feedback) c = slots.get<float>();
         if (slots.get<uint64_t>() != 0) return fail(S::kCorrupt, message, "C9: slot record reserved field is not zero");
     }
-    // C10: SETT; C11: CNTR. Both must fill their section exactly.
+    return S::kOk;
+}
+
+/// C10: SETT, filling its section exactly.
+CacheFileStatus readSettings(const CheckpointSections& sections, CheckpointData& result, std::string* message) {
+    using S = CacheFileStatus;
+    const uint8_t* const* found = sections.data;
+    const uint64_t* found_length = sections.length;
     ByteReader settings{found[2], found_length[2]};
     bool utf8_ok = true;
     const uint32_t setting_count = settings.get<uint32_t>();
@@ -359,6 +391,15 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
     if (!settings.ok || settings.at != settings.size || !utf8_ok) {
         return fail(S::kCorrupt, message, "C10: SETT entries do not fill the section exactly or are not UTF-8");
     }
+    return S::kOk;
+}
+
+/// C11: CNTR, filling its section exactly.
+CacheFileStatus readCounters(const CheckpointSections& sections, CheckpointData& result, std::string* message) {
+    using S = CacheFileStatus;
+    const uint8_t* const* found = sections.data;
+    const uint64_t* found_length = sections.length;
+    bool utf8_ok = true;
     ByteReader counters{found[3], found_length[3]};
     const uint32_t counter_count = counters.get<uint32_t>();
     if (counters.get<uint32_t>() != 0 || counter_count > found_length[3] / 16) {
@@ -381,6 +422,25 @@ CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* 
     if (!counters.ok || counters.at != counters.size || !utf8_ok) {
         return fail(S::kCorrupt, message, "C11: CNTR entries do not fill the section exactly or are not UTF-8");
     }
+    return S::kOk;
+}
+
+}  // namespace
+
+/// Validates a checkpoint rule by rule (SPEC §C, C1 - C11) and decodes it.
+CacheFileStatus decodeCheckpoint(const uint8_t* d, size_t size, CheckpointData* data, std::string* message) {
+    using S = CacheFileStatus;
+    if (!d && size > 0) return fail(S::kInvalidArgument, message, "decodeCheckpoint: null data");
+    if (!hostIsLittleEndian()) return fail(S::kUnsupportedFeature, message, "big-endian hosts are not supported");
+    CheckpointSections sections;
+    CheckpointData result;
+    uint64_t slot_count = 0;
+    CacheFileStatus status = readCheckpointFrame(d, size, &sections, message);
+    if (status == S::kOk) status = readState(sections, result, &slot_count, message);
+    if (status == S::kOk) status = readSlots(sections, slot_count, result, message);
+    if (status == S::kOk) status = readSettings(sections, result, message);
+    if (status == S::kOk) status = readCounters(sections, result, message);
+    if (status != S::kOk) return status;
     std::string problem;
     if (!validateContent(result, &problem)) return fail(S::kCorrupt, message, problem);
     if (data) *data = std::move(result);
