@@ -585,19 +585,29 @@ GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& 
 /// The cache's metadata: everything that reproduces the bake, and nothing that varies between
 /// runs (timings go to --stats-json), so the same scene, settings and seed give the same file
 /// byte for byte. "iterations" is filled in after the bake.
+/// What a finished bake adds to its settings: the iterations done and the table's final size.
+struct BakeOutcome {
+    uint32_t iterations = 0;
+    uint32_t capacity = 0;  ///< grown from the starting one with --capacity auto
+};
+
+/// The cache file's metadata: the bake's settings, and with `outcome` what it did. Without one
+/// (at the start, for the checkpoint's settings) the iterations are empty and the capacity is
+/// the starting one.
 std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions& o, const Scene& scene,
                                                               const LightSampler& lights,
                                                               const BakeSettings& settings, double radiance_scale,
                                                               const std::string& camera_description,
                                                               const std::string& capacity_choice,
                                                               const std::string& grid_choice,
-                                                              const std::string& levels_covered) {
+                                                              const std::string& levels_covered,
+                                                              std::optional<BakeOutcome> outcome = std::nullopt) {
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", o.scene_path},
         {"scene_hash", sceneContentHash(scene.source_files)},
         {"sky", skyDescription(o.sky)},
-        {"iterations", ""},
+        {"iterations", outcome ? std::to_string(outcome->iterations) : ""},
         {"seed", std::to_string(o.seed)},
         {"history", settings.sharc.history.describe()},
         {"resolution", o.resolution},
@@ -611,7 +621,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
         {"grid_choice", grid_choice},
         {"view_region", settings.view_region.describe()},
         {"levels_covered", levels_covered},
-        {"capacity", std::to_string(settings.sharc.grid.capacity)},
+        {"capacity", std::to_string(outcome ? outcome->capacity : settings.sharc.grid.capacity)},
         {"left_out", workLeftOut(scene, lights)},
     };
     if (!capacity_choice.empty()) metadata.emplace_back("capacity_choice", capacity_choice);
@@ -619,9 +629,6 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
     return metadata;
 }
 
-/// What a resume must match: the metadata without the scene's path (the hash names the scene)
-/// and the iteration count, plus the options that change the work but are not recorded in the
-/// cache.
 /// With --capacity auto and --resume: the starting capacity and its description that the first
 /// run chose (its checkpoint's settings), so the resumed bake uses that table whatever
 /// --iterations now says (the pre-pass depends on it). Nothing when the checkpoint cannot be
@@ -641,6 +648,9 @@ std::optional<std::pair<uint32_t, std::string>> autoCapacityOfCheckpoint(const s
     return std::make_pair(uint32_t(slots), choice);
 }
 
+/// What a resume must match: the metadata without the scene's path (the hash names the scene)
+/// and the iteration count, plus the options that change the work but are not recorded in the
+/// cache.
 BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::string>>& metadata,
                                 const BakeOptions& o) {
     BakeSettingsText settings;
@@ -726,9 +736,7 @@ private:
         if (autoCapacity()) chooseAutoCapacity();
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, settings_,
                                          SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
-        metadata_ = bakeMetadata(o_, scene_, *lights_, settings_, baker_->cache().radianceScale(), camera_description_,
-                                 capacity_choice_text_, grid_decision_.choice, grid_decision_.levelsCovered());
-        resume_settings_ = resumeSettings(metadata_, o_);
+        resume_settings_ = resumeSettings(metadata(std::nullopt), o_);
         if (!o_.resume_path.empty()) {
             checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_); });
         }
@@ -741,6 +749,11 @@ private:
     }
 
     bool autoCapacity() const { return o_.capacity == "auto"; }
+
+    std::vector<std::pair<std::string, std::string>> metadata(std::optional<BakeOutcome> outcome) const {
+        return bakeMetadata(o_, scene_, *lights_, settings_, baker_->cache().radianceScale(), camera_description_,
+                            capacity_choice_text_, grid_decision_.choice, grid_decision_.levelsCovered(), outcome);
+    }
 
     void chooseAutoCapacity() {
         if (const auto resumed = autoCapacityOfCheckpoint(o_.resume_path)) {
@@ -867,13 +880,9 @@ private:
         // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
         prediction_ = predictHitRate(*tracer_, data, settings_.view_region,
                                      predictionViews(*tracer_, settings_.view_region, o_.prediction_views, o_.seed));
-        metadata_.emplace_back("predicted_hit_rate", describeHitRate(prediction_));
-        for (auto& entry : metadata_) {
-            if (entry.first == "iterations") entry.second = std::to_string(baker_->iterationsDone());
-            if (entry.first == "capacity") entry.second = std::to_string(cache.capacity());  // grown?
-        }
-        metadata_.emplace_back("stop_reason", stop_reason_);
-        data.metadata = metadata_;
+        data.metadata = metadata(BakeOutcome{baker_->iterationsDone(), cache.capacity()});
+        data.metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction_));
+        data.metadata.emplace_back("stop_reason", stop_reason_);
         std::string message;
         const CacheFileStatus status = writeCacheFile(o_.output_path, data, &message);
         if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
@@ -1019,7 +1028,6 @@ private:
     CapacityChoice capacity_choice_;
     std::string capacity_choice_text_;  ///< empty for a fixed --capacity
     std::unique_ptr<Baker> baker_;
-    std::vector<std::pair<std::string, std::string>> metadata_;
     BakeSettingsText resume_settings_;
     uint32_t first_iteration_ = 0;
     double setup_seconds_ = 0.0;
