@@ -247,8 +247,6 @@ struct CheckpointSections {
 /// back with zero padding, the four required ones once each.
 CacheFileStatus readCheckpointFrame(const uint8_t* d, size_t size, CheckpointSections* sections, std::string* message) {
     using S = CacheFileStatus;
-    auto load32 = [&](uint64_t at) { uint32_t v; std::memcpy(&v, d + at, 4); return v; };
-    auto load64 = [&](uint64_t at) { uint64_t v; std::memcpy(&v, d + at, 8); return v; };
     // C1: identifier.
     if (size < sizeof kCheckpointIdentifier || std::memcmp(d, kCheckpointIdentifier, sizeof kCheckpointIdentifier) != 0) {
         if (size >= sizeof kCacheIdentifier && std::memcmp(d, kCacheIdentifier, sizeof kCacheIdentifier) == 0) {
@@ -258,51 +256,53 @@ CacheFileStatus readCheckpointFrame(const uint8_t* d, size_t size, CheckpointSec
     }
     // C2: header present; C3: version.
     if (size < kCacheHeaderSize) return fail(S::kTruncated, message, "C2: truncated header");
-    uint16_t major, minor;
-    std::memcpy(&major, d + 16, 2);
-    std::memcpy(&minor, d + 18, 2);
+    const ContainerHeader header = ContainerHeader::read(d);
+    const uint16_t major = header.version_major, minor = header.version_minor;
     if (major != kCheckpointVersionMajor) {
         return fail(S::kUnsupportedVersion, message,
                     "C3: checkpoint version " + std::to_string(major) + "." + std::to_string(minor) +
                         " is not supported (this reader reads " + std::to_string(kCheckpointVersionMajor) + ".x)");
     }
     // C4: declared size and header/table geometry.
-    const uint64_t file_size = load64(40);
+    const uint64_t file_size = header.file_size;
     if (file_size != size) {
         return fail(file_size > size ? S::kTruncated : S::kTrailingBytes, message,
                     "C4: the header declares " + std::to_string(file_size) + " bytes, the file has " + std::to_string(size));
     }
-    const uint32_t header_size = load32(20);
-    const uint32_t section_count = load32(28);
-    if (header_size != kCacheHeaderSize || load64(32) != header_size || load32(48) != kCacheSectionEntrySize ||
+    const uint32_t header_size = header.header_size;
+    const uint32_t section_count = header.section_count;
+    if (header_size != kCacheHeaderSize || header.table_offset != header_size ||
+        header.entry_size != kCacheSectionEntrySize ||
         section_count == 0 || section_count > kCacheMaxSections ||
         header_size + uint64_t(section_count) * kCacheSectionEntrySize > size) {
         return fail(S::kCorrupt, message, "C4: bad header or section table geometry");
     }
-    const uint64_t table_end = header_size + uint64_t(section_count) * kCacheSectionEntrySize;
+    const uint64_t table_end = header.tableEnd();
     // C5: header + table checksum.
-    uint32_t crc = cacheCrc32(d, kCacheHeaderCrcOffset);
-    crc = cacheCrc32(d + kCacheHeaderSize, size_t(table_end - kCacheHeaderSize), crc);
-    if (crc != load32(kCacheHeaderCrcOffset)) return fail(S::kChecksumMismatch, message, "C5: header checksum mismatch");
-    if (load32(24) != 0) return fail(S::kUnsupportedFeature, message, "C5: unknown header flags");
-    if (load32(52) != 0 || load32(56) != 0) return fail(S::kCorrupt, message, "C5: reserved header fields are not zero");
+    if (ContainerHeader::computeCrc32(d, table_end) != header.header_crc32) {
+        return fail(S::kChecksumMismatch, message, "C5: header checksum mismatch");
+    }
+    if (header.flags != 0) return fail(S::kUnsupportedFeature, message, "C5: unknown header flags");
+    if (header.reserved[0] != 0 || header.reserved[1] != 0) {
+        return fail(S::kCorrupt, message, "C5: reserved header fields are not zero");
+    }
     // C6: sections back to back, zero padding, checksums; C7: the four required sections once each.
     const uint8_t** found = sections->data;
     uint64_t* found_length = sections->length;
     uint64_t expected = align8(table_end);
     for (uint32_t i = 0; i < section_count; ++i) {
-        const uint64_t e = header_size + uint64_t(i) * kCacheSectionEntrySize;
-        const uint32_t type = load32(e), flags = load32(e + 4);
-        const uint64_t offset = load64(e + 8), length = load64(e + 16);
+        const ContainerEntry entry = ContainerEntry::read(d, header_size, i);
+        const uint32_t type = entry.type, flags = entry.flags;
+        const uint64_t offset = entry.offset, length = entry.length;
         const std::string name = "section " + std::to_string(i);
-        if ((flags & ~kCacheSectionRequired) != 0 || load32(e + 28) != 0 || offset != expected || offset > size ||
+        if ((flags & ~kCacheSectionRequired) != 0 || entry.reserved != 0 || offset != expected || offset > size ||
             length > size - offset || align8(offset + length) > size) {
             return fail(S::kCorrupt, message, "C6: " + name + ": bad flags, offset or length");
         }
         for (uint64_t p = offset + length; p < align8(offset + length); ++p) {
             if (d[p] != 0) return fail(S::kCorrupt, message, "C6: " + name + ": non-zero padding");
         }
-        if (cacheCrc32(d + offset, size_t(length)) != load32(e + 24)) {
+        if (cacheCrc32(d + offset, size_t(length)) != entry.crc32) {
             return fail(S::kChecksumMismatch, message, "C6: " + name + ": checksum mismatch");
         }
         expected = align8(offset + length);

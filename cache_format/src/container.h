@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// The container that caches and checkpoints share (SPEC §F.1 - §F.4, §C.1): writing its bytes
-// and putting a file in place atomically. Internal to cache_format/.
+// The container that caches and checkpoints share (SPEC §F.1 - §F.4, §C.1): reading its header
+// and section table, and writing its bytes. The field offsets live here only; each format checks
+// its own rules over what ContainerHeader and ContainerEntry read. Internal to cache_format/.
 #pragma once
 
 #include "sharcbake/cache_types.h"
@@ -26,6 +27,67 @@ inline CacheFileStatus fail(CacheFileStatus status, std::string* message, const 
     if (message) *message = text;
     return status;
 }
+
+template <typename T> T loadLittleEndian(const uint8_t* p) {
+    T value;
+    std::memcpy(&value, p, sizeof(T));
+    return value;
+}
+
+/// The container header's fields (SPEC §F.2), read from at least kCacheHeaderSize bytes.
+struct ContainerHeader {
+    uint16_t version_major = 0, version_minor = 0;
+    uint32_t header_size = 0;
+    uint32_t flags = 0;
+    uint32_t section_count = 0;
+    uint64_t table_offset = 0;
+    uint64_t file_size = 0;
+    uint32_t entry_size = 0;
+    uint32_t reserved[2] = {0, 0};
+    uint32_t header_crc32 = 0;
+
+    static ContainerHeader read(const uint8_t* d) {
+        ContainerHeader h;
+        h.version_major = loadLittleEndian<uint16_t>(d + 16);
+        h.version_minor = loadLittleEndian<uint16_t>(d + 18);
+        h.header_size = loadLittleEndian<uint32_t>(d + 20);
+        h.flags = loadLittleEndian<uint32_t>(d + 24);
+        h.section_count = loadLittleEndian<uint32_t>(d + 28);
+        h.table_offset = loadLittleEndian<uint64_t>(d + 32);
+        h.file_size = loadLittleEndian<uint64_t>(d + 40);
+        h.entry_size = loadLittleEndian<uint32_t>(d + 48);
+        h.reserved[0] = loadLittleEndian<uint32_t>(d + 52);
+        h.reserved[1] = loadLittleEndian<uint32_t>(d + 56);
+        h.header_crc32 = loadLittleEndian<uint32_t>(d + kCacheHeaderCrcOffset);
+        return h;
+    }
+    /// The end of the section table (valid once the geometry has been checked).
+    uint64_t tableEnd() const { return table_offset + uint64_t(section_count) * kCacheSectionEntrySize; }
+    /// The CRC-32 the header should hold: the header without its CRC field, then the table.
+    static uint32_t computeCrc32(const uint8_t* d, uint64_t table_end) {
+        const uint32_t crc = cacheCrc32(d, kCacheHeaderCrcOffset);
+        return cacheCrc32(d + kCacheHeaderSize, size_t(table_end - kCacheHeaderSize), crc);
+    }
+};
+
+/// One entry of the section table (SPEC §F.3).
+struct ContainerEntry {
+    uint32_t type = 0, flags = 0;
+    uint64_t offset = 0, length = 0;
+    uint32_t crc32 = 0, reserved = 0;
+
+    static ContainerEntry read(const uint8_t* d, uint64_t table_offset, uint32_t index) {
+        const uint8_t* e = d + table_offset + uint64_t(index) * kCacheSectionEntrySize;
+        ContainerEntry entry;
+        entry.type = loadLittleEndian<uint32_t>(e);
+        entry.flags = loadLittleEndian<uint32_t>(e + 4);
+        entry.offset = loadLittleEndian<uint64_t>(e + 8);
+        entry.length = loadLittleEndian<uint64_t>(e + 16);
+        entry.crc32 = loadLittleEndian<uint32_t>(e + 24);
+        entry.reserved = loadLittleEndian<uint32_t>(e + 28);
+        return entry;
+    }
+};
 
 /// Little-endian writer appending to a byte vector (callers check hostIsLittleEndian()).
 struct ByteWriter {

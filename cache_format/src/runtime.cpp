@@ -264,16 +264,17 @@ CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
                     "truncated: " + std::to_string(size) + " bytes, the header alone is " +
                         std::to_string(kCacheHeaderSize));
     }
+    const ContainerHeader header = ContainerHeader::read(d);
     // V3: version.
-    version_major_ = load<uint16_t>(d + 16);
-    version_minor_ = load<uint16_t>(d + 18);
+    version_major_ = header.version_major;
+    version_minor_ = header.version_minor;
     if (version_major_ != kCacheVersionMajor) {
         return fail(error, S::kUnsupportedVersion, 3,
                     "format version " + std::to_string(version_major_) + "." + std::to_string(version_minor_) +
                         " is not supported (this reader reads " + std::to_string(kCacheVersionMajor) + ".x)");
     }
     // V4: declared file size equals the actual size.
-    const uint64_t file_size = load<uint64_t>(d + 40);
+    const uint64_t file_size = header.file_size;
     if (file_size > size) {
         return fail(error, S::kTruncated, 4,
                     "truncated: the header declares " + std::to_string(file_size) + " bytes, " +
@@ -285,10 +286,10 @@ CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
                         std::to_string(file_size) + " bytes)");
     }
     // V5: header and table geometry.
-    header_size_ = load<uint32_t>(d + 20);
-    const uint32_t section_count = load<uint32_t>(d + 28);
-    const uint64_t table_offset = load<uint64_t>(d + 32);
-    const uint32_t entry_size = load<uint32_t>(d + 48);
+    header_size_ = header.header_size;
+    const uint32_t section_count = header.section_count;
+    const uint64_t table_offset = header.table_offset;
+    const uint32_t entry_size = header.entry_size;
     if (header_size_ < kCacheHeaderSize || header_size_ % kCacheAlignment != 0 || header_size_ > size ||
         (version_minor_ == 0 && header_size_ != kCacheHeaderSize)) {
         return fail(error, S::kCorrupt, 5, "bad header size " + std::to_string(header_size_));
@@ -300,13 +301,12 @@ CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
                     "bad section table (offset " + std::to_string(table_offset) + ", " +
                         std::to_string(section_count) + " entries of " + std::to_string(entry_size) + " bytes)");
     }
-    const uint64_t table_end = table_offset + uint64_t(section_count) * kCacheSectionEntrySize;
+    const uint64_t table_end = header.tableEnd();
     *table = SectionTable{table_offset, section_count, table_end};
     // V6: header + table checksum.
     {
-        uint32_t crc = cacheCrc32(d, kCacheHeaderCrcOffset);
-        crc = cacheCrc32(d + kCacheHeaderSize, size_t(table_end - kCacheHeaderSize), crc);
-        const uint32_t stored = load<uint32_t>(d + kCacheHeaderCrcOffset);
+        const uint32_t crc = ContainerHeader::computeCrc32(d, table_end);
+        const uint32_t stored = header.header_crc32;
         if (crc != stored) {
             char buf[96];
             std::snprintf(buf, sizeof buf, "header/section-table checksum mismatch (stored %08X, computed %08X)",
@@ -315,13 +315,13 @@ CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
         }
     }
     // V7: flags and reserved header fields.
-    const uint32_t flags = load<uint32_t>(d + 24);
+    const uint32_t flags = header.flags;
     if (flags != 0) {
         char buf[80];
         std::snprintf(buf, sizeof buf, "unknown required header flags 0x%08X", flags);
         return fail(error, S::kUnsupportedFeature, 7, buf);
     }
-    if (load<uint32_t>(d + 52) != 0 || load<uint32_t>(d + 56) != 0) {
+    if (header.reserved[0] != 0 || header.reserved[1] != 0) {
         return fail(error, S::kCorrupt, 7, "reserved header fields are not zero");
     }
 
@@ -347,16 +347,16 @@ CacheFileStatus CacheView::parseSections(const SectionTable& table, CacheError* 
     const CacheSectionInfo*& levels = found->levels;
     const CacheSectionInfo*& meta = found->meta;
     for (uint32_t i = 0; i < section_count; ++i) {
-        const uint8_t* e = d + table_offset + uint64_t(i) * kCacheSectionEntrySize;
+        const ContainerEntry entry = ContainerEntry::read(d, table_offset, i);
         CacheSectionInfo s;
-        s.type = load<uint32_t>(e);
-        const uint32_t sflags = load<uint32_t>(e + 4);
-        s.offset = load<uint64_t>(e + 8);
-        s.length = load<uint64_t>(e + 16);
-        s.crc32 = load<uint32_t>(e + 24);
+        s.type = entry.type;
+        const uint32_t sflags = entry.flags;
+        s.offset = entry.offset;
+        s.length = entry.length;
+        s.crc32 = entry.crc32;
         s.required = (sflags & kCacheSectionRequired) != 0;
         const std::string name = "section " + std::to_string(i) + " (" + fourccText(s.type) + ")";
-        if ((sflags & ~kCacheSectionRequired) != 0 || load<uint32_t>(e + 28) != 0) {
+        if ((sflags & ~kCacheSectionRequired) != 0 || entry.reserved != 0) {
             return fail(error, S::kCorrupt, 8, name + ": unknown flag bits or non-zero reserved field");
         }
         if (s.offset != expected_offset || s.offset > size || s.length > size - s.offset) {
