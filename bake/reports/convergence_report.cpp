@@ -333,7 +333,9 @@ std::optional<double> plainErrorAt(const std::vector<PlainPathTracingRow>& plain
     return std::nullopt;
 }
 
-void writeConvergenceTables(const std::string& dir, const ConvergenceReport& report) {
+namespace {
+
+void writeCheckpointsCsv(const std::string& dir, const ConvergenceReport& report) {
     const std::string csv_path = dir + "/convergence.csv";
     std::ostringstream csv;
     csv << "iteration,bake_seconds,render_seconds,total_seconds,rays,live_voxels,"
@@ -385,6 +387,9 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
     }
     finishWriting(csv, csv_path);
 
+}
+
+void writePlainPathTracingCsv(const std::string& dir, const ConvergenceReport& report) {
     const std::string plain_path = dir + "/plain_path_tracing.csv";
     std::ostringstream plain;
     plain << "samples_per_pixel,seconds,rays,image_relative_mse,image_mean_relative_error,image_relative_bias,"
@@ -398,6 +403,9 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
     }
     finishWriting(plain, plain_path);
 
+}
+
+void writeConvergenceJson(const std::string& dir, const ConvergenceReport& report) {
     const std::string json_path = dir + "/convergence.json";
     std::ostringstream json;
     json << "{\n  \"scene\": " << jsonString(report.scene) << ",\n"
@@ -460,6 +468,94 @@ void writeConvergenceTables(const std::string& dir, const ConvergenceReport& rep
     finishWriting(json, json_path);
 }
 
+}  // namespace
+
+void writeConvergenceTables(const std::string& dir, const ConvergenceReport& report) {
+    writeCheckpointsCsv(dir, report);
+    writePlainPathTracingCsv(dir, report);
+    writeConvergenceJson(dir, report);
+}
+
+namespace {
+
+/// Runs gnuplot on `script_path` in `dir`. Returns an empty string, or why there is no plot.
+std::string runGnuplot(const std::string& dir, const std::string& script_path) {
+    // fork + exec rather than system(): no shell, so no quoting of the folder name.
+    const std::string log_path = dir + "/convergence.gnuplot.log";
+    const pid_t child = ::fork();
+    if (child < 0) return "could not start gnuplot";
+    if (child == 0) {
+        const int log = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (log >= 0) ::dup2(log, STDERR_FILENO);
+        if (::chdir(dir.c_str()) != 0) ::_exit(126);
+        ::execlp("gnuplot", "gnuplot", "convergence.gp", static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    int status = 0;
+    while (::waitpid(child, &status, 0) < 0) {
+        if (errno != EINTR) return "could not wait for gnuplot";
+    }
+    if (!WIFEXITED(status)) return "gnuplot crashed; see " + log_path;
+    if (WEXITSTATUS(status) == 127) {
+        return "gnuplot is not installed (Debian: apt-get install gnuplot-nox); the tables and " + script_path +
+               " are written";
+    }
+    if (WEXITSTATUS(status) != 0) return "gnuplot failed; see " + log_path;
+    std::remove(log_path.c_str());
+    return "";
+}
+
+}  // namespace
+
+namespace {
+
+/// A gnuplot `plot` command of `curves`, one per line.
+void writePlot(std::ostream& gp, const std::vector<std::string>& curves) {
+    gp << "plot ";
+    for (size_t i = 0; i < curves.size(); ++i) gp << (i ? ", \\\n     " : "") << curves[i];
+    gp << "\n";
+}
+
+/// The probe panel: the cache itself, its RMS error at the probes falling with bake time towards
+/// the bias floor, the part that more samples do not remove.
+void writeProbePanel(std::ostream& gp, const ConvergenceReport& report) {
+    std::vector<std::string> curves;
+    const double floor = report.probe_floor ? report.probe_floor->floor() : 0.0;
+    double first_seconds = 0.0;
+    for (const ConvergenceRow& r : report.rows) {
+        if (r.probes && r.probes->view.probes > 0) {
+            first_seconds = r.bake_seconds;
+            break;
+        }
+    }
+    gp << "set xlabel 'bake seconds'\n"
+          "set ylabel 'relative error of the cache at the probes'\n"
+          "set key bottom left box opaque\n";
+    if (first_seconds > 0.0) gp << "set xrange [" << first_seconds / 1.5 << ":*]\n";
+    // Error bars from the interval of the mean square (its low end kept above 0 for the
+    // log axis).
+    curves.push_back("'convergence.csv' using 'bake_seconds':'probe_rms_error':"
+                     "(sqrt(column('probe_relative_mse') - column('probe_relative_mse_ci95') > 1e-6 ? "
+                     "column('probe_relative_mse') - column('probe_relative_mse_ci95') : 1e-6)):"
+                     "(sqrt(column('probe_relative_mse') + column('probe_relative_mse_ci95'))) with "
+                     "yerrorlines lw 2 pt 7 lc rgb '#d55e00' title 'RMS error (95% interval)'");
+    curves.push_back("'convergence.csv' using 'bake_seconds':(sqrt(column('probe_voxel_noise'))) with "
+                     "linespoints lw 1 pt 6 lc rgb '#56b4e9' title 'of which voxel noise'");
+    curves.push_back("'convergence.csv' using 'bake_seconds':(column('probe_bias_squared') > 0 ? "
+                     "sqrt(column('probe_bias_squared')) : NaN) with linespoints lw 1 pt 4 lc rgb '#009e73' "
+                     "title 'of which bias'");
+    if (floor > 0.0) {
+        char line[160];
+        std::snprintf(line, sizeof line, "%.6g with lines dt 2 lw 2 lc rgb '#000000' title 'bias floor %.3g%%'",
+                      floor, 100.0 * floor);
+        curves.push_back(line);
+    }
+    writePlot(gp, curves);
+    gp << "set key top right box opaque\nset autoscale x\n";
+}
+
+}  // namespace
+
 std::string plotConvergence(const std::string& dir, const ConvergenceReport& report) {
     const auto any = [&report](auto&& has) { return std::any_of(report.rows.begin(), report.rows.end(), has); };
     const bool has_image = any([](const ConvergenceRow& r) { return r.image.has_value(); });
@@ -472,11 +568,7 @@ std::string plotConvergence(const std::string& dir, const ConvergenceReport& rep
     const std::string script_path = dir + "/convergence.gp";
     {
         std::ofstream gp(script_path);
-        const auto plot = [&gp](const std::vector<std::string>& curves) {
-            gp << "plot ";
-            for (size_t i = 0; i < curves.size(); ++i) gp << (i ? ", \\\n     " : "") << curves[i];
-            gp << "\n";
-        };
+        const auto plot = [&gp](const std::vector<std::string>& curves) { writePlot(gp, curves); };
         const std::string spp = std::to_string(report.view.samples_per_pixel);
         gp << "# Written by sharcbake bake --report; re-run with: gnuplot convergence.gp\n"
               "set terminal png size " << 100 + 600 * panels << ",620 font ',11'\n"
@@ -489,43 +581,7 @@ std::string plotConvergence(const std::string& dir, const ConvergenceReport& rep
            << "set multiplot layout 1," << panels << " title "
            << jsonString("Error against time: " + report.scene) << " noenhanced\n";
         std::vector<std::string> curves;
-        if (has_probes) {
-            // The cache itself: its RMS error at the probes falls with bake time towards the bias
-            // floor, the part that more samples do not remove.
-            const double floor = report.probe_floor ? report.probe_floor->floor() : 0.0;
-            double first_seconds = 0.0;
-            for (const ConvergenceRow& r : report.rows) {
-                if (r.probes && r.probes->view.probes > 0) {
-                    first_seconds = r.bake_seconds;
-                    break;
-                }
-            }
-            gp << "set xlabel 'bake seconds'\n"
-                  "set ylabel 'relative error of the cache at the probes'\n"
-                  "set key bottom left box opaque\n";
-            if (first_seconds > 0.0) gp << "set xrange [" << first_seconds / 1.5 << ":*]\n";
-            // Error bars from the interval of the mean square (its low end kept above 0 for the
-            // log axis).
-            curves.push_back("'convergence.csv' using 'bake_seconds':'probe_rms_error':"
-                             "(sqrt(column('probe_relative_mse') - column('probe_relative_mse_ci95') > 1e-6 ? "
-                             "column('probe_relative_mse') - column('probe_relative_mse_ci95') : 1e-6)):"
-                             "(sqrt(column('probe_relative_mse') + column('probe_relative_mse_ci95'))) with "
-                             "yerrorlines lw 2 pt 7 lc rgb '#d55e00' title 'RMS error (95% interval)'");
-            curves.push_back("'convergence.csv' using 'bake_seconds':(sqrt(column('probe_voxel_noise'))) with "
-                             "linespoints lw 1 pt 6 lc rgb '#56b4e9' title 'of which voxel noise'");
-            curves.push_back("'convergence.csv' using 'bake_seconds':(column('probe_bias_squared') > 0 ? "
-                             "sqrt(column('probe_bias_squared')) : NaN) with linespoints lw 1 pt 4 lc rgb '#009e73' "
-                             "title 'of which bias'");
-            if (floor > 0.0) {
-                char line[160];
-                std::snprintf(line, sizeof line, "%.6g with lines dt 2 lw 2 lc rgb '#000000' title 'bias floor %.3g%%'",
-                              floor, 100.0 * floor);
-                curves.push_back(line);
-            }
-            plot(curves);
-            curves.clear();
-            gp << "set key top right box opaque\nset autoscale x\n";
-        }
+        if (has_probes) writeProbePanel(gp, report);
         if (has_image || has_voxel) {
             gp << "set xlabel 'seconds (cache: bake + render through it; path tracing: render)'\n"
                   "set ylabel 'mean relative error'\n";
@@ -573,29 +629,7 @@ std::string plotConvergence(const std::string& dir, const ConvergenceReport& rep
         gp << "unset multiplot\n";
         if (!gp) return script_path + ": cannot write";
     }
-    // fork + exec rather than system(): no shell, so no quoting of the folder name.
-    const std::string log_path = dir + "/convergence.gnuplot.log";
-    const pid_t child = ::fork();
-    if (child < 0) return "could not start gnuplot";
-    if (child == 0) {
-        const int log = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (log >= 0) ::dup2(log, STDERR_FILENO);
-        if (::chdir(dir.c_str()) != 0) ::_exit(126);
-        ::execlp("gnuplot", "gnuplot", "convergence.gp", static_cast<char*>(nullptr));
-        ::_exit(127);
-    }
-    int status = 0;
-    while (::waitpid(child, &status, 0) < 0) {
-        if (errno != EINTR) return "could not wait for gnuplot";
-    }
-    if (!WIFEXITED(status)) return "gnuplot crashed; see " + log_path;
-    if (WEXITSTATUS(status) == 127) {
-        return "gnuplot is not installed (Debian: apt-get install gnuplot-nox); the tables and " + script_path +
-               " are written";
-    }
-    if (WEXITSTATUS(status) != 0) return "gnuplot failed; see " + log_path;
-    std::remove(log_path.c_str());
-    return "";
+    return runGnuplot(dir, script_path);
 }
 
 }  // namespace sharcbake
