@@ -113,16 +113,17 @@ size_t CacheProbes::record(const CacheView& cache) {
     }
     for (const CacheLevel& level : cache.levels()) r.levels.push_back(level.level);
     const glm::vec3 view = settings_.view_position;
-    grid_ = cache.gridParameters(Float3{view.x, view.y, view.z});
+    const Float3 camera{view.x, view.y, view.z};
+    const HashGridKeyer keyer(cache.gridParameters(camera));
     const size_t n = candidates_.size();
     r.values.resize(r.levels.size() * n);
     tbb::parallel_for(size_t(0), n, [&](size_t c) {
         const Float3 p{candidates_[c].point.position.x, candidates_[c].point.position.y,
                        candidates_[c].point.position.z};
         const Float3 normal{candidates_[c].normal.x, candidates_[c].normal.y, candidates_[c].normal.z};
-        candidates_[c].view_level = decodeHashGridKey(cache.keyFor(p, normal, grid_.camera_position)).level;
+        candidates_[c].view_level = decodeHashGridKey(cache.keyFor(p, normal, camera)).level;
         for (size_t l = 0; l < r.levels.size(); ++l) {
-            const uint64_t index = cache.findKey(hashGridKeyAtLevel(p, normal, r.levels[l], grid_));
+            const uint64_t index = cache.findKey(keyer.keyAtLevel(p, normal, r.levels[l]));
             if (index >= cache.voxelCount()) continue;
             const CacheVoxel v = cache.voxel(index);
             if (!(v.sample_weight > 0.0f)) continue;
@@ -221,10 +222,11 @@ void CacheProbes::computeReferences(const std::vector<Pair>& pairs) {
     reference_seconds_ += secondsSince(start);
 }
 
-bool CacheProbes::isLive(const Record& record, const Pair& pair) const {
+const CacheProbes::Value* CacheProbes::valueAt(const Record& record, const Pair& pair) const {
     const auto level = std::lower_bound(record.levels.begin(), record.levels.end(), pair.level);
-    if (level == record.levels.end() || *level != pair.level) return false;
-    return record.at(size_t(level - record.levels.begin()), pair.candidate, candidates_.size()).sample_weight > 0.0f;
+    if (level == record.levels.end() || *level != pair.level) return nullptr;
+    const Value& value = record.at(size_t(level - record.levels.begin()), pair.candidate, candidates_.size());
+    return value.sample_weight > 0.0f ? &value : nullptr;
 }
 
 double CacheProbes::greyOf(const Reference& reference) {
@@ -236,14 +238,8 @@ ProbeError CacheProbes::errorOf(const std::vector<Pair>& pairs, const Record& re
     ProbeError e;
     std::vector<double> absolute, squared, signed_error;
     double variance_sum = 0.0, reference_noise_sum = 0.0;
-    const size_t n = candidates_.size();
     for (const Pair& pair : pairs) {
-        const auto level = std::lower_bound(record.levels.begin(), record.levels.end(), pair.level);
-        const Value* value = nullptr;
-        if (level != record.levels.end() && *level == pair.level) {
-            const Value& v = record.at(size_t(level - record.levels.begin()), pair.candidate, n);
-            if (v.sample_weight > 0.0f) value = &v;
-        }
+        const Value* value = valueAt(record, pair);
         if (!value) {
             ++e.not_live;
             continue;
@@ -319,7 +315,7 @@ ProbeMeasure CacheProbes::measure(size_t index, size_t population_index) {
         // Only pairs live in the population's record: a level the view needs but the cache
         // lacks would be all misses.
         const std::vector<Pair> at_level = select([&](const Pair& pair) {
-            return pair.level == level && (!pair.view_level || isLive(records_[population_index], pair));
+            return pair.level == level && (!pair.view_level || valueAt(records_[population_index], pair));
         });
         m.levels.push_back(ProbeLevelError{level, errorOf(at_level, record, grey_floor)});
     }

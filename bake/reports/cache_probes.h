@@ -180,7 +180,8 @@ private:
 
     std::vector<Pair> population(const Record& record) const;
     void computeReferences(const std::vector<Pair>& pairs);
-    bool isLive(const Record& record, const Pair& pair) const;
+    /// The record's value at a pair, or nullptr when its voxel had no samples.
+    const Value* valueAt(const Record& record, const Pair& pair) const;
     static double greyOf(const Reference& reference);
     ProbeError errorOf(const std::vector<Pair>& pairs, const Record& record, double grey_floor,
                        std::vector<ProbeLeak>* leaks = nullptr) const;
@@ -189,7 +190,6 @@ private:
     const Tracer& tracer_;
     const LightSampler& lights_;
     ProbeSettings settings_;
-    HashGridParameters grid_;
     float ray_offset_ = 1e-4f;  ///< distance from which a reference ray looks at its point
     std::vector<Candidate> candidates_;
     std::vector<Reference> references_;

@@ -46,8 +46,7 @@ BakedCache::BakedCache(const CacheData& data, glm::vec3 camera_position, CacheLo
 
 void BakedCache::setUp(glm::vec3 camera_position) {
     params_ = view_.gridParameters(Float3{camera_position.x, camera_position.y, camera_position.z});
-    voxel_sizes_.resize(kHashGridLevelMax + 1);
-    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) voxel_sizes_[level] = voxelSize(level, params_);
+    keyer_ = HashGridKeyer(params_);
     for (const CacheLevel& level : view_.levels()) levels_.push_back(level.level);
 }
 
@@ -75,7 +74,7 @@ std::optional<CacheVoxel> BakedCache::find(uint64_t key) const {
 bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
     const uint64_t k = key(query.position, query.geometric_normal);
     const uint32_t wanted = decodeHashGridKey(k).level;
-    if (!cacheQueryEligible(query.segment_length, query.cone_roughness, voxel_sizes_[wanted])) {
+    if (!cacheQueryEligible(query.segment_length, query.cone_roughness, keyer_.voxelSizeAt(wanted))) {
         refused_.fetch_add(1, std::memory_order_relaxed);
         return false;
     }
@@ -88,7 +87,7 @@ bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
         for (uint32_t level : levels_) {
             const uint32_t distance = level > wanted ? level - wanted : wanted - level;
             if (distance == 0 || distance >= best_distance) continue;
-            if (std::optional<CacheVoxel> found = find(hashGridKeyAtLevel(p, n, level, params_))) {
+            if (std::optional<CacheVoxel> found = find(keyer_.keyAtLevel(p, n, level))) {
                 v = found;
                 best_distance = distance;
             }

@@ -77,7 +77,7 @@ private:
     std::vector<uint8_t> bytes_;  ///< the encoded cache the view reads (in-memory constructor)
     CacheView view_;
     HashGridParameters params_;
-    std::vector<float> voxel_sizes_;  ///< per level, for the eligibility test
+    HashGridKeyer keyer_;  ///< the grid's voxel sizes and level keys, without a logarithm per query
     CacheLookup mode_;
     std::vector<uint32_t> levels_;
     mutable std::atomic<uint64_t> refused_{0};

@@ -210,10 +210,9 @@ CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, Cac
     view.owned_ = std::move(bytes.owned);
     view.mapping_ = bytes.mapping;
     view.mapping_size_ = bytes.mapping_size;
-    view.data_ = view.mapping_ ? static_cast<const uint8_t*>(view.mapping_) : view.owned_.data();
-    if (view.owned_.empty() && !view.mapping_) view.data_ = nullptr;
-    const size_t size = bytes.size;
-    view.size_ = size;
+    view.data_ = view.mapping_ ? static_cast<const uint8_t*>(view.mapping_)
+                               : (view.owned_.empty() ? nullptr : view.owned_.data());
+    view.size_ = bytes.size;
     if (!view.data_) {
         static const uint8_t kEmpty = 0;
         view.data_ = &kEmpty;  // empty file: parse() rejects it (V1)
