@@ -10,7 +10,7 @@
 #include "sharc/coverage.h"
 #include "sharc/grid_fit.h"
 #include "sharc/hit_rate.h"
-#include "support/json_text.h"
+#include "support/json.h"
 #include "support/progress.h"
 #include "tracing/render.h"
 #include "reports/stability_report.h"
@@ -470,6 +470,13 @@ std::vector<uint32_t> levelsOf(const CacheData& data) {
     return levels;
 }
 
+/// "1,2,5"
+std::string joined(const std::vector<uint32_t>& values) {
+    std::string text;
+    for (const uint32_t v : values) text += (text.empty() ? "" : ",") + std::to_string(v);
+    return text;
+}
+
 /// "98.7% of 131072 lookups from 33 views (lowest: camera 'Main' 97.1%)"
 std::string describeHitRate(const HitRatePrediction& p) {
     char text[256];
@@ -483,19 +490,16 @@ std::string describeHitRate(const HitRatePrediction& p) {
     return result;
 }
 
-std::string hitRateJson(const HitRatePrediction& p) {
-    std::ostringstream json;
-    json << "{\"rate\": " << p.rate() << ", \"lookups\": " << p.eligible << ", \"hits\": " << p.hits
-         << ", \"views\": [";
-    for (size_t i = 0; i < p.views.size(); ++i) {
-        const ViewHitRate& v = p.views[i];
-        json << (i ? ", " : "") << "{\"name\": " << jsonString(v.view.camera.name) << ", \"declared\": "
-             << (v.view.declared ? "true" : "false") << ", \"position\": [" << v.view.camera.position.x << ", "
-             << v.view.camera.position.y << ", " << v.view.camera.position.z << "], \"rate\": " << v.rate()
-             << ", \"lookups\": " << v.eligible << "}";
+Json hitRateJson(const HitRatePrediction& p) {
+    Json views = Json::array();
+    for (const ViewHitRate& v : p.views) {
+        views.push_back({{"name", v.view.camera.name},
+                         {"declared", v.view.declared},
+                         {"position", jsonVec3(v.view.camera.position)},
+                         {"rate", jsonNumber(v.rate())},
+                         {"lookups", v.eligible}});
     }
-    json << "]}";
-    return json.str();
+    return {{"rate", jsonNumber(p.rate())}, {"lookups", p.eligible}, {"hits", p.hits}, {"views", views}};
 }
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
@@ -887,7 +891,7 @@ private:
         const CacheFileStatus status = writeCacheFile(o_.output_path, data, &message);
         if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
         live_voxels_ = data.voxels.size();
-        for (uint32_t l : levelsOf(data)) level_list_ += (level_list_.empty() ? "" : ",") + std::to_string(l);
+        written_levels_ = levelsOf(data);
         finish_seconds_ = secondsSince(finish_start);
         stability_ = makeStabilityReport(cache, baker_->counters(), scene_.bounds_min, scene_.bounds_max, levels_);
     }
@@ -912,7 +916,7 @@ private:
                     raysPerSecond(), double(c.segments) / std::max(stage.update, 1e-9));
         std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n",
                     (unsigned long long)live_voxels_, 100.0 * occupancy(), baker_->cache().capacity(),
-                    level_list_.c_str());
+                    joined(written_levels_).c_str());
         std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
                     100.0 * coverage_.unreached_area, coverage_.points);
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
@@ -955,33 +959,41 @@ private:
     void writeStatsJson() const {
         const UpdateCounters& c = baker_->counters();
         const StageSeconds& stage = baker_->seconds();
-        std::ostringstream json;
-        json << "{\n"
-             << "  \"iterations\": " << baker_->iterationsDone() << ",\n"
-             << "  \"stop_reason\": \"" << stop_reason_ << "\",\n"
-             << "  \"threads\": " << threads_ << ",\n"
-             << "  \"seconds\": {\"total\": " << secondsSince(start_) << ", \"setup\": " << setup_seconds_
-             << ", \"bake\": " << bake_seconds_ << ", \"update\": " << stage.update << ", \"commit\": " << stage.commit
-             << ", \"resolve\": " << stage.resolve << ", \"finish\": " << finish_seconds_
-             << ", \"evaluation\": " << evaluation_seconds_ << "},\n"
-             << "  \"paths\": " << c.paths << ",\n  \"segments\": " << c.segments << ",\n"
-             << "  \"shadow_rays\": " << c.shadow_rays << ",\n  \"rays_per_second\": " << raysPerSecond() << ",\n"
-             << "  \"resampled_paths\": " << c.resampled << ",\n"
-             << "  \"live_voxels\": " << live_voxels_ << ",\n  \"capacity\": " << baker_->cache().capacity() << ",\n"
-             << "  \"occupancy\": " << occupancy() << ",\n  \"levels\": [" << level_list_ << "],\n"
-             << "  \"coverage\": {\"points\": " << coverage_.points << ", \"unreached_area_fraction\": "
-             << coverage_.unreached_area << "},\n"
-             << "  \"grid\": {\"scene_scale\": " << settings_.sharc.grid.scene_scale
-             << ", \"log_base\": " << settings_.sharc.grid.logarithm_base
-             << ", \"level_bias\": " << settings_.sharc.grid.level_bias << ", \"level_bias_auto\": "
-             << (o_.level_bias == "auto" ? "true" : "false") << ", \"finest_voxel_size\": "
-             << voxelSize(kHashGridLevelMin, settings_.sharc.grid) << "},\n"
-             << "  \"view_region\": " << jsonString(settings_.view_region.describe()) << ",\n"
-             << "  \"levels_covered\": " << jsonString(grid_decision_.levelsCovered()) << ",\n"
-             << "  \"predicted_hit_rate\": " << hitRateJson(prediction_) << ",\n"
-             << "  \"stability\": " << stabilityJson(stability_) << "\n"
-             << "}\n";
-        writeTextOutput(o_.stats_json, "stats JSON", json.str());
+        const Json json = {
+            {"iterations", baker_->iterationsDone()},
+            {"stop_reason", stop_reason_},
+            {"threads", threads_},
+            {"seconds",
+             {{"total", secondsSince(start_)},
+              {"setup", setup_seconds_},
+              {"bake", bake_seconds_},
+              {"update", stage.update},
+              {"commit", stage.commit},
+              {"resolve", stage.resolve},
+              {"finish", finish_seconds_},
+              {"evaluation", evaluation_seconds_}}},
+            {"paths", c.paths},
+            {"segments", c.segments},
+            {"shadow_rays", c.shadow_rays},
+            {"rays_per_second", jsonNumber(raysPerSecond())},
+            {"resampled_paths", c.resampled},
+            {"live_voxels", live_voxels_},
+            {"capacity", baker_->cache().capacity()},
+            {"occupancy", jsonNumber(occupancy())},
+            {"levels", written_levels_},
+            {"coverage", {{"points", coverage_.points}, {"unreached_area_fraction", coverage_.unreached_area}}},
+            {"grid",
+             {{"scene_scale", settings_.sharc.grid.scene_scale},
+              {"log_base", settings_.sharc.grid.logarithm_base},
+              {"level_bias", settings_.sharc.grid.level_bias},
+              {"level_bias_auto", o_.level_bias == "auto"},
+              {"finest_voxel_size", voxelSize(kHashGridLevelMin, settings_.sharc.grid)}}},
+            {"view_region", settings_.view_region.describe()},
+            {"levels_covered", grid_decision_.levelsCovered()},
+            {"predicted_hit_rate", hitRateJson(prediction_)},
+            {"stability", stabilityJson(stability_)},
+        };
+        writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
 
     /// Warnings about what the cache lacks, then the exit code of a bake a signal stopped.
@@ -1043,7 +1055,7 @@ private:
     CoverageReport coverage_;
     HitRatePrediction prediction_;
     uint64_t live_voxels_ = 0;
-    std::string level_list_;
+    std::vector<uint32_t> written_levels_;  ///< the levels of the cache file's voxels
     StabilityReport stability_;
     double finish_seconds_ = 0.0;
 };

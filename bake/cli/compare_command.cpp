@@ -3,6 +3,7 @@
 // and resolution).
 #include "cli/command_support.h"
 #include "cli/commands.h"
+#include "support/json.h"
 #include "reports/image_error.h"
 
 #include <cstdio>
@@ -33,10 +34,11 @@ void runCompare(const CompareOptions& o) {
         throw CommandError(kExitInvalidInput, o.image_path + ": " + e.what());
     }
     if (o.json) {
-        std::printf("{\"relative_mse\": %.9g, \"mean_relative_error\": %.9g, \"relative_bias\": %.9g, "
-                    "\"non_finite_pixels\": %llu}\n",
-                    error.relative_mse, error.mean_relative_error, error.relative_bias,
-                    (unsigned long long)error.non_finite_pixels);
+        const Json json = {{"relative_mse", jsonNumber(error.relative_mse)},
+                           {"mean_relative_error", jsonNumber(error.mean_relative_error)},
+                           {"relative_bias", jsonNumber(error.relative_bias)},
+                           {"non_finite_pixels", error.non_finite_pixels}};
+        std::fputs(jsonText(json).c_str(), stdout);
     } else {
         std::printf("relative MSE %.6g, mean relative error %.4f%%, bias %+.4f%%, non-finite pixels %llu\n",
                     error.relative_mse, 100.0 * error.mean_relative_error, 100.0 * error.relative_bias,

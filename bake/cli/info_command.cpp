@@ -3,7 +3,7 @@
 // (SPEC.md §F.10 rules). Everything is read through the runtime library (CacheView).
 #include "cli/command_support.h"
 #include "cli/commands.h"
-#include "support/json_text.h"
+#include "support/json.h"
 #include "sharcbake/runtime.h"
 
 #include <cinttypes>
@@ -52,13 +52,6 @@ std::string printable(std::string_view text) {
     return out;
 }
 
-/// A JSON number; null where the value is not finite (JSON has no inf or nan).
-std::string num(double v) {
-    if (!std::isfinite(v)) return "null";
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
-    return buf;
-}
 
 CacheView openOrThrow(const std::string& path) {
     CacheView view;
@@ -126,48 +119,52 @@ void printText(const std::string& path, const CacheView& v) {
     }
 }
 
+Json vec3Json(const float v[3]) { return Json::array({jsonNumber(v[0]), jsonNumber(v[1]), jsonNumber(v[2])}); }
+Json vec3Json(const double v[3]) { return Json::array({jsonNumber(v[0]), jsonNumber(v[1]), jsonNumber(v[2])}); }
+
 void printJson(const std::string& path, const CacheView& v) {
     const HashGridParameters p = v.gridParameters();
     const CacheStats s = v.stats();
-    std::string o = "{\n";
-    o += "  \"file\": " + jsonString(path) + ",\n";
-    o += "  \"valid\": true,\n";
-    o += "  \"version\": {\"major\": " + std::to_string(v.versionMajor()) + ", \"minor\": " +
-         std::to_string(v.versionMinor()) + "},\n";
-    o += "  \"file_size\": " + std::to_string(v.fileSize()) + ",\n";
-    o += "  \"sections\": [";
-    for (size_t i = 0; i < v.sections().size(); ++i) {
-        const CacheSectionInfo& sec = v.sections()[i];
-        o += std::string(i ? ", " : "") + "{\"type\": " + jsonString(fourcc(sec.type)) + ", \"required\": " +
-             (sec.required ? "true" : "false") + ", \"known\": " + (sec.known ? "true" : "false") +
-             ", \"offset\": " + std::to_string(sec.offset) + ", \"length\": " + std::to_string(sec.length) +
-             ", \"crc32\": " + std::to_string(sec.crc32) + "}";
+    Json sections = Json::array(), levels = Json::array(), metadata = Json::object();
+    for (const CacheSectionInfo& sec : v.sections()) {
+        sections.push_back({{"type", fourcc(sec.type)},
+                            {"required", sec.required},
+                            {"known", sec.known},
+                            {"offset", sec.offset},
+                            {"length", sec.length},
+                            {"crc32", sec.crc32}});
     }
-    o += "],\n";
-    o += "  \"grid\": {\"position_bits\": 17, \"level_bits\": 9, \"normal_bits\": 3, \"bucket_size\": " +
-         std::to_string(p.bucket_size) + ", \"hash\": \"jenkins32_xor\", \"lod_policy\": \"camera_distance\", " +
-         "\"logarithm_base\": " + num(p.logarithm_base) + ", \"scene_scale\": " + num(p.scene_scale) +
-         ", \"level_bias\": " + num(p.level_bias) + ", \"bake_capacity\": " + std::to_string(v.bakeCapacity()) + "},\n";
-    o += "  \"voxels\": " + std::to_string(s.voxels) + ",\n";
-    o += "  \"bytes_per_voxel\": " + num(s.bytes_per_voxel) + ",\n";
-    o += "  \"radiance\": {\"min\": [" + num(s.radiance_min[0]) + ", " + num(s.radiance_min[1]) + ", " +
-         num(s.radiance_min[2]) + "], \"max\": [" + num(s.radiance_max[0]) + ", " + num(s.radiance_max[1]) + ", " +
-         num(s.radiance_max[2]) + "], \"mean\": [" + num(s.radiance_mean[0]) + ", " + num(s.radiance_mean[1]) +
-         ", " + num(s.radiance_mean[2]) + "]},\n";
-    o += "  \"sample_weight\": {\"min\": " + num(s.weight_min) + ", \"max\": " + num(s.weight_max) +
-         ", \"total\": " + num(s.weight_total) + "},\n";
-    o += "  \"levels\": [";
-    for (size_t i = 0; i < v.levels().size(); ++i) {
-        const CacheLevel& l = v.levels()[i];
-        o += std::string(i ? ", " : "") + "{\"level\": " + std::to_string(l.level) + ", \"voxel_size\": " +
-             num(voxelSize(l.level, p)) + ", \"voxels\": " + std::to_string(l.voxel_count) + "}";
+    for (const CacheLevel& l : v.levels()) {
+        levels.push_back({{"level", l.level}, {"voxel_size", jsonNumber(voxelSize(l.level, p))}, {"voxels", l.voxel_count}});
     }
-    o += "],\n  \"metadata\": {";
-    for (size_t i = 0; i < v.metadataCount(); ++i) {
-        o += std::string(i ? ", " : "") + jsonString(v.metadataKey(i)) + ": " + jsonString(v.metadataValue(i));
-    }
-    o += "}\n}\n";
-    std::fputs(o.c_str(), stdout);
+    for (size_t i = 0; i < v.metadataCount(); ++i) metadata[std::string(v.metadataKey(i))] = v.metadataValue(i);
+    const Json json = {
+        {"file", path},
+        {"valid", true},
+        {"version", {{"major", v.versionMajor()}, {"minor", v.versionMinor()}}},
+        {"file_size", v.fileSize()},
+        {"sections", sections},
+        {"grid",
+         {{"position_bits", 17},
+          {"level_bits", 9},
+          {"normal_bits", 3},
+          {"bucket_size", p.bucket_size},
+          {"hash", "jenkins32_xor"},
+          {"lod_policy", "camera_distance"},
+          {"logarithm_base", jsonNumber(p.logarithm_base)},
+          {"scene_scale", jsonNumber(p.scene_scale)},
+          {"level_bias", jsonNumber(p.level_bias)},
+          {"bake_capacity", v.bakeCapacity()}}},
+        {"voxels", s.voxels},
+        {"bytes_per_voxel", jsonNumber(s.bytes_per_voxel)},
+        {"radiance",
+         {{"min", vec3Json(s.radiance_min)}, {"max", vec3Json(s.radiance_max)}, {"mean", vec3Json(s.radiance_mean)}}},
+        {"sample_weight",
+         {{"min", jsonNumber(s.weight_min)}, {"max", jsonNumber(s.weight_max)}, {"total", jsonNumber(s.weight_total)}}},
+        {"levels", levels},
+        {"metadata", metadata},
+    };
+    std::fputs(jsonText(json).c_str(), stdout);
 }
 
 }  // namespace
@@ -206,11 +203,12 @@ void registerInfoCommand(CLI::App& app) {
         CacheError error;
         const CacheFileStatus status = CacheView::openFile(v->path, &view, &error);
         if (v->json) {
-            std::printf("{\"file\": %s, \"valid\": %s, \"status\": %s, \"rule\": %s, \"message\": %s}\n",
-                        jsonString(v->path).c_str(), status == CacheFileStatus::kOk ? "true" : "false",
-                        jsonString(toString(status)).c_str(),
-                        error.rule ? jsonString("V" + std::to_string(error.rule)).c_str() : "null",
-                        jsonString(error.message).c_str());
+            const Json json = {{"file", v->path},
+                               {"valid", status == CacheFileStatus::kOk},
+                               {"status", toString(status)},
+                               {"rule", error.rule ? Json("V" + std::to_string(error.rule)) : Json(nullptr)},
+                               {"message", error.message}};
+            std::fputs(jsonText(json).c_str(), stdout);
             if (status != CacheFileStatus::kOk) throw CommandError(exitCodeFor(status), error.message);
             return;
         }

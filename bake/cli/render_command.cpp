@@ -6,6 +6,7 @@
 #include "cli/commands.h"
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
+#include "support/json.h"
 #include "support/progress.h"
 #include "tracing/render.h"
 #include "support/stopwatch.h"
@@ -423,22 +424,23 @@ private:
     }
 
     void writeStatsJson() const {
-        std::ostringstream json;
-        json << "{\n  \"width\": " << width_ << ",\n  \"height\": " << height_
-             << ",\n  \"samples_per_pixel\": " << o_.spp << ",\n  \"threads\": " << threads_
-             << ",\n  \"seconds\": {\"total\": " << total_seconds_ << ", \"bvh_build\": " << build_seconds_
-             << ", \"render\": " << render_seconds_ << "},\n  \"closest_hit_rays\": " << counters_.closest_hit_rays
-             << ",\n  \"shadow_rays\": " << counters_.shadow_rays
-             << ",\n  \"rays_per_second\": " << double(rays()) / render_seconds_
-             << ",\n  \"non_finite_samples\": " << counters_.non_finite_samples;
+        Json json = {{"width", width_},
+                     {"height", height_},
+                     {"samples_per_pixel", o_.spp},
+                     {"threads", threads_},
+                     {"seconds", {{"total", total_seconds_}, {"bvh_build", build_seconds_}, {"render", render_seconds_}}},
+                     {"closest_hit_rays", counters_.closest_hit_rays.load()},
+                     {"shadow_rays", counters_.shadow_rays.load()},
+                     {"rays_per_second", jsonNumber(double(rays()) / render_seconds_)},
+                     {"non_finite_samples", counters_.non_finite_samples.load()}};
         if (cache_) {
-            json << ",\n  \"cache_hits\": " << counters_.cache_hits << ",\n  \"cache_misses\": "
-                 << counters_.cache_misses << ",\n  \"cache_refused\": " << cache_->refused()
-                 << ",\n  \"cache_hit_rate\": " << hit_rate_;
+            json["cache_hits"] = counters_.cache_hits.load();
+            json["cache_misses"] = counters_.cache_misses.load();
+            json["cache_refused"] = cache_->refused();
+            json["cache_hit_rate"] = jsonNumber(hit_rate_);
         }
-        if (o_.debug_view == "cache") json << ",\n  \"debug_missing\": " << debug_missing_.load();
-        json << "\n}\n";
-        writeTextOutput(o_.stats_json, "stats JSON", json.str());
+        if (o_.debug_view == "cache") json["debug_missing"] = debug_missing_.load();
+        writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
 
     const RenderOptions& o_;

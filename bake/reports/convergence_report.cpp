@@ -4,7 +4,7 @@
 #include "sharcbake/cache_file.h"
 
 #include "sharc/cache_query.h"
-#include "support/json_text.h"
+#include "support/json.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
 #include "support/stopwatch.h"
@@ -41,8 +41,18 @@ std::string csvNumber(std::optional<double> value) {
     return text;
 }
 
-std::string jsonNumber(std::optional<double> value) {
-    return value && std::isfinite(*value) ? csvNumber(value) : "null";
+/// `text` as a gnuplot string literal: single quotes take no escapes except a doubled quote;
+/// control characters (possible in a file name) become '?' so the script stays one line each.
+std::string gnuplotString(const std::string& text) {
+    std::string quoted = "'";
+    for (const char c : text) {
+        if (c == '\'') {
+            quoted += "''";
+        } else {
+            quoted += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
+        }
+    }
+    return quoted + "'";
 }
 
 /// Writes a finished table with the outputs' atomic, checked write (cache_file.h).
@@ -54,56 +64,52 @@ void finishWriting(const std::ostringstream& out, const std::string& path) {
     }
 }
 
-/// An ImageComparison's fields as the start of a JSON object (the caller closes it).
-std::string imageComparisonFields(const ImageComparison& e) {
-    return "{\"relative_mse\": " + jsonNumber(e.relative_mse) +
-           ", \"mean_relative_error\": " + jsonNumber(e.mean_relative_error) +
-           ", \"relative_bias\": " + jsonNumber(e.relative_bias) +
-           ", \"tile_mean_relative_error\": " + jsonNumber(e.tile_mean_relative_error) +
-           ", \"masked_mean_relative_error\": " + jsonNumber(e.masked_mean_relative_error) +
-           ", \"masked_relative_mse\": " + jsonNumber(e.masked_relative_mse) +
-           ", \"masked_pixels\": " + std::to_string(e.masked_pixels);
+Json imageComparisonJson(const ImageComparison& e) {
+    return {{"relative_mse", jsonNumber(e.relative_mse)},
+            {"mean_relative_error", jsonNumber(e.mean_relative_error)},
+            {"relative_bias", jsonNumber(e.relative_bias)},
+            {"tile_mean_relative_error", jsonNumber(e.tile_mean_relative_error)},
+            {"masked_mean_relative_error", jsonNumber(e.masked_mean_relative_error)},
+            {"masked_relative_mse", jsonNumber(e.masked_relative_mse)},
+            {"masked_pixels", e.masked_pixels}};
 }
 
-std::string probeErrorJson(const ProbeError& e) {
-    std::ostringstream json;
-    json << "{\"probes\": " << e.probes << ", \"not_live\": " << e.not_live
-         << ", \"mean_relative_error\": " << jsonNumber(e.mean_relative_error)
-         << ", \"rms_error\": " << jsonNumber(e.rmsError()) << ", \"relative_mse\": " << jsonNumber(e.relative_mse)
-         << ", \"relative_mse_ci95\": " << jsonNumber(e.relative_mse_ci)
-         << ", \"voxel_noise\": " << jsonNumber(e.relative_variance)
-         << ", \"bias_squared\": " << jsonNumber(e.biasSquared()) << ", \"bias_floor\": " << jsonNumber(e.biasFloor())
-         << ", \"relative_bias\": " << jsonNumber(e.relative_bias)
-         << ", \"relative_bias_ci95\": " << jsonNumber(e.relative_bias_ci)
-         << ", \"reference_noise\": " << jsonNumber(e.reference_noise) << ", \"leaks\": " << e.leaks
-         << ", \"worst_leak\": " << jsonNumber(e.worst_leak) << "}";
-    return json.str();
+Json probeErrorJson(const ProbeError& e) {
+    return {{"probes", e.probes},
+            {"not_live", e.not_live},
+            {"mean_relative_error", jsonNumber(e.mean_relative_error)},
+            {"rms_error", jsonNumber(e.rmsError())},
+            {"relative_mse", jsonNumber(e.relative_mse)},
+            {"relative_mse_ci95", jsonNumber(e.relative_mse_ci)},
+            {"voxel_noise", jsonNumber(e.relative_variance)},
+            {"bias_squared", jsonNumber(e.biasSquared())},
+            {"bias_floor", jsonNumber(e.biasFloor())},
+            {"relative_bias", jsonNumber(e.relative_bias)},
+            {"relative_bias_ci95", jsonNumber(e.relative_bias_ci)},
+            {"reference_noise", jsonNumber(e.reference_noise)},
+            {"leaks", e.leaks},
+            {"worst_leak", jsonNumber(e.worst_leak)}};
 }
 
-std::string probeMeasureJson(const ProbeMeasure& m) {
-    std::string json = "{\"view\": " + probeErrorJson(m.view) + ", \"levels\": [";
-    for (size_t i = 0; i < m.levels.size(); ++i) {
-        json += std::string(i ? ", " : "") + "{\"level\": " + std::to_string(m.levels[i].level) +
-                ", \"error\": " + probeErrorJson(m.levels[i].error) + "}";
+Json probeMeasureJson(const ProbeMeasure& m) {
+    Json levels = Json::array(), regions = Json::array(), leaks = Json::array();
+    for (const ProbeLevelError& level : m.levels) {
+        levels.push_back({{"level", level.level}, {"error", probeErrorJson(level.error)}});
     }
-    json += "], \"regions\": [";
-    for (size_t i = 0; i < m.regions.size(); ++i) {
-        json += std::string(i ? ", " : "") + "{\"name\": " + jsonString(m.regions[i].name) +
-                ", \"stands_out\": " + (m.regions[i].standsOut() ? "true" : "false") +
-                ", \"error\": " + probeErrorJson(m.regions[i].error) + "}";
+    for (const ProbeRegionError& region : m.regions) {
+        regions.push_back(
+            {{"name", region.name}, {"stands_out", region.standsOut()}, {"error", probeErrorJson(region.error)}});
     }
-    json += "], \"worst_leaks\": [";
-    for (size_t i = 0; i < m.worst_leaks.size(); ++i) {
-        const ProbeLeak& leak = m.worst_leaks[i];
-        const auto vec3 = [](glm::vec3 v) {
-            return "[" + jsonNumber(v.x) + ", " + jsonNumber(v.y) + ", " + jsonNumber(v.z) + "]";
-        };
-        json += std::string(i ? ", " : "") + "{\"position\": " + vec3(leak.position) + ", \"normal\": " +
-                vec3(leak.normal) + ", \"level\": " + std::to_string(leak.level) + ", \"material\": " +
-                jsonString(leak.material) + ", \"cache\": " + vec3(leak.cache) + ", \"reference\": " +
-                vec3(leak.reference) + ", \"relative_error\": " + jsonNumber(leak.relative_error) + "}";
+    for (const ProbeLeak& leak : m.worst_leaks) {
+        leaks.push_back({{"position", jsonVec3(leak.position)},
+                         {"normal", jsonVec3(leak.normal)},
+                         {"level", leak.level},
+                         {"material", leak.material},
+                         {"cache", jsonVec3(leak.cache)},
+                         {"reference", jsonVec3(leak.reference)},
+                         {"relative_error", jsonNumber(leak.relative_error)}});
     }
-    return json + "]}";
+    return {{"view", probeErrorJson(m.view)}, {"levels", levels}, {"regions", regions}, {"worst_leaks", leaks}};
 }
 
 }  // namespace
@@ -405,67 +411,68 @@ void writePlainPathTracingCsv(const std::string& dir, const ConvergenceReport& r
 
 }
 
+Json convergenceRowJson(const ConvergenceRow& r) {
+    Json row = {{"iteration", r.iteration},
+                {"bake_seconds", jsonNumber(r.bake_seconds)},
+                {"render_seconds", jsonNumber(r.render_seconds)},
+                {"total_seconds", jsonNumber(r.bake_seconds + r.render_seconds)},
+                {"rays", r.rays},
+                {"live_voxels", r.live_voxels}};
+    if (r.voxel && r.voxel->voxels > 0) {
+        row["voxel"] = {{"voxels", r.voxel->voxels},
+                        {"mean_relative_error", jsonNumber(r.voxel->mean_relative)},
+                        {"rms_relative_error", jsonNumber(r.voxel->rms_relative)},
+                        {"max_relative_error", jsonNumber(r.voxel->max_relative)},
+                        {"within_1_percent", jsonNumber(r.voxel->within_1_percent)}};
+    }
+    if (r.image) {
+        Json image = imageComparisonJson(*r.image);
+        if (r.image_split) {
+            image["render_noise_relative_mse"] = jsonNumber(r.image_split->noise);
+            image["cache_relative_mse"] = jsonNumber(r.image_split->rest);
+            image["cache_relative_mse_standard_error"] = jsonNumber(r.image_split->rest_standard_error);
+        }
+        row["image"] = image;
+    }
+    if (r.probes && r.probes->view.probes > 0) row["probes"] = probeMeasureJson(*r.probes);
+    return row;
+}
+
 void writeConvergenceJson(const std::string& dir, const ConvergenceReport& report) {
-    const std::string json_path = dir + "/convergence.json";
-    std::ostringstream json;
-    json << "{\n  \"scene\": " << jsonString(report.scene) << ",\n"
-         << "  \"reference\": " << jsonString(report.reference) << ",\n"
-         << "  \"view\": {\"camera\": " << jsonString(report.view.camera.name) << ", \"width\": " << report.view.width
-         << ", \"height\": " << report.view.height << ", \"samples_per_pixel\": " << report.view.samples_per_pixel
-         << "},\n"
-         << "  \"evaluation_seconds\": " << jsonNumber(report.evaluation_seconds) << ",\n"
-         << "  \"target_error\": " << jsonNumber(report.target_error) << ",\n"
-         << "  \"probe_floor\": "
-         << (report.probe_floor
-                 ? "{\"bias_floor\": " + jsonNumber(report.probe_floor->floor()) + ", \"floor_squared\": " +
-                       jsonNumber(report.probe_floor->floor_squared) + ", \"floor_squared_ci95\": " +
-                       jsonNumber(report.probe_floor->floor_squared_ci) + ", \"noise_scale\": " +
-                       jsonNumber(report.probe_floor->noise_scale) + ", \"checkpoints\": " +
-                       std::to_string(report.probe_floor->checkpoints) + "}"
-                 : std::string("null"))
-         << ",\n"
-         << "  \"reference_floor\": "
-         << (report.reference_floor
-                 ? "{\"relative_mse\": " + jsonNumber(report.reference_floor->rest) + ", \"standard_error\": " +
-                       jsonNumber(report.reference_floor->rest_standard_error) + "}"
-                 : std::string("null"))
-         << ",\n"
-         << "  \"checkpoints\": [";
-    for (size_t i = 0; i < report.rows.size(); ++i) {
-        const ConvergenceRow& r = report.rows[i];
-        json << (i ? "," : "") << "\n    {\"iteration\": " << r.iteration
-             << ", \"bake_seconds\": " << jsonNumber(r.bake_seconds)
-             << ", \"render_seconds\": " << jsonNumber(r.render_seconds)
-             << ", \"total_seconds\": " << jsonNumber(r.bake_seconds + r.render_seconds) << ", \"rays\": " << r.rays
-             << ", \"live_voxels\": " << r.live_voxels;
-        if (r.voxel && r.voxel->voxels > 0) {
-            json << ", \"voxel\": {\"voxels\": " << r.voxel->voxels
-                 << ", \"mean_relative_error\": " << jsonNumber(r.voxel->mean_relative)
-                 << ", \"rms_relative_error\": " << jsonNumber(r.voxel->rms_relative)
-                 << ", \"max_relative_error\": " << jsonNumber(r.voxel->max_relative)
-                 << ", \"within_1_percent\": " << jsonNumber(r.voxel->within_1_percent) << "}";
-        }
-        if (r.image) {
-            json << ", \"image\": " << imageComparisonFields(*r.image);
-            if (r.image_split) {
-                json << ", \"render_noise_relative_mse\": " << jsonNumber(r.image_split->noise)
-                     << ", \"cache_relative_mse\": " << jsonNumber(r.image_split->rest)
-                     << ", \"cache_relative_mse_standard_error\": " << jsonNumber(r.image_split->rest_standard_error);
-            }
-            json << "}";
-        }
-        if (r.probes && r.probes->view.probes > 0) json << ", \"probes\": " << probeMeasureJson(*r.probes);
-        json << "}";
+    Json json = {{"scene", report.scene},
+                 {"reference", report.reference},
+                 {"view",
+                  {{"camera", report.view.camera.name},
+                   {"width", report.view.width},
+                   {"height", report.view.height},
+                   {"samples_per_pixel", report.view.samples_per_pixel}}},
+                 {"evaluation_seconds", jsonNumber(report.evaluation_seconds)},
+                 {"target_error", jsonNumber(report.target_error)},
+                 {"probe_floor", nullptr},
+                 {"reference_floor", nullptr},
+                 {"checkpoints", Json::array()},
+                 {"plain_path_tracing", Json::array()}};
+    if (const auto& fit = report.probe_floor) {
+        json["probe_floor"] = {{"bias_floor", jsonNumber(fit->floor())},
+                               {"floor_squared", jsonNumber(fit->floor_squared)},
+                               {"floor_squared_ci95", jsonNumber(fit->floor_squared_ci)},
+                               {"noise_scale", jsonNumber(fit->noise_scale)},
+                               {"checkpoints", fit->checkpoints}};
     }
-    json << "\n  ],\n  \"plain_path_tracing\": [";
-    for (size_t i = 0; i < report.plain.size(); ++i) {
-        const PlainPathTracingRow& p = report.plain[i];
-        json << (i ? "," : "") << "\n    {\"samples_per_pixel\": " << p.samples_per_pixel
-             << ", \"seconds\": " << jsonNumber(p.seconds) << ", \"rays\": " << p.rays
-             << ", \"image\": " << imageComparisonFields(p.image) << "}}";
+    if (const auto& floor = report.reference_floor) {
+        json["reference_floor"] = {{"relative_mse", jsonNumber(floor->rest)},
+                                   {"standard_error", jsonNumber(floor->rest_standard_error)}};
     }
-    json << "\n  ]\n}\n";
-    finishWriting(json, json_path);
+    for (const ConvergenceRow& r : report.rows) json["checkpoints"].push_back(convergenceRowJson(r));
+    for (const PlainPathTracingRow& p : report.plain) {
+        json["plain_path_tracing"].push_back({{"samples_per_pixel", p.samples_per_pixel},
+                                              {"seconds", jsonNumber(p.seconds)},
+                                              {"rays", p.rays},
+                                              {"image", imageComparisonJson(p.image)}});
+    }
+    std::ostringstream text;
+    text << jsonText(json);
+    finishWriting(text, dir + "/convergence.json");
 }
 
 }  // namespace
@@ -579,7 +586,7 @@ std::string plotConvergence(const std::string& dir, const ConvergenceReport& rep
               "set key top right box opaque\n"
               "set format y '%g'\n"
            << "set multiplot layout 1," << panels << " title "
-           << jsonString("Error against time: " + report.scene) << " noenhanced\n";
+           << gnuplotString("Error against time: " + report.scene) << " noenhanced\n";
         std::vector<std::string> curves;
         if (has_probes) writeProbePanel(gp, report);
         if (has_image || has_voxel) {

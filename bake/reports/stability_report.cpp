@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 namespace sharcbake {
 namespace {
@@ -153,36 +152,35 @@ void printStabilitySection(std::FILE* out, const StabilityReport& r) {
     if (r.warnings.empty()) std::fprintf(out, "  no problems found\n");
 }
 
-std::string stabilityJson(const StabilityReport& r) {
-    std::ostringstream json;
-    json.precision(9);
-    json << "{\"deposits\": " << r.deposits << ", \"deposited_energy\": " << r.deposited_energy
-         << ", \"radiance_scale\": " << r.radiance_scale << ", \"clamped_deposits\": " << r.clamped_deposits
-         << ", \"clamped_energy\": " << r.clamped_energy << ", \"clamped_energy_share\": " << r.share(r.clamped_energy)
-         << ", \"saturated_sums\": " << r.saturated_sums << ", \"failed_inserts\": " << r.failed_inserts
-         << ", \"failed_insert_energy\": " << r.failed_insert_energy
-         << ", \"failed_insert_energy_share\": " << r.share(r.failed_insert_energy)
-         << ", \"non_finite_dropped\": " << r.non_finite_dropped << ", \"negative_clamped\": " << r.negative_clamped
-         << ", \"resample_emission_clamped\": " << r.resample_emission_clamped
-         << ", \"orphan_sums\": " << r.orphan_sums << ", \"capacity\": " << r.capacity
-         << ", \"occupied_slots\": " << r.occupied_slots
-         << ", \"capacity_power_of_two\": " << (r.capacity_power_of_two ? "true" : "false")
-         << ", \"far_corner_distance\": " << r.far_corner_distance << ", \"float_spacing\": " << r.float_spacing
-         << ", \"ray_offset\": " << r.ray_offset
-         << ", \"finest_level\": " << r.finest_level << ", \"finest_voxel_size\": " << r.finest_voxel_size
-         << ", \"float_spacing_share_of_finest_voxel\": " << r.precisionShare()
-         << ", \"max_grid_coordinate\": " << r.max_grid_coordinate
-         << ", \"grid_coordinates_wrap\": " << (r.grid_coordinates_wrap ? "true" : "false") << ", \"warnings\": [";
-    for (size_t i = 0; i < r.warnings.size(); ++i) {
-        json << (i ? ", " : "") << '"';
-        for (char c : r.warnings[i]) {
-            if (c == '"' || c == '\\') json << '\\';
-            json << c;
-        }
-        json << '"';
-    }
-    json << "]}";
-    return json.str();
+Json stabilityJson(const StabilityReport& r) {
+    return {
+        {"deposits", r.deposits},
+        {"deposited_energy", r.deposited_energy},
+        {"radiance_scale", r.radiance_scale},
+        {"clamped_deposits", r.clamped_deposits},
+        {"clamped_energy", r.clamped_energy},
+        {"clamped_energy_share", r.share(r.clamped_energy)},
+        {"saturated_sums", r.saturated_sums},
+        {"failed_inserts", r.failed_inserts},
+        {"failed_insert_energy", r.failed_insert_energy},
+        {"failed_insert_energy_share", r.share(r.failed_insert_energy)},
+        {"non_finite_dropped", r.non_finite_dropped},
+        {"negative_clamped", r.negative_clamped},
+        {"resample_emission_clamped", r.resample_emission_clamped},
+        {"orphan_sums", r.orphan_sums},
+        {"capacity", r.capacity},
+        {"occupied_slots", r.occupied_slots},
+        {"capacity_power_of_two", r.capacity_power_of_two},
+        {"far_corner_distance", r.far_corner_distance},
+        {"float_spacing", r.float_spacing},
+        {"ray_offset", r.ray_offset},
+        {"finest_level", r.finest_level},
+        {"finest_voxel_size", r.finest_voxel_size},
+        {"float_spacing_share_of_finest_voxel", r.precisionShare()},
+        {"max_grid_coordinate", r.max_grid_coordinate},
+        {"grid_coordinates_wrap", r.grid_coordinates_wrap},
+        {"warnings", r.warnings},
+    };
 }
 
 }  // namespace sharcbake

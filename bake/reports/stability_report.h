@@ -9,6 +9,7 @@
 
 #include "sharc/sharc_cache.h"
 #include "sharc/sharc_update.h"
+#include "support/json.h"
 
 #include <glm/glm.hpp>
 
@@ -72,7 +73,7 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
 /// The "Stability" section of the bake summary: one line per group, then each warning.
 void printStabilitySection(std::FILE* out, const StabilityReport& report);
 
-/// The "stability" object of --stats-json (a JSON object, no trailing newline).
-std::string stabilityJson(const StabilityReport& report);
+/// The "stability" object of --stats-json.
+Json stabilityJson(const StabilityReport& report);
 
 }  // namespace sharcbake
