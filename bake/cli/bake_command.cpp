@@ -80,6 +80,37 @@ struct BakeOptions {
     double target_error = 0.0;
 };
 
+/// How the roaming camera is made (--camera-source, --camera-path, --explore-points,
+/// --iterations-per-leg).
+struct CameraRequest {
+    CameraPathSource source = CameraPathSource::Explore;
+    std::string path_file;  ///< waypoints; when set it overrides `source`
+    uint32_t explore_points = 64;
+    uint32_t iterations_per_leg = 8;
+
+    /// "explore||64|8": what a resumed bake must ask for again.
+    std::string describe() const {
+        return std::string(toString(source)) + "|" + path_file + "|" + std::to_string(explore_points) + "|" +
+               std::to_string(iterations_per_leg);
+    }
+};
+
+/// The bake the command line asks for, parsed and checked once (bakeJobFromOptions). The cache's
+/// metadata, the checkpoint's settings and the stats are derived from this, never from the
+/// option strings, so each value has one owner.
+struct BakeJob {
+    std::string scene_path;
+    SkyOptions sky;
+    /// What the Baker runs. The level bias (when auto) and the capacity (when auto) are final
+    /// once the scene is loaded (decideGrid, chooseAutoCapacity).
+    BakeSettings settings;
+    CameraRequest camera;
+    bool level_bias_auto = true;
+    bool scene_scale_auto = true;
+    bool capacity_auto = false;
+    uint64_t voxel_budget = kDefaultVoxelBudget;  ///< what an auto level bias fits to
+};
+
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
 /// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
 /// second signal aborts promptly.
@@ -175,32 +206,32 @@ void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
 }
 
 /// The roaming camera the options ask for.
-CameraPath makeCameraPath(const BakeOptions& o, const Scene& scene, const Tracer& tracer, std::string& description) {
+CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& tracer, std::string& description) {
     const float diagonal = glm::length(scene.bounds_max - scene.bounds_min);
-    if (!o.camera_path.empty()) {
+    if (!job.camera.path_file.empty()) {
         std::vector<CameraPose> poses;
         try {
-            poses = readCameraPathFile(o.camera_path);
+            poses = readCameraPathFile(job.camera.path_file);
         } catch (const CameraPathError& e) {
             throw CommandError(kExitInvalidInput, e.what());
         }
-        description = "path file " + o.camera_path + " (" + std::to_string(poses.size()) + " waypoints)";
-        return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
+        description = "path file " + job.camera.path_file + " (" + std::to_string(poses.size()) + " waypoints)";
+        return CameraPath(std::move(poses), false, job.camera.iterations_per_leg, 0.002f * diagonal, job.settings.seed);
     }
-    if (o.camera_source == CameraPathSource::GltfCameras) {
+    if (job.camera.source == CameraPathSource::GltfCameras) {
         if (scene.cameras.empty()) {
-            throw CommandError(kExitInvalidInput, o.scene_path + ": --camera-source gltf, but the scene has no camera");
+            throw CommandError(kExitInvalidInput, job.scene_path + ": --camera-source gltf, but the scene has no camera");
         }
         std::vector<CameraPose> poses;
         for (const Camera& c : scene.cameras) poses.push_back(CameraPose{c.position, c.forward, c.up, c.yfov});
         description = "glTF cameras (" + std::to_string(poses.size()) + " waypoints)";
-        return CameraPath(std::move(poses), false, o.iterations_per_leg, 0.002f * diagonal, o.seed);
+        return CameraPath(std::move(poses), false, job.camera.iterations_per_leg, 0.002f * diagonal, job.settings.seed);
     }
     ExplorationResult explored;
-    std::optional<CameraPath> path = exploringCameraPath(tracer, scene, o.explore_points, o.seed, &explored);
+    std::optional<CameraPath> path = exploringCameraPath(tracer, scene, job.camera.explore_points, job.settings.seed, &explored);
     if (!path) {
         throw CommandError(kExitInvalidInput,
-                           o.scene_path + ": found no free space to place the camera in (tried " +
+                           job.scene_path + ": found no free space to place the camera in (tried " +
                                std::to_string(explored.candidates) +
                                " points); give a --camera-path or --camera-source gltf");
     }
@@ -461,6 +492,23 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
     return settings;
 }
 
+/// Everything the bake command does, from its options.
+BakeJob bakeJobFromOptions(const BakeOptions& o) {
+    BakeJob job;
+    job.scene_path = o.scene_path;
+    job.sky = o.sky;
+    job.settings = settingsFromOptions(o);
+    job.camera.source = o.camera_source;
+    job.camera.path_file = o.camera_path;
+    job.camera.explore_points = o.explore_points;
+    job.camera.iterations_per_leg = o.iterations_per_leg;
+    job.level_bias_auto = o.level_bias == "auto";
+    job.scene_scale_auto = o.scene_scale == "auto";
+    job.capacity_auto = o.capacity == "auto";
+    job.voxel_budget = o.voxel_budget;
+    return job;
+}
+
 /// The levels of a cache's voxels, ascending.
 std::vector<uint32_t> levelsOf(const CacheData& data) {
     std::vector<uint32_t> levels;
@@ -536,27 +584,28 @@ struct GridDecision {
 
 /// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
 /// or checks the given one against the scene.
-GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& settings) {
+GridDecision decideGrid(BakeJob& job, const Scene& scene) {
+    BakeSettings& settings = job.settings;
     ViewRegion& region = settings.view_region;
     if (region.kind == ViewRegion::Kind::Points && region.source == "gltf") {
         if (scene.cameras.empty()) {
-            throw CommandError(kExitInvalidInput, o.scene_path + ": --view-region gltf, but the scene has no camera");
+            throw CommandError(kExitInvalidInput, job.scene_path + ": --view-region gltf, but the scene has no camera");
         }
         for (const Camera& c : scene.cameras) region.points.push_back(c.position);
         region.source = "the glTF cameras";
     } else if (region.kind == ViewRegion::Kind::Points && region.source == "path") {
-        if (o.camera_path.empty()) throw CommandError(kExitUsage, "--view-region path needs --camera-path FILE");
+        if (job.camera.path_file.empty()) throw CommandError(kExitUsage, "--view-region path needs --camera-path FILE");
         try {
-            for (const CameraPose& pose : readCameraPathFile(o.camera_path)) region.points.push_back(pose.position);
+            for (const CameraPose& pose : readCameraPathFile(job.camera.path_file)) region.points.push_back(pose.position);
         } catch (const CameraPathError& e) {
             throw CommandError(kExitInvalidInput, e.what());
         }
-        region.source = "waypoints of " + o.camera_path;
+        region.source = "waypoints of " + job.camera.path_file;
     }
     GridDecision decision;
     HashGridParameters& grid = settings.sharc.grid;
-    if (o.level_bias == "auto") {
-        const GridFit fit = fitLevelBias(scene, grid, o.voxel_budget);
+    if (job.level_bias_auto) {
+        const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget);
         grid.level_bias = fit.level_bias;
         decision.choice = "auto, " + fit.reason;
     } else {
@@ -578,8 +627,8 @@ GridDecision decideGrid(const BakeOptions& o, const Scene& scene, BakeSettings& 
                       std::pow(double(grid.logarithm_base), double(decision.finest_level) - double(grid.level_bias)));
         decision.misses = text;
     }
-    if (o.level_bias != "auto") decision.warnings = checkGridForScene(scene, grid, decision.finest_level, o.voxel_budget);
-    if (o.scene_scale != "auto") {
+    if (!job.level_bias_auto) decision.warnings = checkGridForScene(scene, grid, decision.finest_level, job.voxel_budget);
+    if (!job.scene_scale_auto) {
         const std::string warning = checkSceneScale(grid.scene_scale);
         if (!warning.empty()) decision.warnings.push_back(warning);
     }
@@ -598,25 +647,25 @@ struct BakeOutcome {
 /// The cache file's metadata: the bake's settings, and with `outcome` what it did. Without one
 /// (at the start, for the checkpoint's settings) the iterations are empty and the capacity is
 /// the starting one.
-std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions& o, const Scene& scene,
-                                                              const LightSampler& lights,
-                                                              const BakeSettings& settings, double radiance_scale,
+std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job, const Scene& scene,
+                                                              const LightSampler& lights, double radiance_scale,
                                                               const std::string& camera_description,
                                                               const std::string& capacity_choice,
                                                               const std::string& grid_choice,
                                                               const std::string& levels_covered,
                                                               std::optional<BakeOutcome> outcome = std::nullopt) {
+    const BakeSettings& settings = job.settings;
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
-        {"scene", o.scene_path},
+        {"scene", job.scene_path},
         {"scene_hash", sceneContentHash(scene.source_files)},
-        {"sky", skyDescription(o.sky)},
+        {"sky", skyDescription(job.sky)},
         {"iterations", outcome ? std::to_string(outcome->iterations) : ""},
-        {"seed", std::to_string(o.seed)},
+        {"seed", std::to_string(settings.seed)},
         {"history", settings.sharc.history.describe()},
-        {"resolution", o.resolution},
-        {"update_stride", std::to_string(o.update_stride)},
-        {"max_bounces", std::to_string(o.max_bounces)},
+        {"resolution", std::to_string(settings.width) + "x" + std::to_string(settings.height)},
+        {"update_stride", std::to_string(settings.update_stride)},
+        {"max_bounces", std::to_string(settings.path.max_bounces)},
         {"camera", camera_description},
         {"radiance_scale", std::to_string(radiance_scale)},
         {"scene_scale", std::to_string(settings.sharc.grid.scene_scale)},
@@ -629,7 +678,9 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeOptions&
         {"left_out", workLeftOut(scene, lights)},
     };
     if (!capacity_choice.empty()) metadata.emplace_back("capacity_choice", capacity_choice);
-    if (settings.shard_count > 1) metadata.emplace_back("shard", o.shard);
+    if (settings.shard_count > 1) {
+        metadata.emplace_back("shard", std::to_string(settings.shard_index) + "/" + std::to_string(settings.shard_count));
+    }
     return metadata;
 }
 
@@ -656,15 +707,15 @@ std::optional<std::pair<uint32_t, std::string>> autoCapacityOfCheckpoint(const s
 /// and the iteration count, plus the options that change the work but are not recorded in the
 /// cache.
 BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::string>>& metadata,
-                                const BakeOptions& o) {
+                                const BakeJob& job) {
     BakeSettingsText settings;
     for (const auto& entry : metadata) {
-        if (entry.first != "scene" && entry.first != "iterations") settings.push_back(entry);
+        // The shard is added below for every bake; the metadata names it only for shards.
+        if (entry.first != "scene" && entry.first != "iterations" && entry.first != "shard") settings.push_back(entry);
     }
-    settings.emplace_back("shard", o.shard);
-    settings.emplace_back("camera_options", std::string(toString(o.camera_source)) + "|" + o.camera_path + "|" +
-                                                std::to_string(o.explore_points) + "|" +
-                                                std::to_string(o.iterations_per_leg));
+    settings.emplace_back("shard", std::to_string(job.settings.shard_index) + "/" +
+                                       std::to_string(job.settings.shard_count));
+    settings.emplace_back("camera_options", job.camera.describe());
     return settings;
 }
 
@@ -677,7 +728,8 @@ public:
         : o_(o),
           threads_(o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency()),
           checkpoint_path_(!o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path),
-          report_csv_(o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv") {}
+          report_csv_(o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv"),
+          job_(bakeJobFromOptions(o)) {}
 
     void run() {
         tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
@@ -695,7 +747,7 @@ public:
 private:
     /// No output may be an input or another output; --resume F keeps checkpointing into F.
     void checkOutputs(const std::vector<std::string>& more_inputs) const {
-        std::vector<std::string> others = {o_.scene_path, o_.resume_path, o_.sky.exr_path};
+        std::vector<std::string> others = {job_.scene_path, o_.resume_path, job_.sky.exr_path};
         others.insert(others.end(), more_inputs.begin(), more_inputs.end());
         checkOutputPath(o_.output_path, "cache", others);
         others.push_back(o_.output_path);
@@ -723,10 +775,9 @@ private:
     }
 
     void setUp() {
-        settings_ = settingsFromOptions(o_);
-        scene_ = loadSceneForCommand(o_.scene_path, o_.sky, o_.quiet, o_.limits);
+        scene_ = loadSceneForCommand(job_.scene_path, job_.sky, o_.quiet, o_.limits);
         checkOutputs(scene_.source_files);  // the buffers and images the scene read
-        if (scene_.empty()) throw CommandError(kExitInvalidInput, o_.scene_path + ": the scene has no triangles to bake");
+        if (scene_.empty()) throw CommandError(kExitInvalidInput, job_.scene_path + ": the scene has no triangles to bake");
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);
         lights_.emplace(scene_);
@@ -734,28 +785,28 @@ private:
             std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
                                  "the cache will be black\n");
         }
-        grid_decision_ = decideGrid(o_, scene_, settings_);
+        grid_decision_ = decideGrid(job_, scene_);
         for (const std::string& warning : grid_decision_.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
-        camera_path_.emplace(makeCameraPath(o_, scene_, *tracer_, camera_description_));
+        camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
         if (autoCapacity()) chooseAutoCapacity();
-        baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, settings_,
+        baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
                                          SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
-        resume_settings_ = resumeSettings(metadata(std::nullopt), o_);
+        resume_settings_ = resumeSettings(metadata(std::nullopt), job_);
         if (!o_.resume_path.empty()) {
             checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_); });
         }
         first_iteration_ = baker_->iterationsDone();
-        report_.scene = o_.scene_path;
+        report_.scene = job_.scene_path;
         if (o_.target_error > 0.0) report_.target_error = o_.target_error;
         evaluator_ = makeEvaluator(o_, scene_, *tracer_, *lights_, report_.reference);
         if (evaluator_) report_.view = evaluator_->view();
         setup_seconds_ = secondsSince(setup_start);
     }
 
-    bool autoCapacity() const { return o_.capacity == "auto"; }
+    bool autoCapacity() const { return job_.capacity_auto; }
 
     std::vector<std::pair<std::string, std::string>> metadata(std::optional<BakeOutcome> outcome) const {
-        return bakeMetadata(o_, scene_, *lights_, settings_, baker_->cache().radianceScale(), camera_description_,
+        return bakeMetadata(job_, scene_, *lights_, baker_->cache().radianceScale(), camera_description_,
                             capacity_choice_text_, grid_decision_.choice, grid_decision_.levelsCovered(), outcome);
     }
 
@@ -765,33 +816,33 @@ private:
             capacity_choice_.capacity = resumed->first;
             capacity_choice_text_ = resumed->second;
         } else {
-            capacity_choice_ = chooseCapacity(*tracer_, *lights_, *camera_path_, settings_, o_.iterations);
+            capacity_choice_ = chooseCapacity(*tracer_, *lights_, *camera_path_, job_.settings, o_.iterations);
             capacity_choice_text_ = capacity_choice_.describe();
         }
-        settings_.sharc.grid.capacity = capacity_choice_.capacity;
-        settings_.sharc.grow_when_loaded = true;
+        job_.settings.sharc.grid.capacity = capacity_choice_.capacity;
+        job_.settings.sharc.grow_when_loaded = true;
     }
 
     void printPlan() const {
-        if (settings_.shard_count > 1) {
-            std::printf("Shard %u of %u: iterations k*%u + %u of the unsharded bake\n", settings_.shard_index,
-                        settings_.shard_count, settings_.shard_count, settings_.shard_index);
+        if (job_.settings.shard_count > 1) {
+            std::printf("Shard %u of %u: iterations k*%u + %u of the unsharded bake\n", job_.settings.shard_index,
+                        job_.settings.shard_count, job_.settings.shard_count, job_.settings.shard_index);
         }
         if (!o_.resume_path.empty()) {
             std::printf("Resumed from %s after %u iterations\n", o_.resume_path.c_str(), first_iteration_);
         }
         std::printf("Camera: %s\n", camera_description_.c_str());
-        std::printf("Grid: scene scale %g, log base %g, %s\n", double(settings_.sharc.grid.scene_scale),
-                    double(settings_.sharc.grid.logarithm_base), grid_decision_.choice.c_str());
-        std::printf("Views: %s; levels %s%s\n", settings_.view_region.describe().c_str(),
+        std::printf("Grid: scene scale %g, log base %g, %s\n", double(job_.settings.sharc.grid.scene_scale),
+                    double(job_.settings.sharc.grid.logarithm_base), grid_decision_.choice.c_str());
+        std::printf("Views: %s; levels %s%s\n", job_.settings.view_region.describe().c_str(),
                     grid_decision_.levelsCovered().c_str(), grid_decision_.misses.c_str());
         if (autoCapacity()) {
             std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text_.c_str(), capacity_choice_.seconds);
         }
         std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
-                    baker_->pathsPerIteration(), settings_.width, settings_.height, settings_.update_stride,
-                    settings_.sharc.grid.capacity, settings_.sharc.history.describe().c_str(), threads_);
+                    baker_->pathsPerIteration(), job_.settings.width, job_.settings.height, job_.settings.update_stride,
+                    job_.settings.sharc.grid.capacity, job_.settings.sharc.history.describe().c_str(), threads_);
         std::fflush(stdout);
     }
 
@@ -882,8 +933,8 @@ private:
         coverage_ = measureCoverage(scene_, cache, levels_, o_.coverage_points);
         CacheData data = toCacheData(cache);
         // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
-        prediction_ = predictHitRate(*tracer_, data, settings_.view_region,
-                                     predictionViews(*tracer_, settings_.view_region, o_.prediction_views, o_.seed));
+        prediction_ = predictHitRate(*tracer_, data, job_.settings.view_region,
+                                     predictionViews(*tracer_, job_.settings.view_region, o_.prediction_views, job_.settings.seed));
         data.metadata = metadata(BakeOutcome{baker_->iterationsDone(), cache.capacity()});
         data.metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction_));
         data.metadata.emplace_back("stop_reason", stop_reason_);
@@ -983,12 +1034,12 @@ private:
             {"levels", written_levels_},
             {"coverage", {{"points", coverage_.points}, {"unreached_area_fraction", coverage_.unreached_area}}},
             {"grid",
-             {{"scene_scale", settings_.sharc.grid.scene_scale},
-              {"log_base", settings_.sharc.grid.logarithm_base},
-              {"level_bias", settings_.sharc.grid.level_bias},
-              {"level_bias_auto", o_.level_bias == "auto"},
-              {"finest_voxel_size", voxelSize(kHashGridLevelMin, settings_.sharc.grid)}}},
-            {"view_region", settings_.view_region.describe()},
+             {{"scene_scale", job_.settings.sharc.grid.scene_scale},
+              {"log_base", job_.settings.sharc.grid.logarithm_base},
+              {"level_bias", job_.settings.sharc.grid.level_bias},
+              {"level_bias_auto", job_.level_bias_auto},
+              {"finest_voxel_size", voxelSize(kHashGridLevelMin, job_.settings.sharc.grid)}}},
+            {"view_region", job_.settings.view_region.describe()},
             {"levels_covered", grid_decision_.levelsCovered()},
             {"predicted_hit_rate", hitRateJson(prediction_)},
             {"stability", stabilityJson(stability_)},
@@ -1013,7 +1064,7 @@ private:
             std::fprintf(stderr,
                          "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no "
                          "slot within an iteration; bake with a fixed --capacity %llu\n",
-                         settings_.sharc.grid.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts,
+                         job_.settings.sharc.grid.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts,
                          2ull * cache.capacity());
         }
         if (g_stop_signal == SIGTERM) {
@@ -1030,7 +1081,7 @@ private:
     const std::string report_csv_;
     std::optional<CheckpointLock> checkpoint_lock_;
 
-    BakeSettings settings_;
+    BakeJob job_;
     Scene scene_;
     std::optional<Tracer> tracer_;
     std::optional<LightSampler> lights_;

@@ -78,6 +78,12 @@ expect 1 "bad shard syntax" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --sh
 for i in 0 1 2 3; do
     expect 0 "shard $i/4" "$sharcbake" bake "$furnace" -o "$work/shard$i.sharc" --iterations 8 --resolution 96x96 -q --shard "$i/4"
 done
+# A shard that checkpoints and resumes (a preempted job in a batch queue) ends with the shard's
+# uninterrupted cache byte for byte.
+expect 0 "shard with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 4 --resolution 96x96 -q --shard 1/4 --checkpoint "$work/shard1.ckpt"
+expect 0 "shard resumed" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 8 --resolution 96x96 -q --shard 1/4 --resume "$work/shard1.ckpt"
+cmp -s "$work/shard1.sharc" "$work/shard1ck.sharc" || fail "the resumed shard differs from the uninterrupted one"
+expect 3 "resume a shard's checkpoint as another shard" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --iterations 8 --resolution 96x96 -q --shard 2/4 --resume "$work/shard1.ckpt"
 expect 0 "merge" "$sharcbake" merge "$work/shard0.sharc" "$work/shard1.sharc" "$work/shard2.sharc" "$work/shard3.sharc" -o "$work/merged.sharc"
 expect 0 "merge in another order" "$sharcbake" merge "$work/shard2.sharc" "$work/shard0.sharc" "$work/shard3.sharc" "$work/shard1.sharc" -o "$work/merged2.sharc" -q
 cmp -s "$work/merged.sharc" "$work/merged2.sharc" || fail "the merge depends on the order of its inputs"
