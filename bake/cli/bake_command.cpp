@@ -69,6 +69,7 @@ struct BakeOptions {
     std::string resume_path;
     std::string shard = "0/1";
     bool quiet = false;
+    double progress_interval = kDefaultProgressInterval;
     // Error against run time (convergence_report.h).
     std::string report_dir;
     std::string reference_path;
@@ -121,42 +122,6 @@ extern "C" void onStopSignal(int signal) {
         std::signal(signal, SIG_DFL);
         std::raise(signal);
     }
-}
-
-/// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
-/// its external buffers and images: Scene::source_files), so a cache records which scene it was
-/// baked from, geometry included.
-std::string sceneContentHash(const std::vector<std::string>& files) {
-    uint64_t hash = 0xcbf29ce484222325ull;
-    std::vector<char> buffer(1 << 16);
-    for (const std::string& file : files) {
-        std::ifstream in(file, std::ios::binary);
-        if (!in) throw CommandError(kExitIo, file + ": cannot read (a file of the scene)");
-        while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) {
-            for (std::streamsize i = 0; i < in.gcount(); ++i) hash = (hash ^ uint8_t(buffer[size_t(i)])) * 0x100000001b3ull;
-        }
-    }
-    char text[32];
-    std::snprintf(text, sizeof text, "fnv1a64:%016llx", (unsigned long long)hash);
-    return text;
-}
-
-/// The sky the bake used where it is not the scene file's own (that one is in scene_hash): a
-/// uniform radiance as parsed, or a map by the hash of its bytes and its scale. Shards baked
-/// under different skies must not merge.
-std::string skyDescription(const SkyOptions& sky) {
-    if (!sky.uniform.empty()) {
-        const glm::vec3 radiance = parseVec3(sky.uniform, "--sky");
-        char text[96];
-        std::snprintf(text, sizeof text, "uniform %.9g,%.9g,%.9g", radiance.x, radiance.y, radiance.z);
-        return text;
-    }
-    if (!sky.exr_path.empty()) {
-        char scale[32];
-        std::snprintf(scale, sizeof scale, "%.9g", sky.scale);
-        return "map " + sceneContentHash({sky.exr_path}) + " x " + scale;
-    }
-    return "scene";
 }
 
 void parseSize(const std::string& text, const char* option, int& width, int& height) {
@@ -648,6 +613,7 @@ struct BakeOutcome {
 /// (at the start, for the checkpoint's settings) the iterations are empty and the capacity is
 /// the starting one.
 std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job, const Scene& scene,
+                                                              const std::string& scene_hash,
                                                               const LightSampler& lights, double radiance_scale,
                                                               const std::string& camera_description,
                                                               const std::string& capacity_choice,
@@ -658,7 +624,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
         {"scene", job.scene_path},
-        {"scene_hash", sceneContentHash(scene.source_files)},
+        {"scene_hash", scene_hash},
         {"sky", skyDescription(job.sky)},
         {"iterations", outcome ? std::to_string(outcome->iterations) : ""},
         {"seed", std::to_string(settings.seed)},
@@ -777,11 +743,12 @@ private:
     void setUp() {
         scene_ = loadSceneForCommand(job_.scene_path, job_.sky, o_.quiet, o_.limits);
         checkOutputs(scene_.source_files);  // the buffers and images the scene read
+        scene_hash_ = sceneContentHash(scene_.source_files);
         if (scene_.empty()) throw CommandError(kExitInvalidInput, job_.scene_path + ": the scene has no triangles to bake");
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);
         lights_.emplace(scene_);
-        if (!o_.quiet && !lights_->hasLights()) {
+        if (!lights_->hasLights()) {
             std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
                                  "the cache will be black\n");
         }
@@ -806,7 +773,7 @@ private:
     bool autoCapacity() const { return job_.capacity_auto; }
 
     std::vector<std::pair<std::string, std::string>> metadata(std::optional<BakeOutcome> outcome) const {
-        return bakeMetadata(job_, scene_, *lights_, baker_->cache().radianceScale(), camera_description_,
+        return bakeMetadata(job_, scene_, scene_hash_, *lights_, baker_->cache().radianceScale(), camera_description_,
                             capacity_choice_text_, grid_decision_.choice, grid_decision_.levelsCovered(), outcome);
     }
 
@@ -875,8 +842,8 @@ private:
         auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
         bake_start_ = std::chrono::steady_clock::now();
         {
-            Progress progress("Baking", o_.iterations - std::min(o_.iterations, first_iteration_),
-                              !o_.quiet && Progress::isTerminal());
+            Progress progress("Baking", "iterations", o_.iterations - std::min(o_.iterations, first_iteration_),
+                              ProgressOutput::forCommand(o_.quiet, o_.progress_interval));
             uint32_t next_checkpoint = nextReportCheckpoint(0);
             while (next_checkpoint <= first_iteration_ && next_checkpoint != UINT32_MAX) {
                 next_checkpoint = nextReportCheckpoint(next_checkpoint);
@@ -892,6 +859,7 @@ private:
                 }
                 baker_->runIteration();
                 progress.advance();
+                progress.setDetail(std::to_string(baker_->cache().liveEntries()) + " voxels");
                 if (!checkpoint_path_.empty() && baker_->iterationsDone() % o_.checkpoint_interval == 0) {
                     saveCheckpointNow();
                 }
@@ -1010,7 +978,13 @@ private:
     void writeStatsJson() const {
         const UpdateCounters& c = baker_->counters();
         const StageSeconds& stage = baker_->seconds();
-        const Json json = {
+        Json json = provenanceJson("bake-stats", scene_, scene_hash_);
+        json.update({
+            {"output", o_.output_path},
+            {"checkpoint", checkpoint_path_.empty() ? Json(nullptr) : Json(checkpoint_path_)},
+            {"camera", {{"mode", job_.camera.path_file.empty() ? toString(job_.camera.source) : "file"},
+                        {"description", camera_description_}}},
+            {"settings", metadataJson(metadata(BakeOutcome{baker_->iterationsDone(), baker_->cache().capacity()}))},
             {"iterations", baker_->iterationsDone()},
             {"stop_reason", stop_reason_},
             {"threads", threads_},
@@ -1043,7 +1017,7 @@ private:
             {"levels_covered", grid_decision_.levelsCovered()},
             {"predicted_hit_rate", hitRateJson(prediction_)},
             {"stability", stabilityJson(stability_)},
-        };
+        });
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
 
@@ -1083,6 +1057,7 @@ private:
 
     BakeJob job_;
     Scene scene_;
+    std::string scene_hash_;
     std::optional<Tracer> tracer_;
     std::optional<LightSampler> lights_;
     GridDecision grid_decision_;
@@ -1254,7 +1229,8 @@ void registerBakeCommand(CLI::App& app) {
                     "mean relative error against the known radiance where the scene has one, else the probes' mean "
                     "relative error (over the probes live at the time), else the image's against --reference")
         ->check(CLI::PositiveNumber)->check(kFiniteNumber);
-    cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output");
+    cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output; warnings and errors still print");
+    addProgressIntervalOption(*cmd, o->progress_interval);
     cmd->callback([o] { runBake(*o); });
 }
 

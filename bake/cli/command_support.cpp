@@ -5,8 +5,10 @@
 #include "sharcbake/scene_loader.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <sys/stat.h>
@@ -186,6 +188,51 @@ void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits) {
         ->check(CLI::Range(1u, 1u << 16));
 }
 
+/// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
+/// its external buffers and images: Scene::source_files), so a cache records which scene it was
+/// baked from, geometry included.
+std::string sceneContentHash(const std::vector<std::string>& files) {
+    uint64_t hash = 0xcbf29ce484222325ull;
+    std::vector<char> buffer(1 << 16);
+    for (const std::string& file : files) {
+        std::ifstream in(file, std::ios::binary);
+        if (!in) throw CommandError(kExitIo, file + ": cannot read (a file of the scene)");
+        while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) {
+            for (std::streamsize i = 0; i < in.gcount(); ++i) hash = (hash ^ uint8_t(buffer[size_t(i)])) * 0x100000001b3ull;
+        }
+    }
+    char text[32];
+    std::snprintf(text, sizeof text, "fnv1a64:%016llx", (unsigned long long)hash);
+    return text;
+}
+
+/// The sky the bake used where it is not the scene file's own (that one is in scene_hash): a
+/// uniform radiance as parsed, or a map by the hash of its bytes and its scale. Shards baked
+/// under different skies must not merge.
+std::string skyDescription(const SkyOptions& sky) {
+    if (!sky.uniform.empty()) {
+        const glm::vec3 radiance = parseVec3(sky.uniform, "--sky");
+        char text[96];
+        std::snprintf(text, sizeof text, "uniform %.9g,%.9g,%.9g", radiance.x, radiance.y, radiance.z);
+        return text;
+    }
+    if (!sky.exr_path.empty()) {
+        char scale[32];
+        std::snprintf(scale, sizeof scale, "%.9g", sky.scale);
+        return "map " + sceneContentHash({sky.exr_path}) + " x " + scale;
+    }
+    return "scene";
+}
+
+void addProgressIntervalOption(CLI::App& command, double& seconds) {
+    command
+        .add_option("--progress-interval", seconds,
+                    "Seconds between progress lines (done, elapsed, ETA) printed when stdout is not a "
+                    "terminal, as in a pipe, a log file or CI; 0: none. A terminal shows a bar instead")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 86400.0));
+}
+
 Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
     std::error_code error;
     if (!std::filesystem::is_regular_file(path, error)) {
@@ -214,7 +261,60 @@ Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool q
         scene.sky.map.reset();
     }
     if (!quiet) describeScene(scene);
+    // Warnings are not progress: --quiet never hides them.
+    for (const std::string& warning : scene.stats.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
     return scene;
+}
+
+bool isJsonNumber(std::string_view text) {
+    size_t i = 0;
+    const auto digits = [&] {
+        const size_t start = i;
+        while (i < text.size() && text[i] >= '0' && text[i] <= '9') ++i;
+        return i > start;
+    };
+    if (i < text.size() && text[i] == '-') ++i;
+    if (i < text.size() && text[i] == '0') {
+        ++i;
+    } else if (!digits()) {
+        return false;
+    }
+    if (i < text.size() && text[i] == '.' && (++i, !digits())) return false;
+    if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+        ++i;
+        if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+        if (!digits()) return false;
+    }
+    return i == text.size();
+}
+
+Json metadataJson(const std::vector<std::pair<std::string, std::string>>& metadata) {
+    Json json = Json::object();
+    for (const auto& [key, value] : metadata) {
+        if (isJsonNumber(value)) {
+            const double number = std::strtod(value.c_str(), nullptr);
+            // Integers stay exact (seeds, capacities); others are doubles.
+            const bool integer = value.find_first_of(".eE") == std::string::npos && value.size() < 16;
+            json[key] = integer ? Json(std::strtoll(value.c_str(), nullptr, 10)) : jsonNumber(number);
+        } else {
+            json[key] = value;
+        }
+    }
+    return json;
+}
+
+Json cameraJson(const Camera& camera) {
+    return {{"name", camera.name},
+            {"position", jsonVec3(camera.position)},
+            {"forward", jsonVec3(camera.forward)},
+            {"up", jsonVec3(camera.up)},
+            {"yfov", jsonNumber(camera.yfov)}};
+}
+
+Json provenanceJson(const char* output_kind, const Scene& scene, const std::string& scene_hash) {
+    return {{"schema", std::string("sharcbake.") + output_kind + "/" + std::to_string(kStatsJsonSchemaVersion)},
+            {"tool", {{"name", "sharcbake"}, {"version", SHARCBAKE_VERSION}}},
+            {"scene", {{"path", scene.source_path}, {"content_hash", scene_hash}, {"warnings", scene.stats.warnings}}}};
 }
 
 void describeScene(const Scene& scene) {
@@ -228,9 +328,6 @@ void describeScene(const Scene& scene) {
         std::printf("  dropped %llu degenerate triangles, skipped %llu non-triangle primitives\n",
                     (unsigned long long)scene.stats.degenerate_triangles_dropped,
                     (unsigned long long)scene.stats.primitives_skipped);
-    }
-    for (const std::string& warning : scene.stats.warnings) {
-        std::fprintf(stderr, "warning: %s\n", warning.c_str());
     }
 }
 

@@ -7,6 +7,7 @@
 #include "sharcbake/cache_types.h"
 #include "sharcbake/scene.h"
 #include "sharcbake/scene_loader.h"
+#include "support/json.h"
 
 #include <CLI/CLI.hpp>
 #include <glm/glm.hpp>
@@ -14,6 +15,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 namespace sharcbake {
@@ -98,11 +101,42 @@ void addSkyOptions(CLI::App& command, SkyOptions& options);
 Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet,
                           const GltfLoadLimits& limits = {});
 
+/// Seconds between progress lines when stdout is a log rather than a terminal.
+inline constexpr double kDefaultProgressInterval = 10.0;
+/// --progress-interval, shared by render and bake.
+void addProgressIntervalOption(CLI::App& command, double& seconds);
+
 /// --max-texture-size, shared by render and bake.
 void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits);
 
-/// One line about the loaded scene (triangles, materials, lights, what was dropped), and the
-/// loader's warnings, on stdout.
+/// FNV-1a (64-bit) of the bytes of the scene's files one after the other (the glTF or GLB, then
+/// its external buffers and images: Scene::source_files), as "fnv1a64:<16 hex digits>": a cache
+/// records which scene it was baked from, geometry included.
+std::string sceneContentHash(const std::vector<std::string>& files);
+
+/// The sky a command used where it is not the scene file's own (that one is in the scene's
+/// hash): "uniform r,g,b", "map <hash> x <scale>", or "scene".
+std::string skyDescription(const SkyOptions& sky);
+
+/// The version of the --stats-json outputs' layout; raised when a field changes meaning or goes
+/// away (adding fields keeps it). The schemas are in docs/schemas/.
+inline constexpr int kStatsJsonSchemaVersion = 1;
+
+/// What every --stats-json starts with: "schema" ("sharcbake.<output_kind>/<version>"), the tool
+/// and its version, and the scene (path, content hash, the loader's warnings).
+Json provenanceJson(const char* output_kind, const Scene& scene, const std::string& scene_hash);
+
+/// A camera's pose and field of view.
+Json cameraJson(const Camera& camera);
+
+/// True if `text` is a number in JSON's grammar ("12", "-0.5", "1e-3"; not "+1", " 1" or "0x1").
+bool isJsonNumber(std::string_view text);
+
+/// Cache metadata as one JSON object: values that are numbers become numbers, the rest strings.
+Json metadataJson(const std::vector<std::pair<std::string, std::string>>& metadata);
+
+/// One line about the loaded scene (triangles, materials, lights, what was dropped) on stdout.
+/// The loader's warnings go to stderr from loadSceneForCommand, --quiet or not.
 void describeScene(const Scene& scene);
 
 }  // namespace sharcbake

@@ -110,7 +110,7 @@ void registerExportVdbCommand(CLI::App& app) {
         ->capture_default_str()
         ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("--split-normals", o->split_normals, "One grid set per normal octant instead of merging them");
-    cmd->add_flag("-q,--quiet", o->quiet, "Print nothing on success");
+    cmd->add_flag("-q,--quiet", o->quiet, "Print nothing on success but warnings");
     cmd->callback([o] { run(*o); });
 }
 

@@ -125,7 +125,7 @@ Json vec3Json(const double v[3]) { return Json::array({jsonNumber(v[0]), jsonNum
 void printJson(const std::string& path, const CacheView& v) {
     const HashGridParameters p = v.gridParameters();
     const CacheStats s = v.stats();
-    Json sections = Json::array(), levels = Json::array(), metadata = Json::object();
+    Json sections = Json::array(), levels = Json::array();
     for (const CacheSectionInfo& sec : v.sections()) {
         sections.push_back({{"type", fourcc(sec.type)},
                             {"required", sec.required},
@@ -137,7 +137,8 @@ void printJson(const std::string& path, const CacheView& v) {
     for (const CacheLevel& l : v.levels()) {
         levels.push_back({{"level", l.level}, {"voxel_size", jsonNumber(voxelSize(l.level, p))}, {"voxels", l.voxel_count}});
     }
-    for (size_t i = 0; i < v.metadataCount(); ++i) metadata[std::string(v.metadataKey(i))] = v.metadataValue(i);
+    std::vector<std::pair<std::string, std::string>> pairs;
+    for (size_t i = 0; i < v.metadataCount(); ++i) pairs.emplace_back(v.metadataKey(i), v.metadataValue(i));
     const Json json = {
         {"file", path},
         {"valid", true},
@@ -162,7 +163,7 @@ void printJson(const std::string& path, const CacheView& v) {
         {"sample_weight",
          {{"min", jsonNumber(s.weight_min)}, {"max", jsonNumber(s.weight_max)}, {"total", jsonNumber(s.weight_total)}}},
         {"levels", levels},
-        {"metadata", metadata},
+        {"metadata", metadataJson(pairs)},  // numbers as numbers, the rest as strings
     };
     std::fputs(jsonText(json).c_str(), stdout);
 }

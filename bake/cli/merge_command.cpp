@@ -170,7 +170,7 @@ void registerMergeCommand(CLI::App& app) {
         "  sharcbake merge shard0.sharc shard1.sharc shard2.sharc shard3.sharc -o scene.sharc");
     cmd->add_option("inputs", o->inputs, "Caches to merge (.sharc)")->required()->check(CLI::ExistingFile);
     cmd->add_option("-o,--output", o->output_path, "Merged cache (.sharc)")->required();
-    cmd->add_flag("-q,--quiet", o->quiet, "No summary output");
+    cmd->add_flag("-q,--quiet", o->quiet, "No summary output; warnings and errors still print");
     cmd->callback([o] { runMerge(*o); });
 }
 

@@ -52,6 +52,8 @@ struct RenderOptions {
     std::string tone_map = "aces";
     bool no_png = false;
     bool quiet = false;
+    bool allow_cache_mismatch = false;
+    double progress_interval = kDefaultProgressInterval;
     std::string stats_json;
     std::string cache_path;  // --cache
     std::string cache_lookup = "exact";  // --cache-lookup
@@ -72,6 +74,13 @@ std::string describeLevels(const std::vector<uint32_t>& levels) {
 
 /// Opens and validates a .sharc file with the runtime library: kExitIo if it cannot be read,
 /// kExitInvalidInput if it is not a valid cache.
+/// True if `path` ends in `extension` (".exr"), in any letter case.
+bool hasExtension(const std::string& path, const char* extension) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == extension;
+}
+
 CacheView openCacheForCommand(const std::string& path) {
     CacheView view;
     CacheError error;
@@ -203,9 +212,11 @@ class RenderRun {
 public:
     explicit RenderRun(const RenderOptions& o)
         : o_(o),
-          // The PNG preview's name derives from the output's; it must name neither the EXR nor an input.
-          png_path_(o.no_png ? std::string()
-                             : std::filesystem::path(o.output_path).replace_extension(".png").string()),
+          output_is_png_(hasExtension(o.output_path, ".png")),
+          // The PNG preview's name derives from the EXR's; it must name no input.
+          png_path_(output_is_png_ ? o.output_path
+                    : o.no_png     ? std::string()
+                                   : std::filesystem::path(o.output_path).replace_extension(".png").string()),
           threads_(o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency()) {}
 
     void run() {
@@ -225,13 +236,13 @@ private:
     void checkOutputs(const std::vector<std::string>& more_inputs) const {
         std::vector<std::string> others = {o_.scene_path, o_.cache_path, o_.sky.exr_path};
         others.insert(others.end(), more_inputs.begin(), more_inputs.end());
+        if (!output_is_png_ && !hasExtension(o_.output_path, ".exr")) {
+            throw CommandError(kExitUsage, o_.output_path + ": the output's name picks its format: .exr (linear "
+                                                            "radiance, with a .png preview) or .png (the preview alone)");
+        }
         checkOutputPath(o_.output_path, "image", others);
         others.push_back(o_.output_path);
-        if (!png_path_.empty()) {
-            if (png_path_ == o_.output_path) {
-                throw CommandError(kExitUsage, o_.output_path + ": the EXR output would be overwritten by its own "
-                                                                ".png preview; name it .exr or pass --no-png");
-            }
+        if (!png_path_.empty() && !output_is_png_) {
             checkOutputPath(png_path_, "PNG preview", others);
             others.push_back(png_path_);
         }
@@ -254,17 +265,47 @@ private:
         tracer_.emplace(scene_);
         lights_.emplace(scene_);
         build_seconds_ = secondsSince(build_start);
-        if (!o_.quiet && !lights_->hasLights()) {
+        if (!lights_->hasLights()) {
             std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
                                  "the image will be black\n");
         }
+        scene_hash_ = sceneContentHash(scene_.source_files);
         if (!o_.cache_path.empty()) {
+            CacheView view = openCacheForCommand(o_.cache_path);
+            checkCacheBelongsToScene(view);
             cache_ = std::make_unique<BakedCache>(
-                openCacheForCommand(o_.cache_path), camera_.position,
+                std::move(view), camera_.position,
                 o_.cache_lookup == "nearest" ? CacheLookup::NearestLevel : CacheLookup::Exact);
         }
         if (o_.debug_view == "bounces") counting_cache_ = std::make_unique<CountingCache>(*cache_);
         if (o_.debug_view == "occupancy") occupancy_ = std::make_unique<BucketOccupancy>(cache_->view());
+    }
+
+    /// A cache records the scene and sky it was baked under (metadata scene_hash and sky); one
+    /// from another scene, or another version of this one, gives plausible but wrong light.
+    void checkCacheBelongsToScene(const CacheView& view) const {
+        bool has_hash = false, has_sky = false;
+        const std::string cache_hash(view.metadata("scene_hash", &has_hash));
+        const std::string cache_sky(view.metadata("sky", &has_sky));
+        std::string mismatch;
+        if (has_hash && cache_hash != scene_hash_) {
+            mismatch = "baked from another scene or another version of it (cache " + cache_hash + ", " +
+                       o_.scene_path + " " + scene_hash_ + ")";
+        }
+        const std::string sky = skyDescription(o_.sky);
+        if (has_sky && cache_sky != sky) {
+            mismatch += std::string(mismatch.empty() ? "" : "; ") + "baked under another sky (cache \"" + cache_sky +
+                        "\", this render \"" + sky + "\")";
+        }
+        if (!mismatch.empty() && !o_.allow_cache_mismatch) {
+            throw CommandError(kExitInvalidInput, o_.cache_path + ": " + mismatch +
+                                                      "; rebake it, or pass --allow-cache-mismatch to render with it");
+        }
+        if (!mismatch.empty()) std::fprintf(stderr, "warning: %s: %s\n", o_.cache_path.c_str(), mismatch.c_str());
+        if (!has_hash) {
+            std::fprintf(stderr, "warning: %s records no scene_hash: cannot check that it belongs to %s\n",
+                         o_.cache_path.c_str(), o_.scene_path.c_str());
+        }
     }
 
     bool primaryView() const { return !o_.debug_view.empty() && o_.debug_view != "bounces"; }
@@ -303,8 +344,9 @@ private:
         const bool primary_view = primaryView();
         const auto render_start = std::chrono::steady_clock::now();
         {
-            Progress progress(o_.debug_view.empty() ? "Rendering" : "Debug view",
-                              uint64_t(width_) * uint64_t(height_), !o_.quiet && Progress::isTerminal());
+            Progress progress(o_.debug_view.empty() ? "Rendering" : "Debug view", "pixels",
+                              uint64_t(width_) * uint64_t(height_),
+                              ProgressOutput::forCommand(o_.quiet, o_.progress_interval));
             image_ = renderImage(CameraRays(camera_, width_, height_),
                                  ImageRenderSettings{width_, height_, o_.spp, o_.seed},
                                  [&](const Ray& ray, PixelSampler& sampler) {
@@ -381,8 +423,8 @@ private:
 
     void writeImages() {
         try {
-            writeExr(o_.output_path, image_, imageMetadata());
-            if (!o_.no_png) writePng(png_path_, image_, o_.exposure, parseToneMap(o_.tone_map));
+            if (!output_is_png_) writeExr(o_.output_path, image_, imageMetadata());
+            if (!png_path_.empty()) writePng(png_path_, image_, o_.exposure, parseToneMap(o_.tone_map));
         } catch (const ImageError& e) {
             throw CommandError(kExitIo, e.what());
         }
@@ -420,11 +462,17 @@ private:
             std::printf("  dropped %llu non-finite path samples\n",
                         (unsigned long long)counters_.non_finite_samples.load());
         }
-        std::printf("Wrote %s%s\n", o_.output_path.c_str(), o_.no_png ? "" : " and its .png preview");
+        std::printf("Wrote %s%s\n", o_.output_path.c_str(),
+                    output_is_png_ || png_path_.empty() ? "" : " and its .png preview");
     }
 
     void writeStatsJson() const {
-        Json json = {{"width", width_},
+        Json json = provenanceJson("render-stats", scene_, scene_hash_);
+        json.update({{"output", o_.output_path},
+                     {"cache", o_.cache_path.empty() ? Json(nullptr) : Json(o_.cache_path)},
+                     {"debug_view", o_.debug_view.empty() ? Json(nullptr) : Json(o_.debug_view)},
+                     {"camera", cameraJson(camera_)},
+                     {"width", width_},
                      {"height", height_},
                      {"samples_per_pixel", o_.spp},
                      {"threads", threads_},
@@ -432,7 +480,7 @@ private:
                      {"closest_hit_rays", counters_.closest_hit_rays.load()},
                      {"shadow_rays", counters_.shadow_rays.load()},
                      {"rays_per_second", jsonNumber(double(rays()) / render_seconds_)},
-                     {"non_finite_samples", counters_.non_finite_samples.load()}};
+                     {"non_finite_samples", counters_.non_finite_samples.load()}});
         if (cache_) {
             json["cache_hits"] = counters_.cache_hits.load();
             json["cache_misses"] = counters_.cache_misses.load();
@@ -444,10 +492,12 @@ private:
     }
 
     const RenderOptions& o_;
+    const bool output_is_png_;  ///< -o x.png: the tone-mapped preview alone, no EXR
     const std::string png_path_;
     const int threads_;
     std::chrono::steady_clock::time_point start_;
     Scene scene_;
+    std::string scene_hash_;
     Camera camera_;
     int width_ = 0, height_ = 0;
     std::optional<Tracer> tracer_;
@@ -499,7 +549,10 @@ void registerRenderCommand(CLI::App& app) {
         "  sharcbake render scenes/cornell_box/cornell_box.gltf -o out/hash.exr --cache out/cornell.sharc \\\n"
         "      --debug-view hash --spp 1");
     cmd->add_option("scene", options->scene_path, "glTF 2.0 scene (.gltf or .glb)")->required();
-    cmd->add_option("-o,--output", options->output_path, "Output image (.exr)")->required();
+    cmd->add_option("-o,--output", options->output_path,
+                    "Output image: .exr (linear radiance, and a tone-mapped .png preview beside it) or .png (the "
+                    "preview alone)")
+        ->required();
     cmd->add_option("--camera", options->camera, "glTF camera by name or index (default: the first)");
     cmd->add_option("--look-at", options->look_at,
                     "Camera from eye and target: \"ex,ey,ez,tx,ty,tz\" (overrides --camera)");
@@ -527,6 +580,10 @@ void registerRenderCommand(CLI::App& app) {
     cmd->add_option("--stats-json", options->stats_json, "Write timings and ray counts as JSON");
     CLI::Option* cache_option =
         cmd->add_option("--cache", options->cache_path, "Baked cache (.sharc): end paths on cache hits");
+    cmd->add_flag("--allow-cache-mismatch", options->allow_cache_mismatch,
+                  "Render with a --cache baked from another scene (its scene_hash differs: another file, or an "
+                  "edited version of this one) or under another sky, with a warning instead of exit 3")
+        ->needs(cache_option);
     cmd->add_option("--cache-lookup", options->cache_lookup,
                     "exact: SHaRC's lookup, the level the camera's distance picks (what a GPU runtime with the "
                     "SDK gets); nearest: then the nearest level the cache holds (the runtime library's "
@@ -536,7 +593,8 @@ void registerRenderCommand(CLI::App& app) {
                     "Write a debug image of the cache instead: cache, hash, levels, occupancy or bounces")
         ->needs(cache_option)
         ->check(CLI::IsMember({"cache", "hash", "levels", "occupancy", "bounces"}));
-    cmd->add_flag("-q,--quiet", options->quiet, "No progress or summary output");
+    cmd->add_flag("-q,--quiet", options->quiet, "No progress or summary output; warnings and errors still print");
+    addProgressIntervalOption(*cmd, options->progress_interval);
     cmd->callback([options] { runRender(*options); });
 }
 

@@ -20,9 +20,9 @@ expect 2 "bake -o /dev/null is refused" "$sharcbake" bake "$furnace" -o /dev/nul
 says "$work/err.txt" "a device" "the message says the output is a device"
 [ -c /dev/null ] || fail "/dev/null is no longer a character device"
 expect 2 "export-vdb -o /dev/full is refused" "$sharcbake" export-vdb "$work/a.sharc" -o /dev/full
-mkfifo "$work/fifo_out"
-expect 2 "render -o FIFO is refused" "$sharcbake" render "$furnace" -o "$work/fifo_out" --resolution 8 --spp 1 -q
-[ -p "$work/fifo_out" ] || fail "the FIFO was replaced"
+mkfifo "$work/fifo_out.exr"
+expect 2 "render -o FIFO is refused" "$sharcbake" render "$furnace" -o "$work/fifo_out.exr" --resolution 8 --spp 1 -q
+[ -p "$work/fifo_out.exr" ] || fail "the FIFO was replaced"
 mkdir -p "$work/real"
 ln -s real/linked.sharc "$work/link.sharc"
 expect 0 "bake through a symlink" "$sharcbake" bake "$furnace" -o "$work/link.sharc" $quick
@@ -51,7 +51,13 @@ expect 1 "render whose PNG preview is the scene's texture" "$sharcbake" render "
 says "$work/err.txt" "PNG preview" "the message names the PNG preview"
 cmp -s "$work/tq/textured_quad.png" "$work/tq.orig.png" || fail "render replaced the scene's texture"
 expect 1 "render --cache C -o C" "$sharcbake" render "$furnace" --cache "$work/a.sharc" -o "$work/a.sharc" --no-png --resolution 8 --spp 1 -q
-expect 1 "render -o X.png (its own preview)" "$sharcbake" render "$furnace" -o "$work/x.png" --resolution 8 --spp 1 -q
+# The output's extension picks its format: .png is the preview alone, anything else but .exr is refused.
+expect 0 "render -o X.png" "$sharcbake" render "$furnace" -o "$work/x.png" --resolution 8 --spp 1 -q
+[ "$(head -c 4 "$work/x.png" | od -An -tx1 | tr -d ' ')" = "89504e47" ] || fail "render -o X.png did not write a PNG"
+[ ! -e "$work/x.exr" ] || fail "render -o X.png also wrote an EXR"
+expect 1 "render -o X.tiff" "$sharcbake" render "$furnace" -o "$work/x.tiff" --resolution 8 --spp 1 -q
+says "$work/err.txt" "picks its format" "the message says how the name picks the format"
+[ ! -e "$work/x.tiff" ] || fail "render -o X.tiff wrote a file"
 expect 1 "export-vdb A -o A" "$sharcbake" export-vdb "$work/a.sharc" -o "$work/a.sharc"
 ln -s a.sharc "$work/alias.sharc"
 expect 1 "export-vdb A -o a link to A" "$sharcbake" export-vdb "$work/a.sharc" -o "$work/alias.sharc"

@@ -1,0 +1,92 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# What a build pipeline relies on: progress lines in logs, warnings that --quiet does not hide,
+# provenance in the JSON outputs, and renders that refuse a cache of another scene or sky.
+# Usage: pipeline_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+. "$(dirname "$0")/../cli_support.sh"
+
+cornell="$scenes/cornell_box/cornell_box.gltf"
+small="--resolution 320x180 --capacity 65536"
+
+# Progress: stdout is a file here, so a bake prints periodic lines and one closing line.
+expect 0 "bake into a log" "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 48 $small --progress-interval 0.05 \
+    --stats-json "$work/bake.json" --checkpoint "$work/c.ckpt"
+says "$work/out.txt" "^progress: Baking [0-9]*/48 iterations ([0-9]*%), [0-9.]*s elapsed, ETA [0-9.m-]*s*, [0-9]* voxels" \
+    "periodic progress lines with elapsed time, ETA and voxels"
+says "$work/out.txt" "^progress: Baking 48/48 iterations (100%) in " "a closing progress line"
+expect 0 "bake, progress lines off" "$sharcbake" bake "$cornell" -o "$work/c0.sharc" --iterations 8 $small --progress-interval 0
+grep -q "^progress:" "$work/out.txt" && fail "--progress-interval 0 still printed progress lines"
+expect 0 "bake -q" "$sharcbake" bake "$cornell" -o "$work/cq.sharc" --iterations 8 $small -q --progress-interval 0.01
+[ -s "$work/out.txt" ] && fail "bake -q printed to stdout: $(head -c 200 "$work/out.txt")"
+
+# --quiet hides progress and summaries, never warnings: a mesh without a material is warned about.
+cp "$scenes/cornell_box/cornell_box.bin" "$work/"
+python3 - "$cornell" "$work/edited.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+for mesh in g["meshes"]:
+    for primitive in mesh["primitives"]:
+        primitive.pop("material", None)
+        break
+    break
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "render -q of a scene with a loader warning" "$sharcbake" render "$work/edited.gltf" -o "$work/e.exr" \
+    --resolution 8 --spp 1 -q
+says "$work/err.txt" "^warning: .*no material" "-q still prints the loader's warnings"
+
+# Provenance in the bake's stats JSON.
+python3 - "$work/bake.json" "$work/c.sharc" "$work/c.ckpt" <<'PY' || fail "bake stats JSON provenance"
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert j["schema"] == "sharcbake.bake-stats/1", j["schema"]
+assert j["tool"]["name"] == "sharcbake" and j["tool"]["version"], j["tool"]
+assert j["scene"]["path"].endswith("cornell_box.gltf") and j["scene"]["content_hash"].startswith("fnv1a64:"), j["scene"]
+assert j["scene"]["warnings"] == [], j["scene"]
+assert j["output"] == sys.argv[2] and j["checkpoint"] == sys.argv[3]
+assert j["camera"]["mode"] == "explore" and "exploration" in j["camera"]["description"], j["camera"]
+s = j["settings"]
+assert s["scene_hash"] == j["scene"]["content_hash"] and s["iterations"] == 48 and s["capacity"] == 65536, s
+assert s["seed"] == 0 and s["resolution"] == "320x180" and isinstance(s["level_bias"], float), s
+print("ok: bake stats JSON carries schema, tool, scene, outputs, camera mode and settings")
+PY
+
+# info --json gives metadata numbers as numbers.
+expect 0 "info --json" "$sharcbake" info "$work/c.sharc" --json
+python3 - "$work/out.txt" <<'PY' || fail "info --json metadata types"
+import json, sys
+m = json.load(open(sys.argv[1]))["metadata"]
+assert m["iterations"] == 48 and m["seed"] == 0 and m["capacity"] == 65536, m
+assert isinstance(m["scene_scale"], float) and isinstance(m["resolution"], str) and isinstance(m["scene_hash"], str), m
+print("ok: info --json metadata numbers are numbers")
+PY
+
+# A render refuses a cache baked from another scene (here an edited copy) or under another sky.
+expect 3 "render with another scene's cache" "$sharcbake" render "$work/edited.gltf" --cache "$work/c.sharc" \
+    -o "$work/x.exr" --resolution 8 --spp 1 -q
+says "$work/err.txt" "another scene or another version" "the refusal says why"
+says "$work/err.txt" "allow-cache-mismatch" "the refusal names the override"
+[ ! -e "$work/x.exr" ] || fail "a refused render wrote its image"
+expect 3 "render with a cache of another sky" "$sharcbake" render "$cornell" --cache "$work/c.sharc" --sky 1,1,1 \
+    -o "$work/x.exr" --resolution 8 --spp 1 -q
+says "$work/err.txt" "another sky" "the sky refusal says why"
+expect 0 "render with another scene's cache, allowed" "$sharcbake" render "$work/edited.gltf" --cache "$work/c.sharc" \
+    --allow-cache-mismatch -o "$work/x.exr" --resolution 8 --spp 1 -q --stats-json "$work/render.json"
+says "$work/err.txt" "^warning: .*another scene" "the override still warns"
+
+# The render's stats JSON: provenance and the camera's pose.
+python3 - "$work/render.json" "$work/c.sharc" <<'PY' || fail "render stats JSON provenance"
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert j["schema"] == "sharcbake.render-stats/1" and j["cache"] == sys.argv[2], j
+assert j["scene"]["path"].endswith("edited.gltf") and any("no material" in w for w in j["scene"]["warnings"]), j["scene"]
+c = j["camera"]
+assert len(c["position"]) == 3 and len(c["forward"]) == 3 and len(c["up"]) == 3 and c["yfov"] > 0, c
+print("ok: render stats JSON carries schema, scene, cache and the camera pose")
+PY
+
+finish "pipeline"
