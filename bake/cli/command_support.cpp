@@ -312,7 +312,7 @@ Json cameraJson(const Camera& camera) {
 }
 
 Json provenanceJson(const char* output_kind, const Scene& scene, const std::string& scene_hash) {
-    return {{"schema", std::string("sharcbake.") + output_kind + "/" + std::to_string(kStatsJsonSchemaVersion)},
+    return {{"schema", jsonSchemaId(output_kind)},
             {"tool", {{"name", "sharcbake"}, {"version", SHARCBAKE_VERSION}}},
             {"scene", {{"path", scene.source_path}, {"content_hash", scene_hash}, {"warnings", scene.stats.warnings}}}};
 }

@@ -118,11 +118,7 @@ std::string sceneContentHash(const std::vector<std::string>& files);
 /// hash): "uniform r,g,b", "map <hash> x <scale>", or "scene".
 std::string skyDescription(const SkyOptions& sky);
 
-/// The version of the --stats-json outputs' layout; raised when a field changes meaning or goes
-/// away (adding fields keeps it). The schemas are in docs/schemas/.
-inline constexpr int kStatsJsonSchemaVersion = 1;
-
-/// What every --stats-json starts with: "schema" ("sharcbake.<output_kind>/<version>"), the tool
+/// What every --stats-json starts with: "schema" (jsonSchemaId(output_kind)), the tool
 /// and its version, and the scene (path, content hash, the loader's warnings).
 Json provenanceJson(const char* output_kind, const Scene& scene, const std::string& scene_hash);
 

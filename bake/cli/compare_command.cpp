@@ -34,7 +34,8 @@ void runCompare(const CompareOptions& o) {
         throw CommandError(kExitInvalidInput, o.image_path + ": " + e.what());
     }
     if (o.json) {
-        const Json json = {{"relative_mse", jsonNumber(error.relative_mse)},
+        const Json json = {{"schema", jsonSchemaId("compare")},
+                           {"relative_mse", jsonNumber(error.relative_mse)},
                            {"mean_relative_error", jsonNumber(error.mean_relative_error)},
                            {"relative_bias", jsonNumber(error.relative_bias)},
                            {"non_finite_pixels", error.non_finite_pixels}};

@@ -140,6 +140,7 @@ void printJson(const std::string& path, const CacheView& v) {
     std::vector<std::pair<std::string, std::string>> pairs;
     for (size_t i = 0; i < v.metadataCount(); ++i) pairs.emplace_back(v.metadataKey(i), v.metadataValue(i));
     const Json json = {
+        {"schema", jsonSchemaId("info")},
         {"file", path},
         {"valid", true},
         {"version", {{"major", v.versionMajor()}, {"minor", v.versionMinor()}}},
@@ -204,7 +205,8 @@ void registerInfoCommand(CLI::App& app) {
         CacheError error;
         const CacheFileStatus status = CacheView::openFile(v->path, &view, &error);
         if (v->json) {
-            const Json json = {{"file", v->path},
+            const Json json = {{"schema", jsonSchemaId("validate")},
+                               {"file", v->path},
                                {"valid", status == CacheFileStatus::kOk},
                                {"status", toString(status)},
                                {"rule", error.rule ? Json("V" + std::to_string(error.rule)) : Json(nullptr)},

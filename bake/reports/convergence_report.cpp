@@ -439,7 +439,8 @@ Json convergenceRowJson(const ConvergenceRow& r) {
 }
 
 void writeConvergenceJson(const std::string& dir, const ConvergenceReport& report) {
-    Json json = {{"scene", report.scene},
+    Json json = {{"schema", jsonSchemaId("convergence")},
+                 {"scene", report.scene},
                  {"reference", report.reference},
                  {"view",
                   {{"camera", report.view.camera.name},

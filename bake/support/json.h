@@ -40,6 +40,16 @@ inline Json jsonNumber(float value) {
 
 inline Json jsonVec3(const glm::vec3& v) { return Json::array({jsonNumber(v.x), jsonNumber(v.y), jsonNumber(v.z)}); }
 
+/// The version of the JSON outputs' layouts, raised when a field changes meaning or goes away
+/// (new fields keep it). Every output names its layout in a "schema" field; the JSON Schemas
+/// that describe them are in docs/schemas/.
+inline constexpr int kJsonOutputVersion = 1;
+
+/// "sharcbake.<output>/<version>", e.g. "sharcbake.bake-stats/1".
+inline std::string jsonSchemaId(const char* output) {
+    return std::string("sharcbake.") + output + "/" + std::to_string(kJsonOutputVersion);
+}
+
 /// The text of `value`: two-space indentation and a final newline. Bytes that are not UTF-8
 /// (a scene path on a Latin-1 file system) print as U+FFFD instead of failing the write.
 inline std::string jsonText(const Json& value) {
