@@ -34,13 +34,14 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
         return false;
     };
     uint32_t unreached = 0;
-    for (const SurfacePoint& point : sampleSurfacePoints(scene, points)) {
+    const std::vector<SurfacePoint> surface = sampleSurfacePoints(scene, points);
+    for (const SurfacePoint& point : surface) {
         if (!reached(point.position, point.normal) && !(point.double_sided && reached(point.position, -point.normal))) {
             ++unreached;
         }
     }
-    report.points = points;
-    report.unreached_area = double(unreached) / double(points);
+    report.points = uint32_t(surface.size());
+    report.unreached_area = surface.empty() ? 0.0 : double(unreached) / double(surface.size());
     return report;
 }
 

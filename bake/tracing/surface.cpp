@@ -2,6 +2,7 @@
 #include "tracing/surface.h"
 
 #include <cmath>
+#include <cstring>
 
 namespace sharcbake {
 namespace {
@@ -9,6 +10,34 @@ namespace {
 glm::vec4 fetch(const Scene& scene, const TextureRef& ref, const SurfaceHit& hit) {
     if (!ref.isSet() || size_t(ref.texture) >= scene.textures.size()) return glm::vec4(1.0f);
     return scene.textures[size_t(ref.texture)].sample(ref.texcoord == 1 ? hit.uv1 : hit.uv0);
+}
+
+template <typename T>
+T barycentric(const std::vector<T>& values, const glm::uvec3& tri, float b0, float b1, float b2) {
+    return b0 * values[tri.x] + b1 * values[tri.y] + b2 * values[tri.z];
+}
+
+/// Bends the (front-facing) shading normal by the material's tangent-space normal map: X along
+/// the tangent, Y along the bitangent, Z along the normal, as glTF defines it. The result is
+/// kept just above the surface, where a steep map would otherwise shade from behind it.
+void applyNormalMap(const Scene& scene, const Material& m, const glm::uvec3& tri, float b0, float b1, float b2,
+                    SurfaceHit& s) {
+    const glm::vec4 t0 = scene.tangents[tri.x];
+    const glm::vec3 n = s.shading_normal;
+    glm::vec3 tangent = barycentric(scene.tangents, tri, b0, b1, b2);
+    tangent -= n * glm::dot(n, tangent);
+    const float length = glm::length(tangent);
+    if (!(length > 1e-6f)) return;  // no tangent here (no UVs): leave the normal as it is
+    tangent /= length;
+    const glm::vec3 bitangent = glm::cross(n, tangent) * (t0.w < 0.0f ? -1.0f : 1.0f);
+    const glm::vec3 texel = glm::vec3(scene.textures[size_t(m.normal_texture.texture)].sample(
+                                m.normal_texture.texcoord == 1 ? s.uv1 : s.uv0)) * 2.0f - 1.0f;
+    glm::vec3 mapped = tangent * (texel.x * m.normal_scale) + bitangent * (texel.y * m.normal_scale) + n * texel.z;
+    constexpr float kLowestCosine = 0.01f;
+    const float cosine = glm::dot(mapped, s.face_normal);
+    if (cosine < kLowestCosine) mapped += s.face_normal * (kLowestCosine - cosine) * glm::length(mapped);
+    const float mapped_length = glm::length(mapped);
+    if (mapped_length > 1e-8f && std::isfinite(mapped_length)) s.shading_normal = mapped / mapped_length;
 }
 
 SurfaceHit interpolate(const Scene& scene, uint32_t triangle, float b1, float b2) {
@@ -37,8 +66,11 @@ SurfaceHit interpolate(const Scene& scene, uint32_t triangle, float b1, float b2
         s.uv1 = b0 * scene.texcoords1[tri.x] + b1 * scene.texcoords1[tri.y] +
                 b2 * scene.texcoords1[tri.z];
     }
+    if (!scene.colors.empty()) s.color = barycentric(scene.colors, tri, b0, b1, b2);
     s.triangle = triangle;
     s.material = scene.triangle_materials[triangle];
+    const Material& material = scene.materials[s.material];
+    if (material.normal_texture.isSet() && !scene.tangents.empty()) applyNormalMap(scene, material, tri, b0, b1, b2, s);
     return s;
 }
 
@@ -60,10 +92,35 @@ SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, flo
     return s;
 }
 
+bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2) {
+    const Material& m = scene.materials[scene.triangle_materials[triangle]];
+    if (!m.cutsOut()) return false;
+    float alpha = m.base_alpha;
+    const glm::uvec3 tri = scene.triangles[triangle];
+    const float b0 = 1.0f - b1 - b2;
+    if (!scene.colors.empty()) alpha *= barycentric(scene.colors, tri, b0, b1, b2).a;
+    if (m.base_color_texture.isSet()) {
+        const std::vector<glm::vec2>& uvs = m.base_color_texture.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
+        const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : barycentric(uvs, tri, b0, b1, b2);
+        alpha *= scene.textures[size_t(m.base_color_texture.texture)].sample(uv).a;
+    }
+    if (m.alpha_mode == AlphaMode::Mask) return alpha < m.alpha_cutoff;
+    // BLEND: a fixed random number per point (triangle and barycentric bits), so the pattern is
+    // the same for every ray and thread count, and opaque in a share alpha of the surface.
+    uint32_t b1_bits, b2_bits;
+    std::memcpy(&b1_bits, &b1, sizeof b1_bits);
+    std::memcpy(&b2_bits, &b2, sizeof b2_bits);
+    uint64_t h = (uint64_t(triangle) << 32 | b1_bits) * 0x9E3779B97F4A7C15ull ^ (uint64_t(b2_bits) * 0xC2B2AE3D27D4EB4Full);
+    h ^= h >> 31;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 29;
+    return float(h >> 40) * 0x1.0p-24f >= alpha;
+}
+
 ShadingMaterial evaluateMaterial(const Scene& scene, const SurfaceHit& hit) {
     const Material& m = scene.materials[hit.material];
     ShadingMaterial out;
-    out.base_color = m.base_color * glm::vec3(fetch(scene, m.base_color_texture, hit));
+    out.base_color = m.base_color * glm::vec3(fetch(scene, m.base_color_texture, hit)) * glm::vec3(hit.color);
     const glm::vec4 mr = fetch(scene, m.metallic_roughness_texture, hit);
     out.metallic = glm::clamp(m.metallic * mr.b, 0.0f, 1.0f);
     out.roughness = glm::clamp(m.roughness * mr.g, 0.0f, 1.0f);

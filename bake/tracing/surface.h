@@ -20,6 +20,7 @@ struct SurfaceHit {
     bool front_face = true;  ///< the ray hit the side the winding's normal points to
     glm::vec2 uv0{0.0f};
     glm::vec2 uv1{0.0f};
+    glm::vec4 color{1.0f};  ///< COLOR_0 (white where the scene has none)
     uint32_t triangle = 0;
     uint32_t material = 0;
 };
@@ -30,6 +31,12 @@ SurfaceHit makeSurfaceHit(const Scene& scene, const RayHit& hit, glm::vec3 ray_d
 /// Surface point on a triangle from barycentrics (b1, b2) of vertices 1 and 2, oriented along
 /// the winding's normal (used for light sampling, where there is no incoming ray).
 SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, float b2);
+
+/// True where a ray passes through the surface at barycentrics (b1, b2) of `triangle`: its
+/// material is MASK with alpha below the cut-off, or BLEND and this point's fixed random number
+/// is at least alpha. Alpha is baseColorFactor.a x base colour texture alpha x COLOR_0 alpha.
+/// Deterministic: the same point gives the same answer on every ray and thread.
+bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2);
 
 /// glTF material parameters after texture lookups at one point.
 struct ShadingMaterial {

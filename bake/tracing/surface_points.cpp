@@ -3,6 +3,7 @@
 
 #include "tracing/distribution.h"
 #include "tracing/sampling.h"
+#include "tracing/surface.h"
 
 #include <algorithm>
 
@@ -38,6 +39,7 @@ std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count
         const float u = (float(i) + uniform(i * 3 + 1)) / float(count);
         const uint32_t t = uint32_t(by_area.sampleDiscrete(std::min(u, kOneMinusEpsilon)));
         const glm::vec2 b = sampleUniformTriangle({uniform(i * 3 + 2), uniform(i * 3 + 3)});
+        if (isCutOut(scene, t, b.x, b.y)) continue;  // a hole in an alpha-masked surface is no surface
         const glm::uvec3 tri = scene.triangles[t];
         const glm::vec3 p0 = scene.positions[tri.x], p1 = scene.positions[tri.y], p2 = scene.positions[tri.z];
         SurfacePoint point;

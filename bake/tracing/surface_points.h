@@ -20,9 +20,9 @@ struct SurfacePoint {
     bool double_sided = false;  ///< the material is seen from both sides
 };
 
-/// `count` points, stratified in the scene's area and uniform within each triangle. The same
-/// scene, count and seed give the same points. Empty for an empty scene; degenerate triangles
-/// (no area) are never picked.
+/// Up to `count` points, stratified in the scene's area and uniform within each triangle; those
+/// that fall in the holes of alpha cut-outs are left out. The same scene, count and seed give
+/// the same points. Empty for an empty scene; degenerate triangles (no area) are never picked.
 std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count, uint32_t seed = 0);
 
 /// The scene's total surface area (world units squared).

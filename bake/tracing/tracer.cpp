@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "tracing/tracer.h"
+#include "tracing/surface.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -33,6 +35,19 @@ int32_t floatAsInt(float f) {
     return i;
 }
 
+/// Embree's filter for both closest-hit and occlusion queries: a candidate hit on a cut-out
+/// point of an alpha-masked or blended material is rejected, and the ray goes on.
+void rejectCutOutHits(const RTCFilterFunctionNArguments* args) {
+    const Scene& scene = *static_cast<const Scene*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        const uint32_t triangle = RTCHitN_primID(args->hit, args->N, i);
+        if (isCutOut(scene, triangle, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i))) {
+            args->valid[i] = 0;
+        }
+    }
+}
+
 }  // namespace
 
 Tracer::Tracer(const Scene& scene) : scene_(scene) {
@@ -57,6 +72,12 @@ Tracer::Tracer(const Scene& scene) : scene_(scene) {
             geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
             scene.triangles.size()));
         std::memcpy(indices, scene.triangles.data(), scene.triangles.size() * sizeof(glm::uvec3));
+        // Only a scene with cut-outs pays for a filter call per candidate hit.
+        if (std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) { return m.cutsOut(); })) {
+            rtcSetGeometryUserData(geometry, const_cast<Scene*>(&scene));
+            rtcSetGeometryIntersectFilterFunction(geometry, rejectCutOutHits);
+            rtcSetGeometryOccludedFilterFunction(geometry, rejectCutOutHits);
+        }
         rtcCommitGeometry(geometry);
         rtcAttachGeometry(rtc_scene_, geometry);
         rtcReleaseGeometry(geometry);

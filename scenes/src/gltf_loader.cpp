@@ -118,6 +118,8 @@ struct PrimitiveGeometry {
     std::vector<glm::vec3> normals;  ///< empty when the primitive has none
     std::vector<glm::vec2> uv0;      ///< empty when absent
     std::vector<glm::vec2> uv1;      ///< empty when absent
+    std::vector<glm::vec4> colors;   ///< COLOR_0 as RGBA; empty when absent
+    std::vector<glm::vec4> tangents; ///< TANGENT (xyz, w = bitangent sign); empty when absent
     std::vector<glm::uvec3> triangles;
 };
 
@@ -211,6 +213,7 @@ public:
         readKnownRadiance();
         for (int root : rootNodes()) visitNode(root, glm::dmat4(1.0));
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
+        settleAlphaModes();
         computeBounds();
         scene_.stats.triangles_loaded = scene_.triangles.size();
         return std::move(scene_);
@@ -525,6 +528,36 @@ private:
         return out;
     }
 
+    std::vector<glm::vec4> readVec4(int index, const std::string& what) const {
+        const std::vector<double> raw = readAccessor(index, TINYGLTF_TYPE_VEC4, what);
+        std::vector<glm::vec4> out(raw.size() / 4);
+        for (size_t i = 0; i < out.size(); ++i)
+            out[i] = glm::vec4(glm::dvec4(raw[4 * i], raw[4 * i + 1], raw[4 * i + 2], raw[4 * i + 3]));
+        return out;
+    }
+
+    /// COLOR_0: VEC3 or VEC4 of floats or normalized unsigned bytes/shorts, linear (glTF says
+    /// vertex colours are linear); alpha 1 where absent. Non-finite or negative values are
+    /// clamped to [0, 1] with a warning rather than poisoning every path that hits them.
+    std::vector<glm::vec4> readColors(int index, const std::string& what) {
+        const tinygltf::Accessor& acc = accessorAt(index, what);
+        const bool rgba = acc.type == TINYGLTF_TYPE_VEC4;
+        const std::vector<double> raw = readAccessor(index, rgba ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, what);
+        const size_t components = rgba ? 4 : 3;
+        std::vector<glm::vec4> out(raw.size() / components, glm::vec4(1.0f));
+        size_t clamped = 0;
+        for (size_t i = 0; i < out.size(); ++i) {
+            for (size_t c = 0; c < components; ++c) {
+                const double v = raw[components * i + c];
+                const double safe = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
+                clamped += safe != v;
+                out[i][int(c)] = float(safe);
+            }
+        }
+        if (clamped > 0) warn(what + ": " + std::to_string(clamped) + " values outside [0, 1] clamped");
+        return out;
+    }
+
     std::vector<glm::vec2> readVec2(int index, const std::string& what) const {
         const std::vector<double> raw = readAccessor(index, TINYGLTF_TYPE_VEC2, what);
         std::vector<glm::vec2> out(raw.size() / 2);
@@ -644,10 +677,14 @@ private:
         dropDegenerateTriangles(geo);
         if (geo.normals.empty()) makeFlatShaded(geo);
         else repairNormals(geo, label);
-        appendGeometry(geo, materialForPrimitive(prim, label));
+        const uint32_t material = materialForPrimitive(prim, label);
+        if (const TextureRef& map = scene_.materials[material].normal_texture; map.isSet() && geo.tangents.empty()) {
+            computeTangents(geo, map.texcoord == 1 ? geo.uv1 : geo.uv0, label);
+        }
+        appendGeometry(geo, material);
     }
 
-    PrimitiveGeometry readPrimitive(const tinygltf::Primitive& prim, const std::string& label) const {
+    PrimitiveGeometry readPrimitive(const tinygltf::Primitive& prim, const std::string& label) {
         PrimitiveGeometry geo;
         auto attribute = [&](const char* name) {
             const auto it = prim.attributes.find(name);
@@ -678,6 +715,14 @@ private:
         if (const int a = attribute("TEXCOORD_1"); a >= 0) {
             geo.uv1 = readVec2(a, label + " TEXCOORD_1");
             checkCount(geo.uv1.size(), "TEXCOORD_1");
+        }
+        if (const int a = attribute("COLOR_0"); a >= 0) {
+            geo.colors = readColors(a, label + " COLOR_0");
+            checkCount(geo.colors.size(), "COLOR_0");
+        }
+        if (const int a = attribute("TANGENT"); a >= 0) {
+            geo.tangents = readVec4(a, label + " TANGENT");
+            checkCount(geo.tangents.size(), "TANGENT");
         }
         return geo;
     }
@@ -711,6 +756,13 @@ private:
             warn(label + ": node transform is singular; the primitive is flattened");
         const glm::dmat3 normalMatrix = det != 0.0 ? glm::inverseTranspose(linear) : linear;
         for (glm::vec3& n : geo.normals) n = glm::vec3(glm::normalize(normalMatrix * glm::dvec3(n)));
+        // Tangents lie in the surface: they transform like positions. A mirror flips the
+        // bitangent's handedness, as it flips the winding.
+        for (glm::vec4& t : geo.tangents) {
+            const glm::dvec3 xyz = linear * glm::dvec3(t);
+            const double length = glm::length(xyz);
+            t = glm::vec4(length > 0.0 ? glm::vec3(xyz / length) : glm::vec3(0.0f), det < 0.0 ? -t.w : t.w);
+        }
         if (det < 0.0)
             for (glm::uvec3& t : geo.triangles) std::swap(t.y, t.z);
     }
@@ -752,10 +804,53 @@ private:
                 flat.normals.push_back(n);
                 if (!geo.uv0.empty()) flat.uv0.push_back(geo.uv0[v]);
                 if (!geo.uv1.empty()) flat.uv1.push_back(geo.uv1[v]);
+                if (!geo.colors.empty()) flat.colors.push_back(geo.colors[v]);
+                if (!geo.tangents.empty()) flat.tangents.push_back(geo.tangents[v]);
             }
             flat.triangles.emplace_back(base, base + 1, base + 2);
         }
         geo = std::move(flat);
+    }
+
+    /// Per-vertex tangents for a normal-mapped primitive without TANGENT, from the directions in
+    /// which its texture coordinates grow (each triangle's dP/du, weighted by its area and summed
+    /// at its vertices, then made orthogonal to the vertex normal); w is the sign that makes
+    /// (normal x tangent) * w the direction of falling v. glTF asks for MikkTSpace tangents,
+    /// which agree with these where UV charts are smooth and differ slightly at seams.
+    void computeTangents(PrimitiveGeometry& geo, const std::vector<glm::vec2>& uv, const std::string& label) {
+        if (uv.empty()) {
+            warn(label + ": a normal map but no texture coordinates for it; the map is ignored");
+            return;
+        }
+        std::vector<glm::dvec3> along_u(geo.positions.size(), glm::dvec3(0.0));
+        std::vector<glm::dvec3> along_v(geo.positions.size(), glm::dvec3(0.0));
+        for (const glm::uvec3& t : geo.triangles) {
+            const glm::dvec3 e1 = glm::dvec3(geo.positions[t.y]) - glm::dvec3(geo.positions[t.x]);
+            const glm::dvec3 e2 = glm::dvec3(geo.positions[t.z]) - glm::dvec3(geo.positions[t.x]);
+            const glm::dvec2 d1 = glm::dvec2(uv[t.y]) - glm::dvec2(uv[t.x]);
+            const glm::dvec2 d2 = glm::dvec2(uv[t.z]) - glm::dvec2(uv[t.x]);
+            const double det = d1.x * d2.y - d2.x * d1.y;
+            if (!(std::abs(det) > 1e-20)) continue;  // no UV area: no direction to take
+            // Dividing by |det| instead of det weights each triangle by its area.
+            const double area = glm::length(glm::cross(e1, e2));
+            const glm::dvec3 du = (e1 * d2.y - e2 * d1.y) / det, dv = (e2 * d1.x - e1 * d2.x) / det;
+            const double weight = area / std::max(glm::length(du), 1e-30);
+            for (uint32_t v : {t.x, t.y, t.z}) {
+                along_u[v] += du * weight;
+                along_v[v] += dv * weight;
+            }
+        }
+        geo.tangents.assign(geo.positions.size(), glm::vec4(0.0f));
+        for (size_t i = 0; i < geo.positions.size(); ++i) {
+            const glm::dvec3 n(geo.normals[i]);
+            const glm::dvec3 t = along_u[i] - n * glm::dot(n, along_u[i]);
+            const double length = glm::length(t);
+            if (!(length > 1e-12)) continue;  // stays zero: the map is not applied at this vertex
+            // glTF's normal maps put +Y towards the top of the image, where v decreases: the
+            // bitangent (normal x tangent) x w must point against growing v.
+            const double handedness = glm::dot(glm::cross(n, t), along_v[i]) < 0.0 ? 1.0 : -1.0;
+            geo.tangents[i] = glm::vec4(glm::vec3(t / length), float(handedness));
+        }
     }
 
     /// Replaces NaN, infinite or zero normals with the area-weighted geometric normal of the
@@ -791,14 +886,16 @@ private:
         const size_t base = scene_.positions.size();
         if (base + geo.positions.size() > std::numeric_limits<uint32_t>::max())
             fail("scene has more than 2^32 vertices");
-        auto appendUv = [&](std::vector<glm::vec2>& dst, const std::vector<glm::vec2>& src) {
-            if (src.empty() && dst.empty()) return;  // nobody has this set (yet)
-            dst.resize(base, glm::vec2(0.0f));       // back-fill earlier primitives without it
-            if (src.empty()) dst.resize(base + geo.positions.size(), glm::vec2(0.0f));
+        auto append = [&](auto& dst, const auto& src, auto missing) {
+            if (src.empty() && dst.empty()) return;  // nobody has this attribute (yet)
+            dst.resize(base, missing);               // back-fill earlier primitives without it
+            if (src.empty()) dst.resize(base + geo.positions.size(), missing);
             else dst.insert(dst.end(), src.begin(), src.end());
         };
-        appendUv(scene_.texcoords0, geo.uv0);
-        appendUv(scene_.texcoords1, geo.uv1);
+        append(scene_.texcoords0, geo.uv0, glm::vec2(0.0f));
+        append(scene_.texcoords1, geo.uv1, glm::vec2(0.0f));
+        append(scene_.colors, geo.colors, glm::vec4(1.0f));      // no colour: white, opaque
+        append(scene_.tangents, geo.tangents, glm::vec4(0.0f));  // no tangent: the map is not applied
         scene_.positions.insert(scene_.positions.end(), geo.positions.begin(), geo.positions.end());
         scene_.normals.insert(scene_.normals.end(), geo.normals.begin(), geo.normals.end());
         const auto offset = static_cast<uint32_t>(base);
@@ -859,10 +956,63 @@ private:
         m.metallic_roughness_texture =
             textureRef({pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord}, false, label);
         m.emissive_texture = textureRef({src.emissiveTexture.index, src.emissiveTexture.texCoord}, true, label);
-        if (src.alphaMode != "OPAQUE")
-            warn(label + ": alphaMode " + src.alphaMode + " treated as OPAQUE");
+        m.normal_texture = textureRef({src.normalTexture.index, src.normalTexture.texCoord}, false, label);
+        m.normal_scale = static_cast<float>(src.normalTexture.scale);
+        if (src.occlusionTexture.index >= 0) {
+            // Not lost light: ambient occlusion is an approximation of what the path tracer
+            // computes from the geometry itself.
+            warn(label + ": occlusionTexture ignored (the path tracer computes occlusion from the geometry)");
+        }
+        readAlpha(src, m, label);
         readMaterialExtensions(src, m, label);
         return m;
+    }
+
+    /// alphaMode, alphaCutoff and the base colour's alpha. MASK and BLEND materials let rays
+    /// through where they are transparent (Material::cutsOut).
+    void readAlpha(const tinygltf::Material& src, Material& m, const std::string& label) {
+        m.base_alpha = src.pbrMetallicRoughness.baseColorFactor.size() == 4
+                           ? std::clamp(static_cast<float>(src.pbrMetallicRoughness.baseColorFactor[3]), 0.0f, 1.0f)
+                           : 1.0f;
+        m.alpha_cutoff = static_cast<float>(src.alphaCutoff);
+        if (src.alphaMode == "MASK") {
+            m.alpha_mode = AlphaMode::Mask;
+        } else if (src.alphaMode == "BLEND") {
+            m.alpha_mode = AlphaMode::Blend;
+        } else if (src.alphaMode != "OPAQUE" && !src.alphaMode.empty()) {
+            warn(label + ": unknown alphaMode " + quoted(src.alphaMode) + " treated as OPAQUE");
+        }
+    }
+
+    /// A MASK or BLEND material whose alpha is 1 everywhere (factor, texture and the vertex
+    /// colours of its triangles) is opaque: tracing it as such skips the per-hit alpha test.
+    void settleAlphaModes() {
+        std::vector<bool> vertex_alpha(scene_.materials.size(), false);  // some vertex colour alpha < 1
+        if (!scene_.colors.empty()) {
+            for (size_t t = 0; t < scene_.triangles.size(); ++t) {
+                for (uint32_t v : {scene_.triangles[t].x, scene_.triangles[t].y, scene_.triangles[t].z})
+                    if (scene_.colors[v].a < 1.0f) vertex_alpha[scene_.triangle_materials[t]] = true;
+            }
+        }
+        for (size_t i = 0; i < scene_.materials.size(); ++i) {
+            Material& m = scene_.materials[i];
+            if (!m.cutsOut()) continue;
+            bool texture_alpha = false;
+            if (m.base_color_texture.isSet()) {
+                for (const glm::vec4& texel : scene_.textures[size_t(m.base_color_texture.texture)].texels)
+                    texture_alpha = texture_alpha || texel.a < 1.0f;
+            }
+            const bool partial = m.base_alpha < 1.0f || texture_alpha || vertex_alpha[i];
+            const float lowest_alpha = partial ? 0.0f : 1.0f;
+            if (m.alpha_mode == AlphaMode::Mask ? !(lowest_alpha < m.alpha_cutoff) : !partial) {
+                m.alpha_mode = AlphaMode::Opaque;
+            } else if (m.alpha_mode == AlphaMode::Blend) {
+                const std::string& name = m.name;
+                warn("material " + std::to_string(i) + (name.empty() ? "" : " " + quoted(name)) +
+                     ": alphaMode BLEND is traced as a stochastic cut-out (opaque with probability alpha at each "
+                     "point, like Blender's alpha hashed); refraction and tinted transmission are not modelled");
+            }
+        }
     }
 
     static const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const char* name) {

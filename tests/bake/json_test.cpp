@@ -43,7 +43,7 @@ TEST(JsonOutput, StringsAreEscapedAndInvalidUtf8IsReplaced) {
     const std::string text = jsonText(json);
     EXPECT_NE(text.find(R"(a\"b\\c\n\u0001 é )"), std::string::npos) << text;
     EXPECT_NE(text.find("\xEF\xBF\xBD"), std::string::npos) << "0xFF becomes U+FFFD: " << text;
-    EXPECT_NO_THROW((void)Json::parse(text));
+    EXPECT_TRUE(Json::accept(text)) << text;
 }
 
 TEST(JsonOutput, Vec3IsAnArrayWithNullsForNonFinite) {

@@ -44,6 +44,11 @@ struct TextureRef {
     bool isSet() const { return texture >= 0; }
 };
 
+/// glTF alphaMode. MASK cuts out where alpha < alpha_cutoff; BLEND is traced as a stochastic
+/// cut-out (a surface point is opaque with probability alpha, fixed per point), which transmits
+/// light in proportion to 1 - alpha the way Blender's "alpha hashed" mode does.
+enum class AlphaMode : uint8_t { Opaque, Mask, Blend };
+
 /// glTF PBR metallic-roughness with KHR_materials_emissive_strength and KHR_materials_specular.
 /// Texture values multiply the factors, as the glTF specification says.
 struct Material {
@@ -62,6 +67,14 @@ struct Material {
     TextureRef specular_color_texture;      ///< RGB
     float ior = 1.5f;                       ///< KHR_materials_ior (1.5 when absent)
     bool double_sided = false;
+    TextureRef normal_texture;              ///< tangent-space normal map (linear RGB)
+    float normal_scale = 1.0f;              ///< scales the map's X and Y
+    AlphaMode alpha_mode = AlphaMode::Opaque;
+    float alpha_cutoff = 0.5f;              ///< MASK threshold
+    float base_alpha = 1.0f;                ///< baseColorFactor's alpha
+
+    /// True when rays may pass through some of this material's surface.
+    bool cutsOut() const { return alpha_mode != AlphaMode::Opaque; }
 
     /// True when some surface with this material emits light.
     bool isEmissive() const {
@@ -71,7 +84,7 @@ struct Material {
     bool hasTextures() const {
         return base_color_texture.isSet() || metallic_roughness_texture.isSet() ||
                emissive_texture.isSet() || specular_texture.isSet() ||
-               specular_color_texture.isSet();
+               specular_color_texture.isSet() || normal_texture.isSet();
     }
 };
 
@@ -135,6 +148,10 @@ struct Scene {
     std::vector<glm::vec3> normals;     ///< empty, or one per vertex (unit, world space)
     std::vector<glm::vec2> texcoords0;  ///< empty, or one per vertex
     std::vector<glm::vec2> texcoords1;  ///< empty, or one per vertex
+    std::vector<glm::vec4> colors;      ///< COLOR_0 (linear RGBA); empty, or one per vertex
+    /// Unit tangent (xyz) and the bitangent's sign (w), for normal maps; empty, or one per vertex
+    /// (TANGENT, or computed from TEXCOORDs where a normal-mapped primitive has none).
+    std::vector<glm::vec4> tangents;
     std::vector<glm::uvec3> triangles;
     std::vector<uint32_t> triangle_materials;
 

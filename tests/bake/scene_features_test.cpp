@@ -1,0 +1,270 @@
+// SPDX-License-Identifier: Apache-2.0
+// What scenes from other tools carry, from the glTF to the traced surface: vertex colours
+// (COLOR_0), tangent-space normal maps (with TANGENT or tangents computed from the UVs), alpha
+// cut-outs (MASK, and BLEND as a stochastic cut-out) and the occlusion map that is dropped with
+// a warning. Each case is a 2 m quad at y = 0 facing +Y, with u along +X and v along +Z.
+#include "gltf_builder.h"
+#include "sharcbake/scene_loader.h"
+#include "tracing/surface.h"
+#include "tracing/tracer.h"
+
+#include <gtest/gtest.h>
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+
+namespace sharcbake {
+namespace {
+
+using nlohmann::json;
+
+/// An 8-bit PNG of `width` x `height` RGBA pixels.
+std::vector<uint8_t> png(int width, int height, const std::vector<uint8_t>& rgba) {
+    std::vector<uint8_t> bytes;
+    stbi_write_png_to_func(
+        [](void* context, void* data, int size) {
+            auto* out = static_cast<std::vector<uint8_t>*>(context);
+            out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+        },
+        &bytes, width, height, 4, rgba.data(), width * 4);
+    return bytes;
+}
+
+/// One quad whose material and extra attributes each test sets.
+struct QuadScene {
+    test::GltfBuilder gltf;
+    json material = {{"pbrMetallicRoughness", {{"metallicFactor", 0.0}}}};
+    json extra_attributes = json::object();
+    json node = json::object();
+    std::vector<int> other_roots;  ///< more nodes in the scene besides the quad
+
+    /// Adds `image` (PNG bytes) as texture `index` order; returns the texture index.
+    int addTexture(const std::vector<uint8_t>& image, bool nearest = false) {
+        gltf.doc["images"].push_back({{"uri", "data:image/png;base64," + test::base64(image)}});
+        json sampler = {{"wrapS", 33071}, {"wrapT", 33071}};  // clamp to edge
+        if (nearest) sampler["magFilter"] = 9728;
+        gltf.doc["samplers"].push_back(sampler);
+        const int index = int(gltf.doc["textures"].size());
+        gltf.doc["textures"].push_back({{"source", index}, {"sampler", index}});
+        return index;
+    }
+
+    Scene load(const std::string& name = "quad.gltf") {
+        const std::vector<float> positions{-1, 0, -1, 1, 0, -1, 1, 0, 1, -1, 0, 1};
+        const std::vector<float> uvs{0, 0, 1, 0, 1, 1, 0, 1};
+        const std::vector<uint16_t> indices{0, 2, 1, 0, 3, 2};
+        json attributes = {{"POSITION", gltf.addPositions(positions)},
+                           {"NORMAL", gltf.addPositions({0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0})},
+                           {"TEXCOORD_0", gltf.addData(uvs, test::kFloat, "VEC2")}};
+        attributes.update(extra_attributes);
+        const int mat = gltf.addMaterial(material);
+        json primitive = {{"attributes", attributes},
+                          {"indices", gltf.addData(indices, test::kUnsignedShort, "SCALAR")},
+                          {"material", mat}};
+        std::vector<int> roots = other_roots;
+        roots.push_back(gltf.addMeshNode(primitive, node));
+        gltf.setScene(roots);
+        return loadGltf(gltf.writeEmbedded(dir, name));
+    }
+
+    test::TempDir dir;
+};
+
+/// The surface a ray straight down (or up, from below) meets at (x, z).
+std::optional<SurfaceHit> hitAt(const Scene& scene, const Tracer& tracer, float x, float z, bool from_below = false) {
+    const Ray ray{glm::vec3(x, from_below ? -1.0f : 1.0f, z), glm::vec3(0.0f, from_below ? 1.0f : -1.0f, 0.0f)};
+    RayHit hit;
+    if (!tracer.intersect(ray, hit)) return std::nullopt;
+    return makeSurfaceHit(scene, hit, ray.direction);
+}
+
+bool passesThrough(const Tracer& tracer, float x, float z) {
+    return !tracer.occluded(Ray{glm::vec3(x, 1.0f, z), glm::vec3(0.0f, -1.0f, 0.0f), 2.0f});
+}
+
+void expectNear(glm::vec3 actual, glm::vec3 expected, float tolerance) {
+    EXPECT_NEAR(actual.x, expected.x, tolerance) << "x";
+    EXPECT_NEAR(actual.y, expected.y, tolerance) << "y";
+    EXPECT_NEAR(actual.z, expected.z, tolerance) << "z";
+}
+
+bool warnedAbout(const Scene& scene, const std::string& text) {
+    return std::any_of(scene.stats.warnings.begin(), scene.stats.warnings.end(),
+                       [&](const std::string& w) { return w.find(text) != std::string::npos; });
+}
+
+TEST(VertexColors, MultiplyTheBaseColor) {
+    QuadScene quad;
+    quad.material["pbrMetallicRoughness"]["baseColorFactor"] = {0.5, 1.0, 1.0, 1.0};
+    const std::vector<uint8_t> rgba{255, 128, 0, 255, 255, 128, 0, 255, 255, 128, 0, 255, 255, 128, 0, 255};
+    quad.extra_attributes["COLOR_0"] = quad.gltf.addData(rgba, test::kUnsignedByte, "VEC4", true);
+    const Scene scene = quad.load();
+    ASSERT_EQ(scene.colors.size(), 4u);
+    expectNear(glm::vec3(scene.colors[2]), {1.0f, 128.0f / 255.0f, 0.0f}, 1e-6f);
+    const Tracer tracer(scene);
+    const auto hit = hitAt(scene, tracer, 0.3f, -0.2f);
+    ASSERT_TRUE(hit);
+    expectNear(evaluateMaterial(scene, *hit).base_color, {0.5f, 128.0f / 255.0f, 0.0f}, 1e-6f);
+    EXPECT_TRUE(scene.stats.warnings.empty());
+}
+
+TEST(VertexColors, FloatRgbAndPrimitivesWithoutColorsStayWhite) {
+    QuadScene quad;
+    quad.extra_attributes["COLOR_0"] = quad.gltf.addData(std::vector<float>{0.25f, 0.5f, 1.0f, 0.25f, 0.5f, 1.0f,
+                                                                            0.25f, 0.5f, 1.0f, 0.25f, 0.5f, 1.0f},
+                                                         test::kFloat, "VEC3");
+    // A second quad without COLOR_0, half a metre up: its vertices are back-filled white.
+    const int plain = quad.gltf.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {0.8, 0.8, 0.8, 1}}}}});
+    const std::vector<uint16_t> indices{0, 2, 1, 0, 3, 2};
+    quad.other_roots.push_back(quad.gltf.addMeshNode(
+        {{"attributes", {{"POSITION", quad.gltf.addPositions({-1, 0.5f, -1, 1, 0.5f, -1, 1, 0.5f, 1, -1, 0.5f, 1})}}},
+         {"indices", quad.gltf.addData(indices, test::kUnsignedShort, "SCALAR")},
+         {"material", plain}}));
+    const Scene scene = quad.load();
+    ASSERT_EQ(scene.colors.size(), scene.positions.size());
+    const Tracer tracer(scene);
+    const auto lower = hitAt(scene, tracer, 0.1f, 0.1f, true);
+    ASSERT_TRUE(lower);
+    expectNear(evaluateMaterial(scene, *lower).base_color, {0.25f, 0.5f, 1.0f}, 1e-6f);
+    const auto top = hitAt(scene, tracer, 0.1f, 0.1f);
+    ASSERT_TRUE(top);
+    expectNear(evaluateMaterial(scene, *top).base_color, {0.8f, 0.8f, 0.8f}, 1e-6f);
+}
+
+/// A 1x1 normal map holding the unit vector n (x, y, z in [-1, 1]).
+std::vector<uint8_t> normalTexel(glm::vec3 n) {
+    const auto encode = [](float c) { return uint8_t(std::lround((c * 0.5f + 0.5f) * 255.0f)); };
+    return png(1, 1, {encode(n.x), encode(n.y), encode(n.z), 255});
+}
+
+TEST(NormalMaps, TiltTheShadingNormalWithComputedTangents) {
+    // Tangent-space +X is the direction of growing u (+X here); +Y is the image's up, where v
+    // falls (-Z here); +Z is the surface normal (+Y).
+    struct Case {
+        glm::vec3 texel;
+        float scale;
+        glm::vec3 expected;
+    };
+    for (const Case& c : {Case{{0.6f, 0.0f, 0.8f}, 1.0f, {0.6f, 0.8f, 0.0f}},
+                          Case{{0.0f, 0.6f, 0.8f}, 1.0f, {0.0f, 0.8f, -0.6f}},
+                          Case{{0.6f, 0.0f, 0.8f}, 0.5f, glm::normalize(glm::vec3(0.3f, 0.8f, 0.0f))}}) {
+        QuadScene quad;
+        quad.material["normalTexture"] = {{"index", quad.addTexture(normalTexel(c.texel))}, {"scale", c.scale}};
+        const Scene scene = quad.load();
+        ASSERT_EQ(scene.tangents.size(), 4u);
+        expectNear(glm::vec3(scene.tangents[0]), {1.0f, 0.0f, 0.0f}, 1e-6f);
+        EXPECT_EQ(scene.tangents[0].w, 1.0f);
+        const Tracer tracer(scene);
+        const auto hit = hitAt(scene, tracer, 0.2f, 0.4f);
+        ASSERT_TRUE(hit);
+        // 8-bit texels: about 0.4% per component.
+        expectNear(hit->shading_normal, c.expected, 0.01f);
+        expectNear(hit->geometric_normal, {0.0f, 1.0f, 0.0f}, 0.0f);  // keys and offsets keep the true surface
+    }
+}
+
+TEST(NormalMaps, GivenTangentsAndTheBackOfADoubleSidedSurface) {
+    QuadScene quad;
+    quad.material["doubleSided"] = true;
+    quad.material["normalTexture"] = {{"index", quad.addTexture(normalTexel({0.6f, 0.0f, 0.8f}))}};
+    // TANGENT along -X with w = -1: the map's +X now points to -X.
+    quad.extra_attributes["TANGENT"] =
+        quad.gltf.addData(std::vector<float>{-1, 0, 0, -1, -1, 0, 0, -1, -1, 0, 0, -1, -1, 0, 0, -1}, test::kFloat,
+                          "VEC4");
+    const Scene scene = quad.load();
+    const Tracer tracer(scene);
+    const auto front = hitAt(scene, tracer, 0.2f, 0.4f);
+    ASSERT_TRUE(front);
+    expectNear(front->shading_normal, {-0.6f, 0.8f, 0.0f}, 0.01f);
+    // From below, the same bent normal turned towards the viewer.
+    const auto back = hitAt(scene, tracer, 0.2f, 0.4f, true);
+    ASSERT_TRUE(back);
+    EXPECT_FALSE(back->front_face);
+    expectNear(back->shading_normal, {0.6f, -0.8f, 0.0f}, 0.01f);
+}
+
+TEST(NormalMaps, AMapSteeperThanTheSurfaceStaysAboveIt) {
+    QuadScene quad;
+    quad.material["normalTexture"] = {{"index", quad.addTexture(normalTexel({1.0f, 0.0f, 0.0f}))}, {"scale", 3.0}};
+    const Scene scene = quad.load();
+    const Tracer tracer(scene);
+    const auto hit = hitAt(scene, tracer, 0.0f, 0.0f);
+    ASSERT_TRUE(hit);
+    EXPECT_GT(glm::dot(hit->shading_normal, hit->geometric_normal), 0.0f);
+    EXPECT_NEAR(glm::length(hit->shading_normal), 1.0f, 1e-5f);
+}
+
+TEST(AlphaCutouts, MaskFactorBelowTheCutoffLetsRaysThrough) {
+    for (const double alpha : {0.3, 0.7}) {
+        QuadScene quad;
+        quad.material["alphaMode"] = "MASK";
+        quad.material["pbrMetallicRoughness"]["baseColorFactor"] = {1.0, 1.0, 1.0, alpha};
+        const Scene scene = quad.load();
+        const Tracer tracer(scene);
+        const bool cut = alpha < 0.5;
+        EXPECT_EQ(!hitAt(scene, tracer, 0.1f, 0.2f).has_value(), cut) << alpha;
+        EXPECT_EQ(passesThrough(tracer, 0.1f, 0.2f), cut) << alpha;
+        EXPECT_EQ(scene.materials[0].alpha_mode, AlphaMode::Mask);
+    }
+}
+
+TEST(AlphaCutouts, MaskTextureCutsOutPerTexel) {
+    QuadScene quad;
+    quad.material["alphaMode"] = "MASK";
+    quad.material["alphaCutoff"] = 0.25;
+    // Left texel (u < 0.5, x < 0) opaque, right texel transparent.
+    quad.material["pbrMetallicRoughness"]["baseColorTexture"] = {
+        {"index", quad.addTexture(png(2, 1, {200, 200, 200, 255, 200, 200, 200, 0}), true)}};
+    const Scene scene = quad.load();
+    const Tracer tracer(scene);
+    for (const float z : {-0.7f, 0.0f, 0.6f}) {
+        EXPECT_TRUE(hitAt(scene, tracer, -0.5f, z)) << z;
+        EXPECT_FALSE(passesThrough(tracer, -0.5f, z)) << z;
+        EXPECT_FALSE(hitAt(scene, tracer, 0.5f, z)) << z;
+        EXPECT_TRUE(passesThrough(tracer, 0.5f, z)) << z;
+    }
+}
+
+TEST(AlphaCutouts, BlendTransmitsOneMinusAlphaDeterministically) {
+    QuadScene quad;
+    quad.material["alphaMode"] = "BLEND";
+    quad.material["pbrMetallicRoughness"]["baseColorFactor"] = {1.0, 1.0, 1.0, 0.3};
+    const Scene scene = quad.load();
+    EXPECT_TRUE(warnedAbout(scene, "stochastic cut-out"));
+    const Tracer tracer(scene);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> coordinate(-0.99f, 0.99f);
+    constexpr int kRays = 20000;
+    int through = 0;
+    for (int i = 0; i < kRays; ++i) {
+        const float x = coordinate(rng), z = coordinate(rng);
+        const bool passes = passesThrough(tracer, x, z);
+        through += passes;
+        ASSERT_EQ(passes, !hitAt(scene, tracer, x, z).has_value()) << "closest hit and occlusion agree";
+        ASSERT_EQ(passes, passesThrough(tracer, x, z)) << "the same point gives the same answer";
+    }
+    // Binomial standard deviation sqrt(0.7 * 0.3 / 20000) = 0.0032: 5 sigma.
+    EXPECT_NEAR(double(through) / kRays, 0.7, 0.016);
+}
+
+TEST(AlphaCutouts, MaterialsThatAreOpaqueEverywhereAreTracedAsOpaque) {
+    for (const char* mode : {"BLEND", "MASK"}) {
+        QuadScene quad;
+        quad.material["alphaMode"] = mode;
+        const Scene scene = quad.load();
+        EXPECT_EQ(scene.materials[0].alpha_mode, AlphaMode::Opaque) << mode;
+        EXPECT_TRUE(scene.stats.warnings.empty()) << mode;
+    }
+}
+
+TEST(OcclusionMaps, AreDroppedWithAWarning) {
+    QuadScene quad;
+    quad.material["occlusionTexture"] = {{"index", quad.addTexture(png(1, 1, {128, 128, 128, 255}))}};
+    const Scene scene = quad.load();
+    EXPECT_TRUE(warnedAbout(scene, "occlusionTexture ignored"));
+}
+
+}  // namespace
+}  // namespace sharcbake
