@@ -21,6 +21,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -30,13 +31,15 @@
 #include <fstream>
 #include <optional>
 #include <memory>
+#include <set>
 #include <sstream>
 
 namespace sharcbake {
 namespace {
 
 struct BakeOptions {
-    std::string scene_path;
+    std::vector<std::string> scene_paths;  ///< as given; one run per scene
+    std::string scene_path;                ///< this run's scene
     std::string output_path;
     uint32_t iterations = 512;
     double time_budget = 0.0;
@@ -70,6 +73,7 @@ struct BakeOptions {
     std::string shard = "0/1";
     bool quiet = false;
     double progress_interval = kDefaultProgressInterval;
+    bool print_config = false;
     // Error against run time (convergence_report.h).
     std::string report_dir;
     std::string reference_path;
@@ -1086,7 +1090,121 @@ private:
     double finish_seconds_ = 0.0;
 };
 
-void runBake(const BakeOptions& o) { BakeRun(o).run(); }
+/// The file name `scene_path` gives its outputs in a batch: "level" for "maps/level.glb".
+std::string sceneStem(const std::string& scene_path) { return std::filesystem::path(scene_path).stem().string(); }
+
+/// One scene's options in a batch: the folders given for -o, --stats-json, --checkpoint and
+/// --report hold that scene's files, named after it.
+BakeOptions batchEntryOptions(const BakeOptions& batch, const std::string& scene_path) {
+    const std::filesystem::path stem = sceneStem(scene_path);
+    BakeOptions o = batch;
+    o.scene_path = scene_path;
+    o.output_path = (std::filesystem::path(batch.output_path) / stem).string() + ".sharc";
+    if (!batch.stats_json.empty()) o.stats_json = (std::filesystem::path(batch.stats_json) / stem).string() + ".json";
+    if (!batch.checkpoint_path.empty()) {
+        o.checkpoint_path = (std::filesystem::path(batch.checkpoint_path) / stem).string() + ".ckpt";
+    }
+    if (!batch.report_dir.empty()) o.report_dir = (std::filesystem::path(batch.report_dir) / stem).string();
+    return o;
+}
+
+/// What a batch cannot do, and the folders it writes into (created when missing).
+void checkBatch(const BakeOptions& o) {
+    const auto refuse = [](const std::string& why) { throw CommandError(kExitUsage, "several scenes: " + why); };
+    if (!o.resume_path.empty()) refuse("--resume continues one bake; resume each scene on its own");
+    if (!o.reference_path.empty()) refuse("--reference is an image of one scene");
+    if (!o.camera_path.empty()) refuse("--camera-path is a path through one scene");
+    std::set<std::string> stems;
+    for (const std::string& scene : o.scene_paths) {
+        if (!stems.insert(sceneStem(scene)).second) {
+            refuse("two scenes named \"" + sceneStem(scene) + "\" would write the same outputs; bake them apart");
+        }
+    }
+    for (const std::string& folder : {o.output_path, o.stats_json, o.checkpoint_path, o.report_dir}) {
+        if (folder.empty()) continue;
+        std::error_code error;
+        std::filesystem::create_directories(folder, error);
+        if (!std::filesystem::is_directory(folder, error)) {
+            throw CommandError(kExitIo, folder + ": with several scenes -o, --stats-json, --checkpoint and --report "
+                                                 "name folders, and this one cannot be made");
+        }
+    }
+}
+
+/// Several scenes, one after the other, each with its own outputs and outcome. A failing scene
+/// does not stop the others; a signal stops the batch. The exit code is the first failure's.
+void runBatch(const BakeOptions& batch) {
+    checkBatch(batch);
+    struct Outcome {
+        std::string scene;
+        std::string output;
+        ExitCode code = kExitOk;
+        std::string message;
+    };
+    std::vector<Outcome> outcomes;
+    for (size_t i = 0; i < batch.scene_paths.size(); ++i) {
+        const BakeOptions o = batchEntryOptions(batch, batch.scene_paths[i]);
+        if (!o.quiet) std::printf("\n== Scene %zu of %zu: %s\n", i + 1, batch.scene_paths.size(), o.scene_path.c_str());
+        Outcome outcome{o.scene_path, o.output_path};
+        try {
+            BakeRun(o).run();
+        } catch (const CommandError& e) {
+            std::fflush(stdout);  // the error after the scene's own lines, in a log that holds both
+            std::fprintf(stderr, "sharcbake: error: %s\n", e.what());
+            outcome.code = e.code();
+            outcome.message = e.what();
+        }
+        outcomes.push_back(outcome);
+        if (outcome.code == kExitInterrupted || outcome.code == kExitTerminated) break;
+    }
+    const auto failed = std::count_if(outcomes.begin(), outcomes.end(), [](const Outcome& x) { return x.code != 0; });
+    std::printf("\nBatch: %zu of %zu scenes baked\n", outcomes.size() - size_t(failed), batch.scene_paths.size());
+    for (size_t i = 0; i < batch.scene_paths.size(); ++i) {
+        if (i >= outcomes.size()) {
+            std::printf("  not run   %s (the batch was stopped)\n", batch.scene_paths[i].c_str());
+        } else if (outcomes[i].code == kExitOk) {
+            std::printf("  ok        %s -> %s\n", outcomes[i].scene.c_str(), outcomes[i].output.c_str());
+        } else {
+            std::printf("  exit %-4d %s: %s\n", outcomes[i].code, outcomes[i].scene.c_str(), outcomes[i].message.c_str());
+        }
+    }
+    std::fflush(stdout);
+    for (const Outcome& x : outcomes) {
+        if (x.code != kExitOk) throw CommandError(x.code, std::to_string(failed) + " of " +
+                                                              std::to_string(batch.scene_paths.size()) +
+                                                              " scenes failed (first: " + x.scene + ")");
+    }
+    if (outcomes.size() < batch.scene_paths.size()) throw CommandError(kExitInterrupted, "the batch was stopped");
+}
+
+/// The command's options as a TOML section that --config reads back: every option that has a
+/// value (defaults included, so the file pins them) under its help text. Options left unset
+/// (an empty path) are left out: read back, an empty value would be checked as a path.
+void printConfig(const CLI::App& command) {
+    std::istringstream lines(command.config_to_str(true, true));
+    std::string text = "# sharcbake " SHARCBAKE_VERSION " bake settings: sharcbake --config FILE bake [SCENE...]\n[" +
+                       command.get_name() + "]\n";
+    std::string comment;
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty()) continue;
+        if (line[0] == '#') {
+            comment = line;
+            continue;
+        }
+        const bool unset = line.size() >= 3 && line.compare(line.size() - 3, 3, "=\"\"") == 0;
+        if (!unset && line.rfind("print-config", 0) != 0 && line.rfind("help", 0) != 0) {
+            text += "\n" + comment + "\n" + line + "\n";
+        }
+        comment.clear();
+    }
+    std::fputs(text.c_str(), stdout);
+}
+
+void runBake(BakeOptions o) {
+    if (o.scene_paths.size() > 1) return runBatch(o);
+    o.scene_path = o.scene_paths.front();
+    BakeRun(o).run();
+}
 
 }  // namespace
 
@@ -1107,8 +1225,13 @@ void registerBakeCommand(CLI::App& app) {
         "Examples:\n"
         "  sharcbake bake scenes/cornell_box/cornell_box.gltf -o out/cornell_box.sharc --iterations 512\n"
         "  sharcbake bake level.gltf -o level.sharc --view-region distance:0.5 --voxel-budget 1000000");
-    cmd->add_option("scene", o->scene_path, "glTF 2.0 scene (.gltf or .glb)")->required();
-    cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc)")->required();
+    cmd->add_option("scene", o->scene_paths,
+                    "glTF 2.0 scene (.gltf or .glb); several scenes bake one after the other, each with its "
+                    "own outputs (then -o, --stats-json, --checkpoint and --report name folders holding "
+                    "NAME.sharc, NAME.json, NAME.ckpt and NAME/ for each scene NAME)")
+        ->required();
+    cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc), or its folder for several scenes")
+        ->required();
     cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
     cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
         ->capture_default_str()->check(CLI::NonNegativeNumber)->check(kFiniteNumber);
@@ -1231,7 +1354,13 @@ void registerBakeCommand(CLI::App& app) {
         ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output; warnings and errors still print");
     addProgressIntervalOption(*cmd, o->progress_interval);
-    cmd->callback([o] { runBake(*o); });
+    cmd->add_flag("--print-config", o->print_config,
+                  "Print these options as a [bake] section for 'sharcbake --config FILE bake' and exit "
+                  "without baking");
+    cmd->callback([o, cmd] {
+        if (o->print_config) return printConfig(*cmd);
+        runBake(*o);
+    });
 }
 
 }  // namespace sharcbake

@@ -20,6 +20,14 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     app.footer(kExitCodeHelp);
     app.set_version_flag("--version", "sharcbake " SHARCBAKE_VERSION);
+    // Settings under version control: a TOML file with a [bake] (or [render], ...) section of
+    // option = value lines; the command line overrides it. An unknown key is an error, so a
+    // typo cannot silently fall back to a default.
+    app.set_config("--config", "",
+                   "Read options from a TOML file, one section per command ([bake], [render], ...; the "
+                   "names are the long options without --); the command line overrides it. 'sharcbake bake "
+                   "... --print-config' writes one. Give it before the command: sharcbake --config FILE bake ...");
+    app.allow_config_extras(CLI::config_extras_mode::error);
     registerRenderCommand(app);
     registerBakeCommand(app);
     registerInfoCommand(app);

@@ -1,0 +1,56 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# Batch work: several scenes in one bake (each with its own outputs and outcome; a failing scene
+# does not stop the others) and bake settings in a config file that the command line overrides.
+# Usage: batch_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+. "$(dirname "$0")/../cli_support.sh"
+
+furnace="$scenes/furnace_rho050/furnace_rho050.gltf"
+cornell="$scenes/cornell_box/cornell_box.gltf"
+small="--iterations 4 --resolution 160x90 --capacity 65536"
+rm -rf "$work/batch" "$work/stats" && mkdir -p "$work/broken"
+printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri": "nowhere.bin" } ] }' > "$work/broken/broken.gltf"
+
+# Three scenes, the second broken: the other two are baked, the summary names each, exit 3.
+expect 3 "a batch with a broken scene" "$sharcbake" bake "$furnace" "$work/broken/broken.gltf" "$cornell" \
+    -o "$work/batch" --stats-json "$work/stats" $small
+says "$work/out.txt" "Batch: 2 of 3 scenes baked" "the summary counts what was baked"
+says "$work/out.txt" "ok  *.*furnace_rho050.gltf -> .*batch/furnace_rho050.sharc" "the summary names each output"
+says "$work/out.txt" "exit 3 .*broken.gltf" "the summary names the failed scene and its exit code"
+says "$work/err.txt" "broken.gltf" "the failed scene's error is printed"
+for name in furnace_rho050 cornell_box; do
+    [ -s "$work/batch/$name.sharc" ] || fail "the batch did not write $name.sharc"
+    [ -s "$work/stats/$name.json" ] || fail "the batch did not write $name.json"
+done
+[ ! -e "$work/batch/broken.sharc" ] || fail "the broken scene left a cache"
+# Each scene's cache is the one a bake of that scene alone gives.
+expect 0 "the cornell box alone" "$sharcbake" bake "$cornell" -o "$work/alone.sharc" $small -q
+cmp -s "$work/alone.sharc" "$work/batch/cornell_box.sharc" || fail "a batch's cache differs from the same bake alone"
+
+expect 1 "two scenes with one name" "$sharcbake" bake "$furnace" "$furnace" -o "$work/batch" $small
+says "$work/err.txt" "same outputs" "the refusal says why"
+expect 1 "--resume with several scenes" "$sharcbake" bake "$furnace" "$cornell" -o "$work/batch" --resume "$work/x.ckpt"
+expect 2 "a batch into a file" sh -c "touch '$work/file' && '$sharcbake' bake '$furnace' '$cornell' -o '$work/file' $small"
+
+# A config file: printed by --print-config, read by --config, overridden by the command line.
+expect 0 "--print-config" "$sharcbake" bake "$cornell" -o "$work/from_config.sharc" $small --seed 3 --print-config
+cp "$work/out.txt" "$work/bake.toml"
+says "$work/bake.toml" "^\[bake\]" "the config has a [bake] section"
+says "$work/bake.toml" "^seed=3" "the config holds the options given"
+[ ! -e "$work/from_config.sharc" ] || fail "--print-config baked"
+expect 0 "bake from the config" "$sharcbake" --config "$work/bake.toml" bake -q
+expect 0 "the same bake from the command line" "$sharcbake" bake "$cornell" -o "$work/from_line.sharc" $small --seed 3 -q
+cmp -s "$work/from_config.sharc" "$work/from_line.sharc" || fail "the config's bake differs from the command line's"
+expect 0 "the command line overrides the config" "$sharcbake" --config "$work/bake.toml" bake -q --iterations 2 \
+    -o "$work/override.sharc" --stats-json "$work/override.json"
+python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['iterations'] == 2 and j['settings']['seed'] == 3, j['settings']" \
+    "$work/override.json" && echo "ok: --iterations 2 overrides the file, its seed stays" || fail "override"
+printf '[bake]\niteratoins = 5\n' > "$work/typo.toml"
+expect 1 "a config with a misspelt option" "$sharcbake" --config "$work/typo.toml" bake "$cornell" -o "$work/x.sharc"
+says "$work/err.txt" "iteratoins" "the error names the unknown key"
+
+finish "batch and config"
