@@ -54,7 +54,7 @@ demo: build
 	@echo "cornell_box_reference.exr/.png (plain path tracing, 1024 spp; the error above is against it)."
 	@echo "Error against run time: $(OUT_DIR)/report/convergence.png, first panel the cache against its"
 	@echo "probe reference, falling to its bias floor (tables: convergence.csv,"
-	@echo "plain_path_tracing.csv, convergence.json; README.md, 'Error against run time', explains them)."
+	@echo "plain_path_tracing.csv, convergence.json; docs/error_report.md explains them)."
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)

@@ -92,7 +92,7 @@ done
 cornell="$scenes/cornell_box/cornell_box.gltf"
 # Level bias 0 (the SDK's): every point of this 1 m room is on level 1, whose 4 cm voxels keep the
 # light (1 mm below the ceiling) and the ceiling apart. The fitted grid puts them in shared voxels
-# on the levels this camera reads, a SHaRC discretisation bias of +2..6% (README, "Light leaks").
+# on the levels this camera reads, a SHaRC discretisation bias of +2..6% (docs/baking.md, "Light leaks").
 expect 0 "cornell bake" "$sharcbake" bake "$cornell" -o "$work/cb.sharc" --iterations 100 --resolution 320x180 -q --level-bias 0
 expect 0 "cornell reference" "$sharcbake" render "$cornell" -o "$work/ref48.exr" --resolution 48 --spp 1024 -q --no-png
 expect 0 "cornell cached" "$sharcbake" render "$cornell" -o "$work/cached48.exr" --resolution 48 --spp 64 --cache "$work/cb.sharc" -q --no-png

@@ -1,6 +1,6 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# Hostile inputs and outputs (issue 19, README "Untrusted scenes and caches"): an output never
+# Hostile inputs and outputs (docs/untrusted_input.md): an output never
 # replaces a device, a FIFO or one of the command's inputs, a failed write keeps the previous
 # file, and crafted scenes and caches end with the documented exit code, quickly.
 # Usage: hardening_test.sh SHARCBAKE SCENES_DIR WORK_DIR

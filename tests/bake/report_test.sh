@@ -99,7 +99,7 @@ grep -q '"stop_reason": "target error"' "$work/target.json" || fail "stats JSON 
     fail "the cache's metadata does not record the stop reason"
 
 # Level bias 0 keeps this room on level 1, whose voxels keep the light and the ceiling apart (see
-# cli_test.sh; README, "Light leaks").
+# cli_test.sh; docs/baking.md, "Light leaks").
 # Cornell box against a reference render: the image error falls between the first and the last
 # checkpoint, and so does the render's own noise (paths end on the cache). Not the relative MSE:
 # a single firefly of this small reference dominates it (see the rest's standard error).
