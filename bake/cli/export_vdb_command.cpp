@@ -22,6 +22,7 @@ struct ExportVdbOptions {
     std::vector<std::string> channels;
     float scale = 1.0f;
     bool split_normals = false;
+    std::string up = "y";
     bool quiet = false;
 };
 
@@ -47,6 +48,7 @@ void run(const ExportVdbOptions& o) {
     }
     options.scale = o.scale;
     options.split_normals = o.split_normals;
+    options.up = o.up == "z" ? VdbUpAxis::kZ : VdbUpAxis::kY;
     options.source_path = o.input;
     options.writer = "sharcbake " SHARCBAKE_VERSION " export-vdb";
 
@@ -72,7 +74,8 @@ void registerExportVdbCommand(CLI::App& app) {
         "export-vdb",
         "Write a .sharc cache as OpenVDB grids to look at it in vdb_view, Houdini or Blender.\n\n"
         "Each SHaRC level present becomes its own grid set with its own voxel size: a VDB voxel is\n"
-        "one cache voxel, placed where the cache has it (glTF units, metres, +Y up, unchanged).\n"
+        "one cache voxel, placed where the cache has it (glTF units, metres, +Y up; --up z turns\n"
+        "it +Z up for Blender and other Z-up viewers).\n"
         "Grids, in file order:\n"
         "  density, color          the finest level exported again under the names viewers look\n"
         "                          for; 'density' is first, so vdb_render renders it\n"
@@ -82,7 +85,8 @@ void registerExportVdbCommand(CLI::App& app) {
         "  levelL_samples          float: effective sample count behind the mean\n"
         "SHaRC keeps up to 8 entries per voxel, one per octant of the surface normal. They are\n"
         "merged into one VDB voxel by their sample-weighted mean (samples = sum of weights);\n"
-        "--split-normals writes one grid set per octant instead (levelL_n+x-y+z_density, ...).\n"
+        "--split-normals writes one grid set per octant instead (levelL_xpos_yneg_zpos_density:\n"
+        "the signs of the normal's components).\n"
         "File metadata records the source cache, its format version, the bake metadata (scene,\n"
         "settings) and the units; each grid records its level, voxel size and scale.\n\n"
         "Viewing the result:\n"
@@ -90,7 +94,8 @@ void registerExportVdbCommand(CLI::App& app) {
         "  vdb_view out.vdb                        interactive viewer (OpenVDB tools)\n"
         "  vdb_render out.vdb out.exr -res 640x480 -translate 0,1,4 -absorb 0.5,0.5,0.5\n"
         "  Houdini: a File SOP reading out.vdb (then a Volume Visualization SOP on 'density')\n"
-        "  Blender: Add > Volume > Import OpenVDB; the 'density' and 'color' grids shade at once\n"
+        "  Blender: blender --python viewer_export/blender/import_sharc_vdb.py -- out.vdb (upright,\n"
+        "  with an emission material reading 'color'; export one level with --levels for it)\n"
         "  Raise --scale when a dim cache looks empty; lower it when it looks solid.\n\n"
         "Examples:\n"
         "  sharcbake export-vdb out/cornell_box.sharc -o out/cornell_box.vdb\n"
@@ -110,6 +115,11 @@ void registerExportVdbCommand(CLI::App& app) {
         ->capture_default_str()
         ->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_flag("--split-normals", o->split_normals, "One grid set per normal octant instead of merging them");
+    cmd->add_option("--up", o->up,
+                    "Up axis of the written world: y (glTF's, unchanged) or z (turned +90 degrees about X, "
+                    "glTF (x, y, z) at (x, -z, y), for Blender and other Z-up viewers)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"y", "z"}));
     cmd->add_flag("-q,--quiet", o->quiet, "Print nothing on success but warnings");
     cmd->callback([o] { run(*o); });
 }

@@ -34,6 +34,13 @@ for what, ok in checks.items():
     print(("ok: " if ok else "FAIL: ") + what)
 sys.exit(0 if all(checks.values()) else 1)
 PY
+# Exported Z-up (export-vdb --up z) and read as such: upright again, without the script's turn.
+expect 0 "export Z-up" "$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/cornell_z.vdb" --levels 1 --up z -q
+expect 0 "Blender, a Z-up file" blender -b --factory-startup --python "$script" -- "$work/cornell_z.vdb" \
+    --render "$work/blender_zz.png" --resolution 96 --up z
+python3 -c "import json,sys; r=json.loads(sys.argv[1]); sys.exit(0 if r['white_from_top'] < 0.4 and r['left_rgb'][0] > 1.5 * r['left_rgb'][1] else 1)" \
+    "$(grep '^sharcbake_vdb_render: ' "$work/out.txt" | sed 's/^sharcbake_vdb_render: //')" &&
+    echo "ok: a file exported Z-up renders upright" || fail "the Z-up export does not render upright"
 # The same file read as if it had been exported Z-up is not turned upright: the check can fail.
 expect 0 "Blender, wrong up axis" blender -b --factory-startup --python "$script" -- "$work/cornell.vdb" \
     --render "$work/blender_z.png" --resolution 96 --up z

@@ -145,6 +145,28 @@ TEST_F(VdbExportTest, TransformsPutVoxelCentresWhereTheCacheHasThem) {
     }
 }
 
+TEST_F(VdbExportTest, ZUpTurnsTheWorldForZUpViewers) {
+    VdbExportOptions options;
+    options.up = VdbUpAxis::kZ;
+    openvdb::MetaMap::Ptr meta;
+    const auto grids = exportAndRead(options, &meta);
+    EXPECT_EQ(meta->metaValue<std::string>("sharcbake_up_axis"), "z");
+    const HashGridParameters params = view_.gridParameters();
+    for (uint64_t i = 0; i < view_.voxelCount(); ++i) {
+        const HashGridCell c = decodeHashGridKey(view_.key(i));
+        const Float3 centre = voxelCenter(view_.key(i), params);
+        const auto grid = find(grids, "level" + std::to_string(c.level) + "_radiance");
+        ASSERT_TRUE(grid);
+        EXPECT_NEAR(grid->voxelSize()[0], voxelSize(c.level, params), 1e-6);
+        // glTF (x, y, z) is Blender's (x, -z, y).
+        const openvdb::Vec3d world = grid->indexToWorld(openvdb::Coord(c.grid.x, c.grid.y, c.grid.z));
+        const float expected[3] = {centre.x, -centre.z, centre.y};
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(world[k], expected[k], 1e-5 * std::max(1.0, std::abs(double(expected[k])))) << i << " " << k;
+        }
+    }
+}
+
 TEST_F(VdbExportTest, ValuesAndOctantMerging) {
     VdbExportOptions options;
     options.scale = 2.0f;
@@ -189,14 +211,14 @@ TEST_F(VdbExportTest, SplitNormalsWritesOneGridSetPerOctant) {
     const auto grids = exportAndRead(options);
     EXPECT_EQ(grids.size(), 2u + 5u * 4u);  // aliases + (3 octants on level 3, 2 on level 5) × 4
     EXPECT_EQ(find(grids, "density")->activeVoxelCount(), 2u);  // aliases stay merged
-    auto a = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_n+x+y+z_radiance"));
-    auto b = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_n-x+y-z_radiance"));
+    auto a = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_xpos_ypos_zpos_radiance"));
+    auto b = openvdb::gridPtrCast<openvdb::Vec3SGrid>(find(grids, "level3_xneg_ypos_zneg_radiance"));
     ASSERT_TRUE(a && b);
     EXPECT_EQ(a->activeVoxelCount(), 1u);
     EXPECT_NEAR(a->tree().getValue(openvdb::Coord(1, 2, -3))[0], 1.0f, 1e-6f);
     EXPECT_NEAR(b->tree().getValue(openvdb::Coord(1, 2, -3))[1], 1.0f, 1e-6f);
-    EXPECT_TRUE(find(grids, "level3_n+x-y+z_samples"));
-    EXPECT_TRUE(find(grids, "level5_n-x-y-z_density"));
+    EXPECT_TRUE(find(grids, "level3_xpos_yneg_zpos_samples"));
+    EXPECT_TRUE(find(grids, "level5_xneg_yneg_zneg_density"));
 }
 
 TEST_F(VdbExportTest, LevelsAndChannelsSelectGrids) {

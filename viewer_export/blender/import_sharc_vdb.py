@@ -3,7 +3,8 @@
 
 Blender's own Add > Volume > Import OpenVDB loads the grids but gives them no material, so the
 volume renders as dim grey smoke, and leaves the glTF scene's +Y up pointing along Blender's -Y.
-This script adds the volume, turns it upright (unless the file was exported with --up z) and
+This script adds the volume, turns it upright (unless the file was exported with
+`sharcbake export-vdb --up z`, which turns it already: then pass --up z here too) and
 gives it an emission shader that shows each voxel's cached radiance as its colour: a ray that
 crosses one voxel picks up about that voxel's radiance, whatever its size.
 

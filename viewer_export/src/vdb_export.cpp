@@ -62,12 +62,13 @@ openvdb::Vec3f meanRadiance(const Cell& cell) {
     return r;
 }
 
+/// "xpos_yneg_zpos": the signs of the normal's components in a sharc octant (a bit set is a
+/// negative component). Plain letters, so the names work in attribute expressions.
 std::string octantName(int32_t octant) {
-    std::string s = "n";
+    std::string s;
     const char axes[3] = {'x', 'y', 'z'};
     for (int k = 0; k < 3; ++k) {
-        s += (octant >> k) & 1 ? '-' : '+';
-        s += axes[k];
+        s += (k ? "_" : "") + std::string(1, axes[k]) + ((octant >> k) & 1 ? "neg" : "pos");
     }
     return s;
 }
@@ -119,108 +120,107 @@ GridSet buildGrids(const std::unordered_map<uint64_t, Cell>& cells, const openvd
     return g;
 }
 
-}  // namespace
-
-VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_path, const VdbExportOptions& options,
-                                 std::vector<VdbGridInfo>* grids_out, std::string* message) {
-    auto fail = [&](VdbExportStatus status, const std::string& text) {
-        if (message) *message = text;
-        return status;
-    };
-    if (grids_out) grids_out->clear();
-    if (!cache.isOpen()) return fail(VdbExportStatus::kInvalidArgument, "no cache open");
-    if (!std::isfinite(options.scale)) return fail(VdbExportStatus::kInvalidArgument, "scale must be finite");
-
+/// The levels to export, sorted, each one the cache holds; an error message otherwise.
+std::string selectLevels(const CacheView& cache, const VdbExportOptions& options, std::vector<uint32_t>& levels) {
     std::vector<uint32_t> present;
     for (const CacheLevel& l : cache.levels()) present.push_back(l.level);
-    std::vector<uint32_t> levels = options.levels.empty() ? present : options.levels;
+    levels = options.levels.empty() ? present : options.levels;
     std::sort(levels.begin(), levels.end());
     levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
     for (const uint32_t l : levels) {
         if (std::find(present.begin(), present.end(), l) == present.end()) {
             std::string list;
             for (const uint32_t p : present) list += (list.empty() ? "" : ",") + std::to_string(p);
-            return fail(VdbExportStatus::kInvalidArgument, "level " + std::to_string(l) +
-                                                               " is not in the cache (levels present: " +
-                                                               (list.empty() ? "none" : list) + ")");
+            return "level " + std::to_string(l) + " is not in the cache (levels present: " +
+                   (list.empty() ? "none" : list) + ")";
         }
     }
-    if (levels.empty()) return fail(VdbExportStatus::kUnrepresentable, "the cache holds no voxels: nothing to export");
+    return {};
+}
 
-    openvdb::initialize();
-    const HashGridParameters params = cache.gridParameters();
-    std::map<uint32_t, openvdb::math::Transform::Ptr> transforms;
-    for (const uint32_t l : levels) {
-        const float s = voxelSize(l, params);
-        if (!std::isfinite(s) || s <= 0.0f) {
-            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + " has no finite voxel size");
-        }
-        // VDB voxel centres sit at index × s; the cache voxel g spans [g·s, (g+1)·s).
-        try {
-            auto xform = openvdb::math::Transform::createLinearTransform(double(s));
-            xform->postTranslate(openvdb::Vec3d(0.5 * double(s)));
-            transforms[l] = xform;
-        } catch (const std::exception& e) {
-            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + ": voxel size " +
-                                                               std::to_string(s) + " is out of OpenVDB's range: " + e.what());
-        }
+/// Index-to-world transform of one level: VDB voxel centres sit at index x s, and the cache voxel
+/// g spans [g s, (g+1) s), so the index space is shifted by half a voxel. For a Z-up viewer the
+/// world is then turned +90 degrees about X: glTF's (x, y, z) becomes (x, -z, y).
+openvdb::math::Transform::Ptr levelTransform(float voxel_size, VdbUpAxis up) {
+    auto xform = openvdb::math::Transform::createLinearTransform(double(voxel_size));
+    xform->postTranslate(openvdb::Vec3d(0.5 * double(voxel_size)));
+    if (up == VdbUpAxis::kZ) xform->postRotate(0.5 * openvdb::math::pi<double>(), openvdb::math::X_AXIS);
+    return xform;
+}
+
+/// The grids written, in file order, and what is said about them.
+class GridList {
+public:
+    explicit GridList(std::vector<VdbGridInfo>* info) : info_(info) {}
+    void add(const openvdb::GridBase::Ptr& grid, uint32_t level, int32_t octant, float voxel_size) {
+        if (grid->activeVoxelCount() == 0) return;  // empty grids are left out
+        grids_.push_back(grid);
+        if (info_) info_->push_back({grid->getName(), level, octant, uint64_t(grid->activeVoxelCount()), voxel_size});
     }
+    const openvdb::GridPtrVec& grids() const { return grids_; }
 
-    openvdb::GridPtrVec grids;
-    auto add = [&](const openvdb::GridBase::Ptr& grid, uint32_t level, int32_t octant) {
-        if (grid->activeVoxelCount() == 0) return;
-        grids.push_back(grid);
-        if (grids_out) {
-            grids_out->push_back({grid->getName(), level, octant, uint64_t(grid->activeVoxelCount()),
-                                  float(grid->voxelSize()[0])});
-        }
-    };
+private:
+    openvdb::GridPtrVec grids_;
+    std::vector<VdbGridInfo>* info_;
+};
 
-    // `density` and `color` first: the merged finest (smallest voxel) level exported.
-    const uint32_t finest = levels.front();
-    {
-        const Groups merged = accumulate(cache, {finest}, false);
-        const GridSet g = buildGrids(merged.begin()->second, transforms[finest], options.scale);
-        const float s = voxelSize(finest, params);
-        tagGrid(*g.density, "density", finest, -1, s, options.scale,
-                "luminance of radiance x scale, finest level (same as level" + std::to_string(finest) + "_density)");
-        tagGrid(*g.color, "color", finest, -1, s, options.scale,
-                "radiance x scale, finest level (same as level" + std::to_string(finest) + "_color)");
-        add(g.density, finest, -1);
-        add(g.color, finest, -1);
-    }
+/// `density` and `color`, first in the file: the merged finest level exported, under the names
+/// viewers look for.
+void addFinestGrids(const CacheView& cache, uint32_t finest, const openvdb::math::Transform::Ptr& xform,
+                    const VdbExportOptions& options, GridList& list) {
+    const Groups merged = accumulate(cache, {finest}, false);
+    const GridSet g = buildGrids(merged.begin()->second, xform, options.scale);
+    const float s = voxelSize(finest, cache.gridParameters());
+    tagGrid(*g.density, "density", finest, -1, s, options.scale,
+            "luminance of radiance x scale, finest level (same as level" + std::to_string(finest) + "_density)");
+    tagGrid(*g.color, "color", finest, -1, s, options.scale,
+            "radiance x scale, finest level (same as level" + std::to_string(finest) + "_color)");
+    list.add(g.density, finest, -1, s);
+    list.add(g.color, finest, -1, s);
+}
 
-    const Groups groups = accumulate(cache, levels, options.split_normals);
-    for (const auto& [group, cells] : groups) {
+/// levelL[_octant]_density, _color, _radiance and _samples, as the options choose.
+void addLevelGrids(const CacheView& cache, const std::vector<uint32_t>& levels,
+                   const std::map<uint32_t, openvdb::math::Transform::Ptr>& transforms,
+                   const VdbExportOptions& options, GridList& list) {
+    for (const auto& [group, cells] : accumulate(cache, levels, options.split_normals)) {
         const auto [level, octant] = group;
-        const float s = voxelSize(level, params);
-        const GridSet g = buildGrids(cells, transforms[level], options.scale);
+        const float s = voxelSize(level, cache.gridParameters());
+        const GridSet g = buildGrids(cells, transforms.at(level), options.scale);
         const std::string prefix =
             "level" + std::to_string(level) + (octant < 0 ? std::string() : "_" + octantName(octant)) + "_";
         if (options.density) {
             tagGrid(*g.density, prefix + "density", level, octant, s, options.scale, "luminance of radiance x scale");
-            add(g.density, level, octant);
+            list.add(g.density, level, octant, s);
         }
         if (options.color) {
             tagGrid(*g.color, prefix + "color", level, octant, s, options.scale, "radiance x scale");
-            add(g.color, level, octant);
+            list.add(g.color, level, octant, s);
         }
         if (options.radiance) {
             tagGrid(*g.radiance, prefix + "radiance", level, octant, s, 1.0f, "mean outgoing radiance (unscaled)");
-            add(g.radiance, level, octant);
+            list.add(g.radiance, level, octant, s);
         }
         if (options.samples) {
             tagGrid(*g.samples, prefix + "samples", level, octant, s, 1.0f, "effective sample count (sum of weights)");
-            add(g.samples, level, octant);
+            list.add(g.samples, level, octant, s);
         }
     }
+}
 
+/// The file's metadata: where the grids come from, their units and axes, the grid parameters an
+/// engine needs, and the cache's own metadata (bake_*).
+openvdb::MetaMap fileMetadata(const CacheView& cache, const VdbExportOptions& options) {
+    const HashGridParameters params = cache.gridParameters();
     openvdb::MetaMap meta;
     meta.insertMeta("sharcbake_source", openvdb::StringMetadata(options.source_path));
     meta.insertMeta("sharcbake_format_version", openvdb::StringMetadata(std::to_string(cache.versionMajor()) + "." +
                                                                         std::to_string(cache.versionMinor())));
     meta.insertMeta("sharcbake_writer", openvdb::StringMetadata(options.writer));
-    meta.insertMeta("units", openvdb::StringMetadata("glTF metres, +Y up"));
+    meta.insertMeta("units", openvdb::StringMetadata(options.up == VdbUpAxis::kZ
+                                                         ? "glTF metres, turned +Z up (glTF (x, y, z) is (x, -z, y))"
+                                                         : "glTF metres, +Y up"));
+    meta.insertMeta("sharcbake_up_axis", openvdb::StringMetadata(options.up == VdbUpAxis::kZ ? "z" : "y"));
     meta.insertMeta("sharcbake_octants",
                     openvdb::StringMetadata(options.split_normals ? "split: one grid set per normal octant"
                                                                   : "merged: sample-weighted mean of the octants"));
@@ -232,15 +232,19 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
         meta.insertMeta("sharcbake_bake_" + std::string(cache.metadataKey(i)),
                         openvdb::StringMetadata(std::string(cache.metadataValue(i))));
     }
+    return meta;
+}
 
-    // The caches' output rules (cache_file.h): the grids go to a temporary beside the target, which
-    // is read back in full (OpenVDB does not report write errors: a full disk leaves a truncated
-    // file) and only then renamed over the target. A device or FIFO is never replaced, and on
-    // failure the previous file is intact. (io::File, not io::Stream: vdb_render needs the grid
-    // offsets that only a file archive stores.)
+/// The caches' output rules (cache_file.h): the grids go to a temporary beside the target, which
+/// is read back in full (OpenVDB does not report write errors: a full disk leaves a truncated
+/// file) and only then renamed over the target. A device or FIFO is never replaced, and on
+/// failure the previous file is intact. (io::File, not io::Stream: vdb_render needs the grid
+/// offsets that only a file archive stores.) Returns an error message, empty on success.
+std::string writeGridsAtomically(const std::string& out_path, const openvdb::GridPtrVec& grids,
+                                 const openvdb::MetaMap& meta) {
     std::string target, temporary, problem;
     if (prepareOutputFile(out_path, &target, &temporary, &problem) != CacheFileStatus::kOk) {
-        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
+        return "cannot write " + out_path + ": " + problem;
     }
     try {
         openvdb::io::File file(temporary);
@@ -253,11 +257,51 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
         if (!read_back || read_back->size() != grids.size()) throw std::runtime_error("the grids do not read back");
     } catch (const std::exception& e) {
         ::unlink(temporary.c_str());
-        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + " (disk full?): " + e.what() +
-                                                   "; the previous file is untouched");
+        return "cannot write " + out_path + " (disk full?): " + e.what() + "; the previous file is untouched";
     }
     if (commitOutputFile(temporary, target, &problem) != CacheFileStatus::kOk) {
-        return fail(VdbExportStatus::kIoError, "cannot write " + out_path + ": " + problem);
+        return "cannot write " + out_path + ": " + problem;
+    }
+    return {};
+}
+
+}  // namespace
+
+VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_path, const VdbExportOptions& options,
+                                 std::vector<VdbGridInfo>* grids_out, std::string* message) {
+    auto fail = [&](VdbExportStatus status, const std::string& text) {
+        if (message) *message = text;
+        return status;
+    };
+    if (grids_out) grids_out->clear();
+    if (!cache.isOpen()) return fail(VdbExportStatus::kInvalidArgument, "no cache open");
+    if (!std::isfinite(options.scale)) return fail(VdbExportStatus::kInvalidArgument, "scale must be finite");
+    std::vector<uint32_t> levels;
+    if (const std::string problem = selectLevels(cache, options, levels); !problem.empty()) {
+        return fail(VdbExportStatus::kInvalidArgument, problem);
+    }
+    if (levels.empty()) return fail(VdbExportStatus::kUnrepresentable, "the cache holds no voxels: nothing to export");
+
+    openvdb::initialize();
+    std::map<uint32_t, openvdb::math::Transform::Ptr> transforms;
+    for (const uint32_t l : levels) {
+        const float s = voxelSize(l, cache.gridParameters());
+        if (!std::isfinite(s) || s <= 0.0f) {
+            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + " has no finite voxel size");
+        }
+        try {
+            transforms[l] = levelTransform(s, options.up);
+        } catch (const std::exception& e) {
+            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + ": voxel size " +
+                                                               std::to_string(s) + " is out of OpenVDB's range: " + e.what());
+        }
+    }
+    GridList list(grids_out);
+    addFinestGrids(cache, levels.front(), transforms[levels.front()], options, list);
+    addLevelGrids(cache, levels, transforms, options, list);
+    if (const std::string problem = writeGridsAtomically(out_path, list.grids(), fileMetadata(cache, options));
+        !problem.empty()) {
+        return fail(VdbExportStatus::kIoError, problem);
     }
     return VdbExportStatus::kOk;
 }

@@ -17,8 +17,12 @@
 ///    surface normal). By default they are merged into one VDB voxel: radiance is the
 ///    sample-weighted mean Σ wᵢ·rᵢ / Σ wᵢ (plain mean when every weight is 0) and samples is
 ///    Σ wᵢ. With split_normals each octant present gets its own grid set instead, named
-///    `levelL_n<sx>x<sy>y<sz>z_<channel>`, e.g. `level3_n+x-y+z_density` (a sign is '-' when
-///    that normal component is negative: key normal bit set).
+///    `levelL_x<s>_y<s>_z<s>_<channel>` with each sign `pos` or `neg`, e.g.
+///    `level3_xpos_yneg_zpos_density` (`neg` when that normal component is negative: key normal
+///    bit set).
+///  * Axes: glTF's +Y up by default; with VdbUpAxis::kZ every transform is turned +90 degrees
+///    about X (glTF (x, y, z) is written at (x, -z, y)) for Z-up viewers such as Blender. The
+///    file's `sharcbake_up_axis` metadata says which.
 ///  * Only non-empty grids are written. Every stored cache entry is an active voxel (even a black
 ///    one); inactive voxels have the background value 0.
 #pragma once
@@ -31,6 +35,9 @@
 
 namespace sharcbake {
 
+/// The up axis of the written world: glTF's (the default) or a Z-up viewer's.
+enum class VdbUpAxis { kY, kZ };
+
 struct VdbExportOptions {
     std::vector<uint32_t> levels;  ///< levels to export; empty = every level present
     bool density = true;           ///< levelL_density
@@ -39,6 +46,7 @@ struct VdbExportOptions {
     bool samples = true;           ///< levelL_samples
     float scale = 1.0f;            ///< display scale applied to density and color
     bool split_normals = false;    ///< one grid set per normal octant instead of merging
+    VdbUpAxis up = VdbUpAxis::kY;  ///< kZ: turn the world +90 degrees about X for Z-up viewers
     std::string source_path;       ///< recorded in the file metadata
     std::string writer = "sharcbake";  ///< recorded in the file metadata
 };
@@ -49,7 +57,7 @@ struct VdbGridInfo {
     uint32_t level = 0;
     int32_t octant = -1;  ///< normal bits 0..7, or -1 when octants are merged
     uint64_t active_voxels = 0;
-    float voxel_size = 0.0f;
+    float voxel_size = 0.0f;  ///< the level's voxel edge, in scene units
 };
 
 enum class VdbExportStatus {
