@@ -48,11 +48,11 @@ void sortVoxels(std::vector<CacheVoxel>& voxels) {
     std::sort(voxels.begin(), voxels.end(), [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; });
 }
 
-// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META.
-CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
-    if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
-    if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
-    // The writer refuses what a reader would reject (SPEC §F.10), with a writer-side message.
+namespace {
+
+/// What a reader would reject (SPEC §F.10), refused before writing with a writer-side message;
+/// on success `levels` holds the voxel count of every level present, ascending.
+CacheFileStatus checkCacheData(const CacheData& data, std::vector<CacheLevel>& levels, std::string* message) {
     std::array<uint32_t, kHashGridLevelMax + 1> per_level{};
     for (size_t i = 0; i < data.voxels.size(); ++i) {
         const CacheVoxel& v = data.voxels[i];
@@ -81,8 +81,7 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     }
     std::unordered_set<std::string_view> keys;  // linear, not quadratic, in the entry count
     keys.reserve(data.metadata.size());
-    for (size_t i = 0; i < data.metadata.size(); ++i) {
-        const auto& [key, value] = data.metadata[i];
+    for (const auto& [key, value] : data.metadata) {
         if (key.empty() || key.size() > 0xFFFFFFFFu || value.size() > 0xFFFFFFFFu) {
             return fail(CacheFileStatus::kInvalidData, message, "metadata keys must be non-empty");
         }
@@ -90,22 +89,15 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
             return fail(CacheFileStatus::kInvalidData, message, "duplicate metadata key \"" + key + "\"");
         }
     }
-    std::vector<CacheLevel> levels;
+    levels.clear();
     for (uint32_t l = 1; l <= kHashGridLevelMax; ++l) {
         if (per_level[l]) levels.push_back(CacheLevel{l, per_level[l]});
     }
+    return CacheFileStatus::kOk;
+}
 
-    constexpr uint32_t kSections = 5;
-    std::vector<uint8_t>& bytes = *out;
-    bytes.clear();
-    bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
-                  levels.size() * 8 + 4096);
-    ContainerWriter container(bytes, kCacheIdentifier, kCacheVersionMajor, kCacheVersionMinor, kSections);
-    ByteWriter& w = container.out();
-    const auto begin = [&](uint32_t type, uint32_t flags) { container.beginSection(type, flags); };
-    const auto end = [&] { container.endSection(); };
-    // 3) GRID (SPEC §F.5).
-    begin(kSectionGrid, kCacheSectionRequired);
+/// GRID (SPEC §F.5): the hash grid's layout and parameters.
+void writeGridSection(ByteWriter& w, const CacheData& data, uint32_t level_count) {
     w.put(kHashGridPositionBits);
     w.put(kHashGridLevelBits);
     w.put(kHashGridNormalBits);
@@ -119,42 +111,63 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     w.put(kHashGridPositionBias);
     w.put(kHashGridNormalBias);
     w.put(uint64_t(data.voxels.size()));
-    w.put(uint32_t(levels.size()));
+    w.put(level_count);
     w.put(uint32_t(0));
-    end();
-    // 4) KEYS (SPEC §F.6).
-    begin(kSectionKeys, kCacheSectionRequired);
+}
+
+/// META (SPEC §F.8): entry count, then each key and value with their lengths.
+void writeMetadataSection(ByteWriter& w, const std::vector<std::pair<std::string, std::string>>& metadata) {
+    w.put(uint32_t(metadata.size()));
+    w.put(uint32_t(0));
+    for (const auto& [key, value] : metadata) {
+        w.put(uint32_t(key.size()));
+        w.put(uint32_t(value.size()));
+        w.putBytes(key.data(), key.size());
+        w.putBytes(value.data(), value.size());
+    }
+}
+
+}  // namespace
+
+// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META.
+CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
+    if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
+    if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
+    std::vector<CacheLevel> levels;
+    if (const CacheFileStatus status = checkCacheData(data, levels, message); status != CacheFileStatus::kOk) {
+        return status;
+    }
+    constexpr uint32_t kSections = 5;
+    std::vector<uint8_t>& bytes = *out;
+    bytes.clear();
+    bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
+                  levels.size() * 8 + 4096);
+    ContainerWriter container(bytes, kCacheIdentifier, kCacheVersionMajor, kCacheVersionMinor, kSections);
+    ByteWriter& w = container.out();
+    container.beginSection(kSectionGrid, kCacheSectionRequired);
+    writeGridSection(w, data, uint32_t(levels.size()));
+    container.endSection();
+    container.beginSection(kSectionKeys, kCacheSectionRequired);  // SPEC §F.6
     for (const CacheVoxel& v : data.voxels) w.put(v.key);
-    end();
-    // 5) VOXL (SPEC §F.6).
-    begin(kSectionVoxels, kCacheSectionRequired);
+    container.endSection();
+    container.beginSection(kSectionVoxels, kCacheSectionRequired);  // SPEC §F.6
     for (const CacheVoxel& v : data.voxels) {
         w.put(v.radiance[0]);
         w.put(v.radiance[1]);
         w.put(v.radiance[2]);
         w.put(v.sample_weight);
     }
-    end();
-    // 6) LEVL (SPEC §F.7).
-    begin(kSectionLevels, kCacheSectionRequired);
+    container.endSection();
+    container.beginSection(kSectionLevels, kCacheSectionRequired);  // SPEC §F.7
     for (const CacheLevel& l : levels) {
         w.put(l.level);
         w.put(l.voxel_count);
     }
-    end();
-    // 7) META (SPEC §F.8), optional.
-    begin(kSectionMetadata, 0);
-    w.put(uint32_t(data.metadata.size()));
-    w.put(uint32_t(0));
-    for (const auto& [key, value] : data.metadata) {
-        w.put(uint32_t(key.size()));
-        w.put(uint32_t(value.size()));
-        w.putBytes(key.data(), key.size());
-        w.putBytes(value.data(), value.size());
-    }
-    end();
-    // 8) Table entries, file size, checksums.
-    container.finish();
+    container.endSection();
+    container.beginSection(kSectionMetadata, 0);  // optional
+    writeMetadataSection(w, data.metadata);
+    container.endSection();
+    container.finish();  // table entries, file size, checksums
     // Metadata text is validated as UTF-8 by the reader: check here, on the encoded bytes.
     CacheView view;
     CacheError error;
