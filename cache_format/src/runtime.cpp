@@ -234,14 +234,11 @@ CacheFileStatus CacheView::openFile(const std::string& path, CacheView* out, Cac
     return CacheFileStatus::kOk;
 }
 
-// The numbered steps follow SPEC §F.10; each failure cites its rule.
-/// V1 - V7: identifier, header, version, size, table geometry, header checksum, flags.
-CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
-    using S = CacheFileStatus;
-    const uint8_t* d = data_;
-    const uint64_t size = size_;
+namespace {
 
-    // V1: identifier.
+/// V1 - V2: the identifier, naming what the file is when it is not a cache, and a whole header.
+CacheFileStatus checkIdentifier(const uint8_t* d, uint64_t size, CacheError* error) {
+    using S = CacheFileStatus;
     const size_t id_bytes = size_t(std::min<uint64_t>(size, sizeof kCacheIdentifier));
     // id_bytes == 0 (openMemory(nullptr, 0)): memcmp on a null pointer is UB even for 0 bytes.
     if (id_bytes > 0 && std::memcmp(d, kCacheIdentifier, id_bytes) != 0) {
@@ -257,74 +254,90 @@ CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
         }
         return fail(error, S::kBadMagic, 1, "not a sharcbake cache file (identifier mismatch)");
     }
-    // V2: a complete header.
     if (size < kCacheHeaderSize) {
         return fail(error, S::kTruncated, 2,
                     "truncated: " + std::to_string(size) + " bytes, the header alone is " +
                         std::to_string(kCacheHeaderSize));
     }
-    const ContainerHeader header = ContainerHeader::read(d);
-    // V3: version.
-    version_major_ = header.version_major;
-    version_minor_ = header.version_minor;
-    if (version_major_ != kCacheVersionMajor) {
+    return S::kOk;
+}
+
+/// V3 - V4: a major version this reader reads, and a declared size equal to the actual one.
+CacheFileStatus checkVersionAndSize(const ContainerHeader& header, uint64_t size, CacheError* error) {
+    using S = CacheFileStatus;
+    if (header.version_major != kCacheVersionMajor) {
         return fail(error, S::kUnsupportedVersion, 3,
-                    "format version " + std::to_string(version_major_) + "." + std::to_string(version_minor_) +
-                        " is not supported (this reader reads " + std::to_string(kCacheVersionMajor) + ".x)");
+                    "format version " + std::to_string(header.version_major) + "." +
+                        std::to_string(header.version_minor) + " is not supported (this reader reads " +
+                        std::to_string(kCacheVersionMajor) + ".x)");
     }
-    // V4: declared file size equals the actual size.
-    const uint64_t file_size = header.file_size;
-    if (file_size > size) {
+    if (header.file_size > size) {
         return fail(error, S::kTruncated, 4,
-                    "truncated: the header declares " + std::to_string(file_size) + " bytes, " +
+                    "truncated: the header declares " + std::to_string(header.file_size) + " bytes, " +
                         std::to_string(size) + " present");
     }
-    if (file_size < size) {
+    if (header.file_size < size) {
         return fail(error, S::kTrailingBytes, 4,
-                    std::to_string(size - file_size) + " trailing bytes after the declared end (" +
-                        std::to_string(file_size) + " bytes)");
+                    std::to_string(size - header.file_size) + " trailing bytes after the declared end (" +
+                        std::to_string(header.file_size) + " bytes)");
     }
-    // V5: header and table geometry.
-    header_size_ = header.header_size;
-    const uint32_t section_count = header.section_count;
-    const uint64_t table_offset = header.table_offset;
-    const uint32_t entry_size = header.entry_size;
-    if (header_size_ < kCacheHeaderSize || header_size_ % kCacheAlignment != 0 || header_size_ > size ||
-        (version_minor_ == 0 && header_size_ != kCacheHeaderSize)) {
-        return fail(error, S::kCorrupt, 5, "bad header size " + std::to_string(header_size_));
+    return S::kOk;
+}
+
+/// V5: header size, and a section table right after the header that fits in the file.
+CacheFileStatus checkTableGeometry(const ContainerHeader& header, uint64_t size, CacheError* error) {
+    using S = CacheFileStatus;
+    if (header.header_size < kCacheHeaderSize || header.header_size % kCacheAlignment != 0 ||
+        header.header_size > size || (header.version_minor == 0 && header.header_size != kCacheHeaderSize)) {
+        return fail(error, S::kCorrupt, 5, "bad header size " + std::to_string(header.header_size));
     }
-    if (table_offset != header_size_ || entry_size != kCacheSectionEntrySize || section_count == 0 ||
-        section_count > kCacheMaxSections ||
-        table_offset + uint64_t(section_count) * kCacheSectionEntrySize > size) {
+    if (header.table_offset != header.header_size || header.entry_size != kCacheSectionEntrySize ||
+        header.section_count == 0 || header.section_count > kCacheMaxSections ||
+        header.table_offset + uint64_t(header.section_count) * kCacheSectionEntrySize > size) {
         return fail(error, S::kCorrupt, 5,
-                    "bad section table (offset " + std::to_string(table_offset) + ", " +
-                        std::to_string(section_count) + " entries of " + std::to_string(entry_size) + " bytes)");
+                    "bad section table (offset " + std::to_string(header.table_offset) + ", " +
+                        std::to_string(header.section_count) + " entries of " + std::to_string(header.entry_size) +
+                        " bytes)");
     }
-    const uint64_t table_end = header.tableEnd();
-    *table = SectionTable{table_offset, section_count, table_end};
-    // V6: header + table checksum.
-    {
-        const uint32_t crc = ContainerHeader::computeCrc32(d, table_end);
-        const uint32_t stored = header.header_crc32;
-        if (crc != stored) {
-            char buf[96];
-            std::snprintf(buf, sizeof buf, "header/section-table checksum mismatch (stored %08X, computed %08X)",
-                          stored, crc);
-            return fail(error, S::kChecksumMismatch, 6, buf);
-        }
+    return S::kOk;
+}
+
+/// V6 - V7: the header and table checksum, then no unknown flags and zero reserved fields.
+CacheFileStatus checkChecksumAndFlags(const uint8_t* d, const ContainerHeader& header, CacheError* error) {
+    using S = CacheFileStatus;
+    const uint32_t crc = ContainerHeader::computeCrc32(d, header.tableEnd());
+    if (crc != header.header_crc32) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "header/section-table checksum mismatch (stored %08X, computed %08X)",
+                      header.header_crc32, crc);
+        return fail(error, S::kChecksumMismatch, 6, buf);
     }
-    // V7: flags and reserved header fields.
-    const uint32_t flags = header.flags;
-    if (flags != 0) {
+    if (header.flags != 0) {
         char buf[80];
-        std::snprintf(buf, sizeof buf, "unknown required header flags 0x%08X", flags);
+        std::snprintf(buf, sizeof buf, "unknown required header flags 0x%08X", header.flags);
         return fail(error, S::kUnsupportedFeature, 7, buf);
     }
     if (header.reserved[0] != 0 || header.reserved[1] != 0) {
         return fail(error, S::kCorrupt, 7, "reserved header fields are not zero");
     }
-
     return S::kOk;
+}
+
+}  // namespace
+
+// The numbered steps follow SPEC §F.10; each failure cites its rule.
+/// V1 - V7: identifier, header, version, size, table geometry, header checksum, flags.
+CacheFileStatus CacheView::parseHeader(CacheError* error, SectionTable* table) {
+    using S = CacheFileStatus;
+    if (const S status = checkIdentifier(data_, size_, error); status != S::kOk) return status;
+    const ContainerHeader header = ContainerHeader::read(data_);
+    version_major_ = header.version_major;
+    version_minor_ = header.version_minor;
+    if (const S status = checkVersionAndSize(header, size_, error); status != S::kOk) return status;
+    header_size_ = header.header_size;
+    if (const S status = checkTableGeometry(header, size_, error); status != S::kOk) return status;
+    *table = SectionTable{header.table_offset, header.section_count, header.tableEnd()};
+    return checkChecksumAndFlags(data_, header, error);
 }
 
 /// V8 - V11: the sections back to back with zero padding, their checksums and types, the
