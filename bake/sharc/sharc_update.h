@@ -7,6 +7,7 @@
 
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
+#include "tracing/surface.h"
 #include "sharc/sharc_cache.h"
 #include "tracing/tracer.h"
 #include "sharc/view_region.h"
@@ -15,6 +16,8 @@
 #include <vector>
 
 namespace sharcbake {
+
+class GltfBsdf;
 
 struct UpdatePathSettings {
     uint32_t max_bounces = 8;        ///< surface interactions per update path
@@ -46,6 +49,20 @@ public:
                std::vector<Deposit>& out, UpdateCounters& counters) const;
 
 private:
+    struct PathState;
+
+    /// SharcUpdateMiss: the sky's radiance, MIS-weighted, to the vertices still waiting.
+    void depositSkyMiss(const PathState& path, uint32_t bounce, std::vector<Deposit>& out,
+                        UpdateCounters& counters) const;
+    /// Cache resampling: at the chosen depth, ends the path on the voxel's resolved value
+    /// (less `counted_emission`, already counted by light sampling) and returns true.
+    bool endOnCache(PathState& path, const SurfaceHit& hit, glm::vec3 counted_emission, bool last_vertex,
+                    uint32_t depth, float u_depth, const DepositLevels& levels, const Float3& camera,
+                    std::vector<Deposit>& out, UpdateCounters& counters) const;
+    /// Russian roulette, then a BSDF sample for the next segment; false when the path ends.
+    bool continuePath(PathState& path, const SurfaceHit& hit, const GltfBsdf& bsdf, glm::vec3 wo, uint32_t bounce,
+                      PixelSampler& sampler) const;
+
     const Tracer& tracer_;
     const LightSampler& lights_;
     const SharcCache& cache_;
