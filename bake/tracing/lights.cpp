@@ -50,39 +50,53 @@ glm::vec3 equirectToDirection(glm::vec2 uv) {
 }
 
 LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
-    std::vector<float> powers;
+    std::vector<float> powers;  // one per entry: light selection is proportional to power
     const glm::vec3 extent = scene.bounds_max - scene.bounds_min;
     const float radius = std::max(0.5f * glm::length(extent), 1e-3f);
+    // Lights at infinity deliver their power through the scene's bounding disk.
     const float disk_area = kPi * radius * radius;
+    addAreaLights(powers);
+    addPunctualLights(disk_area, powers);
+    addSky(disk_area, powers);
+    if (entries_.empty()) return;
+    selection_ = Distribution1D(powers);
+    for (size_t e = 0; e < entries_.size(); ++e) {
+        if (entries_[e].kind == Kind::Triangle) triangle_pmf_[entries_[e].index] = selection_.pmf(e);
+        if (entries_[e].kind == Kind::Sky) sky_pmf_ = selection_.pmf(e);
+    }
+}
 
-    // Area lights. Power = pi * area * luminance(mean emitted radiance) per emitting side.
-    std::vector<glm::vec3> texture_means(scene.textures.size(), glm::vec3(-1.0f));
-    for (uint32_t t = 0; t < scene.triangles.size(); ++t) {
-        const Material& m = scene.materials[scene.triangle_materials[t]];
+void LightSampler::addAreaLights(std::vector<float>& powers) {
+    // Power = pi * area * luminance(mean emitted radiance) per emitting side.
+    std::vector<glm::vec3> texture_means(scene_.textures.size(), glm::vec3(-1.0f));
+    for (uint32_t t = 0; t < scene_.triangles.size(); ++t) {
+        const Material& m = scene_.materials[scene_.triangle_materials[t]];
         if (!m.isEmissive()) continue;
         glm::vec3 emission = m.emissive * m.emissive_strength;
         if (m.emissive_texture.isSet()) {
             glm::vec3& mean = texture_means[size_t(m.emissive_texture.texture)];
-            if (mean.x < 0.0f) mean = textureMean(scene.textures[size_t(m.emissive_texture.texture)]);
+            if (mean.x < 0.0f) mean = textureMean(scene_.textures[size_t(m.emissive_texture.texture)]);
             emission *= mean;
         }
-        const glm::uvec3 tri = scene.triangles[t];
-        const float area = 0.5f * glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
-                                                         scene.positions[tri.z] - scene.positions[tri.x]));
+        const glm::uvec3 tri = scene_.triangles[t];
+        const float area = 0.5f * glm::length(glm::cross(scene_.positions[tri.y] - scene_.positions[tri.x],
+                                                         scene_.positions[tri.z] - scene_.positions[tri.x]));
         const float power = kPi * area * luminance(emission) * (m.double_sided ? 2.0f : 1.0f);
         if (!(power > 0.0f)) continue;
         if (triangle_area_.empty()) {
-            triangle_area_.assign(scene.triangles.size(), 0.0f);
-            triangle_pmf_.assign(scene.triangles.size(), 0.0f);
+            triangle_area_.assign(scene_.triangles.size(), 0.0f);
+            triangle_pmf_.assign(scene_.triangles.size(), 0.0f);
         }
         triangle_area_[t] = area;
         entries_.push_back({Kind::Triangle, t});
         powers.push_back(power);
         ++emissive_triangle_count_;
     }
+}
 
-    for (uint32_t i = 0; i < scene.lights.size(); ++i) {
-        const PunctualLight& light = scene.lights[i];
+void LightSampler::addPunctualLights(float disk_area, std::vector<float>& powers) {
+    for (uint32_t i = 0; i < scene_.lights.size(); ++i) {
+        const PunctualLight& light = scene_.lights[i];
         const float lum = luminance(light.intensity);
         float power = 0.0f;
         switch (light.type) {
@@ -98,38 +112,32 @@ LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
         entries_.push_back({Kind::Punctual, i});
         powers.push_back(power);
     }
+}
 
-    if (!scene.sky.isBlack()) {
-        float mean_luminance = luminance(scene.sky.uniform);
-        if (scene.sky.map) {
-            const Texture& map = *scene.sky.map;
-            std::vector<float> weights(size_t(map.width) * size_t(map.height));
-            double sum = 0.0;
-            for (int y = 0; y < map.height; ++y) {
-                // Rows near the poles cover less solid angle.
-                const float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(map.height));
-                for (int x = 0; x < map.width; ++x) {
-                    const float lum = std::max(0.0f, luminance(glm::vec3(map.texels[size_t(y) * size_t(map.width) + size_t(x)])));
-                    weights[size_t(y) * size_t(map.width) + size_t(x)] = lum * sin_theta;
-                    sum += double(lum * sin_theta);
-                }
+void LightSampler::addSky(float disk_area, std::vector<float>& powers) {
+    if (scene_.sky.isBlack()) return;
+    float mean_luminance = luminance(scene_.sky.uniform);
+    if (scene_.sky.map) {
+        const Texture& map = *scene_.sky.map;
+        std::vector<float> weights(size_t(map.width) * size_t(map.height));
+        double sum = 0.0;
+        for (int y = 0; y < map.height; ++y) {
+            // Rows near the poles cover less solid angle.
+            const float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(map.height));
+            for (int x = 0; x < map.width; ++x) {
+                const float lum = std::max(0.0f, luminance(glm::vec3(map.texels[size_t(y) * size_t(map.width) + size_t(x)])));
+                weights[size_t(y) * size_t(map.width) + size_t(x)] = lum * sin_theta;
+                sum += double(lum * sin_theta);
             }
-            sky_map_distribution_ = Distribution2D(weights, map.width, map.height);
-            mean_luminance = float(sum / std::max(1.0, double(map.width) * double(map.height)) * (kPi / 2.0)) *
-                             scene.sky.scale;
         }
-        if (mean_luminance > 0.0f) {
-            has_sky_ = true;
-            entries_.push_back({Kind::Sky, 0});
-            powers.push_back(kPi * mean_luminance * disk_area);
-        }
+        sky_map_distribution_ = Distribution2D(weights, map.width, map.height);
+        mean_luminance =
+            float(sum / std::max(1.0, double(map.width) * double(map.height)) * (kPi / 2.0)) * scene_.sky.scale;
     }
-
-    if (entries_.empty()) return;
-    selection_ = Distribution1D(powers);
-    for (size_t e = 0; e < entries_.size(); ++e) {
-        if (entries_[e].kind == Kind::Triangle) triangle_pmf_[entries_[e].index] = selection_.pmf(e);
-        if (entries_[e].kind == Kind::Sky) sky_pmf_ = selection_.pmf(e);
+    if (mean_luminance > 0.0f) {
+        has_sky_ = true;
+        entries_.push_back({Kind::Sky, 0});
+        powers.push_back(kPi * mean_luminance * disk_area);
     }
 }
 
