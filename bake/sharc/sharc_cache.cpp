@@ -97,7 +97,55 @@ bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, u
     return count + carries <= kMaxCarries;
 }
 
+/// Up to kSlots per-slot sums of one chunk's deposits, 96 bits wide per channel, added to the
+/// shared accumulation one slot at a time: a path deposits into the same voxels several times,
+/// and the bright voxels are shared by every thread, so one atomic add per slot and chunk
+/// instead of one per deposit cuts the contention.
+class PendingSums {
+public:
+    struct Sum {
+        uint32_t slot = 0;
+        uint32_t samples = 0;
+        uint64_t sums[3] = {0, 0, 0};
+        uint32_t carries[3] = {0, 0, 0};  ///< wraps of sums[c]
+    };
+
+    /// The pending sum of `slot`; when all are taken, the oldest is flushed to make room.
+    template <typename Flush>
+    Sum& at(uint32_t slot, Flush&& flush) {
+        size_t at = 0;
+        while (at < count_ && sums_[at].slot != slot) ++at;
+        if (at == count_) {
+            if (count_ < kSlots) {
+                ++count_;
+            } else {
+                at = next_flush_;
+                next_flush_ = (next_flush_ + 1) % kSlots;
+                flush(sums_[at]);
+            }
+            sums_[at] = Sum{slot};
+        }
+        return sums_[at];
+    }
+    template <typename Flush>
+    void flushAll(Flush&& flush) {
+        for (size_t at = 0; at < count_; ++at) flush(sums_[at]);
+    }
+
+private:
+    static constexpr size_t kSlots = 8;
+    Sum sums_[kSlots];
+    size_t count_ = 0, next_flush_ = 0;
+};
+
 }  // namespace
+
+/// What accumulating one chunk counted, added up in chunk order afterwards.
+struct SharcCache::ChunkNumerics {
+    uint64_t negative = 0, clamped = 0, saturated = 0;
+    glm::dvec3 clamped_energy{0.0};
+    std::vector<uint32_t> touched;
+};
 
 double SharcCache::chooseRadianceScale(double max_radiance) {
     // The brightest radiance maps to 2^40: 40 bits of precision below it (and dithered rounding
@@ -128,52 +176,74 @@ void SharcCache::commit(const std::vector<Deposit>& deposits, uint32_t iteration
     commitChunks(std::vector<std::vector<Deposit>>{deposits}, iteration);
 }
 
-void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration) {
-    constexpr uint32_t kMissing = kHashGridInvalidIndex;      // key not in the table yet
-    constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;  // non-finite or failed insert
-    chunk_slots_.resize(chunks.size());
+namespace {
+constexpr uint32_t kMissing = kHashGridInvalidIndex;      // key not in the table yet
+constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;  // non-finite or failed insert
+}  // namespace
 
-    // 1. Parallel: look every key up (the table is read-only here). A path deposits into its own
-    //    voxel and then into the same voxels again as later vertices propagate back, so the
-    //    last few keys are remembered; each chunk lists the deposits whose key is new.
+void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration) {
+    chunk_slots_.resize(chunks.size());
     chunk_missing_.resize(chunks.size());
     std::vector<uint64_t> chunk_non_finite(chunks.size(), 0);
     std::vector<glm::dvec3> chunk_deposited(chunks.size(), glm::dvec3(0.0));
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
-        const std::vector<Deposit>& deposits = chunks[chunk];
-        std::vector<uint32_t>& slots = chunk_slots_[chunk];
-        std::vector<uint32_t>& missing = chunk_missing_[chunk];
-        slots.resize(deposits.size());
-        missing.clear();
-        constexpr size_t kRecent = 4;
-        uint64_t recent_keys[kRecent] = {};  // key 0 never occurs
-        uint32_t recent_slots[kRecent] = {};
-        size_t next_recent = 0;
-        for (size_t i = 0; i < deposits.size(); ++i) {
-            const Deposit& d = deposits[i];
-            if (!isFiniteColor(d.radiance)) {
-                slots[i] = kDropped;
-                ++chunk_non_finite[chunk];
-                continue;
-            }
-            chunk_deposited[chunk] += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
-            size_t r = 0;
-            while (r < kRecent && recent_keys[r] != d.key) ++r;
-            if (r < kRecent) {
-                slots[i] = recent_slots[r];
-            } else {
-                slots[i] = table_.find(d.key).value_or(kMissing);
-                recent_keys[next_recent] = d.key;
-                recent_slots[next_recent] = slots[i];
-                next_recent = (next_recent + 1) % kRecent;
-            }
-            if (slots[i] == kMissing) missing.push_back(uint32_t(i));
-        }
+        lookUpSlots(chunks[chunk], chunk, chunk_non_finite[chunk], chunk_deposited[chunk]);
     });
+    insertNewKeys(chunks, chunk_non_finite, chunk_deposited);
+    std::vector<ChunkNumerics> chunk_numerics(chunks.size());
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
+        accumulateChunk(chunks[chunk], chunk, iteration, chunk_numerics[chunk]);
+    });
+    for (const ChunkNumerics& n : chunk_numerics) {
+        numerics_.negative_deposits += n.negative;
+        numerics_.clamped_deposits += n.clamped;
+        numerics_.clamped_energy += n.clamped_energy;
+        numerics_.saturated_sums += n.saturated;
+        touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
+    }
+}
 
-    // 2. Serial, in chunk (= path) order: insert the new keys. Slot assignment is therefore the
-    //    same on every run, whatever thread traced which path. Only the deposits listed as new
-    //    are visited, so this serial step shrinks to almost nothing once the cache is warm.
+// 1. Parallel over chunks: look every key up (the table is read-only here). A path deposits into
+//    its own voxel and then into the same voxels again as later vertices propagate back, so the
+//    last few keys are remembered; each chunk lists the deposits whose key is new.
+void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk, uint64_t& non_finite,
+                             glm::dvec3& deposited) {
+    std::vector<uint32_t>& slots = chunk_slots_[chunk];
+    std::vector<uint32_t>& missing = chunk_missing_[chunk];
+    slots.resize(deposits.size());
+    missing.clear();
+    constexpr size_t kRecent = 4;
+    uint64_t recent_keys[kRecent] = {};  // key 0 never occurs
+    uint32_t recent_slots[kRecent] = {};
+    size_t next_recent = 0;
+    for (size_t i = 0; i < deposits.size(); ++i) {
+        const Deposit& d = deposits[i];
+        if (!isFiniteColor(d.radiance)) {
+            slots[i] = kDropped;
+            ++non_finite;
+            continue;
+        }
+        deposited += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
+        size_t r = 0;
+        while (r < kRecent && recent_keys[r] != d.key) ++r;
+        if (r < kRecent) {
+            slots[i] = recent_slots[r];
+        } else {
+            slots[i] = table_.find(d.key).value_or(kMissing);
+            recent_keys[next_recent] = d.key;
+            recent_slots[next_recent] = slots[i];
+            next_recent = (next_recent + 1) % kRecent;
+        }
+        if (slots[i] == kMissing) missing.push_back(uint32_t(i));
+    }
+}
+
+// 2. Serial, in chunk (= path) order: insert the new keys. Slot assignment is therefore the same
+//    on every run, whatever thread traced which path. Only the deposits listed as new are
+//    visited, so this serial step shrinks to almost nothing once the cache is warm.
+void SharcCache::insertNewKeys(const std::vector<std::vector<Deposit>>& chunks,
+                               const std::vector<uint64_t>& chunk_non_finite,
+                               const std::vector<glm::dvec3>& chunk_deposited) {
     for (size_t chunk = 0; chunk < chunks.size(); ++chunk) {
         const std::vector<Deposit>& deposits = chunks[chunk];
         std::vector<uint32_t>& slots = chunk_slots_[chunk];
@@ -196,106 +266,69 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
             }
         }
     }
+}
 
-    // 3. Parallel: fixed-point conversion and integer atomic adds, which commute, so the sums
-    //    do not depend on the order either. A chunk gathers its deposits in a few pending
-    //    per-slot sums first: a path deposits into the same voxels several times, and the
-    //    bright voxels are shared by every thread, so one atomic add per slot and chunk instead
-    //    of one per deposit cuts the contention. Integer addition with carries is associative,
-    //    so the 72-bit sums are bit-identical however they are grouped.
-    struct ChunkNumerics {
-        uint64_t negative = 0, clamped = 0, saturated = 0;
-        glm::dvec3 clamped_energy{0.0};
-        std::vector<uint32_t> touched;
-    };
-    struct PendingSum {
-        uint32_t slot = 0;
-        uint32_t samples = 0;
-        uint64_t sums[3] = {0, 0, 0};
-        uint32_t carries[3] = {0, 0, 0};  ///< wraps of sums[c]: the pending sum is 96 bits wide
-    };
-    std::vector<ChunkNumerics> chunk_numerics(chunks.size());
-    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
-        const std::vector<Deposit>& deposits = chunks[chunk];
-        const std::vector<uint32_t>& slots = chunk_slots_[chunk];
-        ChunkNumerics& numerics = chunk_numerics[chunk];
-        constexpr size_t kPending = 8;
-        PendingSum pending[kPending];
-        size_t pending_count = 0, next_flush = 0;
-        auto flush = [&](const PendingSum& p) {
-            AccumulationEntry& entry = accumulation_[p.slot];
-            if (entry.touched.exchange(1, std::memory_order_relaxed) == 0) numerics.touched.push_back(p.slot);
-            for (int c = 0; c < 3; ++c) {
-                if ((p.sums[c] || p.carries[c]) && !addToSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
-                    ++numerics.saturated;
-                }
+// 3. Parallel over chunks: fixed-point conversion and integer atomic adds, which commute, so the
+//    sums do not depend on the order either. Integer addition with carries is associative, so
+//    the 72-bit sums are bit-identical however PendingSums groups them.
+void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
+                                 ChunkNumerics& numerics) {
+    const std::vector<uint32_t>& slots = chunk_slots_[chunk];
+    const auto flush = [&](const PendingSums::Sum& p) {
+        AccumulationEntry& entry = accumulation_[p.slot];
+        if (entry.touched.exchange(1, std::memory_order_relaxed) == 0) numerics.touched.push_back(p.slot);
+        for (int c = 0; c < 3; ++c) {
+            if ((p.sums[c] || p.carries[c]) && !addToSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
+                ++numerics.saturated;
             }
-            if (p.samples) entry.samples.fetch_add(p.samples, std::memory_order_relaxed);
-        };
-        for (size_t i = 0; i < deposits.size(); ++i) {
-            if (slots[i] >= kDropped) continue;
-            const Deposit& d = deposits[i];
-            size_t at = 0;
-            while (at < pending_count && pending[at].slot != slots[i]) ++at;
-            if (at == pending_count) {
-                if (pending_count < kPending) {
-                    ++pending_count;
-                } else {
-                    at = next_flush;
-                    next_flush = (next_flush + 1) % kPending;
-                    flush(pending[at]);
-                }
-                pending[at] = PendingSum{slots[i]};
-            }
-            PendingSum& sum = pending[at];
-            bool negative = false, clamped = false;
-            std::array<double, 3> dither{};
-            bool dither_ready = false;
-            for (int c = 0; c < 3; ++c) {
-                double value = double(d.radiance[c]);
-                if (value < 0.0) {
-                    negative = true;
-                    value = 0.0;
-                }
-                // Dithered rounding where it matters: the expected fixed-point value is exactly
-                // value x scale, so light below one step is kept on average; truncation would
-                // drop it for good (docs/sharc_algorithm.md §10.2). Above 2^20 steps, rounding to
-                // nearest is off by at most 2^-21 and the hash is not worth its time.
-                const double scaled = value * radiance_scale_;
-                double fixed;
-                if (scaled >= kDitherBelow) {
-                    fixed = std::nearbyint(scaled);
-                } else {
-                    if (!dither_ready) {
-                        dither = roundingDither(iteration, chunk, i);
-                        dither_ready = true;
-                    }
-                    fixed = std::floor(scaled + dither[c]);
-                }
-                if (fixed > double(kMaxFixedDeposit)) {
-                    clamped = true;
-                    numerics.clamped_energy[c] += (fixed - double(kMaxFixedDeposit)) / radiance_scale_;
-                    fixed = double(kMaxFixedDeposit);
-                }
-                if (fixed > 0.0) {
-                    const uint64_t before = sum.sums[c];
-                    sum.sums[c] += uint64_t(fixed);
-                    sum.carries[c] += sum.sums[c] < before;  // at most 2^62 per add: wraps once at most
-                }
-            }
-            numerics.negative += negative;
-            numerics.clamped += clamped;
-            sum.samples += d.samples;
         }
-        for (size_t at = 0; at < pending_count; ++at) flush(pending[at]);
-    });
-    for (const ChunkNumerics& n : chunk_numerics) {
-        numerics_.negative_deposits += n.negative;
-        numerics_.clamped_deposits += n.clamped;
-        numerics_.clamped_energy += n.clamped_energy;
-        numerics_.saturated_sums += n.saturated;
-        touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
+        if (p.samples) entry.samples.fetch_add(p.samples, std::memory_order_relaxed);
+    };
+    PendingSums pending;
+    for (size_t i = 0; i < deposits.size(); ++i) {
+        if (slots[i] >= kDropped) continue;
+        const Deposit& d = deposits[i];
+        PendingSums::Sum& sum = pending.at(slots[i], flush);
+        bool negative = false, clamped = false;
+        std::array<double, 3> dither{};
+        bool dither_ready = false;
+        for (int c = 0; c < 3; ++c) {
+            double value = double(d.radiance[c]);
+            if (value < 0.0) {
+                negative = true;
+                value = 0.0;
+            }
+            // Dithered rounding where it matters: the expected fixed-point value is exactly value
+            // x scale, so light below one step is kept on average; truncation would drop it for
+            // good (docs/sharc_algorithm.md §10.2). Above 2^20 steps, rounding to nearest is off
+            // by at most 2^-21 and the hash is not worth its time.
+            const double scaled = value * radiance_scale_;
+            double fixed;
+            if (scaled >= kDitherBelow) {
+                fixed = std::nearbyint(scaled);
+            } else {
+                if (!dither_ready) {
+                    dither = roundingDither(iteration, chunk, i);
+                    dither_ready = true;
+                }
+                fixed = std::floor(scaled + dither[c]);
+            }
+            if (fixed > double(kMaxFixedDeposit)) {
+                clamped = true;
+                numerics.clamped_energy[c] += (fixed - double(kMaxFixedDeposit)) / radiance_scale_;
+                fixed = double(kMaxFixedDeposit);
+            }
+            if (fixed > 0.0) {
+                const uint64_t before = sum.sums[c];
+                sum.sums[c] += uint64_t(fixed);
+                sum.carries[c] += sum.sums[c] < before;  // at most 2^62 per add: wraps once at most
+            }
+        }
+        numerics.negative += negative;
+        numerics.clamped += clamped;
+        sum.samples += d.samples;
     }
+    pending.flushAll(flush);
 }
 
 glm::dvec3 SharcCache::feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const {

@@ -198,6 +198,15 @@ public:
     static double chooseRadianceScale(double max_radiance);
 
 private:
+    struct ChunkNumerics;
+    /// commitChunks' stages: look the keys up (parallel), insert the new ones in chunk order
+    /// (serial), add the deposits' fixed-point values (parallel).
+    void lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk, uint64_t& non_finite, glm::dvec3& deposited);
+    void insertNewKeys(const std::vector<std::vector<Deposit>>& chunks, const std::vector<uint64_t>& chunk_non_finite,
+                       const std::vector<glm::dvec3>& chunk_deposited);
+    void accumulateChunk(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
+                         ChunkNumerics& numerics);
+
     /// Adds this iteration's accumulation of every touched voxel below SharcSettings::coarsest_level
     /// to its coarser voxel, level by level from the finest, inserting coarser keys that are new in
     /// increasing slot order of their finer voxels (so slots are the same on every run); integer
