@@ -513,10 +513,13 @@ Json hitRateJson(const HitRatePrediction& p) {
         views.push_back({{"name", v.view.camera.name},
                          {"declared", v.view.declared},
                          {"position", jsonVec3(v.view.camera.position)},
-                         {"rate", jsonNumber(v.rate())},
+                         {"rate", v.eligible ? jsonNumber(v.rate()) : Json(nullptr)},
                          {"lookups", v.eligible}});
     }
-    return {{"rate", jsonNumber(p.rate())}, {"lookups", p.eligible}, {"hits", p.hits}, {"views", views}};
+    return {{"rate", p.eligible ? jsonNumber(p.rate()) : Json(nullptr)},  // null: nothing to rate
+            {"lookups", p.eligible},
+            {"hits", p.hits},
+            {"views", views}};
 }
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
@@ -1012,11 +1015,11 @@ private:
             {"levels", written_levels_},
             {"coverage", {{"points", coverage_.points}, {"unreached_area_fraction", coverage_.unreached_area}}},
             {"grid",
-             {{"scene_scale", job_.settings.sharc.grid.scene_scale},
-              {"log_base", job_.settings.sharc.grid.logarithm_base},
-              {"level_bias", job_.settings.sharc.grid.level_bias},
+             {{"scene_scale", jsonNumber(job_.settings.sharc.grid.scene_scale)},
+              {"log_base", jsonNumber(job_.settings.sharc.grid.logarithm_base)},
+              {"level_bias", jsonNumber(job_.settings.sharc.grid.level_bias)},
               {"level_bias_auto", job_.level_bias_auto},
-              {"finest_voxel_size", voxelSize(kHashGridLevelMin, job_.settings.sharc.grid)}}},
+              {"finest_voxel_size", jsonNumber(voxelSize(kHashGridLevelMin, job_.settings.sharc.grid))}}},
             {"view_region", job_.settings.view_region.describe()},
             {"levels_covered", grid_decision_.levelsCovered()},
             {"predicted_hit_rate", hitRateJson(prediction_)},

@@ -485,7 +485,7 @@ private:
             json["cache_hits"] = counters_.cache_hits.load();
             json["cache_misses"] = counters_.cache_misses.load();
             json["cache_refused"] = cache_->refused();
-            json["cache_hit_rate"] = jsonNumber(hit_rate_);
+            json["cache_hit_rate"] = eligible_ > 0 ? jsonNumber(hit_rate_) : Json(nullptr);  // null: no lookups
         }
         if (o_.debug_view == "cache") json["debug_missing"] = debug_missing_.load();
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));

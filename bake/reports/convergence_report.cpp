@@ -69,8 +69,9 @@ Json imageComparisonJson(const ImageComparison& e) {
             {"mean_relative_error", jsonNumber(e.mean_relative_error)},
             {"relative_bias", jsonNumber(e.relative_bias)},
             {"tile_mean_relative_error", jsonNumber(e.tile_mean_relative_error)},
-            {"masked_mean_relative_error", jsonNumber(e.masked_mean_relative_error)},
-            {"masked_relative_mse", jsonNumber(e.masked_relative_mse)},
+            // null over an empty mask (every pixel emits), which would otherwise read as no error
+            {"masked_mean_relative_error", e.masked_pixels ? jsonNumber(e.masked_mean_relative_error) : Json(nullptr)},
+            {"masked_relative_mse", e.masked_pixels ? jsonNumber(e.masked_relative_mse) : Json(nullptr)},
             {"masked_pixels", e.masked_pixels}};
 }
 

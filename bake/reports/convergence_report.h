@@ -165,7 +165,7 @@ std::optional<ProbeFloorFit> fitProbeFloor(std::vector<ConvergenceRow>& rows);
 /// Everything `--report DIR` writes.
 struct ConvergenceReport {
     std::string scene;
-    std::string reference;  ///< path, "known radiance" or "" (no image measure)
+    std::string reference;  ///< the reference image's path, "known radiance" or "probe reference"
     EvaluationView view;
     std::vector<ConvergenceRow> rows;
     std::vector<PlainPathTracingRow> plain;
