@@ -6,7 +6,8 @@
 # the golden cache and checks the answers:
 #   (a) CMake, a C-only project: the static sharcbake::runtime, the shared sharcbake::runtime_shared;
 #   (b) CMake, a C++ project: the README's example, static and shared;
-#   (c) plain cc with pkg-config: the shared library (rpath), and --static with -static.
+#   (c) plain cc with pkg-config: the shared library (rpath), and --static with -static;
+#   (d) the README's lookup snippets are the consumers' marked lines, word for word.
 # Usage: install_consumer_test.sh CMAKE BUILD_DIR WORK_DIR C_COMPILER
 set -euo pipefail
 CMAKE=$1
@@ -14,6 +15,7 @@ BUILD=$2
 WORK=$3
 CC=$4
 HERE=$(cd "$(dirname "$0")" && pwd)
+README=$HERE/../../README.md
 CONSUMER=$HERE/install_consumer
 GOLDEN=$HERE/golden/small.v1.0.sharc
 PREFIX=$WORK/prefix
@@ -92,3 +94,13 @@ quiet "$WORK/pc.log" "$CC" -static "$CONSUMER/consumer.c" -o "$WORK/pc_static" $
 ! loads_shared_runtime "$WORK/pc_static" || fail "pc_static should be linked statically"
 lookup "$WORK/pc_static"
 
+echo "== (d) README snippets"
+# marked FILE: the lines between the file's readme markers, without the function's indentation.
+marked() { sed -n '/readme-begin/,/readme-end/{/readme-begin/d;/readme-end/d;s/^    //;p;}' "$1"; }
+readme=$(<"$README")
+for source in consumer.cpp consumer.c; do
+    snippet=$(marked "$CONSUMER/$source")
+    [ -n "$snippet" ] || fail "no readme markers in $source"
+    [[ $readme == *"$snippet"* ]] || fail "README.md does not show install_consumer/$source's marked lines as they are"
+done
+echo "README.md shows the consumers' code"
