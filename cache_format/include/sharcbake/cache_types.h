@@ -4,6 +4,8 @@
 /// call of both returns.
 #pragma once
 
+#include "sharcbake/runtime_export.h"
+
 #include <cstdint>
 
 namespace sharcbake {
@@ -35,6 +37,6 @@ enum class CacheFileStatus : uint32_t {
     kInvalidArgument,   ///< API misuse (null pointer, capacity 0, ...)
 };
 
-const char* toString(CacheFileStatus status);
+SHARCBAKE_RUNTIME_API const char* toString(CacheFileStatus status);
 
 }  // namespace sharcbake

@@ -8,6 +8,8 @@
 /// overlaid on untrusted memory.
 #pragma once
 
+#include "sharcbake/runtime_export.h"
+
 #include <cstddef>
 #include <cstdint>
 
@@ -141,6 +143,6 @@ static_assert(sizeof(CacheLevelRecord) == 8, "SPEC §F.7: level records are 8 by
 
 /// @brief CRC-32 (ISO-HDLC / zlib / PNG: reflected polynomial 0xEDB88320, init and xorout
 /// 0xFFFFFFFF). Pass the previous result as `crc` to continue over several ranges.
-uint32_t cacheCrc32(const void* data, size_t size, uint32_t crc = 0);
+SHARCBAKE_RUNTIME_API uint32_t cacheCrc32(const void* data, size_t size, uint32_t crc = 0);
 
 }  // namespace sharcbake

@@ -12,6 +12,7 @@
 /// give a defined (documented) key, never undefined behaviour.
 #pragma once
 
+#include "sharcbake/runtime_export.h"
 #include "sharcbake/zeroed_array.h"
 
 #include <atomic>
@@ -90,14 +91,14 @@ enum class HashGridStatus : uint32_t {
 };
 
 /// @brief Human-readable name of a status ("ok", "invalid capacity", ...). Never null.
-const char* toString(HashGridStatus status);
+SHARCBAKE_RUNTIME_API const char* toString(HashGridStatus status);
 
 /// @brief Checks parameters for values that make levels or voxel sizes meaningless.
 ///
 /// The key functions accept any parameters (the result is still defined), but a baker should
 /// refuse parameters for which this returns anything but kOk. Capacities below the bucket size
 /// are valid (see bucketBase()), although the SDK itself requires N >= 16.
-HashGridStatus validateHashGridParameters(const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API HashGridStatus validateHashGridParameters(const HashGridParameters& params);
 
 // ------------------------------------------------------------------------------------------------
 // Key construction (SPEC §H.2 - §H.6)
@@ -108,15 +109,15 @@ HashGridStatus validateHashGridParameters(const HashGridParameters& params);
 /// Like the SDK's HashGridGetLevel this takes the position as given; hashGridKey() applies the
 /// +1e-4 position bias first and then calls this. Evaluated in float32 as in SPEC §H.3.
 /// NaN distances give level 1; an infinite distance gives 511.
-uint32_t gridLevel(const Float3& position, const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API uint32_t gridLevel(const Float3& position, const HashGridParameters& params);
 
 /// @brief Voxel edge length of a level: b^L / (S * b^beta), float32 as in SPEC §H.4.
 /// May be +Inf or NaN for absurd levels/biases (b^L overflows float); callers get a defined key.
-float voxelSize(uint32_t level, const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API float voxelSize(uint32_t level, const HashGridParameters& params);
 
 /// @brief floor(position / voxel_size) per component, converted to int32 with saturation
 /// (NaN -> 0, below INT32_MIN -> INT32_MIN, above INT32_MAX -> INT32_MAX). SPEC §H.5.
-Int3 quantisePosition(const Float3& position, float voxel_size);
+SHARCBAKE_RUNTIME_API Int3 quantisePosition(const Float3& position, float voxel_size);
 
 /// A key's decoded fields (or a cell before packing).
 struct HashGridCell {
@@ -128,27 +129,27 @@ struct HashGridCell {
 
 /// @brief The cell a point falls in: position bias, level, voxel size and quantisation.
 /// Returns the full (unmasked) int32 grid coordinates; normal_bits = 0, user_bit = false.
-HashGridCell gridCell(const Float3& position, const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API HashGridCell gridCell(const Float3& position, const HashGridParameters& params);
 
 /// @brief The 3 normal sign bits: bit i is set unless (n_i + 1e-3) >= 0 (so NaN sets the bit).
-uint32_t normalBits(const Float3& normal);
+SHARCBAKE_RUNTIME_API uint32_t normalBits(const Float3& normal);
 
 /// @brief Packs fields into a key: x, y, z masked to 17 bits (two's complement), level masked to
 /// 9 bits, normal bits masked to 3 bits, user bit at 63. Never fails; the caller is responsible
 /// for passing level >= 1 if the key must be non-zero.
-uint64_t packHashGridKey(const Int3& grid, uint32_t level, uint32_t normal_bits,
-                         bool user_bit = false);
+SHARCBAKE_RUNTIME_API uint64_t packHashGridKey(const Int3& grid, uint32_t level, uint32_t normal_bits,
+                                               bool user_bit = false);
 
 /// @brief The SHaRC key of a surface point (HashGridComputeSpatialHash). Never 0: the level
 /// field is always in 1..511 (SPEC §H.6).
-uint64_t hashGridKey(const Float3& position, const Float3& normal,
-                     const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API uint64_t hashGridKey(const Float3& position, const Float3& normal,
+                                           const HashGridParameters& params);
 
 /// @brief hashGridKey() for fixed grid parameters and any camera position, without a logarithm
 /// or a power per key: the voxel size of every level and, since the SPEC §H.3 level only grows
 /// with the squared distance, the squared distance where each level starts are computed once.
 /// The keys are hashGridKey()'s bit for bit (tested over every level boundary).
-class HashGridKeyer {
+class SHARCBAKE_RUNTIME_API HashGridKeyer {
 public:
     /// Keys for the default HashGridParameters.
     HashGridKeyer() : HashGridKeyer(HashGridParameters{}) {}
@@ -190,8 +191,8 @@ private:
 /// @brief The key the point would have at an explicit `level` (hashGridKey() with the level
 /// chosen by the caller instead of by the camera distance): bias, voxelSize(level), quantise,
 /// normal bits, pack. For lookups at levels other than the camera's (coverage, fallbacks).
-uint64_t hashGridKeyAtLevel(const Float3& position, const Float3& normal, uint32_t level,
-                            const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API uint64_t hashGridKeyAtLevel(const Float3& position, const Float3& normal, uint32_t level,
+                                                  const HashGridParameters& params);
 
 /// @brief The key of the voxel one level coarser (level + 1, same normal bits) that holds `key`'s
 /// voxel: what a camera one level further away asks for at the same surface point.
@@ -202,42 +203,42 @@ uint64_t hashGridKeyAtLevel(const Float3& position, const Float3& normal, uint32
 /// straddles fine ones and the voxel's centre decides. Grid coordinates that wrapped at 17 bits
 /// are divided as stored (the parent of a wrapped cell is then wrong, as its position already
 /// is; the bake warns about wrapping). Level 511 (the last) returns 0 (no coarser level).
-uint64_t coarserKey(uint64_t key, const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API uint64_t coarserKey(uint64_t key, const HashGridParameters& params);
 
 /// @brief Decodes a key: grid coordinates sign-extended from 17 bits, level, normal bits and the
 /// user bit. Exact inverse of packHashGridKey() for coordinates in [-65536, 65535].
-HashGridCell decodeHashGridKey(uint64_t key);
+SHARCBAKE_RUNTIME_API HashGridCell decodeHashGridKey(uint64_t key);
 
 /// @brief Centre of a key's voxel in world units: (g + 0.5) * voxelSize(level), float32, as the
 /// SDK's HashGridGetPositionFromKey. The +1e-4 bias is not removed. Coordinates that wrapped at
 /// 17 bits decode to the wrapped cell (SPEC §H.6).
-Float3 voxelCenter(uint64_t key, const HashGridParameters& params);
+SHARCBAKE_RUNTIME_API Float3 voxelCenter(uint64_t key, const HashGridParameters& params);
 
 // ------------------------------------------------------------------------------------------------
 // Hash and bucket (SPEC §H.7)
 // ------------------------------------------------------------------------------------------------
 
 /// @brief Bob Jenkins' 32-bit integer hash (six shift/add/xor steps, wrap-around arithmetic).
-uint32_t jenkins32(uint32_t value);
+SHARCBAKE_RUNTIME_API uint32_t jenkins32(uint32_t value);
 
 /// @brief The SDK's Hash32: jenkins32(low 32 bits) XOR jenkins32(high 32 bits).
-uint32_t hashGridHash(uint64_t key);
+SHARCBAKE_RUNTIME_API uint32_t hashGridHash(uint64_t key);
 
 /// @brief Number of slots probed in a table of `capacity` slots: min(bucket_size, capacity).
-uint32_t bucketProbeCount(uint32_t capacity, uint32_t bucket_size = kHashGridBucketSize);
+SHARCBAKE_RUNTIME_API uint32_t bucketProbeCount(uint32_t capacity, uint32_t bucket_size = kHashGridBucketSize);
 
 /// @brief First slot of a hash's bucket: min(hash % N, N - bucket_size) for N >= bucket_size
 /// (identical to the SDK for N >= 16 and bucket_size 16). For 0 < N < bucket_size the bucket is
 /// the whole table and the base is 0 (the SDK would underflow here). N == 0 returns
 /// kHashGridInvalidIndex. The window [base, base + bucketProbeCount(N)) always lies inside [0, N).
-uint32_t bucketBase(uint32_t hash, uint32_t capacity, uint32_t bucket_size = kHashGridBucketSize);
+SHARCBAKE_RUNTIME_API uint32_t bucketBase(uint32_t hash, uint32_t capacity, uint32_t bucket_size = kHashGridBucketSize);
 
 /// @brief Debug colour of a key: colorFromHash(hashGridHash(key)) * colorFromHash(jenkins32(L)),
 /// with colorFromHash(h) = ((h & 0x3FF) / 1023, ((h >> 11) & 0x7FF) / 2047,
 /// ((h >> 22) & 0x7FF) / 2047) in float32. L is the key's level. (The SDK's
 /// HashGridDebugColoredHash recomputes L from the unbiased position, which can differ from the
 /// key's level within ~1e-4 of a level boundary; see SPEC §H.8.)
-Float3 hashDebugColor(uint64_t key);
+SHARCBAKE_RUNTIME_API Float3 hashDebugColor(uint64_t key);
 
 // ------------------------------------------------------------------------------------------------
 // CPU hash table (SPEC §H.7)
@@ -251,7 +252,7 @@ Float3 hashDebugColor(uint64_t key);
 /// failedInserts(); a failed insert never yields an index (unlike SDK <= 1.6, which returned 0 or
 /// N - 1). Slot assignment depends on insertion order when keys share a bucket.
 /// Not copyable or movable-while-in-use; create with create().
-class HashGridTable {
+class SHARCBAKE_RUNTIME_API HashGridTable {
 public:
     HashGridTable() = default;
 

@@ -12,6 +12,7 @@
 #include "sharcbake/cache_types.h"
 #include "sharcbake/format.h"
 #include "sharcbake/hash_grid.h"
+#include "sharcbake/runtime_export.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -83,12 +84,12 @@ struct GpuBuffers {
 };
 
 /// Float to IEEE binary16, round to nearest even, overflow -> Inf, NaN kept (quiet).
-uint16_t floatToHalf(float value);
+SHARCBAKE_RUNTIME_API uint16_t floatToHalf(float value);
 /// IEEE binary16 to float (exact).
-float halfToFloat(uint16_t value);
+SHARCBAKE_RUNTIME_API float halfToFloat(uint16_t value);
 
 /// Read-only view of a validated cache.
-class CacheView {
+class SHARCBAKE_RUNTIME_API CacheView {
 public:
     enum class FileMode { kRead, kMap };  ///< read into an owned buffer, or mmap (POSIX)
 

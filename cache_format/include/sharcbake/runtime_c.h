@@ -11,6 +11,8 @@
 #ifndef SHARCBAKE_RUNTIME_C_H
 #define SHARCBAKE_RUNTIME_C_H
 
+#include "sharcbake/runtime_export.h"
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -46,48 +48,54 @@ typedef struct sharcbake_packed_data {
  * A mapped file truncated while open raises SIGBUS on access: map only files nobody changes;
  * untrusted or shared files should be read (map = 0).
  *  `rule` (optional) receives the SPEC validation rule number (0 if none). */
-sharcbake_status sharcbake_cache_open_file(const char* path, int map, sharcbake_cache** out, uint32_t* rule,
-                                           char* message, size_t message_size);
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_open_file(const char* path, int map, sharcbake_cache** out,
+                                                                 uint32_t* rule, char* message, size_t message_size);
 /** Validates `size` bytes at `data` and views them without copying (keep them alive). */
-sharcbake_status sharcbake_cache_open_memory(const void* data, size_t size, sharcbake_cache** out, uint32_t* rule,
-                                             char* message, size_t message_size);
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_open_memory(const void* data, size_t size, sharcbake_cache** out,
+                                                                   uint32_t* rule, char* message, size_t message_size);
 /** Closes a cache (NULL is allowed). */
-void sharcbake_cache_close(sharcbake_cache* cache);
+SHARCBAKE_RUNTIME_API void sharcbake_cache_close(sharcbake_cache* cache);
 
 /** Human-readable status name; never NULL. */
-const char* sharcbake_status_string(sharcbake_status status);
+SHARCBAKE_RUNTIME_API const char* sharcbake_status_string(sharcbake_status status);
 
-uint64_t sharcbake_cache_voxel_count(const sharcbake_cache* cache);
-uint32_t sharcbake_cache_level_count(const sharcbake_cache* cache);
+SHARCBAKE_RUNTIME_API uint64_t sharcbake_cache_voxel_count(const sharcbake_cache* cache);
+SHARCBAKE_RUNTIME_API uint32_t sharcbake_cache_level_count(const sharcbake_cache* cache);
 /** Level `index` (ascending) and its voxel count; 0 if out of range. */
-int sharcbake_cache_level(const sharcbake_cache* cache, uint32_t index, uint32_t* level, uint32_t* voxel_count);
+SHARCBAKE_RUNTIME_API int sharcbake_cache_level(const sharcbake_cache* cache, uint32_t index, uint32_t* level,
+                                                uint32_t* voxel_count);
 /** Grid parameters: log base, scene scale, level bias, bake capacity (any pointer may be NULL). */
-void sharcbake_cache_grid(const sharcbake_cache* cache, float* logarithm_base, float* scene_scale,
-                          float* level_bias, uint32_t* bake_capacity);
+SHARCBAKE_RUNTIME_API void sharcbake_cache_grid(const sharcbake_cache* cache, float* logarithm_base, float* scene_scale,
+                                                float* level_bias, uint32_t* bake_capacity);
 /** Voxel `index` (sorted by key); returns 0 if out of range. Output pointers may be NULL. */
-int sharcbake_cache_voxel(const sharcbake_cache* cache, uint64_t index, uint64_t* key, float radiance[3],
-                          float* sample_weight);
+SHARCBAKE_RUNTIME_API int sharcbake_cache_voxel(const sharcbake_cache* cache, uint64_t index, uint64_t* key,
+                                                float radiance[3], float* sample_weight);
 /** Metadata value of `key` (NUL-terminated copy into `value`); returns 1 if present. */
-int sharcbake_cache_metadata(const sharcbake_cache* cache, const char* key, char* value, size_t value_size);
+SHARCBAKE_RUNTIME_API int sharcbake_cache_metadata(const sharcbake_cache* cache, const char* key, char* value,
+                                                   size_t value_size);
 
 /** Exact SHaRC lookup; 1 on a hit (radiance written), 0 on a miss. */
-int sharcbake_cache_lookup(const sharcbake_cache* cache, const float position[3], const float normal[3],
-                           const float camera_position[3], float radiance[3]);
+SHARCBAKE_RUNTIME_API int sharcbake_cache_lookup(const sharcbake_cache* cache, const float position[3],
+                                                 const float normal[3], const float camera_position[3],
+                                                 float radiance[3]);
 /** Lookup falling back to the nearest level present; `level_used` may be NULL. */
-int sharcbake_cache_lookup_nearest_level(const sharcbake_cache* cache, const float position[3],
-                                         const float normal[3], const float camera_position[3], float radiance[3],
-                                         uint32_t* level_used);
+SHARCBAKE_RUNTIME_API int sharcbake_cache_lookup_nearest_level(const sharcbake_cache* cache, const float position[3],
+                                                               const float normal[3], const float camera_position[3],
+                                                               float radiance[3], uint32_t* level_used);
 /** `count` lookups: positions/normals/radiance are 3*count floats; hits (optional) count bytes.
  *  Returns the number of hits. */
-size_t sharcbake_cache_lookup_batch(const sharcbake_cache* cache, size_t count, const float* positions,
-                                    const float* normals, const float camera_position[3], float* radiance,
-                                    uint8_t* hits, int nearest_level);
+SHARCBAKE_RUNTIME_API size_t sharcbake_cache_lookup_batch(const sharcbake_cache* cache, size_t count,
+                                                          const float* positions, const float* normals,
+                                                          const float camera_position[3], float* radiance,
+                                                          uint8_t* hits, int nearest_level);
 
 /** Fills `hash_entries` (capacity u64) and `resolved` (capacity entries) for a SHaRC table of
  *  `capacity` slots. accumulated_frame_num: see GpuBufferOptions. `failed_inserts` optional. */
-sharcbake_status sharcbake_cache_gpu_buffers(const sharcbake_cache* cache, uint32_t capacity,
-                                             uint32_t accumulated_frame_num, uint64_t* hash_entries,
-                                             sharcbake_packed_data* resolved, uint64_t* failed_inserts);
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_gpu_buffers(const sharcbake_cache* cache, uint32_t capacity,
+                                                                   uint32_t accumulated_frame_num,
+                                                                   uint64_t* hash_entries,
+                                                                   sharcbake_packed_data* resolved,
+                                                                   uint64_t* failed_inserts);
 
 #ifdef __cplusplus
 }
