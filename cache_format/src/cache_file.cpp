@@ -48,7 +48,7 @@ void sortVoxels(std::vector<CacheVoxel>& voxels) {
     std::sort(voxels.begin(), voxels.end(), [](const CacheVoxel& a, const CacheVoxel& b) { return a.key < b.key; });
 }
 
-// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META.
+// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META (and RSCL).
 CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
     if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
     if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
@@ -75,6 +75,9 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         }
         ++per_level[level];
     }
+    if (!std::isfinite(data.gpu_radiance_scale) || !(data.gpu_radiance_scale > 0.0f)) {
+        return fail(CacheFileStatus::kInvalidData, message, "the GPU radiance scale must be finite and > 0");
+    }
     if (validateHashGridParameters(data.gridParameters()) != HashGridStatus::kOk || data.bake_capacity == 0) {
         return fail(CacheFileStatus::kInvalidData, message,
                     std::string("grid parameters: ") + toString(validateHashGridParameters(data.gridParameters())));
@@ -95,7 +98,8 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         if (per_level[l]) levels.push_back(CacheLevel{l, per_level[l]});
     }
 
-    constexpr uint32_t kSections = 5;
+    const bool scaled = data.gpu_radiance_scale != 1.0f;  // SPEC §F.8a: RSCL only when not 1
+    const uint32_t kSections = scaled ? 6 : 5;
     std::vector<uint8_t>& bytes = *out;
     bytes.clear();
     bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
@@ -153,6 +157,13 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         w.putBytes(value.data(), value.size());
     }
     end();
+    // 7a) RSCL (SPEC §F.8a), REQUIRED when written.
+    if (scaled) {
+        begin(kSectionRadianceScale, kCacheSectionRequired);
+        w.put(data.gpu_radiance_scale);
+        w.put(uint32_t(0));
+        end();
+    }
     // 8) Table entries, file size, checksums.
     container.finish();
     // Metadata text is validated as UTF-8 by the reader: check here, on the encoded bytes.
@@ -320,6 +331,7 @@ CacheFileStatus readCacheFile(const std::string& path, CacheData* data, std::str
     result.level_bias = p.level_bias;
     result.bucket_size = p.bucket_size;
     result.bake_capacity = view.bakeCapacity();
+    result.gpu_radiance_scale = view.gpuRadianceScale();
     result.version_major = view.versionMajor();
     result.version_minor = view.versionMinor();
     result.voxels.resize(size_t(view.voxelCount()));

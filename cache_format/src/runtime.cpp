@@ -384,6 +384,7 @@ CacheFileStatus CacheView::parseSections(const SectionTable& table, CacheError* 
             case kSectionVoxels: slot = &voxels; break;
             case kSectionLevels: slot = &levels; break;
             case kSectionMetadata: slot = &meta; break;
+            case kSectionRadianceScale: slot = &found->radiance_scale; break;
             default: break;
         }
         s.known = slot != nullptr;
@@ -572,7 +573,26 @@ CacheFileStatus CacheView::parseMetadata(const CacheSectionInfo* meta, CacheErro
     return S::kOk;
 }
 
-/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V18), and fills the view.
+/// V19: the optional RSCL section (format 1.1).
+CacheFileStatus CacheView::parseRadianceScale(const CacheSectionInfo* section, CacheError* error) {
+    gpu_radiance_scale_ = 1.0f;
+    if (!section) return CacheFileStatus::kOk;
+    if (section->length < kCacheRadianceScaleSize ||
+        (version_minor_ <= 1 && section->length != kCacheRadianceScaleSize)) {
+        return fail(error, CacheFileStatus::kCorrupt, 19,
+                    "RSCL: length " + std::to_string(section->length) + ", expected 8");
+    }
+    if (!section->required) return fail(error, CacheFileStatus::kCorrupt, 19, "RSCL: not marked REQUIRED");
+    const float scale = load<float>(data_ + section->offset);
+    if (!std::isfinite(scale) || !(scale > 0.0f) || load<uint32_t>(data_ + section->offset + 4) != 0) {
+        return fail(error, CacheFileStatus::kCorrupt, 19,
+                    "RSCL: the radiance scale must be finite and > 0 and the reserved field 0");
+    }
+    gpu_radiance_scale_ = scale;
+    return CacheFileStatus::kOk;
+}
+
+/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V19), and fills the view.
 CacheFileStatus CacheView::parse(CacheError* error) {
     SectionTable table;
     KnownSections found;
@@ -583,6 +603,7 @@ CacheFileStatus CacheView::parse(CacheError* error) {
     if (status == CacheFileStatus::kOk) status = parseGrid(*found.grid, error, &voxel_count, &level_count);
     if (status == CacheFileStatus::kOk) status = parseVoxels(found, voxel_count, level_count, error);
     if (status == CacheFileStatus::kOk) status = parseMetadata(found.meta, error);
+    if (status == CacheFileStatus::kOk) status = parseRadianceScale(found.radiance_scale, error);
     if (status != CacheFileStatus::kOk) return status;
     // Query acceleration (not validation): voxel sizes and level thresholds.
     keyer_ = HashGridKeyer(gridParameters());

@@ -249,6 +249,7 @@ private:
         const CacheSectionInfo* voxels = nullptr;
         const CacheSectionInfo* levels = nullptr;
         const CacheSectionInfo* meta = nullptr;
+        const CacheSectionInfo* radiance_scale = nullptr;  ///< RSCL (1.1)
     };
     CacheFileStatus parse(CacheError* error);
     CacheFileStatus parseHeader(CacheError* error, SectionTable* table);
@@ -258,6 +259,7 @@ private:
     CacheFileStatus parseVoxels(const KnownSections& found, uint64_t voxel_count, uint32_t level_count,
                                 CacheError* error);
     CacheFileStatus parseMetadata(const CacheSectionInfo* meta, CacheError* error);
+    CacheFileStatus parseRadianceScale(const CacheSectionInfo* section, CacheError* error);
 
     const uint8_t* data_ = nullptr;
     uint64_t size_ = 0;
