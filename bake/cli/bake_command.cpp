@@ -16,6 +16,7 @@
 #include "reports/stability_report.h"
 #include "support/stopwatch.h"
 #include "sharcbake/cache_file.h"
+#include "sharcbake/runtime.h"
 #include "tracing/tracer.h"
 
 #include <tbb/global_control.h>
@@ -83,6 +84,7 @@ struct BakeOptions {
     uint32_t report_probes = ProbeSettings{}.probes;
     uint32_t report_probe_spp = ProbeSettings{}.reference_samples;
     double target_error = 0.0;
+    float gpu_radiance_scale = 1.0f;  ///< recorded in the cache for GPU buffers (SPEC §F.8a)
 };
 
 /// How the roaming camera is made (--camera-source, --camera-path, --explore-points,
@@ -913,9 +915,15 @@ private:
         data.metadata = metadata(BakeOutcome{baker_->iterationsDone(), cache.capacity()});
         data.metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction_));
         data.metadata.emplace_back("stop_reason", stop_reason_);
+        data.gpu_radiance_scale = o_.gpu_radiance_scale;
         std::string message;
         const CacheFileStatus status = writeCacheFile(o_.output_path, data, &message);
         if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
+        // What a GPU SHaRC table would clip (fp16), from the file as written.
+        CacheView written;
+        if (CacheView::openFile(o_.output_path, &written, nullptr, CacheView::FileMode::kMap) == CacheFileStatus::kOk) {
+            gpu_warning_ = written.gpuRadianceCheck().warning;
+        }
         live_voxels_ = data.voxels.size();
         written_levels_ = levelsOf(data);
         finish_seconds_ = secondsSince(finish_start);
@@ -1040,6 +1048,7 @@ private:
                          "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
                          100.0 * coverage_.unreached_area, coverage_.points);
         }
+        if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
         if (autoCapacity() && cache.numerics().failed_inserts > 0) {
             // The table doubles between iterations; one iteration filled it faster than that.
             std::fprintf(stderr,
@@ -1088,6 +1097,7 @@ private:
     CoverageReport coverage_;
     HitRatePrediction prediction_;
     uint64_t live_voxels_ = 0;
+    std::string gpu_warning_;               ///< fp16 clipping of the written cache at its GPU radiance scale
     std::vector<uint32_t> written_levels_;  ///< the levels of the cache file's voxels
     StabilityReport stability_;
     double finish_seconds_ = 0.0;
@@ -1244,6 +1254,11 @@ void registerBakeCommand(CLI::App& app) {
                     "SHaRC scene scale S: a voxel at camera distance d is about d/S wide, in any units (larger = "
                     "finer). auto = 50, the SDK sample's value. Copy it into the engine's SHaRC parameters "
                     "(sharcbake info shows it)")->capture_default_str();
+    cmd->add_option("--gpu-radiance-scale", o->gpu_radiance_scale,
+                    "Factor recorded in the cache for GPU buffers: an engine's SHaRC table gets radiance x this, "
+                    "in fp16 (at most 65504). Use the engine's radiance units per scene unit (its exposure or "
+                    "pre-exposure); a warning names the largest factor that clips nothing (docs/engine_guide.md)")
+        ->capture_default_str()->check(CLI::PositiveNumber)->check(kFiniteNumber);
     cmd->add_option("--log-base", o->log_base,
                     "SHaRC level logarithm base b (> 1); a power of two (2, the SDK's, or 4) makes the levels "
                     "nest exactly")->capture_default_str()->check(kFiniteNumber);

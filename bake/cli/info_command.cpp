@@ -89,6 +89,11 @@ void printText(const std::string& path, const CacheView& v) {
         std::printf("  sample weight min %g max %g total %g\n", double(s.weight_min), double(s.weight_max),
                     s.weight_total);
     }
+    // What an engine's SHaRC table gets (SPEC §G.6): the scale from RSCL and what fp16 clips.
+    const GpuRadianceReport gpu = v.gpuRadianceCheck();
+    std::printf("GPU buffers: radiance x %g (%s), fp16 up to 65504: %s\n", double(gpu.radiance_scale),
+                v.gpuRadianceScale() == 1.0f ? "no RSCL section" : "RSCL section",
+                gpu.warning.empty() ? "nothing clips" : gpu.warning.c_str());
     std::printf("Levels: %zu present of 511 (others hold no voxels and are not stored)\n", v.levels().size());
     for (const CacheLevel& l : v.levels()) {
         std::printf("  level %3u  voxel size %-10g  %10u voxels\n", l.level, double(voxelSize(l.level, p)),
@@ -125,6 +130,7 @@ Json vec3Json(const double v[3]) { return Json::array({jsonNumber(v[0]), jsonNum
 void printJson(const std::string& path, const CacheView& v) {
     const HashGridParameters p = v.gridParameters();
     const CacheStats s = v.stats();
+    const GpuRadianceReport gpu = v.gpuRadianceCheck();
     Json sections = Json::array(), levels = Json::array();
     for (const CacheSectionInfo& sec : v.sections()) {
         sections.push_back({{"type", fourcc(sec.type)},
@@ -157,6 +163,12 @@ void printJson(const std::string& path, const CacheView& v) {
           {"scene_scale", jsonNumber(p.scene_scale)},
           {"level_bias", jsonNumber(p.level_bias)},
           {"bake_capacity", v.bakeCapacity()}}},
+        {"gpu",
+         {{"radiance_scale", jsonNumber(gpu.radiance_scale)},
+          {"brightest", jsonNumber(gpu.brightest)},
+          {"fitting_radiance_scale", jsonNumber(gpu.fitting_radiance_scale)},
+          {"clipped_voxels", gpu.clipped_voxels},
+          {"flushed_voxels", gpu.flushed_voxels}}},
         {"voxels", s.voxels},
         {"bytes_per_voxel", jsonNumber(s.bytes_per_voxel)},
         {"radiance",

@@ -75,6 +75,9 @@ CacheFileStatus checkCacheData(const CacheData& data, std::vector<CacheLevel>& l
         }
         ++per_level[level];
     }
+    if (!std::isfinite(data.gpu_radiance_scale) || !(data.gpu_radiance_scale > 0.0f)) {
+        return fail(CacheFileStatus::kInvalidData, message, "the GPU radiance scale must be finite and > 0");
+    }
     if (validateHashGridParameters(data.gridParameters()) != HashGridStatus::kOk || data.bake_capacity == 0) {
         return fail(CacheFileStatus::kInvalidData, message,
                     std::string("grid parameters: ") + toString(validateHashGridParameters(data.gridParameters())));
@@ -129,7 +132,7 @@ void writeMetadataSection(ByteWriter& w, const std::vector<std::pair<std::string
 
 }  // namespace
 
-// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META.
+// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META (and RSCL).
 CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
     if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
     if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
@@ -137,7 +140,8 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     if (const CacheFileStatus status = checkCacheData(data, levels, message); status != CacheFileStatus::kOk) {
         return status;
     }
-    constexpr uint32_t kSections = 5;
+    const bool scaled = data.gpu_radiance_scale != 1.0f;  // SPEC §F.8a: RSCL only when not 1
+    const uint32_t kSections = scaled ? 6 : 5;
     std::vector<uint8_t>& bytes = *out;
     bytes.clear();
     bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
@@ -167,6 +171,12 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     container.beginSection(kSectionMetadata, 0);  // optional
     writeMetadataSection(w, data.metadata);
     container.endSection();
+    if (scaled) {
+        container.beginSection(kSectionRadianceScale, kCacheSectionRequired);  // SPEC §F.8a
+        w.put(data.gpu_radiance_scale);
+        w.put(uint32_t(0));
+        container.endSection();
+    }
     container.finish();  // table entries, file size, checksums
     // Metadata text is validated as UTF-8 by the reader: check here, on the encoded bytes.
     CacheView view;
@@ -333,6 +343,7 @@ CacheFileStatus readCacheFile(const std::string& path, CacheData* data, std::str
     result.level_bias = p.level_bias;
     result.bucket_size = p.bucket_size;
     result.bake_capacity = view.bakeCapacity();
+    result.gpu_radiance_scale = view.gpuRadianceScale();
     result.version_major = view.versionMajor();
     result.version_minor = view.versionMinor();
     result.voxels.resize(size_t(view.voxelCount()));

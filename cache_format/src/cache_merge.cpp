@@ -43,6 +43,7 @@ std::string incompatibility(const CacheData& first, const CacheData& other, cons
     if (!sameBits(first.scene_scale, other.scene_scale)) return "grid scene scale differs";
     if (!sameBits(first.level_bias, other.level_bias)) return "grid level bias differs";
     if (first.bucket_size != other.bucket_size) return "grid bucket size differs";
+    if (!sameBits(first.gpu_radiance_scale, other.gpu_radiance_scale)) return "GPU radiance scale differs";
     return {};
 }
 
@@ -68,6 +69,7 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
     merged.scene_scale = inputs[0].scene_scale;
     merged.level_bias = inputs[0].level_bias;
     merged.bucket_size = inputs[0].bucket_size;
+    merged.gpu_radiance_scale = inputs[0].gpu_radiance_scale;
     merged.version_major = inputs[0].version_major;
     merged.version_minor = inputs[0].version_minor;
     for (const CacheData& input : inputs) merged.bake_capacity = std::max(merged.bake_capacity, input.bake_capacity);

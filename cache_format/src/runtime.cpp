@@ -134,6 +134,7 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     level_bias_ = other.level_bias_;
     bucket_size_ = other.bucket_size_;
     bake_capacity_ = other.bake_capacity_;
+    gpu_radiance_scale_ = other.gpu_radiance_scale_;
     voxel_count_ = other.voxel_count_;
     keys_ = other.keys_;
     voxels_ = other.voxels_;
@@ -161,6 +162,7 @@ void CacheView::reset() {
     version_major_ = version_minor_ = 0;
     header_size_ = 0;
     sections_.clear();
+    gpu_radiance_scale_ = 1.0f;
     voxel_count_ = 0;
     keys_ = voxels_ = nullptr;
     levels_.clear();
@@ -395,6 +397,7 @@ CacheFileStatus CacheView::parseSections(const SectionTable& table, CacheError* 
             case kSectionVoxels: slot = &voxels; break;
             case kSectionLevels: slot = &levels; break;
             case kSectionMetadata: slot = &meta; break;
+            case kSectionRadianceScale: slot = &found->radiance_scale; break;
             default: break;
         }
         s.known = slot != nullptr;
@@ -583,7 +586,26 @@ CacheFileStatus CacheView::parseMetadata(const CacheSectionInfo* meta, CacheErro
     return S::kOk;
 }
 
-/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V18), and fills the view.
+/// V19: the optional RSCL section (format 1.1).
+CacheFileStatus CacheView::parseRadianceScale(const CacheSectionInfo* section, CacheError* error) {
+    gpu_radiance_scale_ = 1.0f;
+    if (!section) return CacheFileStatus::kOk;
+    if (section->length < kCacheRadianceScaleSize ||
+        (version_minor_ <= 1 && section->length != kCacheRadianceScaleSize)) {
+        return fail(error, CacheFileStatus::kCorrupt, 19,
+                    "RSCL: length " + std::to_string(section->length) + ", expected 8");
+    }
+    if (!section->required) return fail(error, CacheFileStatus::kCorrupt, 19, "RSCL: not marked REQUIRED");
+    const float scale = load<float>(data_ + section->offset);
+    if (!std::isfinite(scale) || !(scale > 0.0f) || load<uint32_t>(data_ + section->offset + 4) != 0) {
+        return fail(error, CacheFileStatus::kCorrupt, 19,
+                    "RSCL: the radiance scale must be finite and > 0 and the reserved field 0");
+    }
+    gpu_radiance_scale_ = scale;
+    return CacheFileStatus::kOk;
+}
+
+/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V19), and fills the view.
 CacheFileStatus CacheView::parse(CacheError* error) {
     SectionTable table;
     KnownSections found;
@@ -594,6 +616,7 @@ CacheFileStatus CacheView::parse(CacheError* error) {
     if (status == CacheFileStatus::kOk) status = parseGrid(*found.grid, error, &voxel_count, &level_count);
     if (status == CacheFileStatus::kOk) status = parseVoxels(found, voxel_count, level_count, error);
     if (status == CacheFileStatus::kOk) status = parseMetadata(found.meta, error);
+    if (status == CacheFileStatus::kOk) status = parseRadianceScale(found.radiance_scale, error);
     if (status != CacheFileStatus::kOk) return status;
     // Query acceleration (not validation): voxel sizes and level thresholds.
     keyer_ = HashGridKeyer(gridParameters());
@@ -910,11 +933,101 @@ size_t CacheView::lookupBatch(size_t count, const Float3* positions, const Float
 // GPU buffers
 // ------------------------------------------------------------------------------------------------
 
+namespace {
+
+/// What gpuBuffers() and gpuInsertList() share: the checked options and the packing of a voxel
+/// into the SDK's resolved entry (SPEC §G.4, §G.6).
+struct GpuPacker {
+    float scale = 1.0f;
+    float max_count = 65504.0f;
+    uint32_t frames = 1;
+    GpuRadianceReport report;
+
+    SharcPackedData pack(const CacheVoxel& v) {
+        SharcPackedData packed{{0, 0, 0, 0}, 0, 0};
+        bool clipped = false, flushed = false;
+        for (int c = 0; c < 3; ++c) {
+            const float scaled = v.radiance[c] * scale;  // may overflow to +Inf: clipped below
+            clipped = clipped || scaled > 65504.0f;
+            packed.radiance[c] = floatToHalf(std::min(scaled, 65504.0f));
+            flushed = flushed || (v.radiance[c] > 0.0f && packed.radiance[c] == 0);
+            report.brightest = std::max(report.brightest, v.radiance[c]);
+        }
+        report.clipped_voxels += clipped ? 1 : 0;
+        report.flushed_voxels += flushed ? 1 : 0;
+        packed.radiance[3] = floatToHalf(std::min(v.sample_weight, max_count));
+        if (packed.radiance[3] == 0) packed.radiance[3] = 1;  // weight > 0 stays usable (> threshold 0)
+        packed.sample_data = frames;  // staleFrameNum (bits 16-31) = 0: the longest life Resolve gives
+        packed.sample_data_ext = 0;
+        return packed;
+    }
+
+    /// The fitting scale and the warning, once every voxel is packed.
+    void finish() {
+        if (report.brightest > 0.0f) {
+            int exponent = 0;
+            std::frexp(65504.0 / double(report.brightest), &exponent);  // 65504 / brightest = m 2^e, m in [0.5, 1)
+            report.fitting_radiance_scale = float(std::ldexp(1.0, std::min(exponent - 1, 127)));
+        }
+        char buf[512];
+        if (report.clipped_voxels > 0) {
+            std::snprintf(buf, sizeof buf,
+                          "%llu voxels have a channel above fp16's 65504 after radiance scale %g (brightest channel "
+                          "%g) and are clipped; a radiance scale of %g or less keeps them (bake "
+                          "--gpu-radiance-scale, or GpuBufferOptions::radiance_scale: the engine's radiance must be "
+                          "in the same scaled units)",
+                          static_cast<unsigned long long>(report.clipped_voxels), double(report.radiance_scale),
+                          double(report.brightest), double(report.fitting_radiance_scale));
+            report.warning = buf;
+        }
+        if (report.flushed_voxels > 0) {
+            std::snprintf(buf, sizeof buf,
+                          "%s%llu voxels with light are stored as 0 in fp16 (below 6e-8 after radiance scale %g); "
+                          "a larger radiance scale keeps them",
+                          report.warning.empty() ? "" : "; ", static_cast<unsigned long long>(report.flushed_voxels),
+                          double(report.radiance_scale));
+            report.warning += buf;
+        }
+    }
+};
+
+/// Checks the options shared by gpuBuffers() and gpuInsertList() (`what` names the caller).
+CacheFileStatus prepareGpuPacker(const GpuBufferOptions& options, float file_scale, const char* what, GpuPacker* packer,
+                                 CacheError* error) {
+    std::string refused;
+    const CacheFileStatus build = checkSharcBuildOptions(options.build, options.sdk_target, &refused);
+    if (build != CacheFileStatus::kOk) return fail(error, build, 0, std::string(what) + ": " + refused);
+    if (!(options.radiance_scale >= 0.0f) || !std::isfinite(options.radiance_scale)) {
+        return fail(error, CacheFileStatus::kInvalidArgument, 0,
+                    std::string(what) + ": radiance scale must be finite and > 0 (0: the cache's own)");
+    }
+    packer->scale = options.radiance_scale > 0.0f ? options.radiance_scale : file_scale;
+    packer->report.radiance_scale = packer->scale;
+    packer->max_count = std::min(std::isfinite(options.max_sample_count) && options.max_sample_count > 0.0f
+                                     ? options.max_sample_count
+                                     : 65504.0f,
+                                 65504.0f);
+    packer->frames = std::min(options.accumulated_frame_num, kSharcMaxBakedFrameNum);
+    return CacheFileStatus::kOk;
+}
+
+}  // namespace
+
 CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffers* out, CacheError* error) const {
     if (error) *error = CacheError{};
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: null output");
     if (!data_) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: the view is not open");
     if (options.capacity == 0) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: capacity 0");
+    const SharcSdkLayout& layout = sharcSdkLayout(options.sdk_target);
+    if (options.capacity < layout.min_capacity) {
+        return fail(error, CacheFileStatus::kInvalidArgument, 0,
+                    "gpuBuffers: capacity " + std::to_string(options.capacity) + " is below " +
+                        std::to_string(layout.min_capacity) + ", the least " + toString(options.sdk_target) +
+                        "'s bucket rule is defined for");
+    }
+    GpuPacker packer;
+    const CacheFileStatus prepared = prepareGpuPacker(options, gpuRadianceScale(), "gpuBuffers", &packer, error);
+    if (prepared != CacheFileStatus::kOk) return prepared;
     GpuBuffers result;
     try {
         result.hash_entries.assign(options.capacity, kHashGridInvalidKey);
@@ -924,19 +1037,17 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
                     "gpuBuffers: out of memory for " + std::to_string(options.capacity) + " entries");
     }
     result.capacity = options.capacity;
-    const uint32_t probes = bucketProbeCount(options.capacity, bucket_size_);
-    const uint32_t frames = std::min<uint32_t>(options.accumulated_frame_num, 0xFFFFu);
-    const float max_count = std::min(std::isfinite(options.max_sample_count) && options.max_sample_count > 0.0f
-                                         ? options.max_sample_count
-                                         : 65504.0f,
-                                     65504.0f);
+    result.sdk_target = layout.target;
+    // SPEC §G.2: the SDK's 16-slot bucket whatever the bake's table used (GRID bucket_size).
+    const uint32_t probes = bucketProbeCount(options.capacity, layout.bucket_size);
     for (uint64_t i = 0; i < voxel_count_; ++i) {
         const CacheVoxel v = voxel(i);
-        const uint32_t base = bucketBase(hashGridHash(v.key), options.capacity, bucket_size_);
+        const uint64_t sdk_key = sharcSdkKey(v.key, layout.target);
+        const uint32_t base = sharcSdkBucketBase(hashGridHash(sdk_key), options.capacity, layout.target);
         uint32_t slot = kHashGridInvalidIndex;
         for (uint32_t p = 0; p < probes; ++p) {
             const uint64_t held = result.hash_entries[base + p];
-            if (held == kHashGridInvalidKey || held == v.key) {
+            if (held == kHashGridInvalidKey || held == sdk_key) {
                 slot = base + p;
                 break;
             }
@@ -945,15 +1056,50 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
             ++result.failed_inserts;
             continue;
         }
-        result.hash_entries[slot] = v.key;
-        SharcPackedData& packed = result.resolved[slot];
-        for (int c = 0; c < 3; ++c) packed.radiance[c] = floatToHalf(std::min(v.radiance[c], 65504.0f));
-        packed.radiance[3] = floatToHalf(std::min(v.sample_weight, max_count));
-        if (packed.radiance[3] == 0) packed.radiance[3] = 1;  // weight > 0 stays usable (> threshold 0)
-        packed.sample_data = frames;  // staleFrameNum (bits 16-31) = 0
-        packed.sample_data_ext = 0;
+        result.hash_entries[slot] = sdk_key;
+        result.resolved[slot] = packer.pack(v);
         ++result.inserted;
     }
+    packer.finish();
+    result.radiance = std::move(packer.report);
+    if (error) error->message = result.radiance.warning;
+    *out = std::move(result);
+    return CacheFileStatus::kOk;
+}
+
+GpuRadianceReport CacheView::gpuRadianceCheck(float radiance_scale) const {
+    GpuPacker packer;
+    packer.scale = std::isfinite(radiance_scale) && radiance_scale > 0.0f ? radiance_scale : gpuRadianceScale();
+    packer.report.radiance_scale = packer.scale;
+    for (uint64_t i = 0; i < voxel_count_; ++i) (void)packer.pack(voxel(i));
+    packer.finish();
+    return packer.report;
+}
+
+CacheFileStatus CacheView::gpuInsertList(const GpuBufferOptions& options, GpuInsertList* out, CacheError* error) const {
+    if (error) *error = CacheError{};
+    if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuInsertList: null output");
+    if (!data_) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuInsertList: the view is not open");
+    GpuPacker packer;
+    const CacheFileStatus prepared = prepareGpuPacker(options, gpuRadianceScale(), "gpuInsertList", &packer, error);
+    if (prepared != CacheFileStatus::kOk) return prepared;
+    GpuInsertList result;
+    result.sdk_target = sharcSdkLayout(options.sdk_target).target;
+    try {
+        result.keys.resize(size_t(voxel_count_));
+        result.values.resize(size_t(voxel_count_));
+    } catch (const std::bad_alloc&) {
+        return fail(error, CacheFileStatus::kIoError, 0,
+                    "gpuInsertList: out of memory for " + std::to_string(voxel_count_) + " voxels");
+    }
+    for (uint64_t i = 0; i < voxel_count_; ++i) {
+        const CacheVoxel v = voxel(i);
+        result.keys[size_t(i)] = sharcSdkKey(v.key, result.sdk_target);
+        result.values[size_t(i)] = packer.pack(v);
+    }
+    packer.finish();
+    result.radiance = std::move(packer.report);
+    if (error) error->message = result.radiance.warning;
     *out = std::move(result);
     return CacheFileStatus::kOk;
 }

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <new>
+#include <string>
 
 struct sharcbake_cache {
     sharcbake::CacheView view;
@@ -45,6 +46,44 @@ sharcbake_status finishOpen(CacheFileStatus status, CacheView& view, const Cache
 }
 
 Float3 f3(const float* v) { return Float3{v[0], v[1], v[2]}; }
+
+static_assert(int(SHARCBAKE_SDK_1_6) == int(sharcbake::SharcSdkTarget::kSdk1_6), "targets agree");
+static_assert(int(SHARCBAKE_SDK_1_7) == int(sharcbake::SharcSdkTarget::kSdk1_7), "targets agree");
+static_assert(int(SHARCBAKE_SDK_1_8_3) == int(sharcbake::SharcSdkTarget::kSdk1_8_3), "targets agree");
+
+sharcbake::GpuBufferOptions gpuOptions(const sharcbake_gpu_options& o) {
+    sharcbake::GpuBufferOptions options;
+    options.capacity = o.capacity;
+    options.sdk_target = sharcbake::SharcSdkTarget(o.sdk_target);
+    options.build.sh_encoding = (o.build_flags & SHARCBAKE_BUILD_SH_ENCODING) != 0;
+    options.build.compact_keys = (o.build_flags & SHARCBAKE_BUILD_COMPACT_KEYS) != 0;
+    options.build.material_demodulation = (o.build_flags & SHARCBAKE_BUILD_MATERIAL_DEMODULATION) != 0;
+    options.build.separate_emissive = (o.build_flags & SHARCBAKE_BUILD_SEPARATE_EMISSIVE) != 0;
+    options.accumulated_frame_num = o.accumulated_frame_num;
+    options.max_sample_count = o.max_sample_count;
+    options.radiance_scale = o.radiance_scale;
+    return options;
+}
+
+void fillReport(const sharcbake::GpuRadianceReport& r, uint64_t inserted, uint64_t failed, sharcbake_gpu_report* out) {
+    if (!out) return;
+    *out = sharcbake_gpu_report{};
+    out->inserted = inserted;
+    out->failed_inserts = failed;
+    out->clipped_voxels = r.clipped_voxels;
+    out->flushed_voxels = r.flushed_voxels;
+    out->radiance_scale = r.radiance_scale;
+    out->brightest = r.brightest;
+    out->fitting_radiance_scale = r.fitting_radiance_scale;
+}
+
+/// A known target, or an unknown one refused with a message (the C++ API maps unknown values to
+/// the default; a C caller passing garbage should hear about it).
+bool knownTarget(const sharcbake_gpu_options& o, char* message, size_t message_size) {
+    if (sharcbake::isKnownSharcSdkTarget(sharcbake::SharcSdkTarget(o.sdk_target))) return true;
+    copyMessage("unknown sdk_target " + std::to_string(o.sdk_target), message, message_size);
+    return false;
+}
 
 }  // namespace
 
@@ -187,6 +226,88 @@ sharcbake_status sharcbake_cache_gpu_buffers(const sharcbake_cache* cache, uint3
     } catch (...) {
         return SHARCBAKE_IO_ERROR;
     }
+}
+
+void sharcbake_gpu_options_init(sharcbake_gpu_options* options) {
+    if (!options) return;
+    const sharcbake::GpuBufferOptions d;
+    options->capacity = d.capacity;
+    options->sdk_target = uint32_t(d.sdk_target);
+    options->build_flags = 0;
+    options->accumulated_frame_num = d.accumulated_frame_num;
+    options->max_sample_count = d.max_sample_count;
+    options->radiance_scale = d.radiance_scale;
+}
+
+float sharcbake_cache_gpu_radiance_scale(const sharcbake_cache* cache) {
+    return cache ? cache->view.gpuRadianceScale() : 0.0f;
+}
+
+sharcbake_status sharcbake_cache_gpu_buffers_ex(const sharcbake_cache* cache, const sharcbake_gpu_options* options,
+                                                uint64_t* hash_entries, sharcbake_packed_data* resolved,
+                                                sharcbake_gpu_report* report, char* message, size_t message_size) {
+    copyMessage("", message, message_size);
+    if (!cache || !options || !hash_entries || !resolved) return SHARCBAKE_INVALID_ARGUMENT;
+    if (!knownTarget(*options, message, message_size)) return SHARCBAKE_INVALID_ARGUMENT;
+    try {
+        sharcbake::GpuBuffers buffers;
+        CacheError error;
+        const CacheFileStatus status = cache->view.gpuBuffers(gpuOptions(*options), &buffers, &error);
+        copyMessage(error.message, message, message_size);
+        if (status != CacheFileStatus::kOk) return sharcbake_status(status);
+        std::memcpy(hash_entries, buffers.hash_entries.data(), size_t(buffers.capacity) * sizeof(uint64_t));
+        std::memcpy(resolved, buffers.resolved.data(), size_t(buffers.capacity) * sizeof(sharcbake_packed_data));
+        fillReport(buffers.radiance, buffers.inserted, buffers.failed_inserts, report);
+        return SHARCBAKE_OK;
+    } catch (...) {
+        copyMessage("out of memory", message, message_size);
+        return SHARCBAKE_IO_ERROR;
+    }
+}
+
+sharcbake_status sharcbake_cache_gpu_insert_list(const sharcbake_cache* cache, const sharcbake_gpu_options* options,
+                                                 uint64_t* keys, sharcbake_packed_data* values,
+                                                 sharcbake_gpu_report* report, char* message, size_t message_size) {
+    copyMessage("", message, message_size);
+    if (!cache || !options || ((!keys || !values) && cache->view.voxelCount() > 0)) return SHARCBAKE_INVALID_ARGUMENT;
+    if (!knownTarget(*options, message, message_size)) return SHARCBAKE_INVALID_ARGUMENT;
+    try {
+        sharcbake::GpuInsertList list;
+        CacheError error;
+        const CacheFileStatus status = cache->view.gpuInsertList(gpuOptions(*options), &list, &error);
+        copyMessage(error.message, message, message_size);
+        if (status != CacheFileStatus::kOk) return sharcbake_status(status);
+        if (!list.keys.empty()) {
+            std::memcpy(keys, list.keys.data(), list.keys.size() * sizeof(uint64_t));
+            std::memcpy(values, list.values.data(), list.values.size() * sizeof(sharcbake_packed_data));
+        }
+        fillReport(list.radiance, list.keys.size(), 0, report);
+        return SHARCBAKE_OK;
+    } catch (...) {
+        copyMessage("out of memory", message, message_size);
+        return SHARCBAKE_IO_ERROR;
+    }
+}
+
+sharcbake_status sharcbake_sdk_target_for_release(const char* release, sharcbake_sdk_target* target, char* message,
+                                                  size_t message_size) {
+    copyMessage("", message, message_size);
+    if (!release || !target) return SHARCBAKE_INVALID_ARGUMENT;
+    try {
+        sharcbake::SharcSdkTarget t{};
+        std::string text;
+        const CacheFileStatus status = sharcbake::sharcSdkTargetForRelease(release, &t, &text);
+        copyMessage(text, message, message_size);
+        if (status == CacheFileStatus::kOk) *target = sharcbake_sdk_target(t);
+        return sharcbake_status(status);
+    } catch (...) {
+        copyMessage("out of memory", message, message_size);
+        return SHARCBAKE_IO_ERROR;
+    }
+}
+
+uint32_t sharcbake_resolve_frames_kept(uint32_t stale_frame_num_max) {
+    return sharcbake::sharcResolveFramesKept(stale_frame_num_max);
 }
 
 }  // extern "C"

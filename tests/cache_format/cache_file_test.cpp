@@ -3,6 +3,7 @@
 // tests (every prefix, every flipped byte, versions, sections, trailing bytes), lookups and GPU
 // buffers. Links only sharcbake_runtime.
 #include "sharcbake/cache_file.h"
+#include "sharcbake/cache_merge.h"
 #include "sharcbake/format.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/runtime.h"
@@ -32,7 +33,8 @@
 namespace sharcbake {
 namespace {
 
-const std::string kGoldenPath = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.0.sharc";
+const std::string kGoldenPath = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.0.sharc";  ///< format 1.0, kept
+const std::string kGolden11Path = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.1.sharc";
 
 // ------------------------------------------------------------------------------------------------
 // Helpers
@@ -72,6 +74,13 @@ CacheData goldenData() {
                      {"bake_settings", "--iterations 16 --seed 7"},
                      {"bake_seconds", "0"},
                      {"note", "UTF-8 \xC3\xA9\xE2\x82\xAC"}};
+    return data;
+}
+
+/// The golden cache of format 1.1: goldenData() with a GPU radiance scale, so the file has RSCL.
+CacheData goldenData11() {
+    CacheData data = goldenData();
+    data.gpu_radiance_scale = 0.25f;
     return data;
 }
 
@@ -204,6 +213,7 @@ TEST(CacheFile, RoundTripThroughDisk) {
     EXPECT_EQ(back.level_bias, data.level_bias);
     EXPECT_EQ(back.bucket_size, data.bucket_size);
     EXPECT_EQ(back.bake_capacity, data.bake_capacity);
+    EXPECT_EQ(back.gpu_radiance_scale, 1.0f);
     ASSERT_EQ(back.voxels.size(), data.voxels.size());
     for (size_t i = 0; i < data.voxels.size(); ++i) {
         EXPECT_EQ(back.voxels[i].key, data.voxels[i].key);
@@ -237,40 +247,57 @@ TEST(CacheFile, EmptyCacheRoundTrips) {
 }
 
 // Writes the golden when SHARCBAKE_UPDATE_GOLDENS is set; otherwise the writer must reproduce it.
+// (small.v1.0.sharc, of format 1.0, is no longer written: GoldenReadsBack keeps it readable.)
 TEST(CacheFileGolden, WriterReproducesGolden) {
-    const std::vector<uint8_t> bytes = encode(goldenData());
+    const std::vector<uint8_t> bytes = encode(goldenData11());
     if (std::getenv("SHARCBAKE_UPDATE_GOLDENS")) {
-        std::ofstream out(kGoldenPath, std::ios::binary | std::ios::trunc);
+        std::ofstream out(kGolden11Path, std::ios::binary | std::ios::trunc);
         out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
         ASSERT_TRUE(out.good());
     }
-    const std::vector<uint8_t> golden = readBytes(kGoldenPath);
-    ASSERT_FALSE(golden.empty()) << kGoldenPath << " is missing; run with SHARCBAKE_UPDATE_GOLDENS=1";
-    EXPECT_EQ(bytes, golden) << "the writer no longer reproduces " << kGoldenPath
-                             << ". If the change is intended, add a new golden for the new format version "
-                                "(goldens are kept forever) and verify, then regenerate with SHARCBAKE_UPDATE_GOLDENS=1";
+    const std::vector<uint8_t> golden = readBytes(kGolden11Path);
+    ASSERT_FALSE(golden.empty()) << kGolden11Path << " is missing; run with SHARCBAKE_UPDATE_GOLDENS=1";
+    EXPECT_EQ(bytes, golden)
+        << "the writer no longer reproduces " << kGolden11Path
+        << ". If the change is intended, add a new golden for the new format version "
+           "(goldens are kept forever) and verify, then regenerate with SHARCBAKE_UPDATE_GOLDENS=1";
 }
 
 TEST(CacheFileGolden, GoldenReadsBack) {
-    CacheData back;
-    std::string message;
-    ASSERT_EQ(readCacheFile(kGoldenPath, &back, &message), CacheFileStatus::kOk) << message;
-    EXPECT_EQ(back.version_major, 1);
-    EXPECT_EQ(back.version_minor, 0);
-    const CacheData expected = goldenData();
-    ASSERT_EQ(back.voxels.size(), expected.voxels.size());
-    for (size_t i = 0; i < expected.voxels.size(); ++i) {
-        EXPECT_EQ(back.voxels[i].key, expected.voxels[i].key);
-        EXPECT_EQ(back.voxels[i].radiance[0], expected.voxels[i].radiance[0]);
-        EXPECT_EQ(back.voxels[i].sample_weight, expected.voxels[i].sample_weight);
+    // Every golden stays readable: 1.0 (no RSCL: scale 1) and 1.1 (RSCL 0.25; VOXL is not scaled).
+    struct Golden {
+        std::string path;
+        uint16_t minor;
+        float scale;
+        size_t sections;
+    };
+    for (const Golden& g : {Golden{kGoldenPath, 0, 1.0f, 5}, Golden{kGolden11Path, 1, 0.25f, 6}}) {
+        CacheData back;
+        std::string message;
+        ASSERT_EQ(readCacheFile(g.path, &back, &message), CacheFileStatus::kOk) << message;
+        EXPECT_EQ(back.version_major, 1);
+        EXPECT_EQ(back.version_minor, g.minor);
+        EXPECT_EQ(back.gpu_radiance_scale, g.scale);
+        const CacheData expected = goldenData();
+        ASSERT_EQ(back.voxels.size(), expected.voxels.size());
+        for (size_t i = 0; i < expected.voxels.size(); ++i) {
+            EXPECT_EQ(back.voxels[i].key, expected.voxels[i].key);
+            EXPECT_EQ(back.voxels[i].radiance[0], expected.voxels[i].radiance[0]);
+            EXPECT_EQ(back.voxels[i].sample_weight, expected.voxels[i].sample_weight);
+        }
+        EXPECT_EQ(back.metadata, expected.metadata);
+        CacheView view;
+        CacheError error;
+        ASSERT_EQ(CacheView::openFile(g.path, &view, &error, CacheView::FileMode::kMap), CacheFileStatus::kOk)
+            << error.message;
+        ASSERT_EQ(view.sections().size(), g.sections);
+        EXPECT_EQ(view.metadata("seed"), "7");
+        EXPECT_EQ(view.gpuRadianceScale(), g.scale);
+        if (g.sections == 6) {
+            EXPECT_EQ(view.sections()[5].type, kSectionRadianceScale);
+            EXPECT_TRUE(view.sections()[5].required);
+        }
     }
-    EXPECT_EQ(back.metadata, expected.metadata);
-    CacheView view;
-    CacheError error;
-    ASSERT_EQ(CacheView::openFile(kGoldenPath, &view, &error, CacheView::FileMode::kMap), CacheFileStatus::kOk)
-        << error.message;
-    EXPECT_EQ(view.sections().size(), 5u);
-    EXPECT_EQ(view.metadata("seed"), "7");
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -291,15 +318,17 @@ TEST(CacheFileReject, EveryPrefixIsRejected) {
 }
 
 TEST(CacheFileReject, EveryFlippedByteIsRejected) {
-    const std::vector<uint8_t> bytes = encode(goldenData());
-    ASSERT_EQ(openBytes(bytes), CacheFileStatus::kOk);
-    for (size_t i = 0; i < bytes.size(); ++i) {
-        for (uint8_t mask : {uint8_t(0x01), uint8_t(0x80), uint8_t(0xFF)}) {
-            std::vector<uint8_t> bad = bytes;
-            bad[i] ^= mask;
-            CacheError error;
-            EXPECT_NE(openBytes(bad, &error), CacheFileStatus::kOk) << "byte " << i << " ^ " << int(mask) << " accepted";
-            EXPECT_FALSE(error.message.empty());
+    for (const std::vector<uint8_t>& bytes : {encode(goldenData()), encode(goldenData11())}) {
+        ASSERT_EQ(openBytes(bytes), CacheFileStatus::kOk);
+        for (size_t i = 0; i < bytes.size(); ++i) {
+            for (uint8_t mask : {uint8_t(0x01), uint8_t(0x80), uint8_t(0xFF)}) {
+                std::vector<uint8_t> bad = bytes;
+                bad[i] ^= mask;
+                CacheError error;
+                EXPECT_NE(openBytes(bad, &error), CacheFileStatus::kOk)
+                    << "byte " << i << " ^ " << int(mask) << " accepted";
+                EXPECT_FALSE(error.message.empty());
+            }
         }
     }
 }
@@ -361,7 +390,7 @@ TEST(CacheFileReject, NewerMajorIsRejectedNewerMinorRead) {
 TEST(CacheFileReject, UnknownSections) {
     const std::vector<uint8_t> bytes = encode(goldenData());
     std::vector<RawSection> sections = splitSections(bytes);
-    ASSERT_EQ(assemble(1, 0, sections), bytes);  // the test's layout is the writer's
+    ASSERT_EQ(assemble(1, kCacheVersionMinor, sections), bytes);  // the test's layout is the writer's
     sections.insert(sections.begin() + 2, RawSection{cacheFourCC('X', 'T', 'R', 'A'), 0, {1, 2, 3, 4, 5}});
     CacheView view;
     CacheError error;
@@ -443,6 +472,91 @@ TEST(CacheFileReject, SemanticRulesWithValidChecksums) {
     fixHeaderCrc(count);
     EXPECT_EQ(openBytes(count, &error), CacheFileStatus::kCorrupt);
     EXPECT_EQ(error.rule, 5u);
+}
+
+TEST(CacheFileReject, RadianceScaleRule19) {
+    const std::vector<uint8_t> bytes = encode(goldenData11());
+    const std::vector<RawSection> sections = splitSections(bytes);
+    ASSERT_EQ(sections.size(), 6u);
+    ASSERT_EQ(sections[5].type, kSectionRadianceScale);
+    ASSERT_EQ(assemble(1, 1, sections), bytes);
+    auto with = [&](auto change, uint16_t minor = 1) {
+        std::vector<RawSection> s = sections;
+        change(s[5]);
+        return assemble(1, minor, s);
+    };
+    CacheError error;
+    for (float bad : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        EXPECT_EQ(openBytes(with([&](RawSection& r) { set(r.data, 0, bad); }), &error), CacheFileStatus::kCorrupt)
+            << bad;
+        EXPECT_EQ(error.rule, 19u) << error.message;
+    }
+    EXPECT_EQ(openBytes(with([](RawSection& r) { set(r.data, 4, uint32_t(1)); }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 19u);
+    EXPECT_EQ(openBytes(with([](RawSection& r) { r.flags = 0; }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 19u);
+    EXPECT_EQ(openBytes(with([](RawSection& r) { r.data.resize(4); }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 19u);
+    EXPECT_EQ(openBytes(with([](RawSection& r) { r.data.resize(12, 0); }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 19u);
+    // A later minor may append fields; a 1.0-marked file with RSCL is read as it says.
+    CacheView view;
+    ASSERT_EQ(openBytes(with([](RawSection& r) { r.data.resize(12, 0); }, 2), &error, &view), CacheFileStatus::kOk)
+        << error.message;
+    EXPECT_EQ(view.gpuRadianceScale(), 0.25f);
+    ASSERT_EQ(openBytes(assemble(1, 0, sections), &error, &view), CacheFileStatus::kOk) << error.message;
+    EXPECT_EQ(view.gpuRadianceScale(), 0.25f);
+    // Twice: V10.
+    std::vector<RawSection> twice = sections;
+    twice.push_back(sections[5]);
+    EXPECT_EQ(openBytes(assemble(1, 1, twice), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 10u);
+}
+
+TEST(CacheFile, GpuRadianceScaleIsRecordedAndAppliedToGpuBuffersOnly) {
+    const CacheData data = goldenData11();
+    const std::vector<uint8_t> bytes = encode(data);
+    CacheView view;
+    ASSERT_EQ(openBytes(bytes, nullptr, &view), CacheFileStatus::kOk);
+    EXPECT_EQ(view.versionMinor(), kCacheVersionMinor);
+    EXPECT_EQ(view.gpuRadianceScale(), 0.25f);
+    const CacheVoxel& v = data.voxels[7];
+    Float3 radiance{};
+    ASSERT_TRUE(view.lookup(voxelCenter(v.key, data.gridParameters()),
+                            normalFromBits(decodeHashGridKey(v.key).normal_bits),
+                            cameraForLevel(voxelCenter(v.key, data.gridParameters()), decodeHashGridKey(v.key).level),
+                            &radiance));
+    EXPECT_EQ(radiance.y, v.radiance[1]);  // lookups keep the scene's units
+    GpuBufferOptions options;
+    options.capacity = 4096;
+    GpuInsertList list;
+    ASSERT_EQ(view.gpuInsertList(options, &list), CacheFileStatus::kOk);
+    EXPECT_EQ(list.radiance.radiance_scale, 0.25f);
+    EXPECT_EQ(halfToFloat(list.values[7].radiance[1]), halfToFloat(floatToHalf(v.radiance[1] * 0.25f)));
+    options.radiance_scale = 1.0f;  // the caller's scale wins
+    ASSERT_EQ(view.gpuInsertList(options, &list), CacheFileStatus::kOk);
+    EXPECT_EQ(halfToFloat(list.values[7].radiance[1]), halfToFloat(floatToHalf(v.radiance[1])));
+    EXPECT_EQ(view.gpuRadianceCheck().radiance_scale, 0.25f);
+    EXPECT_EQ(view.gpuRadianceCheck(2.0f).radiance_scale, 2.0f);
+    // Scale 1 writes no RSCL; the writer refuses scales a reader would reject.
+    CacheView plain;
+    const std::vector<uint8_t> plain_bytes = encode(goldenData());
+    ASSERT_EQ(openBytes(plain_bytes, nullptr, &plain), CacheFileStatus::kOk);
+    EXPECT_EQ(plain.sections().size(), 5u);
+    EXPECT_EQ(plain.gpuRadianceScale(), 1.0f);
+    for (float bad : {0.0f, -2.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        CacheData invalid = goldenData();
+        invalid.gpu_radiance_scale = bad;
+        std::vector<uint8_t> out;
+        EXPECT_EQ(encodeCacheFile(invalid, &out, nullptr), CacheFileStatus::kInvalidData) << bad;
+    }
+    // Shards must agree on it; the merge keeps it.
+    CacheData merged;
+    std::string message;
+    EXPECT_EQ(mergeCaches({goldenData11(), goldenData()}, {}, &merged, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("GPU radiance scale"), std::string::npos) << message;
+    ASSERT_EQ(mergeCaches({goldenData11(), goldenData11()}, {}, &merged, &message), CacheFileStatus::kOk) << message;
+    EXPECT_EQ(merged.gpu_radiance_scale, 0.25f);
 }
 
 TEST(CacheFile, WriterRefusesInvalidData) {

@@ -129,10 +129,16 @@ void exercise(const uint8_t* data, size_t size) {
         options.capacity = capacity;
         options.accumulated_frame_num = capacity * 100u;
         options.max_sample_count = in.nextFloat();
+        options.sdk_target = SharcSdkTarget(1 + capacity % 3);  // every release's layout and rule
+        options.radiance_scale = capacity == 64u ? in.nextFloat() : 0.0f;
         GpuBuffers buffers;
         if (view.gpuBuffers(options, &buffers, &error) == CacheFileStatus::kOk) {
             if (buffers.hash_entries.size() != capacity || buffers.resolved.size() != capacity) __builtin_trap();
             if (buffers.inserted + buffers.failed_inserts != n) __builtin_trap();
+        }
+        GpuInsertList list;
+        if (view.gpuInsertList(options, &list, &error) == CacheFileStatus::kOk) {
+            if (list.keys.size() != n || list.values.size() != n) __builtin_trap();
         }
     }
 }

@@ -24,7 +24,8 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 echo "== (a) sanitized runtime build + cache_format tests in $WORK/build"
 cmake -S "$SRC" -B "$WORK/build" -DSHARCBAKE_BUILD_TOOLS=OFF -DSHARCBAKE_SANITIZE=ON \
     -DCMAKE_BUILD_TYPE=Debug >"$WORK/configure.log" 2>&1 || { cat "$WORK/configure.log"; exit 1; }
-cmake --build "$WORK/build" -j "$JOBS" --target cache_file_tests hash_grid_tests hash_grid_vector_dump
+cmake --build "$WORK/build" -j "$JOBS" --target cache_file_tests hash_grid_tests hash_grid_vector_dump \
+    sdk_target_tests
 # install_consumer needs a full build to install; the generator check is not runtime code.
 (cd "$WORK/build" && ctest --output-on-failure -j "$JOBS" \
     -E 'install_consumer|scenes\.generator_check|sanitized_and_fuzzed')

@@ -24,6 +24,9 @@ struct CacheData {
     float level_bias = kHashGridDefaultLevelBias;
     uint32_t bucket_size = kHashGridBucketSize;
     uint32_t bake_capacity = 0;  ///< table capacity used by the bake (informative)
+    /// Factor GPU buffers apply to the radiance by default (SPEC §F.8a, section RSCL): the engine's
+    /// SHaRC radiance units per scene unit. Finite, > 0; 1 writes no RSCL section.
+    float gpu_radiance_scale = 1.0f;
     /// Voxels sorted by key, keys unique and non-zero.
     std::vector<CacheVoxel> voxels;
     /// Provenance and settings as ordered key/value text (writer, scene, settings, timings).

@@ -16,8 +16,8 @@ namespace sharcbake {
 /// weight, then radiance), so the result does not depend on the order of `inputs`.
 ///
 /// Refuses (kInvalidData, with a message naming the first differing input and field) inputs
-/// whose grid parameters (logarithm base, scene scale, level bias, bucket size) or format
-/// versions differ, or whose metadata differ in one of `keys_that_must_agree` (for example
+/// whose grid parameters (logarithm base, scene scale, level bias, bucket size), GPU radiance
+/// scales or format versions differ, or whose metadata differ in one of `keys_that_must_agree` (for example
 /// "scene_hash"; a key missing from an input counts as a difference).
 /// `out` gets the merged voxels and the grid parameters, bake_capacity the largest input's;
 /// its metadata is left empty for the caller to describe the merge.

@@ -30,12 +30,13 @@ inline constexpr uint8_t kCheckpointIdentifier[16] = {0xAB, 'S', 'H', 'A', 'R', 
                                                       'P',  'T', 0xBB, '\r', '\n', 0x1A, '\n', 0x00};
 
 inline constexpr uint16_t kCacheVersionMajor = 1;  ///< incompatible changes
-inline constexpr uint16_t kCacheVersionMinor = 0;  ///< compatible additions (optional sections)
+inline constexpr uint16_t kCacheVersionMinor = 1;  ///< compatible additions (1.1: RSCL)
 
 /// Notable format versions (OpenVDB style), for version-gated reading code.
 enum CacheFormatVersion : uint32_t {
     kCacheFormatInterim = 0x0001,  ///< 0.1: "SHRCBAKE" + one CRC; not readable (re-bake)
     kCacheFormat_1_0 = 0x0100,     ///< 1.0: identifier, header, section table, GRID/KEYS/VOXL/LEVL/META
+    kCacheFormat_1_1 = 0x0101,     ///< 1.1: RSCL, the radiance scale for GPU buffers (SPEC §F.8a)
 };
 
 // ------------------------------------------------------------------------------------------------
@@ -96,6 +97,7 @@ inline constexpr uint32_t kSectionKeys = cacheFourCC('K', 'E', 'Y', 'S');
 inline constexpr uint32_t kSectionVoxels = cacheFourCC('V', 'O', 'X', 'L');
 inline constexpr uint32_t kSectionLevels = cacheFourCC('L', 'E', 'V', 'L');
 inline constexpr uint32_t kSectionMetadata = cacheFourCC('M', 'E', 'T', 'A');
+inline constexpr uint32_t kSectionRadianceScale = cacheFourCC('R', 'S', 'C', 'L');  ///< 1.1
 
 // ------------------------------------------------------------------------------------------------
 // Sections (SPEC §F.5 - §F.8)
@@ -140,6 +142,16 @@ struct CacheLevelRecord {
     uint32_t voxel_count;
 };
 static_assert(sizeof(CacheLevelRecord) == 8, "SPEC §F.7: level records are 8 bytes");
+
+/// RSCL (1.1): the factor GPU buffers apply to the radiance (SPEC §F.8a). Written only when it is
+/// not 1, and then REQUIRED: a reader that cannot apply it must not make buffers at the wrong
+/// brightness.
+struct CacheRadianceScaleSection {
+    float radiance_scale;  ///< finite, > 0, != 1
+    uint32_t reserved;     ///< 0
+};
+static_assert(sizeof(CacheRadianceScaleSection) == 8, "SPEC §F.8a: RSCL is 8 bytes");
+inline constexpr uint32_t kCacheRadianceScaleSize = 8;
 
 /// @brief CRC-32 (ISO-HDLC / zlib / PNG: reflected polynomial 0xEDB88320, init and xorout
 /// 0xFFFFFFFF). Pass the previous result as `crc` to continue over several ranges.

@@ -13,6 +13,7 @@
 #include "sharcbake/format.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/runtime_export.h"
+#include "sharcbake/sdk_target.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -53,7 +54,7 @@ struct CacheStats {
     double bytes_per_voxel = 0.0;  ///< file size / voxels (0 when empty)
 };
 
-/// SHaRC 1.8 `SharcPackedData` (resolved buffer entry, 16 bytes).
+/// SHaRC `SharcPackedData` (resolved buffer entry, 16 bytes; SDK 1.6.3 - 1.8.x default build).
 struct SharcPackedData {
     uint16_t radiance[4];      ///< fp16 mean R, G, B and effective sample count (each <= 65504)
     uint32_t sample_data;      ///< bits 0-15 accumulatedFrameNum, bits 16-31 staleFrameNum
@@ -61,26 +62,59 @@ struct SharcPackedData {
 };
 static_assert(sizeof(SharcPackedData) == 16, "SharcPackedData is 16 bytes");
 
-/// Options for CacheView::gpuBuffers().
+/// Options for CacheView::gpuBuffers() and CacheView::gpuInsertList().
 struct GpuBufferOptions {
-    uint32_t capacity = kHashGridDefaultCapacity;  ///< slots N of the runtime table (>= 1)
-    /// accumulatedFrameNum stored for every entry (clamped to 0..65535). The SDK's resolve scales
+    uint32_t capacity = kHashGridDefaultCapacity;  ///< slots N of the runtime table (>= 1; gpuBuffers only)
+    /// accumulatedFrameNum stored for every entry (clamped to 0..kSharcMaxBakedFrameNum, 64511, so
+    /// that Resolve's frame count never carries into the stale counter). The SDK's resolve scales
     /// the history by A/F once F exceeds its accumulation frame count A; 1 keeps the baked weight
-    /// intact for A frames, larger values let new frames take over sooner.
+    /// intact for A frames, larger values let new frames take over sooner (SPEC §G.4).
     uint32_t accumulated_frame_num = 1;
     /// The sample count stored is min(sample_weight, max_sample_count, 65504): caps how strongly
     /// the baked mean resists new frames.
     float max_sample_count = 65504.0f;
+    /// The SDK release the engine runs: its key layout and bucket rule (SPEC §G.1).
+    SharcSdkTarget sdk_target = kSharcSdkTargetDefault;
+    /// The engine's SDK build options; any of them on is refused (kUnsupportedFeature, SPEC §G.3).
+    SharcBuildOptions build;
+    /// Factor applied to the radiance before it goes to fp16 (SPEC §G.6): > 0 uses this value, 0
+    /// uses the cache's own (SPEC §F.8a RSCL; 1 when the file has none). Negative or NaN:
+    /// kInvalidArgument.
+    float radiance_scale = 0.0f;
 };
 
-/// Buffers for a GPU SHaRC implementation (SDK 1.8 layout), `capacity` entries each.
+/// How the radiance fared on its way to fp16 (SPEC §G.6).
+struct GpuRadianceReport {
+    float radiance_scale = 1.0f;  ///< the factor applied
+    float brightest = 0.0f;       ///< largest channel of any voxel, before scaling
+    /// Largest power of two at which the brightest channel still fits fp16 (<= 65504); 0 when
+    /// every voxel is black.
+    float fitting_radiance_scale = 0.0f;
+    uint64_t clipped_voxels = 0;  ///< voxels with a channel above 65504 after scaling (stored 65504)
+    uint64_t flushed_voxels = 0;  ///< voxels with a channel > 0 that fp16 stores as 0
+    std::string warning;          ///< empty, or what clipped and the scale that fixes it
+};
+
+/// Buffers for a GPU SHaRC implementation (SDK 1.6.3+ resolved layout), `capacity` entries each.
 struct GpuBuffers {
     uint32_t capacity = 0;
+    SharcSdkTarget sdk_target = kSharcSdkTargetDefault;  ///< whose layout and rule placed the keys
     std::vector<uint64_t> hash_entries;     ///< keys placed by SHaRC's insert rule, 0 = empty
     std::vector<SharcPackedData> resolved;  ///< resolved data at the key's slot, zero elsewhere
     /// The SDK's accumulation buffer (uint4 per entry) starts at zero; not materialised here.
     uint64_t inserted = 0;
     uint64_t failed_inserts = 0;  ///< voxels dropped because their bucket was full
+    GpuRadianceReport radiance;
+};
+
+/// Keys and resolved entries for the engine to insert itself, with its SDK's own insert function
+/// (a compute pass; docs/engine_guide.md §4): no bucket rule is assumed. One entry per voxel, in
+/// file (key) order; `keys[i]` is in the target's key layout.
+struct GpuInsertList {
+    SharcSdkTarget sdk_target = kSharcSdkTargetDefault;
+    std::vector<uint64_t> keys;
+    std::vector<SharcPackedData> values;
+    GpuRadianceReport radiance;
 };
 
 /// Float to IEEE binary16, round to nearest even, overflow -> Inf, NaN kept (quiet).
@@ -125,6 +159,9 @@ public:
     /// Grid parameters with the given camera (LOD centre); capacity = the bake's capacity.
     HashGridParameters gridParameters(const Float3& camera_position = {0, 0, 0}) const;
     uint32_t bakeCapacity() const { return bake_capacity_; }
+    /// The factor GPU buffers apply to the radiance unless told otherwise (SPEC §F.8a, section
+    /// RSCL; 1 when the file has none). Lookups are not scaled: they return the file's radiance.
+    float gpuRadianceScale() const { return gpu_radiance_scale_; }
 
     // Voxels (sorted by key) ---------------------------------------------------------------------
     uint64_t voxelCount() const { return voxel_count_; }
@@ -181,10 +218,23 @@ public:
 
     // GPU ----------------------------------------------------------------------------------------
     /// @brief SHaRC hash-entries and resolved buffers for a table of options.capacity slots:
-    /// keys inserted in file (key) order with bucketBase + linear probe (SPEC §H.7). Voxels whose
-    /// bucket is full are counted in failed_inserts. Errors: kInvalidArgument (capacity 0, null
-    /// out), kIoError (allocation failed).
+    /// keys in the layout of options.sdk_target, inserted in file (key) order with that release's
+    /// bucket rule + linear probe (SPEC §G.2). Voxels whose bucket is full are counted in
+    /// failed_inserts. Errors: kInvalidArgument (capacity 0, or below 16 for SDK 1.8.3+; a bad
+    /// radiance scale; null out), kUnsupportedFeature (a build option the library cannot serve;
+    /// the message says why), kIoError (allocation failed). A clipping warning is in
+    /// out->radiance.warning (and in `error->message` with status kOk).
     CacheFileStatus gpuBuffers(const GpuBufferOptions& options, GpuBuffers* out, CacheError* error = nullptr) const;
+
+    /// @brief The voxels as (key, resolved entry) pairs for the engine's own insert pass: no
+    /// capacity and no bucket rule involved (options.capacity is ignored). Same errors and
+    /// warnings as gpuBuffers().
+    CacheFileStatus gpuInsertList(const GpuBufferOptions& options, GpuInsertList* out,
+                                  CacheError* error = nullptr) const;
+
+    /// @brief What gpuBuffers() would report about fp16 at `radiance_scale` (0 or an invalid
+    /// value: the cache's own), without making any buffer.
+    GpuRadianceReport gpuRadianceCheck(float radiance_scale = 0.0f) const;
 
 private:
     void reset();
@@ -200,6 +250,7 @@ private:
         const CacheSectionInfo* voxels = nullptr;
         const CacheSectionInfo* levels = nullptr;
         const CacheSectionInfo* meta = nullptr;
+        const CacheSectionInfo* radiance_scale = nullptr;  ///< RSCL (1.1)
     };
     CacheFileStatus parse(CacheError* error);
     CacheFileStatus parseHeader(CacheError* error, SectionTable* table);
@@ -209,6 +260,7 @@ private:
     CacheFileStatus parseVoxels(const KnownSections& found, uint64_t voxel_count, uint32_t level_count,
                                 CacheError* error);
     CacheFileStatus parseMetadata(const CacheSectionInfo* meta, CacheError* error);
+    CacheFileStatus parseRadianceScale(const CacheSectionInfo* section, CacheError* error);
 
     const uint8_t* data_ = nullptr;
     uint64_t size_ = 0;
@@ -222,6 +274,7 @@ private:
     float logarithm_base_ = 2.0f, scene_scale_ = 50.0f, level_bias_ = 0.0f;
     uint32_t bucket_size_ = kHashGridBucketSize;
     uint32_t bake_capacity_ = 0;
+    float gpu_radiance_scale_ = 1.0f;
     uint64_t voxel_count_ = 0;
     const uint8_t* keys_ = nullptr;    ///< voxel_count_ little-endian u64
     const uint8_t* voxels_ = nullptr;  ///< voxel_count_ records of 16 bytes

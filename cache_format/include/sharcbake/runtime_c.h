@@ -37,7 +37,7 @@ typedef enum sharcbake_status {
 /** An open, validated cache. */
 typedef struct sharcbake_cache sharcbake_cache;
 
-/** SHaRC 1.8 SharcPackedData: fp16 x4 (mean RGB, sample count), sampleData, sampleDataExt. */
+/** SHaRC SharcPackedData (SDK 1.6.3 - 1.8.x): fp16 x4 (mean RGB, sample count), sampleData, sampleDataExt. */
 typedef struct sharcbake_packed_data {
     uint16_t radiance[4];
     uint32_t sample_data;
@@ -90,12 +90,81 @@ SHARCBAKE_RUNTIME_API size_t sharcbake_cache_lookup_batch(const sharcbake_cache*
                                                           uint8_t* hits, int nearest_level);
 
 /** Fills `hash_entries` (capacity u64) and `resolved` (capacity entries) for a SHaRC table of
- *  `capacity` slots. accumulated_frame_num: see GpuBufferOptions. `failed_inserts` optional. */
+ *  `capacity` slots, for SDK 1.7.2 - 1.8.2 (sharcbake_cache_gpu_buffers_ex names other releases).
+ *  accumulated_frame_num: see GpuBufferOptions. `failed_inserts` optional. */
 SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_gpu_buffers(const sharcbake_cache* cache, uint32_t capacity,
                                                                    uint32_t accumulated_frame_num,
                                                                    uint64_t* hash_entries,
                                                                    sharcbake_packed_data* resolved,
                                                                    uint64_t* failed_inserts);
+
+/* SHaRC SDK targets, build options and GPU buffers for them (SPEC.md section G) ------------ */
+
+/** The SDK release family an engine runs (sharcbake::SharcSdkTarget). */
+typedef enum sharcbake_sdk_target {
+    SHARCBAKE_SDK_1_6 = 1,  /**< 1.6.3 - 1.6.x: 10 level bits; base = min(hash % N, N - 16) */
+    SHARCBAKE_SDK_1_7 = 2,  /**< 1.7.2 - 1.8.2: the file's layout; base = min(hash % N, N - 16) (default) */
+    SHARCBAKE_SDK_1_8_3 = 3 /**< 1.8.3 and later 1.8: base = hash % (N - 15) (unverified) */
+} sharcbake_sdk_target;
+
+/** SDK build options (bit flags); any of them is refused with SHARCBAKE_UNSUPPORTED_FEATURE. */
+enum {
+    SHARCBAKE_BUILD_SH_ENCODING = 1,           /**< SHARC_ENABLE_SH_ENCODING=1 */
+    SHARCBAKE_BUILD_COMPACT_KEYS = 2,          /**< HASH_GRID_COMPACT=1 */
+    SHARCBAKE_BUILD_MATERIAL_DEMODULATION = 4, /**< SHARC_MATERIAL_DEMODULATION=1 */
+    SHARCBAKE_BUILD_SEPARATE_EMISSIVE = 8      /**< SHARC_SEPARATE_EMISSIVE=1 */
+};
+
+/** Options of sharcbake_cache_gpu_buffers_ex / _gpu_insert_list; fill with sharcbake_gpu_options_init. */
+typedef struct sharcbake_gpu_options {
+    uint32_t capacity;              /**< table slots (buffers only) */
+    uint32_t sdk_target;            /**< a sharcbake_sdk_target */
+    uint32_t build_flags;           /**< SHARCBAKE_BUILD_* of the engine's SDK build */
+    uint32_t accumulated_frame_num; /**< stored accumulatedFrameNum (clamped to 64511) */
+    float max_sample_count;         /**< cap of the stored sample count (<= 65504) */
+    float radiance_scale;           /**< > 0: this factor; 0: the cache's own (1 if none) */
+} sharcbake_gpu_options;
+
+/** What happened on the way to fp16 (sharcbake::GpuRadianceReport) and to the table. */
+typedef struct sharcbake_gpu_report {
+    uint64_t inserted;            /**< voxels placed (buffers) or listed (insert list) */
+    uint64_t failed_inserts;      /**< voxels whose bucket was full (buffers only) */
+    uint64_t clipped_voxels;      /**< a channel above 65504 after scaling */
+    uint64_t flushed_voxels;      /**< a channel > 0 stored as 0 */
+    float radiance_scale;         /**< the factor applied */
+    float brightest;              /**< largest channel before scaling */
+    float fitting_radiance_scale; /**< largest power of two that keeps the brightest channel */
+    uint32_t reserved;
+} sharcbake_gpu_report;
+
+/** Defaults: capacity 2^22, SDK 1.7.2 - 1.8.2, no build options, frame number 1, no cap, the cache's scale. */
+SHARCBAKE_RUNTIME_API void sharcbake_gpu_options_init(sharcbake_gpu_options* options);
+
+/** The cache's radiance scale for GPU buffers (section RSCL; 1 without one); 0 for NULL. */
+SHARCBAKE_RUNTIME_API float sharcbake_cache_gpu_radiance_scale(const sharcbake_cache* cache);
+
+/** Buffers for options->capacity slots in the target's layout. `report` (optional) is filled on
+ *  success; `message` (optional) receives the error, or on success the clipping warning (empty
+ *  when none). */
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_gpu_buffers_ex(
+    const sharcbake_cache* cache, const sharcbake_gpu_options* options, uint64_t* hash_entries,
+    sharcbake_packed_data* resolved, sharcbake_gpu_report* report, char* message, size_t message_size);
+
+/** One (key, resolved entry) per voxel (sharcbake_cache_voxel_count entries each), for the
+ *  engine's own insert pass; options->capacity is ignored. Reports as above. */
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_gpu_insert_list(const sharcbake_cache* cache,
+                                                                       const sharcbake_gpu_options* options,
+                                                                       uint64_t* keys, sharcbake_packed_data* values,
+                                                                       sharcbake_gpu_report* report, char* message,
+                                                                       size_t message_size);
+
+/** The target of an SDK release ("1.8.2"); SHARCBAKE_UNSUPPORTED_FEATURE with a reason otherwise. */
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_sdk_target_for_release(const char* release,
+                                                                        sharcbake_sdk_target* target, char* message,
+                                                                        size_t message_size);
+
+/** Frames a baked entry survives the SDK's Resolve without samples: clamp(stale, 8, 1024) - 1. */
+SHARCBAKE_RUNTIME_API uint32_t sharcbake_resolve_frames_kept(uint32_t stale_frame_num_max);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,36 @@
+#!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
+# `bake --gpu-radiance-scale`: recorded in the cache (RSCL, cache_format/SPEC.md F.8a), shown by
+# `info`, and a warning with the factor that fits when a GPU table's fp16 would clip (SPEC G.6).
+# Usage: gpu_scale_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
+set -u
+sharcbake=$1
+scenes=$2
+work=$3
+. "$(dirname "$0")/../cli_support.sh"
+scene="$scenes/cornell_box/cornell_box.gltf"
+small="--iterations 2 --resolution 32x32 -q"
+
+expect 0 "bake at scale 1" "$sharcbake" bake "$scene" -o "$work/plain.sharc" $small
+expect 0 "info" "$sharcbake" info "$work/plain.sharc"
+says "$work/out.txt" "radiance x 1 (no RSCL section), fp16 up to 65504: nothing clips" "scale 1 writes no RSCL"
+
+expect 0 "bake at scale 0.5" "$sharcbake" bake "$scene" -o "$work/half.sharc" $small --gpu-radiance-scale 0.5
+expect 0 "info" "$sharcbake" info "$work/half.sharc"
+says "$work/out.txt" "radiance x 0.5 (RSCL section)" "info shows the recorded scale"
+says "$work/out.txt" "format 1.1" "the cache is format 1.1"
+expect 0 "info --json" "$sharcbake" info "$work/half.sharc" --json
+python3 - "$work/out.txt" <<'PY' || fail "info --json gpu fields"
+import json, sys
+g = json.load(open(sys.argv[1]))["gpu"]
+assert g["radiance_scale"] == 0.5 and g["clipped_voxels"] == 0 and g["fitting_radiance_scale"] > 0.5, g
+PY
+
+expect 0 "bake at a scale that clips" "$sharcbake" bake "$scene" -o "$work/bright.sharc" $small --gpu-radiance-scale 1e9
+says "$work/err.txt" "warning: GPU buffers: .* voxels have a channel above fp16's 65504 after radiance scale 1e+09" \
+    "the bake warns about clipping"
+says "$work/err.txt" "a radiance scale of .* or less keeps them" "the warning names the scale that fits"
+
+expect 1 "scale 0 is refused" "$sharcbake" bake "$scene" -o "$work/zero.sharc" $small --gpu-radiance-scale 0
+expect 1 "a negative scale is refused" "$sharcbake" bake "$scene" -o "$work/neg.sharc" $small --gpu-radiance-scale -2
+finish gpu_scale_cli_test
