@@ -10,6 +10,7 @@
 #include "sharc/coverage.h"
 #include "sharc/grid_fit.h"
 #include "sharc/hit_rate.h"
+#include "sharc/voxel_materials.h"
 #include "support/json.h"
 #include "support/progress.h"
 #include "tracing/render.h"
@@ -85,6 +86,7 @@ struct BakeOptions {
     uint32_t report_probe_spp = ProbeSettings{}.reference_samples;
     double target_error = 0.0;
     float gpu_radiance_scale = 1.0f;  ///< recorded in the cache for GPU buffers (SPEC §F.8a)
+    bool voxel_materials = false;     ///< keep each voxel's emission and demodulation factor (SPEC §F.8b)
 };
 
 /// How the roaming camera is made (--camera-source, --camera-path, --explore-points,
@@ -916,6 +918,7 @@ private:
         data.metadata.emplace_back("predicted_hit_rate", describeHitRate(prediction_));
         data.metadata.emplace_back("stop_reason", stop_reason_);
         data.gpu_radiance_scale = o_.gpu_radiance_scale;
+        if (o_.voxel_materials) data.voxel_materials = computeVoxelMaterials(scene_, data, &voxel_material_stats_);
         std::string message;
         const CacheFileStatus status = writeCacheFile(o_.output_path, data, &message);
         if (status != CacheFileStatus::kOk) throw CommandError(kExitIo, message);
@@ -962,6 +965,13 @@ private:
         }
         printStabilitySection(stdout, stability_);
         std::printf("Wrote %s (%llu voxels)\n", o_.output_path.c_str(), (unsigned long long)live_voxels_);
+        if (o_.voxel_materials) {
+            const VoxelMaterialStats& m = voxel_material_stats_;
+            std::printf("  voxel materials (emission, demodulation factor) from %llu surface points; %llu voxels took "
+                        "a coarser voxel's, %llu the scene's mean\n",
+                        (unsigned long long)m.points, (unsigned long long)m.voxels_from_coarser,
+                        (unsigned long long)m.voxels_from_scene_mean);
+        }
     }
 
     /// Plain path tracing at equal time, the convergence table, and --report's files.
@@ -1097,6 +1107,7 @@ private:
     CoverageReport coverage_;
     HitRatePrediction prediction_;
     uint64_t live_voxels_ = 0;
+    VoxelMaterialStats voxel_material_stats_;  ///< --voxel-materials: how the means were found
     std::string gpu_warning_;               ///< fp16 clipping of the written cache at its GPU radiance scale
     std::vector<uint32_t> written_levels_;  ///< the levels of the cache file's voxels
     StabilityReport stability_;
@@ -1259,6 +1270,11 @@ void registerBakeCommand(CLI::App& app) {
                     "in fp16 (at most 65504). Use the engine's radiance units per scene unit (its exposure or "
                     "pre-exposure); a warning names the largest factor that clips nothing (docs/engine_guide.md)")
         ->capture_default_str()->check(CLI::PositiveNumber)->check(kFiniteNumber);
+    cmd->add_flag("--voxel-materials", o->voxel_materials,
+                  "Also store each voxel's mean emission and SHaRC demodulation factor (about 24 bytes per voxel), "
+                  "so that GPU buffers can be made for engines whose SHaRC build keeps emission apart "
+                  "(SHARC_SEPARATE_EMISSIVE) or demodulates materials (SHARC_MATERIAL_DEMODULATION); "
+                  "docs/engine_guide.md");
     cmd->add_option("--log-base", o->log_base,
                     "SHaRC level logarithm base b (> 1); a power of two (2, the SDK's, or 4) makes the levels "
                     "nest exactly")->capture_default_str()->check(kFiniteNumber);

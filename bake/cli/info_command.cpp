@@ -94,6 +94,11 @@ void printText(const std::string& path, const CacheView& v) {
     std::printf("GPU buffers: radiance x %g (%s), fp16 up to 65504: %s\n", double(gpu.radiance_scale),
                 v.gpuRadianceScale() == 1.0f ? "no RSCL section" : "RSCL section",
                 gpu.warning.empty() ? "nothing clips" : gpu.warning.c_str());
+    std::printf("Voxel materials: %s\n", v.hasVoxelMaterials()
+                                             ? "kept (VMAT): buffers for SDK builds with separate emissive or "
+                                               "material demodulation can be made"
+                                             : "not kept (bake --voxel-materials keeps them, for SDK builds with "
+                                               "separate emissive or material demodulation)");
     std::printf("Levels: %zu present of 511 (others hold no voxels and are not stored)\n", v.levels().size());
     for (const CacheLevel& l : v.levels()) {
         std::printf("  level %3u  voxel size %-10g  %10u voxels\n", l.level, double(voxelSize(l.level, p)),
@@ -168,7 +173,8 @@ void printJson(const std::string& path, const CacheView& v) {
           {"brightest", jsonNumber(gpu.brightest)},
           {"fitting_radiance_scale", jsonNumber(gpu.fitting_radiance_scale)},
           {"clipped_voxels", gpu.clipped_voxels},
-          {"flushed_voxels", gpu.flushed_voxels}}},
+          {"flushed_voxels", gpu.flushed_voxels},
+          {"voxel_materials", v.hasVoxelMaterials()}}},
         {"voxels", s.voxels},
         {"bytes_per_voxel", jsonNumber(s.bytes_per_voxel)},
         {"radiance",

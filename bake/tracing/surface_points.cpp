@@ -46,6 +46,7 @@ std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count
         point.position = (1.0f - b.x - b.y) * p0 + b.x * p1 + b.y * p2;
         point.normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
         point.triangle = t;
+        point.barycentrics = b;
         point.double_sided = scene.materials[scene.triangle_materials[t]].double_sided;
         points.push_back(point);
     }

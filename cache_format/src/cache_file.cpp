@@ -78,6 +78,16 @@ CacheFileStatus checkCacheData(const CacheData& data, std::vector<CacheLevel>& l
     if (!std::isfinite(data.gpu_radiance_scale) || !(data.gpu_radiance_scale > 0.0f)) {
         return fail(CacheFileStatus::kInvalidData, message, "the GPU radiance scale must be finite and > 0");
     }
+    if (!data.voxel_materials.empty() && data.voxel_materials.size() != data.voxels.size()) {
+        return fail(CacheFileStatus::kInvalidData, message, "voxel materials: one per voxel, or none");
+    }
+    for (size_t i = 0; i < data.voxel_materials.size(); ++i) {
+        if (!validVoxelMaterial(data.voxel_materials[i])) {
+            return fail(CacheFileStatus::kInvalidData, message,
+                        "voxel " + std::to_string(i) + ": emission must be finite and >= 0, the demodulation "
+                        "factor finite and > 0");
+        }
+    }
     if (validateHashGridParameters(data.gridParameters()) != HashGridStatus::kOk || data.bake_capacity == 0) {
         return fail(CacheFileStatus::kInvalidData, message,
                     std::string("grid parameters: ") + toString(validateHashGridParameters(data.gridParameters())));
@@ -132,7 +142,7 @@ void writeMetadataSection(ByteWriter& w, const std::vector<std::pair<std::string
 
 }  // namespace
 
-// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META (and RSCL).
+// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META (and RSCL, VMAT).
 CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
     if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
     if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
@@ -141,7 +151,8 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         return status;
     }
     const bool scaled = data.gpu_radiance_scale != 1.0f;  // SPEC §F.8a: RSCL only when not 1
-    const uint32_t kSections = scaled ? 6 : 5;
+    const bool materials = !data.voxel_materials.empty();  // SPEC §F.8b: VMAT only when kept
+    const uint32_t kSections = 5 + (scaled ? 1 : 0) + (materials ? 1 : 0);
     std::vector<uint8_t>& bytes = *out;
     bytes.clear();
     bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
@@ -175,6 +186,14 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
         container.beginSection(kSectionRadianceScale, kCacheSectionRequired);  // SPEC §F.8a
         w.put(data.gpu_radiance_scale);
         w.put(uint32_t(0));
+        container.endSection();
+    }
+    if (materials) {
+        container.beginSection(kSectionVoxelMaterials, 0);  // SPEC §F.8b, optional
+        for (const CacheVoxelMaterial& m : data.voxel_materials) {
+            for (float c : m.emission) w.put(c);
+            for (float c : m.demodulation) w.put(c);
+        }
         container.endSection();
     }
     container.finish();  // table entries, file size, checksums
@@ -344,6 +363,10 @@ CacheFileStatus readCacheFile(const std::string& path, CacheData* data, std::str
     result.bucket_size = p.bucket_size;
     result.bake_capacity = view.bakeCapacity();
     result.gpu_radiance_scale = view.gpuRadianceScale();
+    if (view.hasVoxelMaterials()) {
+        result.voxel_materials.resize(size_t(view.voxelCount()));
+        for (uint64_t i = 0; i < view.voxelCount(); ++i) result.voxel_materials[size_t(i)] = view.voxelMaterial(i);
+    }
     result.version_major = view.versionMajor();
     result.version_minor = view.versionMinor();
     result.voxels.resize(size_t(view.voxelCount()));

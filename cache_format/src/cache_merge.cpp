@@ -44,6 +44,11 @@ std::string incompatibility(const CacheData& first, const CacheData& other, cons
     if (!sameBits(first.level_bias, other.level_bias)) return "grid level bias differs";
     if (first.bucket_size != other.bucket_size) return "grid bucket size differs";
     if (!sameBits(first.gpu_radiance_scale, other.gpu_radiance_scale)) return "GPU radiance scale differs";
+    if (first.voxel_materials.empty() != other.voxel_materials.empty()) {
+        return std::string(other.voxel_materials.empty() ? "it has no" : "it has") +
+               " voxel materials (VMAT, bake --voxel-materials) and input 1 " +
+               (other.voxel_materials.empty() ? "has" : "has none");
+    }
     return {};
 }
 
@@ -62,7 +67,11 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
         for (size_t k = 1; k < v.size(); ++k) {
             if (v[k - 1].key >= v[k].key) return fail(message, "input " + std::to_string(i + 1) + ": voxels not sorted by key");
         }
+        if (!inputs[i].voxel_materials.empty() && inputs[i].voxel_materials.size() != v.size()) {
+            return fail(message, "input " + std::to_string(i + 1) + ": voxel materials do not match the voxels");
+        }
     }
+    const bool materials = !inputs[0].voxel_materials.empty();
 
     CacheData merged;
     merged.logarithm_base = inputs[0].logarithm_base;
@@ -76,7 +85,16 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
 
     // k-way merge of the key-sorted voxel lists.
     std::vector<size_t> next(inputs.size(), 0);
-    std::vector<CacheVoxel> same_key;
+    // A voxel and its material (VMAT; defaults when the inputs keep none).
+    struct Entry {
+        CacheVoxel voxel;
+        CacheVoxelMaterial material;
+    };
+    const auto entry = [&](size_t input, size_t index) {
+        return Entry{inputs[input].voxels[index],
+                     materials ? inputs[input].voxel_materials[index] : CacheVoxelMaterial{}};
+    };
+    std::vector<Entry> same_key;
     same_key.reserve(inputs.size());
     for (;;) {
         uint64_t key = ~uint64_t(0);
@@ -91,27 +109,45 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
         same_key.clear();
         for (size_t i = 0; i < inputs.size(); ++i) {
             if (next[i] < inputs[i].voxels.size() && inputs[i].voxels[next[i]].key == key) {
-                same_key.push_back(inputs[i].voxels[next[i]++]);
+                same_key.push_back(entry(i, next[i]++));
             }
         }
         if (same_key.size() == 1) {
-            merged.voxels.push_back(same_key[0]);
+            merged.voxels.push_back(same_key[0].voxel);
+            if (materials) merged.voxel_materials.push_back(same_key[0].material);
             continue;
         }
-        std::sort(same_key.begin(), same_key.end(), [](const CacheVoxel& a, const CacheVoxel& b) {
+        std::sort(same_key.begin(), same_key.end(), [](const Entry& x, const Entry& y) {
+            const CacheVoxel& a = x.voxel;
+            const CacheVoxel& b = y.voxel;
             return std::tie(a.sample_weight, a.radiance[0], a.radiance[1], a.radiance[2]) <
                    std::tie(b.sample_weight, b.radiance[0], b.radiance[1], b.radiance[2]);
         });
-        double weight = 0.0, sum[3] = {0.0, 0.0, 0.0};
-        for (const CacheVoxel& v : same_key) {
-            weight += double(v.sample_weight);
-            for (int c = 0; c < 3; ++c) sum[c] += double(v.sample_weight) * double(v.radiance[c]);
+        // Weighted by sample weight: radiance, and the material means (which shards estimate
+        // from their own surface points).
+        double weight = 0.0, sum[3] = {0.0, 0.0, 0.0}, emission[3] = {0.0, 0.0, 0.0}, factor[3] = {0.0, 0.0, 0.0};
+        for (const Entry& e : same_key) {
+            const double w = double(e.voxel.sample_weight);
+            weight += w;
+            for (int c = 0; c < 3; ++c) {
+                sum[c] += w * double(e.voxel.radiance[c]);
+                emission[c] += w * double(e.material.emission[c]);
+                factor[c] += w * double(e.material.demodulation[c]);
+            }
         }
         CacheVoxel result;
         result.key = key;
         for (int c = 0; c < 3; ++c) result.radiance[c] = float(sum[c] / weight);
         result.sample_weight = float(weight);
         merged.voxels.push_back(result);
+        if (materials) {
+            CacheVoxelMaterial m;
+            for (int c = 0; c < 3; ++c) {
+                m.emission[c] = float(emission[c] / weight);
+                m.demodulation[c] = float(factor[c] / weight);
+            }
+            merged.voxel_materials.push_back(m);
+        }
     }
     *out = std::move(merged);
     return CacheFileStatus::kOk;

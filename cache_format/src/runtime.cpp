@@ -138,6 +138,7 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     voxel_count_ = other.voxel_count_;
     keys_ = other.keys_;
     voxels_ = other.voxels_;
+    voxel_materials_ = other.voxel_materials_;
     levels_ = std::move(other.levels_);
     metadata_ = std::move(other.metadata_);
     keyer_ = std::move(other.keyer_);
@@ -164,7 +165,7 @@ void CacheView::reset() {
     sections_.clear();
     gpu_radiance_scale_ = 1.0f;
     voxel_count_ = 0;
-    keys_ = voxels_ = nullptr;
+    keys_ = voxels_ = voxel_materials_ = nullptr;
     levels_.clear();
     metadata_.clear();
     keyer_ = HashGridKeyer();
@@ -398,6 +399,7 @@ CacheFileStatus CacheView::parseSections(const SectionTable& table, CacheError* 
             case kSectionLevels: slot = &levels; break;
             case kSectionMetadata: slot = &meta; break;
             case kSectionRadianceScale: slot = &found->radiance_scale; break;
+            case kSectionVoxelMaterials: slot = &found->voxel_materials; break;
             default: break;
         }
         s.known = slot != nullptr;
@@ -605,7 +607,30 @@ CacheFileStatus CacheView::parseRadianceScale(const CacheSectionInfo* section, C
     return CacheFileStatus::kOk;
 }
 
-/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V19), and fills the view.
+/// V20: the optional VMAT section (format 1.1): one record per voxel, valid values.
+CacheFileStatus CacheView::parseVoxelMaterials(const CacheSectionInfo* section, CacheError* error) {
+    voxel_materials_ = nullptr;
+    if (!section) return CacheFileStatus::kOk;
+    if (section->length != voxel_count_ * kCacheVoxelMaterialRecordSize) {
+        return fail(error, CacheFileStatus::kCorrupt, 20,
+                    "VMAT: length " + std::to_string(section->length) + ", expected " +
+                        std::to_string(voxel_count_ * kCacheVoxelMaterialRecordSize) + " (24 bytes per voxel)");
+    }
+    const uint8_t* records = data_ + section->offset;
+    for (uint64_t i = 0; i < voxel_count_; ++i) {
+        CacheVoxelMaterial m;
+        std::memcpy(&m, records + i * kCacheVoxelMaterialRecordSize, kCacheVoxelMaterialRecordSize);
+        if (!validVoxelMaterial(m)) {
+            return fail(error, CacheFileStatus::kCorrupt, 20,
+                        "VMAT: voxel " + std::to_string(i) +
+                            ": emission must be finite and >= 0, the demodulation factor finite and > 0");
+        }
+    }
+    voxel_materials_ = records;
+    return CacheFileStatus::kOk;
+}
+
+/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V20), and fills the view.
 CacheFileStatus CacheView::parse(CacheError* error) {
     SectionTable table;
     KnownSections found;
@@ -617,6 +642,7 @@ CacheFileStatus CacheView::parse(CacheError* error) {
     if (status == CacheFileStatus::kOk) status = parseVoxels(found, voxel_count, level_count, error);
     if (status == CacheFileStatus::kOk) status = parseMetadata(found.meta, error);
     if (status == CacheFileStatus::kOk) status = parseRadianceScale(found.radiance_scale, error);
+    if (status == CacheFileStatus::kOk) status = parseVoxelMaterials(found.voxel_materials, error);
     if (status != CacheFileStatus::kOk) return status;
     // Query acceleration (not validation): voxel sizes and level thresholds.
     keyer_ = HashGridKeyer(gridParameters());
@@ -639,6 +665,12 @@ HashGridParameters CacheView::gridParameters(const Float3& camera_position) cons
 }
 
 uint64_t CacheView::key(uint64_t index) const { return load<uint64_t>(keys_ + index * 8); }
+
+CacheVoxelMaterial CacheView::voxelMaterial(uint64_t index) const {
+    CacheVoxelMaterial m;
+    if (voxel_materials_) std::memcpy(&m, voxel_materials_ + index * kCacheVoxelMaterialRecordSize, sizeof m);
+    return m;
+}
 
 CacheVoxel CacheView::voxel(uint64_t index) const {
     CacheVoxel v;
@@ -941,20 +973,34 @@ struct GpuPacker {
     float scale = 1.0f;
     float max_count = 65504.0f;
     uint32_t frames = 1;
+    bool separate_emissive = false;  ///< store radiance - the voxel's emission (SPEC §G.3)
+    bool demodulate = false;         ///< store radiance / the voxel's demodulation factor (SPEC §G.3)
     GpuRadianceReport report;
+    uint64_t packed_voxels = 0;
 
-    SharcPackedData pack(const CacheVoxel& v) {
+    /// What the engine's build keeps in the voxel: the whole radiance, less the emission it adds
+    /// back itself, divided by the factor it multiplies back itself.
+    float storedRadiance(const CacheVoxel& v, const CacheVoxelMaterial& m, int c) const {
+        float value = v.radiance[c];
+        if (separate_emissive) value = std::max(value - m.emission[c], 0.0f);
+        if (demodulate) value /= m.demodulation[c];
+        return value;
+    }
+
+    SharcPackedData pack(const CacheVoxel& v, const CacheVoxelMaterial& material) {
         SharcPackedData packed{{0, 0, 0, 0}, 0, 0};
         bool clipped = false, flushed = false;
         for (int c = 0; c < 3; ++c) {
-            const float scaled = v.radiance[c] * scale;  // may overflow to +Inf: clipped below
+            const float stored = storedRadiance(v, material, c);
+            const float scaled = stored * scale;  // may overflow to +Inf: clipped below
             clipped = clipped || scaled > 65504.0f;
             packed.radiance[c] = floatToHalf(std::min(scaled, 65504.0f));
-            flushed = flushed || (v.radiance[c] > 0.0f && packed.radiance[c] == 0);
-            report.brightest = std::max(report.brightest, v.radiance[c]);
+            flushed = flushed || (stored > 0.0f && packed.radiance[c] == 0);
+            report.brightest = std::max(report.brightest, stored);
         }
         report.clipped_voxels += clipped ? 1 : 0;
         report.flushed_voxels += flushed ? 1 : 0;
+        ++packed_voxels;
         packed.radiance[3] = floatToHalf(std::min(v.sample_weight, max_count));
         if (packed.radiance[3] == 0) packed.radiance[3] = 1;  // weight > 0 stays usable (> threshold 0)
         packed.sample_data = frames;  // staleFrameNum (bits 16-31) = 0: the longest life Resolve gives
@@ -980,7 +1026,9 @@ struct GpuPacker {
                           double(report.brightest), double(report.fitting_radiance_scale));
             report.warning = buf;
         }
-        if (report.flushed_voxels > 0) {
+        // A few near-black voxels stored as 0 change nothing visible; a scene whose light is
+        // mostly below fp16's range (wrong units) does.
+        if (report.flushed_voxels * 100 > packed_voxels) {
             std::snprintf(buf, sizeof buf,
                           "%s%llu voxels with light are stored as 0 in fp16 (below 6e-8 after radiance scale %g); "
                           "a larger radiance scale keeps them",
@@ -992,16 +1040,19 @@ struct GpuPacker {
 };
 
 /// Checks the options shared by gpuBuffers() and gpuInsertList() (`what` names the caller).
-CacheFileStatus prepareGpuPacker(const GpuBufferOptions& options, float file_scale, const char* what, GpuPacker* packer,
-                                 CacheError* error) {
+CacheFileStatus prepareGpuPacker(const GpuBufferOptions& options, const CacheView& view, const char* what,
+                                 GpuPacker* packer, CacheError* error) {
     std::string refused;
-    const CacheFileStatus build = checkSharcBuildOptions(options.build, options.sdk_target, &refused);
+    const CacheFileStatus build =
+        checkSharcBuildOptions(options.build, options.sdk_target, view.hasVoxelMaterials(), &refused);
     if (build != CacheFileStatus::kOk) return fail(error, build, 0, std::string(what) + ": " + refused);
     if (!(options.radiance_scale >= 0.0f) || !std::isfinite(options.radiance_scale)) {
         return fail(error, CacheFileStatus::kInvalidArgument, 0,
                     std::string(what) + ": radiance scale must be finite and > 0 (0: the cache's own)");
     }
-    packer->scale = options.radiance_scale > 0.0f ? options.radiance_scale : file_scale;
+    packer->scale = options.radiance_scale > 0.0f ? options.radiance_scale : view.gpuRadianceScale();
+    packer->separate_emissive = options.build.separate_emissive;
+    packer->demodulate = options.build.material_demodulation;
     packer->report.radiance_scale = packer->scale;
     packer->max_count = std::min(std::isfinite(options.max_sample_count) && options.max_sample_count > 0.0f
                                      ? options.max_sample_count
@@ -1026,7 +1077,7 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
                         "'s bucket rule is defined for");
     }
     GpuPacker packer;
-    const CacheFileStatus prepared = prepareGpuPacker(options, gpuRadianceScale(), "gpuBuffers", &packer, error);
+    const CacheFileStatus prepared = prepareGpuPacker(options, *this, "gpuBuffers", &packer, error);
     if (prepared != CacheFileStatus::kOk) return prepared;
     GpuBuffers result;
     try {
@@ -1057,7 +1108,7 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
             continue;
         }
         result.hash_entries[slot] = sdk_key;
-        result.resolved[slot] = packer.pack(v);
+        result.resolved[slot] = packer.pack(v, voxelMaterial(i));
         ++result.inserted;
     }
     packer.finish();
@@ -1071,7 +1122,7 @@ GpuRadianceReport CacheView::gpuRadianceCheck(float radiance_scale) const {
     GpuPacker packer;
     packer.scale = std::isfinite(radiance_scale) && radiance_scale > 0.0f ? radiance_scale : gpuRadianceScale();
     packer.report.radiance_scale = packer.scale;
-    for (uint64_t i = 0; i < voxel_count_; ++i) (void)packer.pack(voxel(i));
+    for (uint64_t i = 0; i < voxel_count_; ++i) (void)packer.pack(voxel(i), CacheVoxelMaterial{});
     packer.finish();
     return packer.report;
 }
@@ -1081,7 +1132,7 @@ CacheFileStatus CacheView::gpuInsertList(const GpuBufferOptions& options, GpuIns
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuInsertList: null output");
     if (!data_) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuInsertList: the view is not open");
     GpuPacker packer;
-    const CacheFileStatus prepared = prepareGpuPacker(options, gpuRadianceScale(), "gpuInsertList", &packer, error);
+    const CacheFileStatus prepared = prepareGpuPacker(options, *this, "gpuInsertList", &packer, error);
     if (prepared != CacheFileStatus::kOk) return prepared;
     GpuInsertList result;
     result.sdk_target = sharcSdkLayout(options.sdk_target).target;
@@ -1095,7 +1146,7 @@ CacheFileStatus CacheView::gpuInsertList(const GpuBufferOptions& options, GpuIns
     for (uint64_t i = 0; i < voxel_count_; ++i) {
         const CacheVoxel v = voxel(i);
         result.keys[size_t(i)] = sharcSdkKey(v.key, result.sdk_target);
-        result.values[size_t(i)] = packer.pack(v);
+        result.values[size_t(i)] = packer.pack(v, voxelMaterial(i));
     }
     packer.finish();
     result.radiance = std::move(packer.report);

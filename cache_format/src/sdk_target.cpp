@@ -141,7 +141,8 @@ uint32_t sharcSdkBucketBase(uint32_t hash, uint32_t capacity, SharcSdkTarget tar
 // Build options
 // ------------------------------------------------------------------------------------------------
 
-CacheFileStatus checkSharcBuildOptions(const SharcBuildOptions& options, SharcSdkTarget target, std::string* message) {
+CacheFileStatus checkSharcBuildOptions(const SharcBuildOptions& options, SharcSdkTarget target,
+                                       bool cache_has_voxel_materials, std::string* message) {
     std::string refused;
     const auto refuse = [&](const char* text) {
         if (!refused.empty()) refused += "; ";
@@ -159,17 +160,19 @@ CacheFileStatus checkSharcBuildOptions(const SharcBuildOptions& options, SharcSd
             "baked keys have 17-bit coordinates (8 bits make distinct voxels share a key once the scene "
             "scale exceeds about 64); build the SDK with 64-bit keys (the default)");
     }
-    if (options.material_demodulation) {
+    if (options.material_demodulation && !cache_has_voxel_materials) {
         refuse(
-            "SHARC_MATERIAL_DEMODULATION=1 is not supported: the engine multiplies what it reads by the hit's "
-            "demodulation factor, but baked radiance is not demodulated (the file keeps no albedo per voxel), "
-            "so surfaces would be multiplied by their albedo twice; build the SDK with demodulation off");
+            "SHARC_MATERIAL_DEMODULATION=1 needs a cache that keeps each voxel's demodulation factor: the engine "
+            "multiplies what it reads by the hit's factor, and this cache's radiance cannot be demodulated "
+            "(it has no VMAT section), so surfaces would be multiplied by their albedo twice; re-bake with "
+            "'sharcbake bake --voxel-materials', or build the SDK with demodulation off");
     }
-    if (options.separate_emissive) {
+    if (options.separate_emissive && !cache_has_voxel_materials) {
         refuse(
-            "SHARC_SEPARATE_EMISSIVE=1 is not supported: the engine adds the hit's emission to what it reads, "
-            "but baked radiance already includes emission (the file does not keep it apart), so emitters "
-            "would count twice; build the SDK with separate emissive off");
+            "SHARC_SEPARATE_EMISSIVE=1 needs a cache that keeps each voxel's emission: the engine adds the hit's "
+            "emission to what it reads, and this cache's radiance includes emission that cannot be taken out "
+            "(it has no VMAT section), so emitters would count twice; re-bake with "
+            "'sharcbake bake --voxel-materials', or build the SDK with separate emissive off");
     }
     if (!isKnownSharcSdkTarget(target)) refuse("unknown SDK target");
     if (refused.empty()) {
@@ -256,6 +259,19 @@ CacheFileStatus identifySharcSdkTarget(const HashGridParameters& grid, const Sha
         setMessage(message, "the observations fit more than one release; add observations at other points");
     }
     return CacheFileStatus::kUnsupportedFeature;
+}
+
+Float3 sharcDemodulationFactor(const Float3& diffuse_albedo, const Float3& specular_f0) {
+    const float d[3] = {diffuse_albedo.x, diffuse_albedo.y, diffuse_albedo.z};
+    const float f0[3] = {specular_f0.x, specular_f0.y, specular_f0.z};
+    // The specular term's scale: the luminance of F0 + (1 - F0) / 21, Schlick's Fresnel averaged
+    // over the hemisphere (1/21 is the cosine-weighted mean of (1 - cos)^5 times 2).
+    float average_fresnel[3];
+    for (int c = 0; c < 3; ++c) average_fresnel[c] = f0[c] + (1.0f - f0[c]) / 21.0f;
+    const float luminance = 0.2126f * average_fresnel[0] + 0.7152f * average_fresnel[1] + 0.0722f * average_fresnel[2];
+    float m[3];
+    for (int c = 0; c < 3; ++c) m[c] = std::max(d[c], 0.05f) + std::max(f0[c], 0.02f) * luminance;
+    return Float3{m[0], m[1], m[2]};
 }
 
 }  // namespace sharcbake

@@ -31,6 +31,21 @@ says "$work/err.txt" "warning: GPU buffers: .* voxels have a channel above fp16'
     "the bake warns about clipping"
 says "$work/err.txt" "a radiance scale of .* or less keeps them" "the warning names the scale that fits"
 
+# --voxel-materials: a VMAT section of 24 bytes per voxel, which info reports.
+expect 0 "info" "$sharcbake" info "$work/plain.sharc"
+says "$work/out.txt" "Voxel materials: not kept" "a plain bake keeps no voxel materials"
+expect 0 "bake --voxel-materials" "$sharcbake" bake "$scene" -o "$work/materials.sharc" --iterations 2 --resolution 32x32 \
+    --voxel-materials
+says "$work/out.txt" "voxel materials (emission, demodulation factor) from [0-9]* surface points" "the bake says so"
+expect 0 "info" "$sharcbake" info "$work/materials.sharc" --json
+python3 - "$work/out.txt" "$work/plain.sharc" "$work/materials.sharc" <<'PY' || fail "VMAT in the file"
+import json, os, sys
+info = json.load(open(sys.argv[1]))
+assert info["gpu"]["voxel_materials"] is True, info["gpu"]
+vmat = [s for s in info["sections"] if s["type"] == "VMAT"]
+assert len(vmat) == 1 and not vmat[0]["required"] and vmat[0]["length"] == 24 * info["voxels"], vmat
+PY
+
 expect 1 "scale 0 is refused" "$sharcbake" bake "$scene" -o "$work/zero.sharc" $small --gpu-radiance-scale 0
 expect 1 "a negative scale is refused" "$sharcbake" bake "$scene" -o "$work/neg.sharc" $small --gpu-radiance-scale -2
 finish gpu_scale_cli_test

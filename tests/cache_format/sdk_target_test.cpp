@@ -10,6 +10,7 @@
 // vectors check against the SDK's own code and which no release changes.
 #include "sharcbake/sdk_target.h"
 #include "sharcbake/cache_file.h"
+#include "sharcbake/cache_merge.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/runtime.h"
 #include "sharcbake/runtime_c.h"
@@ -697,6 +698,151 @@ TEST(GpuRadianceScale, LightTooDimForFp16IsReported) {
     EXPECT_EQ(list.radiance.flushed_voxels, 1u);
     EXPECT_EQ(list.radiance.clipped_voxels, 0u);
     EXPECT_NE(list.radiance.warning.find("stored as 0"), std::string::npos) << list.radiance.warning;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Voxel materials (VMAT, SPEC §F.8b): separate emissive and material demodulation (SPEC §G.3)
+// ------------------------------------------------------------------------------------------------
+
+/// brightCache's four voxels with materials: voxel 0 an emitter, the others coloured surfaces.
+CacheData cacheWithMaterials() {
+    CacheData data = brightCache(6.0f, 0.25f);
+    for (size_t i = 0; i < data.voxels.size(); ++i) {
+        CacheVoxelMaterial m;
+        m.emission[0] = i == 0 ? 5.0f : 0.0f;
+        m.emission[1] = i == 0 ? 1.5f : 0.0f;
+        m.emission[2] = 0.0f;
+        m.demodulation[0] = 0.8f;
+        m.demodulation[1] = 0.05f + 0.1f * float(i);
+        m.demodulation[2] = 0.35f;
+        data.voxel_materials.push_back(m);
+    }
+    return data;
+}
+
+float half(uint16_t bits) { return halfToFloat(bits); }
+
+TEST(VoxelMaterials, AreStoredReadBackAndMerged) {
+    const CacheData data = cacheWithMaterials();
+    std::vector<uint8_t> bytes;
+    ASSERT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
+    CacheView view;
+    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, nullptr), CacheFileStatus::kOk);
+    ASSERT_TRUE(view.hasVoxelMaterials());
+    for (uint64_t i = 0; i < view.voxelCount(); ++i) {
+        const CacheVoxelMaterial m = view.voxelMaterial(i);
+        EXPECT_EQ(std::memcmp(&m, &data.voxel_materials[size_t(i)], sizeof m), 0) << i;
+    }
+    bool optional_vmat = false;
+    for (const CacheSectionInfo& s : view.sections()) {
+        optional_vmat = optional_vmat || (s.type == kSectionVoxelMaterials && !s.required && s.known);
+    }
+    EXPECT_TRUE(optional_vmat) << "VMAT is optional: a reader that skips it still makes the plain buffers";
+
+    // Without materials: no section, and the plain values.
+    CacheData plain = data;
+    plain.voxel_materials.clear();
+    std::vector<uint8_t> plain_bytes;
+    ASSERT_EQ(encodeCacheFile(plain, &plain_bytes, nullptr), CacheFileStatus::kOk);
+    EXPECT_EQ(bytes.size() - plain_bytes.size(), data.voxels.size() * 24 + kCacheSectionEntrySize);  // records + table entry
+    CacheView plain_view;
+    ASSERT_EQ(CacheView::openMemory(plain_bytes.data(), plain_bytes.size(), &plain_view, nullptr), CacheFileStatus::kOk);
+    EXPECT_FALSE(plain_view.hasVoxelMaterials());
+
+    // Merging: shards' means weighted by sample weight; all inputs keep materials or none.
+    CacheData other = data;
+    for (CacheVoxel& v : other.voxels) v.sample_weight = 12.0f;  // 3x data's weight of 4
+    for (CacheVoxelMaterial& m : other.voxel_materials) m.demodulation[2] = 0.75f;
+    CacheData merged;
+    std::string message;
+    ASSERT_EQ(mergeCaches({data, other}, {}, &merged, &message), CacheFileStatus::kOk) << message;
+    ASSERT_EQ(merged.voxel_materials.size(), merged.voxels.size());
+    EXPECT_FLOAT_EQ(merged.voxel_materials[0].demodulation[2], 0.25f * 0.35f + 0.75f * 0.75f);
+    EXPECT_EQ(mergeCaches({data, plain}, {}, &merged, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("voxel materials"), std::string::npos) << message;
+}
+
+TEST(VoxelMaterials, TheWriterRefusesWhatTheReaderWould) {
+    CacheData data = cacheWithMaterials();
+    std::vector<uint8_t> bytes;
+    std::string message;
+    data.voxel_materials.pop_back();
+    EXPECT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("one per voxel"), std::string::npos) << message;
+    for (const float bad : {-1.0f, NAN, INFINITY}) {
+        data = cacheWithMaterials();
+        data.voxel_materials[1].emission[2] = bad;
+        EXPECT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kInvalidData) << bad;
+        data = cacheWithMaterials();
+        data.voxel_materials[2].demodulation[0] = bad == -1.0f ? 0.0f : bad;
+        EXPECT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kInvalidData) << bad;
+    }
+}
+
+// What an engine built with the option reads at a hit of the voxel (the SDK's query with
+// SHARC_SEPARATE_EMISSIVE / SHARC_MATERIAL_DEMODULATION, docs/sharc_algorithm.md §6): the stored
+// value times the hit's factor, plus the hit's emission. Here the hit has the voxel's mean
+// material, so the engine must read back the plain radiance (fp16 both ways).
+TEST(VoxelMaterials, EachBuildReadsBackThePlainRadiance) {
+    const CacheData data = cacheWithMaterials();
+    std::vector<uint8_t> bytes;
+    ASSERT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
+    CacheView view;
+    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, nullptr), CacheFileStatus::kOk);
+    GpuInsertList plain;
+    ASSERT_EQ(view.gpuInsertList(GpuBufferOptions{}, &plain, nullptr), CacheFileStatus::kOk);
+    for (const bool emissive : {false, true}) {
+        for (const bool demodulation : {false, true}) {
+            GpuBufferOptions options;
+            options.build.separate_emissive = emissive;
+            options.build.material_demodulation = demodulation;
+            options.capacity = 64;
+            GpuInsertList list;
+            GpuBuffers buffers;
+            CacheError error;
+            ASSERT_EQ(view.gpuInsertList(options, &list, &error), CacheFileStatus::kOk) << error.message;
+            ASSERT_EQ(view.gpuBuffers(options, &buffers, &error), CacheFileStatus::kOk) << error.message;
+            for (size_t i = 0; i < list.keys.size(); ++i) {
+                const CacheVoxelMaterial& m = data.voxel_materials[i];
+                for (int c = 0; c < 3; ++c) {
+                    const float stored = half(list.values[i].radiance[c]);
+                    const float read = stored * (demodulation ? m.demodulation[c] : 1.0f) +
+                                       (emissive ? m.emission[c] : 0.0f);
+                    const float expected = half(plain.values[i].radiance[c]);
+                    EXPECT_NEAR(read, expected, 2e-3f * expected + 1e-6f)
+                        << "voxel " << i << " channel " << c << " emissive " << emissive << " demod " << demodulation;
+                    if (emissive && m.emission[c] > 0.0f && !demodulation) {
+                        EXPECT_LT(stored, expected) << "the emission is taken out";
+                    }
+                }
+                EXPECT_EQ(list.values[i].radiance[3], plain.values[i].radiance[3]) << "the sample count stays";
+            }
+            // The buffers hold the same entries as the list.
+            for (size_t slot = 0; slot < buffers.hash_entries.size(); ++slot) {
+                if (buffers.hash_entries[slot] == 0) continue;
+                const auto it = std::find(list.keys.begin(), list.keys.end(), buffers.hash_entries[slot]);
+                ASSERT_NE(it, list.keys.end());
+                EXPECT_EQ(std::memcmp(&buffers.resolved[slot], &list.values[size_t(it - list.keys.begin())],
+                                      sizeof(SharcPackedData)), 0);
+            }
+        }
+    }
+}
+
+TEST(VoxelMaterials, DemodulationFactorIsTheSdkSamples) {
+    // A red Lambert-with-coat dielectric: F0 = 0.04, luminance(0.04 + 0.96/21) = 0.0857...
+    const Float3 m = sharcDemodulationFactor(Float3{0.63f, 0.01f, 0.05f}, Float3{0.04f, 0.04f, 0.04f});
+    const float coat = 0.04f * (0.04f + 0.96f / 21.0f);
+    EXPECT_NEAR(m.x, 0.63f + coat, 1e-6f);
+    EXPECT_NEAR(m.y, 0.05f + coat, 1e-6f) << "diffuse albedo clamped at 0.05";
+    EXPECT_NEAR(m.z, 0.05f + coat, 1e-6f);
+    // A gold-like metal: no diffuse (0.05 floor), F0 per channel times the luminance of its average.
+    const Float3 f0{1.0f, 0.78f, 0.34f};
+    const float lum = 0.2126f * (1.0f) + 0.7152f * (0.78f + 0.22f / 21.0f) + 0.0722f * (0.34f + 0.66f / 21.0f);
+    const Float3 g = sharcDemodulationFactor(Float3{0, 0, 0}, f0);
+    EXPECT_NEAR(g.x, 0.05f + 1.0f * lum, 1e-6f);
+    EXPECT_NEAR(g.y, 0.05f + 0.78f * lum, 1e-6f);
+    EXPECT_NEAR(g.z, 0.05f + 0.34f * lum, 1e-6f);
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -29,6 +29,9 @@ struct CacheData {
     float gpu_radiance_scale = 1.0f;
     /// Voxels sorted by key, keys unique and non-zero.
     std::vector<CacheVoxel> voxels;
+    /// Empty, or one entry per voxel in the same order (SPEC §F.8b, section VMAT): for GPU buffers
+    /// of SHaRC builds with separate emissive or material demodulation.
+    std::vector<CacheVoxelMaterial> voxel_materials;
     /// Provenance and settings as ordered key/value text (writer, scene, settings, timings).
     /// Keys must be unique and non-empty, keys and values valid UTF-8 (SPEC §F.8).
     std::vector<std::pair<std::string, std::string>> metadata;

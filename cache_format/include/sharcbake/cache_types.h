@@ -6,6 +6,7 @@
 
 #include "sharcbake/runtime_export.h"
 
+#include <cmath>
 #include <cstdint>
 
 namespace sharcbake {
@@ -16,6 +17,22 @@ struct CacheVoxel {
     float radiance[3] = {0.0f, 0.0f, 0.0f};  ///< mean outgoing radiance, emission included
     float sample_weight = 0.0f;              ///< effective sample count of the resolved mean
 };
+
+/// What a SHaRC build that keeps emission or the material apart needs to read a voxel (section
+/// VMAT, SPEC §F.8b): means over the voxel's surface, by area.
+struct CacheVoxelMaterial {
+    float emission[3] = {0.0f, 0.0f, 0.0f};      ///< emitted radiance (included in the radiance)
+    float demodulation[3] = {1.0f, 1.0f, 1.0f};  ///< SHaRC demodulation factor (SPEC §G.3)
+};
+
+/// SPEC §F.8b's values: emission finite and >= 0, demodulation factor finite and > 0.
+inline bool validVoxelMaterial(const CacheVoxelMaterial& m) {
+    for (int c = 0; c < 3; ++c) {
+        if (!(m.emission[c] >= 0.0f) || !std::isfinite(m.emission[c])) return false;
+        if (!(m.demodulation[c] > 0.0f) || !std::isfinite(m.demodulation[c])) return false;
+    }
+    return true;
+}
 
 /// A level present in the cache and how many voxels it holds.
 struct CacheLevel {

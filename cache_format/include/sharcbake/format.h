@@ -98,6 +98,7 @@ inline constexpr uint32_t kSectionVoxels = cacheFourCC('V', 'O', 'X', 'L');
 inline constexpr uint32_t kSectionLevels = cacheFourCC('L', 'E', 'V', 'L');
 inline constexpr uint32_t kSectionMetadata = cacheFourCC('M', 'E', 'T', 'A');
 inline constexpr uint32_t kSectionRadianceScale = cacheFourCC('R', 'S', 'C', 'L');  ///< 1.1
+inline constexpr uint32_t kSectionVoxelMaterials = cacheFourCC('V', 'M', 'A', 'T');  ///< 1.1
 
 // ------------------------------------------------------------------------------------------------
 // Sections (SPEC §F.5 - §F.8)
@@ -152,6 +153,15 @@ struct CacheRadianceScaleSection {
 };
 static_assert(sizeof(CacheRadianceScaleSection) == 8, "SPEC §F.8a: RSCL is 8 bytes");
 inline constexpr uint32_t kCacheRadianceScaleSize = 8;
+
+/// VMAT record (1.1), one per voxel in KEYS order (SPEC §F.8b): what SHaRC builds that keep
+/// emission or the material apart need to read the voxel.
+struct CacheVoxelMaterialRecord {
+    float emission[3];      ///< mean emitted radiance of the voxel's surface, >= 0
+    float demodulation[3];  ///< mean SHaRC demodulation factor of the voxel's surface, > 0
+};
+static_assert(sizeof(CacheVoxelMaterialRecord) == 24, "SPEC §F.8b: VMAT records are 24 bytes");
+inline constexpr uint32_t kCacheVoxelMaterialRecordSize = 24;
 
 /// @brief CRC-32 (ISO-HDLC / zlib / PNG: reflected polynomial 0xEDB88320, init and xorout
 /// 0xFFFFFFFF). Pass the previous result as `crc` to continue over several ranges.

@@ -86,7 +86,7 @@ struct GpuBufferOptions {
 /// How the radiance fared on its way to fp16 (SPEC §G.6).
 struct GpuRadianceReport {
     float radiance_scale = 1.0f;  ///< the factor applied
-    float brightest = 0.0f;       ///< largest channel of any voxel, before scaling
+    float brightest = 0.0f;       ///< largest channel stored (after the build's emission and demodulation), before scaling
     /// Largest power of two at which the brightest channel still fits fp16 (<= 65504); 0 when
     /// every voxel is black.
     float fitting_radiance_scale = 0.0f;
@@ -167,6 +167,10 @@ public:
     uint64_t voxelCount() const { return voxel_count_; }
     uint64_t key(uint64_t index) const;         ///< index < voxelCount()
     CacheVoxel voxel(uint64_t index) const;     ///< index < voxelCount()
+    /// Whether the file keeps each voxel's emission and demodulation factor (SPEC §F.8b, VMAT).
+    bool hasVoxelMaterials() const { return voxel_materials_ != nullptr; }
+    /// The voxel's VMAT record (index < voxelCount()); no emission and factor 1 without VMAT.
+    CacheVoxelMaterial voxelMaterial(uint64_t index) const;
     /// Index of `key`, or voxelCount() when absent (hash index if built, else binary search).
     uint64_t findKey(uint64_t key) const;
     /// The SHaRC key of (position, normal) for a camera: identical to hashGridKey() with this
@@ -251,6 +255,7 @@ private:
         const CacheSectionInfo* levels = nullptr;
         const CacheSectionInfo* meta = nullptr;
         const CacheSectionInfo* radiance_scale = nullptr;  ///< RSCL (1.1)
+        const CacheSectionInfo* voxel_materials = nullptr;  ///< VMAT (1.1)
     };
     CacheFileStatus parse(CacheError* error);
     CacheFileStatus parseHeader(CacheError* error, SectionTable* table);
@@ -261,6 +266,7 @@ private:
                                 CacheError* error);
     CacheFileStatus parseMetadata(const CacheSectionInfo* meta, CacheError* error);
     CacheFileStatus parseRadianceScale(const CacheSectionInfo* section, CacheError* error);
+    CacheFileStatus parseVoxelMaterials(const CacheSectionInfo* section, CacheError* error);
 
     const uint8_t* data_ = nullptr;
     uint64_t size_ = 0;
@@ -278,6 +284,7 @@ private:
     uint64_t voxel_count_ = 0;
     const uint8_t* keys_ = nullptr;    ///< voxel_count_ little-endian u64
     const uint8_t* voxels_ = nullptr;  ///< voxel_count_ records of 16 bytes
+    const uint8_t* voxel_materials_ = nullptr;  ///< VMAT: voxel_count_ records of 24 bytes, or null
     std::vector<CacheLevel> levels_;
     std::vector<std::pair<std::string_view, std::string_view>> metadata_;
     HashGridKeyer keyer_;  ///< this cache's grid: keys without a logarithm per query

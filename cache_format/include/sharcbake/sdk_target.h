@@ -95,7 +95,9 @@ SHARCBAKE_RUNTIME_API uint32_t sharcSdkBucketBase(uint32_t hash, uint32_t capaci
 // ------------------------------------------------------------------------------------------------
 
 /// The SDK's compile-time options that change what the resolved buffer holds or how keys look.
-/// All off is the SDK's default build, the only one the library serves.
+/// All off is the SDK's default build. SH encoding and compact keys are never served; material
+/// demodulation and separate emissive are served from a cache that keeps each voxel's emission
+/// and demodulation factor (section VMAT, `sharcbake bake --voxel-materials`; SPEC §G.3).
 struct SharcBuildOptions {
     bool sh_encoding = false;            ///< SHARC_ENABLE_SH_ENCODING (1.8.0+)
     bool compact_keys = false;           ///< HASH_GRID_COMPACT (1.7.2+): 32-bit keys
@@ -103,9 +105,18 @@ struct SharcBuildOptions {
     bool separate_emissive = false;      ///< SHARC_SEPARATE_EMISSIVE
 };
 
-/// @brief kOk for a build the library can serve on `target`, else kUnsupportedFeature and a
-/// message naming the option, why baked data would read wrong, and what to change.
-SHARCBAKE_RUNTIME_API CacheFileStatus checkSharcBuildOptions(const SharcBuildOptions& options, SharcSdkTarget target, std::string* message);
+/// @brief kOk for a build the library can serve on `target` from a cache with or without voxel
+/// materials (CacheView::hasVoxelMaterials()), else kUnsupportedFeature and a message naming the
+/// option, why baked data would read wrong, and what to change.
+SHARCBAKE_RUNTIME_API CacheFileStatus checkSharcBuildOptions(const SharcBuildOptions& options, SharcSdkTarget target,
+                                                             bool cache_has_voxel_materials, std::string* message);
+
+/// @brief The demodulation factor of SHaRC's sample application for a surface with this diffuse
+/// albedo and specular reflectance at normal incidence F0, per channel:
+/// max(diffuse, 0.05) + max(F0, 0.02) * luminance(F0 + (1 - F0) / 21), with Rec. 709 luminance.
+/// The bake stores each voxel's mean of it (VMAT); an engine built with
+/// SHARC_MATERIAL_DEMODULATION must give the SDK the same factor (SPEC §G.3).
+SHARCBAKE_RUNTIME_API Float3 sharcDemodulationFactor(const Float3& diffuse_albedo, const Float3& specular_f0);
 
 // ------------------------------------------------------------------------------------------------
 // Resolve (SPEC §G.4)
