@@ -52,24 +52,70 @@ std::string incompatibility(const CacheData& first, const CacheData& other, cons
     return {};
 }
 
+/// A voxel and its material (VMAT; defaults when the inputs keep none).
+struct Entry {
+    CacheVoxel voxel;
+    CacheVoxelMaterial material;
+};
+
+/// The voxel that several inputs hold under one key: radiance and material means weighted by
+/// sample weight (shards estimate the material means from their own surface points), summed in
+/// a fixed order so the result does not depend on the order of the inputs. One entry is kept as is.
+Entry combine(std::vector<Entry>& same_key) {
+    if (same_key.size() == 1) return same_key[0];
+    std::sort(same_key.begin(), same_key.end(), [](const Entry& x, const Entry& y) {
+        const CacheVoxel& a = x.voxel;
+        const CacheVoxel& b = y.voxel;
+        return std::tie(a.sample_weight, a.radiance[0], a.radiance[1], a.radiance[2]) <
+               std::tie(b.sample_weight, b.radiance[0], b.radiance[1], b.radiance[2]);
+    });
+    double weight = 0.0, sum[3] = {0.0, 0.0, 0.0}, emission[3] = {0.0, 0.0, 0.0}, factor[3] = {0.0, 0.0, 0.0};
+    for (const Entry& e : same_key) {
+        const double w = double(e.voxel.sample_weight);
+        weight += w;
+        for (int c = 0; c < 3; ++c) {
+            sum[c] += w * double(e.voxel.radiance[c]);
+            emission[c] += w * double(e.material.emission[c]);
+            factor[c] += w * double(e.material.demodulation[c]);
+        }
+    }
+    Entry result;
+    result.voxel.key = same_key[0].voxel.key;
+    result.voxel.sample_weight = float(weight);
+    for (int c = 0; c < 3; ++c) {
+        result.voxel.radiance[c] = float(sum[c] / weight);
+        result.material.emission[c] = float(emission[c] / weight);
+        result.material.demodulation[c] = float(factor[c] / weight);
+    }
+    return result;
+}
+
+/// The first reason the inputs cannot be merged, or an empty string.
+std::string inputsProblem(const std::vector<CacheData>& inputs, const std::vector<std::string>& keys_that_must_agree) {
+    for (size_t i = 1; i < inputs.size(); ++i) {
+        const std::string problem = incompatibility(inputs[0], inputs[i], keys_that_must_agree);
+        if (!problem.empty()) return "input " + std::to_string(i + 1) + " vs input 1: " + problem;
+    }
+    for (size_t i = 0; i < inputs.size(); ++i) {
+        const std::vector<CacheVoxel>& v = inputs[i].voxels;
+        for (size_t k = 1; k < v.size(); ++k) {
+            if (v[k - 1].key >= v[k].key) return "input " + std::to_string(i + 1) + ": voxels not sorted by key";
+        }
+        if (!inputs[i].voxel_materials.empty() && inputs[i].voxel_materials.size() != v.size()) {
+            return "input " + std::to_string(i + 1) + ": voxel materials do not match the voxels";
+        }
+    }
+    return {};
+}
+
 }  // namespace
 
 CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vector<std::string>& keys_that_must_agree,
                             CacheData* out, std::string* message) {
     if (!out) return CacheFileStatus::kInvalidArgument;
     if (inputs.empty()) return fail(message, "nothing to merge");
-    for (size_t i = 1; i < inputs.size(); ++i) {
-        const std::string problem = incompatibility(inputs[0], inputs[i], keys_that_must_agree);
-        if (!problem.empty()) return fail(message, "input " + std::to_string(i + 1) + " vs input 1: " + problem);
-    }
-    for (size_t i = 0; i < inputs.size(); ++i) {
-        const std::vector<CacheVoxel>& v = inputs[i].voxels;
-        for (size_t k = 1; k < v.size(); ++k) {
-            if (v[k - 1].key >= v[k].key) return fail(message, "input " + std::to_string(i + 1) + ": voxels not sorted by key");
-        }
-        if (!inputs[i].voxel_materials.empty() && inputs[i].voxel_materials.size() != v.size()) {
-            return fail(message, "input " + std::to_string(i + 1) + ": voxel materials do not match the voxels");
-        }
+    if (const std::string problem = inputsProblem(inputs, keys_that_must_agree); !problem.empty()) {
+        return fail(message, problem);
     }
     const bool materials = !inputs[0].voxel_materials.empty();
 
@@ -85,15 +131,6 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
 
     // k-way merge of the key-sorted voxel lists.
     std::vector<size_t> next(inputs.size(), 0);
-    // A voxel and its material (VMAT; defaults when the inputs keep none).
-    struct Entry {
-        CacheVoxel voxel;
-        CacheVoxelMaterial material;
-    };
-    const auto entry = [&](size_t input, size_t index) {
-        return Entry{inputs[input].voxels[index],
-                     materials ? inputs[input].voxel_materials[index] : CacheVoxelMaterial{}};
-    };
     std::vector<Entry> same_key;
     same_key.reserve(inputs.size());
     for (;;) {
@@ -109,45 +146,14 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
         same_key.clear();
         for (size_t i = 0; i < inputs.size(); ++i) {
             if (next[i] < inputs[i].voxels.size() && inputs[i].voxels[next[i]].key == key) {
-                same_key.push_back(entry(i, next[i]++));
+                same_key.push_back(Entry{inputs[i].voxels[next[i]],
+                                         materials ? inputs[i].voxel_materials[next[i]] : CacheVoxelMaterial{}});
+                ++next[i];
             }
         }
-        if (same_key.size() == 1) {
-            merged.voxels.push_back(same_key[0].voxel);
-            if (materials) merged.voxel_materials.push_back(same_key[0].material);
-            continue;
-        }
-        std::sort(same_key.begin(), same_key.end(), [](const Entry& x, const Entry& y) {
-            const CacheVoxel& a = x.voxel;
-            const CacheVoxel& b = y.voxel;
-            return std::tie(a.sample_weight, a.radiance[0], a.radiance[1], a.radiance[2]) <
-                   std::tie(b.sample_weight, b.radiance[0], b.radiance[1], b.radiance[2]);
-        });
-        // Weighted by sample weight: radiance, and the material means (which shards estimate
-        // from their own surface points).
-        double weight = 0.0, sum[3] = {0.0, 0.0, 0.0}, emission[3] = {0.0, 0.0, 0.0}, factor[3] = {0.0, 0.0, 0.0};
-        for (const Entry& e : same_key) {
-            const double w = double(e.voxel.sample_weight);
-            weight += w;
-            for (int c = 0; c < 3; ++c) {
-                sum[c] += w * double(e.voxel.radiance[c]);
-                emission[c] += w * double(e.material.emission[c]);
-                factor[c] += w * double(e.material.demodulation[c]);
-            }
-        }
-        CacheVoxel result;
-        result.key = key;
-        for (int c = 0; c < 3; ++c) result.radiance[c] = float(sum[c] / weight);
-        result.sample_weight = float(weight);
-        merged.voxels.push_back(result);
-        if (materials) {
-            CacheVoxelMaterial m;
-            for (int c = 0; c < 3; ++c) {
-                m.emission[c] = float(emission[c] / weight);
-                m.demodulation[c] = float(factor[c] / weight);
-            }
-            merged.voxel_materials.push_back(m);
-        }
+        const Entry voxel = combine(same_key);
+        merged.voxels.push_back(voxel.voxel);
+        if (materials) merged.voxel_materials.push_back(voxel.material);
     }
     *out = std::move(merged);
     return CacheFileStatus::kOk;
