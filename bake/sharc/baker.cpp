@@ -54,7 +54,7 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
       settings_(settings),
       levels_(levelsFor(tracer.scene(), settings)),
       cache_(withCoverage(settings.sharc, levels_), radiance_scale),
-      update_(tracer, lights, cache_, settings.path) {
+      wavefronts_([this] { return UpdateWavefront(tracer_, lights_, cache_, settings_.path); }) {
     const uint32_t stride = std::max(1u, settings_.update_stride);
     blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
     blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
@@ -69,13 +69,17 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
     const uint32_t paths = pathsPerIteration();
     chunk_deposits.resize((paths + kPathsPerChunk - 1) / kPathsPerChunk);
 
-    // Every chunk of paths traced by one task into its own deposit list.
+    // Every chunk of paths is one wavefront batch, traced by one task into its own deposit list.
     tbb::enumerable_thread_specific<UpdateCounters> thread_counters;
+    tbb::enumerable_thread_specific<std::vector<UpdatePathStart>> thread_starts;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk_deposits.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
         UpdateCounters& local = thread_counters.local();
+        UpdateWavefront& wavefront = wavefronts_.local();
+        std::vector<UpdatePathStart>& starts = thread_starts.local();
         for (size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
             std::vector<Deposit>& deposits = chunk_deposits[chunk];
             deposits.clear();
+            starts.clear();
             const uint32_t first = uint32_t(chunk) * kPathsPerChunk;
             const uint32_t last = std::min(paths, first + kPathsPerChunk);
             for (uint32_t block = first; block < last; ++block) {
@@ -84,20 +88,12 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
                 const glm::vec2 u = sampler.next2D() * float(stride);
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
-                const Ray ray = camera.generate(x, y, glm::fract(u));
-                update_.trace(ray, sampler, levels_, camera_position, deposits, local);
+                starts.push_back(UpdatePathStart{camera.generate(x, y, glm::fract(u)), sampler});
             }
+            wavefront.trace(starts, levels_, camera_position, deposits, local);
         }
     });
-    for (const UpdateCounters& c : thread_counters) {
-        counters.paths += c.paths;
-        counters.segments += c.segments;
-        counters.shadow_rays += c.shadow_rays;
-        counters.resampled += c.resampled;
-        counters.sky_misses += c.sky_misses;
-        counters.non_finite += c.non_finite;
-        counters.clamped_propagation += c.clamped_propagation;
-    }
+    for (const UpdateCounters& c : thread_counters) counters += c;
 }
 
 void Baker::runIteration() {

@@ -10,6 +10,8 @@
 #include "sharc/sharc_update.h"
 #include "tracing/tracer.h"
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <cstdint>
 #include <vector>
 
@@ -82,7 +84,8 @@ private:
     BakeSettings settings_;
     DepositLevels levels_;  ///< each path vertex's voxel, from the grid and the view region
     SharcCache cache_;
-    UpdatePathTracer update_;
+    /// One wavefront (and its batch memory) per thread, kept between iterations.
+    mutable tbb::enumerable_thread_specific<UpdateWavefront> wavefronts_;
     uint32_t blocks_x_, blocks_y_;
     uint32_t iteration_ = 0;
     std::vector<std::vector<Deposit>> chunk_deposits_;  ///< one list per fixed chunk of paths

@@ -155,6 +155,18 @@ public:
     /// The resolved entry of a key, or nullptr when the key is absent. Safe to call from many
     /// threads while no commit or resolve runs.
     const ResolvedEntry* findResolved(uint64_t key) const;
+    /// findResolved in steps, for a batch of lookups whose memory latency should overlap:
+    /// prefetchKey for every key, then findSlot (and prefetchResolved) for every key, then
+    /// resolvedAt. findSlot returns kNoSlot when the key is absent.
+    static constexpr uint32_t kNoSlot = ~0u;
+    void prefetchKey(uint64_t key) const { table_.prefetch(key); }
+    uint32_t findSlot(uint64_t key) const { return table_.find(key).value_or(kNoSlot); }
+    void prefetchResolved(uint32_t slot) const {
+#if defined(__GNUC__) || defined(__clang__)
+        __builtin_prefetch(&resolved_[slot]);
+#endif
+    }
+    const ResolvedEntry& resolvedAt(uint32_t slot) const { return resolved_[slot]; }
 
     /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,
     /// inserts the new ones serially in chunk order (so slot assignment is the same on every

@@ -1,11 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/sharc_update.h"
 
-#include "tracing/bsdf.h"
-#include "tracing/surface.h"
-
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace sharcbake {
@@ -50,132 +46,248 @@ glm::vec3 finiteOrZero(glm::vec3 v, uint64_t& non_finite) {
 
 }  // namespace
 
-UpdatePathTracer::UpdatePathTracer(const Tracer& tracer, const LightSampler& lights,
-                                   const SharcCache& cache, UpdatePathSettings settings)
-    : tracer_(tracer), lights_(lights), cache_(cache), settings_(settings) {}
+UpdateCounters& UpdateCounters::operator+=(const UpdateCounters& other) {
+    paths += other.paths;
+    segments += other.segments;
+    shadow_rays += other.shadow_rays;
+    resampled += other.resampled;
+    sky_misses += other.sky_misses;
+    non_finite += other.non_finite;
+    clamped_propagation += other.clamped_propagation;
+    return *this;
+}
 
-/// One update path's state between its vertices.
-struct UpdatePathTracer::PathState {
+/// One update path's state between its bounces, and the vertex being shaded between the
+/// shading step and the deposit step of a bounce (its shadow ray is traced in between).
+struct UpdateWavefront::Path {
+    PixelSampler sampler{0, 0, 0};
     PathHistory history;
     Ray ray;
     float previous_bsdf_pdf = 0.0f;
     glm::vec3 previous_position{0.0f};
     glm::vec3 previous_shading_normal{0.0f};
     glm::vec3 throughput{1.0f};  ///< only for Russian roulette
+    std::vector<Deposit> deposits;
+
+    // The current vertex.
+    SurfaceHit hit;
+    ShadingMaterial material;
+    glm::vec2 u_select_resample{0.0f};
+    glm::vec2 u_light_point{0.0f};
+    uint64_t feedback_key = 0;            ///< the voxel cache resampling reads; 0 = not this vertex
+    uint32_t feedback_slot = SharcCache::kNoSlot;
+    std::optional<GltfBsdf> bsdf;
+    glm::vec3 wo{0.0f};
+    uint64_t key = 0;
+    glm::vec3 emitted{0.0f};
+    float emission_weight = 0.0f;
+    ShadowQuery shadow;
 };
 
-void UpdatePathTracer::trace(const Ray& camera_ray, PixelSampler& sampler, const DepositLevels& levels,
-                             const Float3& camera,
-                             std::vector<Deposit>& out, UpdateCounters& counters) const {
-    const uint32_t depth = std::clamp(cache_.settings().propagation_depth, 1u, PathHistory::kMaxDepth);
-    PathState path;
-    path.ray = camera_ray;
-    path.previous_position = camera_ray.origin;
-    TraceCounters trace_counters;  // shadow rays from estimateDirectLight
-    ++counters.paths;
+UpdateWavefront::UpdateWavefront(const Tracer& tracer, const LightSampler& lights, const SharcCache& cache,
+                                 UpdatePathSettings settings)
+    : tracer_(tracer), lights_(lights), cache_(cache), settings_(settings) {}
 
-    for (uint32_t bounce = 0; bounce < settings_.max_bounces; ++bounce) {
-        sampler.startDimension(PathTracer::kFirstBounceDimension + bounce * PathTracer::kDimensionsPerBounce);
-        RayHit ray_hit;
-        ++counters.segments;
-        if (!tracer_.intersect(path.ray, ray_hit)) {
-            depositSkyMiss(path, bounce, out, counters);
-            break;
-        }
-        const SurfaceHit hit = makeSurfaceHit(tracer_.scene(), ray_hit, path.ray.direction);
-        const ShadingMaterial material = evaluateMaterial(tracer_.scene(), hit);
-        const glm::vec3 wo = -path.ray.direction;
-        // SHaRC keys use the geometric normal turned towards the incoming ray, so the two sides
-        // of a thin wall are different voxels.
-        const uint64_t key = levels.key(hit.position, hit.geometric_normal, camera);
+UpdateWavefront::~UpdateWavefront() = default;
 
-        const glm::vec2 u_select_resample = sampler.next2D();
-        const glm::vec2 u_light_point = sampler.next2D();
-
-        const glm::vec3 emitted = emittedRadiance(hit, material);
-        const float emission_weight =
-            maxComponent(emitted) > 0.0f
-                ? emissionMisWeight(lights_, bounce, path.previous_bsdf_pdf, path.previous_position, hit)
-                : 0.0f;
-        const bool last_vertex = bounce + 1 >= settings_.max_bounces;
-        if (endOnCache(path, hit, emitted * (1.0f - emission_weight), last_vertex, depth, u_select_resample.y, levels,
-                       camera, out, counters)) {
-            break;
-        }
-
-        // Local radiance at this vertex: its emission and next-event direct light, evaluated
-        // with throughput 1 and the update pass's roughness clamp.
-        const GltfBsdf bsdf(material, hit, cache_.settings().update_roughness_clamp);
-        glm::vec3 direct(0.0f);
-        if (lights_.hasLights()) {
-            direct = finiteOrZero(estimateDirectLight(tracer_, lights_, hit, bsdf, wo, u_select_resample.x,
-                                                      u_light_point, trace_counters),
-                                  counters.non_finite);
-        }
-        // Its own voxel stores the full outgoing radiance (emission included, as the SDK's
-        // default does); earlier vertices get the emission's BSDF-sampled share only.
-        out.push_back(Deposit{key, emitted + direct, 1});
-        path.history.propagate(emitted * emission_weight + direct, out);
-        path.history.push(key, depth);
-
-        if (last_vertex || !continuePath(path, hit, bsdf, wo, bounce, sampler)) break;
-    }
-    counters.shadow_rays += trace_counters.shadow_rays.load(std::memory_order_relaxed);
+size_t UpdateWavefront::bytesPerPathInFlight() {
+    // The path's state, its entries in the batch's index lists, its ray and hit, its shadow ray,
+    // and Embree's copies of both. Its deposits come on top (sizeof(Deposit) each).
+    return sizeof(Path) + sizeof(uint32_t) * 3 + sizeof(Ray) * 2 + sizeof(RayHit) + sizeof(uint8_t) * 3 +
+           sizeof(RTCRayHit) + sizeof(RTCRay);
 }
 
-void UpdatePathTracer::depositSkyMiss(const PathState& path, uint32_t bounce, std::vector<Deposit>& out,
-                                      UpdateCounters& counters) const {
+void UpdateWavefront::trace(const std::vector<UpdatePathStart>& starts, const DepositLevels& levels,
+                            const Float3& camera, std::vector<Deposit>& out, UpdateCounters& counters) {
+    if (paths_.size() < starts.size()) paths_.resize(starts.size());
+    active_.clear();
+    for (size_t i = 0; i < starts.size(); ++i) {
+        Path& path = paths_[i];
+        path.sampler = starts[i].sampler;
+        path.history = PathHistory{};
+        path.ray = starts[i].camera_ray;
+        path.previous_bsdf_pdf = 0.0f;
+        path.previous_position = path.ray.origin;
+        path.previous_shading_normal = glm::vec3(0.0f);
+        path.throughput = glm::vec3(1.0f);
+        path.deposits.clear();
+        active_.push_back(uint32_t(i));
+    }
+    counters.paths += starts.size();
+    for (uint32_t bounce = 0; bounce < settings_.max_bounces && !active_.empty(); ++bounce) {
+        advance(bounce, levels, camera, counters);
+    }
+    for (size_t i = 0; i < starts.size(); ++i) out.insert(out.end(), paths_[i].deposits.begin(), paths_[i].deposits.end());
+}
+
+void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, const Float3& camera,
+                              UpdateCounters& counters) {
+    const uint32_t depth = std::clamp(cache_.settings().propagation_depth, 1u, PathHistory::kMaxDepth);
+    const size_t count = active_.size();
+    rays_.resize(count);
+    hits_.resize(count);
+    found_.resize(count);
+    for (size_t i = 0; i < count; ++i) rays_[i] = paths_[active_[i]].ray;
+    tracer_.intersectMany(rays_.data(), count, hits_.data(), found_.data(), embree_hits_);
+    counters.segments += count;
+
+    // Shade every hit; paths that end here (sky, cache) drop out of the batch.
+    shaded_.clear();
+    for (size_t i = 0; i < count; ++i) {
+        Path& path = paths_[active_[i]];
+        path.sampler.startDimension(PathTracer::kFirstBounceDimension + bounce * PathTracer::kDimensionsPerBounce);
+        if (!found_[i]) {
+            depositSkyMiss(path, bounce, counters);
+            continue;
+        }
+        shadeSurface(path, hits_[i], bounce, depth, levels, camera);
+        shaded_.push_back(active_[i]);
+    }
+    findFeedbackVoxels();
+    shadow_paths_.clear();
+    shadow_rays_.clear();
+    next_active_.clear();
+    for (const uint32_t index : shaded_) {
+        Path& path = paths_[index];
+        if (endOnCache(path, counters)) continue;
+        prepareLocalLight(path);
+        if (path.shadow.needed) {
+            shadow_paths_.push_back(uint32_t(next_active_.size()));
+            shadow_rays_.push_back(path.shadow.ray);
+        }
+        next_active_.push_back(index);
+    }
+    blocked_.resize(shadow_rays_.size());
+    tracer_.occludedMany(shadow_rays_.data(), shadow_rays_.size(), blocked_.data(), embree_rays_);
+    counters.shadow_rays += shadow_rays_.size();
+    shadow_blocked_.assign(next_active_.size(), 0);
+    for (size_t s = 0; s < shadow_paths_.size(); ++s) shadow_blocked_[shadow_paths_[s]] = blocked_[s];
+
+    // Deposit, then continue the survivors; the batch keeps its order.
+    active_.clear();
+    for (size_t i = 0; i < next_active_.size(); ++i) {
+        if (depositAndContinue(paths_[next_active_[i]], shadow_blocked_[i] != 0, bounce, depth, counters)) {
+            active_.push_back(next_active_[i]);
+        }
+    }
+}
+
+void UpdateWavefront::shadeSurface(Path& path, const RayHit& ray_hit, uint32_t bounce, uint32_t depth,
+                                   const DepositLevels& levels, const Float3& camera) const {
+    path.hit = makeSurfaceHit(tracer_.scene(), ray_hit, path.ray.direction);
+    const SurfaceHit& hit = path.hit;
+    path.material = evaluateMaterial(tracer_.scene(), hit);
+    path.wo = -path.ray.direction;
+    // SHaRC keys use the geometric normal turned towards the incoming ray, so the two sides
+    // of a thin wall are different voxels.
+    path.key = levels.key(hit.position, hit.geometric_normal, camera);
+
+    path.u_select_resample = path.sampler.next2D();
+    path.u_light_point = path.sampler.next2D();
+
+    path.emitted = emittedRadiance(hit, path.material);
+    path.emission_weight =
+        maxComponent(path.emitted) > 0.0f
+            ? emissionMisWeight(lights_, bounce, path.previous_bsdf_pdf, path.previous_position, hit)
+            : 0.0f;
+
+    // Cache resampling: with a random depth in [1, depth] (or, resampling at the end, once
+    // `depth` vertices wait), the path may end on this voxel's resolved value.
+    path.feedback_key = 0;
+    path.feedback_slot = SharcCache::kNoSlot;
+    const SharcSettings& sharc = cache_.settings();
+    if (!sharc.cache_resampling || path.history.length == 0) return;
+    const bool last_vertex = bounce + 1 >= settings_.max_bounces;
+    const uint32_t resample_depth =
+        sharc.resample_at_end ? (last_vertex ? 1u : depth)
+                              : uint32_t(std::lround(1.0f + float(depth - 1) * path.u_select_resample.y));
+    if (resample_depth > path.history.length) return;
+    path.feedback_key = levels.feedbackKey(hit.position, hit.geometric_normal, camera);
+}
+
+void UpdateWavefront::findFeedbackVoxels() {
+    // Two passes, each prefetching what the next one reads: the table's buckets, then the
+    // resolved entries. Their cache misses (the table is far larger than any cache) overlap.
+    for (const uint32_t index : shaded_) {
+        if (paths_[index].feedback_key) cache_.prefetchKey(paths_[index].feedback_key);
+    }
+    for (const uint32_t index : shaded_) {
+        Path& path = paths_[index];
+        if (!path.feedback_key) continue;
+        path.feedback_slot = cache_.findSlot(path.feedback_key);
+        if (path.feedback_slot != SharcCache::kNoSlot) cache_.prefetchResolved(path.feedback_slot);
+    }
+}
+
+void UpdateWavefront::prepareLocalLight(Path& path) const {
+    // Local radiance at this vertex: its emission and next-event direct light, evaluated with
+    // throughput 1 and the update pass's roughness clamp. The shadow ray waits for the batch.
+    path.bsdf.emplace(path.material, path.hit, cache_.settings().update_roughness_clamp);
+    path.shadow = lights_.hasLights() ? prepareDirectLight(lights_, path.hit, *path.bsdf, path.wo,
+                                                           path.u_select_resample.x, path.u_light_point)
+                                      : ShadowQuery{};
+}
+
+bool UpdateWavefront::depositAndContinue(Path& path, bool shadow_blocked, uint32_t bounce, uint32_t depth,
+                                         UpdateCounters& counters) const {
+    glm::vec3 direct(0.0f);
+    if (lights_.hasLights()) {
+        direct = finiteOrZero(path.shadow.needed && !shadow_blocked ? path.shadow.unoccluded : glm::vec3(0.0f),
+                              counters.non_finite);
+    }
+    // Its own voxel stores the full outgoing radiance (emission included, as the SDK's default
+    // does); earlier vertices get the emission's BSDF-sampled share only.
+    path.deposits.push_back(Deposit{path.key, path.emitted + direct, 1});
+    path.history.propagate(path.emitted * path.emission_weight + direct, path.deposits);
+    path.history.push(path.key, depth);
+    if (bounce + 1 >= settings_.max_bounces) return false;
+
+    // Russian roulette from the vertex's albedo, as PathTracer does, then the next direction.
+    const GltfBsdf& bsdf = *path.bsdf;
+    const glm::vec2 u_lobe_rr = path.sampler.next2D();
+    float survive = 1.0f;
+    if (bounce >= settings_.russian_roulette_start) {
+        survive = russianRouletteSurvival(path.throughput, bsdf.albedo(path.wo));
+        if (!(survive > 0.0f) || u_lobe_rr.y >= survive) return false;
+    }
+    const GltfBsdf::Sample s = bsdf.sample(path.wo, u_lobe_rr.x, path.sampler.next2D());
+    if (!s.valid) return false;
+    const glm::vec3 segment = s.weight / survive;
+    path.throughput *= segment;
+    path.history.applyThroughput(segment);
+    path.previous_bsdf_pdf = s.pdf;
+    path.previous_position = path.hit.position;
+    path.previous_shading_normal = path.hit.shading_normal;
+    path.ray = Ray{offsetRayOrigin(path.hit.position, path.hit.geometric_normal), s.wi};
+    return true;
+}
+
+void UpdateWavefront::depositSkyMiss(Path& path, uint32_t bounce, UpdateCounters& counters) const {
     if (!lights_.hasSky()) return;
     // SharcUpdateMiss, with the BSDF-sampling MIS weight: the previous vertex's own next-event
     // estimate already holds the light-sampling share of the sky.
     const float weight =
         bounce == 0 ? 1.0f
                     : powerHeuristic(path.previous_bsdf_pdf, lights_.pdfSky(path.previous_shading_normal, path.ray.direction));
-    path.history.propagate(finiteOrZero(lights_.skyRadiance(path.ray.direction) * weight, counters.non_finite), out);
+    path.history.propagate(finiteOrZero(lights_.skyRadiance(path.ray.direction) * weight, counters.non_finite),
+                           path.deposits);
     ++counters.sky_misses;
 }
 
-bool UpdatePathTracer::endOnCache(PathState& path, const SurfaceHit& hit, glm::vec3 counted_emission,
-                                  bool last_vertex, uint32_t depth, float u_depth, const DepositLevels& levels,
-                                  const Float3& camera, std::vector<Deposit>& out, UpdateCounters& counters) const {
-    const SharcSettings& sharc = cache_.settings();
-    if (!sharc.cache_resampling || path.history.length == 0) return false;
-    // With a random depth in [1, depth] (or, resampling at the end, once `depth` vertices wait),
-    // end the path on the voxel's resolved value (the previous iteration's).
-    const uint32_t resample_depth = sharc.resample_at_end ? (last_vertex ? 1u : depth)
-                                                          : uint32_t(std::lround(1.0f + float(depth - 1) * u_depth));
-    if (resample_depth > path.history.length) return false;
-    const ResolvedEntry* entry = cache_.findResolved(levels.feedbackKey(hit.position, hit.geometric_normal, camera));
-    if (!entry || !(entry->weight > 0.0)) return false;
+bool UpdateWavefront::endOnCache(Path& path, UpdateCounters& counters) const {
+    if (path.feedback_slot == SharcCache::kNoSlot) return false;
+    const ResolvedEntry& entry = cache_.resolvedAt(path.feedback_slot);
+    if (!(entry.weight > 0.0)) return false;
     // The cached mean holds this voxel's full emission, but the previous vertex's light
-    // sampling already counted the emission's light-sampled share (`counted_emission`).
-    glm::vec3 value = entry->feedback - counted_emission;
+    // sampling already counted the emission's light-sampled share.
+    const glm::vec3 counted_emission = path.emitted * (1.0f - path.emission_weight);
+    glm::vec3 value = entry.feedback - counted_emission;
     if (value.x < 0.0f || value.y < 0.0f || value.z < 0.0f) {
         ++counters.clamped_propagation;
         value = glm::max(value, glm::vec3(0.0f));
     }
-    path.history.propagate(value, out);
+    path.history.propagate(value, path.deposits);
     ++counters.resampled;
-    return true;
-}
-
-bool UpdatePathTracer::continuePath(PathState& path, const SurfaceHit& hit, const GltfBsdf& bsdf, glm::vec3 wo,
-                                    uint32_t bounce, PixelSampler& sampler) const {
-    const glm::vec2 u_lobe_rr = sampler.next2D();
-    float survive = 1.0f;  // Russian roulette from the vertex's albedo, as PathTracer does
-    if (bounce >= settings_.russian_roulette_start) {
-        survive = russianRouletteSurvival(path.throughput, bsdf.albedo(wo));
-        if (!(survive > 0.0f) || u_lobe_rr.y >= survive) return false;
-    }
-    const GltfBsdf::Sample s = bsdf.sample(wo, u_lobe_rr.x, sampler.next2D());
-    if (!s.valid) return false;
-    const glm::vec3 segment = s.weight / survive;
-    path.throughput *= segment;
-    path.history.applyThroughput(segment);
-    path.previous_bsdf_pdf = s.pdf;
-    path.previous_position = hit.position;
-    path.previous_shading_normal = hit.shading_normal;
-    path.ray = Ray{offsetRayOrigin(hit.position, hit.geometric_normal), s.wi};
     return true;
 }
 

@@ -8,13 +8,13 @@
 
 namespace sharcbake {
 
-glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, const SurfaceHit& hit,
-                              const GltfBsdf& bsdf, glm::vec3 wo, float u_select, glm::vec2 u_point,
-                              TraceCounters& counters) {
+ShadowQuery prepareDirectLight(const LightSampler& lights, const SurfaceHit& hit, const GltfBsdf& bsdf,
+                               glm::vec3 wo, float u_select, glm::vec2 u_point) {
+    ShadowQuery query;
     LightSample light;
-    if (!lights.sample(hit, u_select, u_point, light)) return glm::vec3(0.0f);
+    if (!lights.sample(hit, u_select, u_point, light)) return query;
     const GltfBsdf::Evaluation e = bsdf.evaluate(wo, light.wi);
-    if (maxComponent(e.f_cos) <= 0.0f) return glm::vec3(0.0f);
+    if (maxComponent(e.f_cos) <= 0.0f) return query;
 
     Ray shadow{offsetRayOrigin(hit.position, hit.geometric_normal), light.wi, light.distance};
     if (std::isfinite(light.distance)) {
@@ -24,15 +24,24 @@ glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, 
         // everywhere in a scene modelled at millimetre scale (the offset is absolute there).
         const glm::vec3 to_light = hit.position + light.wi * light.distance - shadow.origin;
         const float length = glm::length(to_light);
-        if (!(length > 0.0f)) return glm::vec3(0.0f);
+        if (!(length > 0.0f)) return query;
         shadow.direction = to_light / length;
         shadow.t_max = length * (1.0f - 1e-4f);
     }
-    counters.shadow_rays.fetch_add(1, std::memory_order_relaxed);
-    if (tracer.occluded(shadow)) return glm::vec3(0.0f);
-
     const float weight = light.is_delta ? 1.0f : powerHeuristic(light.pdf, e.pdf);
-    return e.f_cos * light.radiance * (weight / light.pdf);
+    query.ray = shadow;
+    query.unoccluded = e.f_cos * light.radiance * (weight / light.pdf);
+    query.needed = true;
+    return query;
+}
+
+glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, const SurfaceHit& hit,
+                              const GltfBsdf& bsdf, glm::vec3 wo, float u_select, glm::vec2 u_point,
+                              TraceCounters& counters) {
+    const ShadowQuery query = prepareDirectLight(lights, hit, bsdf, wo, u_select, u_point);
+    if (!query.needed) return glm::vec3(0.0f);
+    counters.shadow_rays.fetch_add(1, std::memory_order_relaxed);
+    return tracer.occluded(query.ray) ? glm::vec3(0.0f) : query.unoccluded;
 }
 
 float emissionMisWeight(const LightSampler& lights, uint32_t bounce, float previous_bsdf_pdf,

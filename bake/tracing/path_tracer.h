@@ -35,6 +35,17 @@ struct TraceCounters {
 
 class GltfBsdf;
 
+/// Next-event estimation at a hit, split around its shadow ray so that many paths can trace
+/// theirs together: the segment to test and what arrives if nothing blocks it.
+struct ShadowQuery {
+    Ray ray;
+    glm::vec3 unoccluded{0.0f};  ///< BSDF x cos x Le / pdf, MIS-weighted
+    bool needed = false;         ///< false: the light sample contributes nothing (no ray to trace)
+};
+/// The first half of estimateDirectLight: light and point sampled, BSDF evaluated, no ray traced.
+ShadowQuery prepareDirectLight(const LightSampler& lights, const SurfaceHit& hit, const GltfBsdf& bsdf,
+                               glm::vec3 wo, float u_select, glm::vec2 u_point);
+
 /// Next-event estimation at a hit: picks one light with u_select, a point on it with u_point,
 /// tests occlusion and returns BSDF x cos x Le / pdf, weighted by MIS against BSDF sampling
 /// (delta lights have weight 1). Shared by the reference path tracer and the SHaRC update.

@@ -130,6 +130,31 @@ bool Tracer::occluded(const Ray& ray) const {
     return rayhit.ray.tfar < 0.0f;
 }
 
+void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found,
+                           std::vector<RTCRayHit>& scratch) const {
+    if (count == 0) return;
+    scratch.resize(count);
+    for (size_t i = 0; i < count; ++i) initRayHit(rays[i], scratch[i]);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1M(rtc_scene_, &context, scratch.data(), unsigned(count), sizeof(RTCRayHit));
+    for (size_t i = 0; i < count; ++i) {
+        const RTCRayHit& r = scratch[i];
+        found[i] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        hits[i] = RayHit{r.hit.primID, r.ray.tfar, r.hit.u, r.hit.v};
+    }
+}
+
+void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked, std::vector<RTCRay>& scratch) const {
+    if (count == 0) return;
+    scratch.resize(count);
+    for (size_t i = 0; i < count; ++i) initEmbreeRay(rays[i], scratch[i]);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcOccluded1M(rtc_scene_, &context, scratch.data(), unsigned(count), sizeof(RTCRay));
+    for (size_t i = 0; i < count; ++i) blocked[i] = scratch[i].tfar < 0.0f;  // Embree's mark
+}
+
 glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
     // Near the origin floats are dense, so a fixed tiny offset is used there; elsewhere the
     // position is nudged by a number of ULPs proportional to the normal component.

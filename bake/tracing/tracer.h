@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace sharcbake {
 
@@ -45,6 +46,14 @@ public:
     bool intersect(const Ray& ray, RayHit& hit) const;
     /// True if anything blocks the segment (0, t_max).
     bool occluded(const Ray& ray) const;
+
+    /// Closest hits of `count` rays at once (Embree's ray stream): hits[i] is valid where
+    /// found[i] is 1. The same hits as intersect() ray by ray, but Embree traverses the rays
+    /// together. `rays` and the outputs hold `count` entries; `scratch` is reused between calls.
+    void intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found,
+                       std::vector<RTCRayHit>& scratch) const;
+    /// Occlusion of `count` segments at once: blocked[i] is 1 where something blocks rays[i].
+    void occludedMany(const Ray* rays, size_t count, uint8_t* blocked, std::vector<RTCRay>& scratch) const;
 
     const Scene& scene() const { return scene_; }
     /// The committed Embree scene, for code that calls Embree's packet or stream APIs directly

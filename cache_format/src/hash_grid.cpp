@@ -364,6 +364,20 @@ std::optional<uint32_t> HashGridTable::find(uint64_t key) const {
     return std::nullopt;
 }
 
+void HashGridTable::prefetch(uint64_t key) const {
+    const uint32_t n = capacity();
+    if (key == kHashGridInvalidKey || n == 0) return;
+    const uint32_t base = bucketBase(hashGridHash(key), n, bucket_size_);
+    const uint32_t last = base + bucketProbeCount(n, bucket_size_) - 1;
+#if defined(__GNUC__) || defined(__clang__)
+    // A 16-slot window spans two or three 64-byte lines: its first and last slot cover both ends.
+    __builtin_prefetch(&keys_[base]);
+    __builtin_prefetch(&keys_[last]);
+#else
+    (void)last;
+#endif
+}
+
 uint32_t HashGridTable::occupiedSlots() const {
     uint32_t count = 0;
     for (const auto& slot : keys_) {
