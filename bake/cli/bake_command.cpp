@@ -21,6 +21,7 @@
 #include "tracing/tracer.h"
 
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <tbb/info.h>
 
 #include <algorithm>
@@ -709,7 +710,15 @@ public:
           job_(bakeJobFromOptions(o)) {}
 
     void run() {
+        // Exactly --threads workers, even beyond the core count (the cache is the same for any
+        // count, which tests check with more threads than the test machine has cores).
         tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
+        tbb::task_arena arena(threads_);
+        arena.execute([&] { runPhases(); });
+    }
+
+private:
+    void runPhases() {
         prepareOutputs();
         setUp();
         if (!o_.quiet) printPlan();
@@ -721,7 +730,6 @@ public:
         warnAndStop();
     }
 
-private:
     /// No output may be an input or another output; --resume F keeps checkpointing into F.
     void checkOutputs(const std::vector<std::string>& more_inputs) const {
         std::vector<std::string> others = {job_.scene_path, o_.resume_path, job_.sky.exr_path};

@@ -3,6 +3,7 @@
 
 #include "tracing/sampling.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -101,6 +102,18 @@ bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, u
 /// shared accumulation one slot at a time: a path deposits into the same voxels several times,
 /// and the bright voxels are shared by every thread, so one atomic add per slot and chunk
 /// instead of one per deposit cuts the contention.
+/// A hint to start loading the line at `address` for writing; no effect on results. Slots are
+/// scattered over a table far larger than the caches, so loops over slots ask a few entries ahead.
+inline void prefetchForWrite(const void* address) {
+#if defined(__GNUC__) || defined(__clang__)
+    __builtin_prefetch(address, 1);
+#else
+    (void)address;
+#endif
+}
+/// How many entries ahead those loops prefetch (enough to cover a memory latency).
+constexpr size_t kPrefetchDistance = 8;
+
 class PendingSums {
 public:
     struct Sum {
@@ -286,6 +299,9 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
     };
     PendingSums pending;
     for (size_t i = 0; i < deposits.size(); ++i) {
+        if (i + kPrefetchDistance < deposits.size() && slots[i + kPrefetchDistance] < kDropped) {
+            prefetchForWrite(&accumulation_[slots[i + kPrefetchDistance]]);
+        }
         if (slots[i] >= kDropped) continue;
         const Deposit& d = deposits[i];
         PendingSums::Sum& sum = pending.at(slots[i], flush);
@@ -406,44 +422,52 @@ void SharcCache::sumIntoCoarserLevels() {
     }
 }
 
+bool SharcCache::resolveSlot(uint32_t slot, uint32_t iteration, double inverse_scale) {
+    AccumulationEntry& acc = accumulation_[slot];
+    ResolvedEntry& r = resolved_[slot];
+    const uint32_t samples = acc.samples.load(std::memory_order_relaxed);
+    if (samples > 0) {
+        double sums[3];
+        for (int c = 0; c < 3; ++c) {
+            // A saturated sum's low word may have wrapped once more: read it as the ceiling.
+            const uint8_t carries = acc.carries[c].load(std::memory_order_relaxed);
+            sums[c] = carries == kMaxCarries ? 0x1p72
+                                             : double(acc.sums[c].load(std::memory_order_relaxed)) +
+                                                   std::ldexp(double(carries), 64);
+        }
+        const double n = double(samples);
+        const glm::dvec3 mean_new = glm::dvec3(sums[0], sums[1], sums[2]) * (inverse_scale / n);
+        r.frames += 1;
+        const double history = r.weight * settings_.history.historyFactor(r.frames);
+        const double total = history + n;
+        const glm::dvec3 mean = (glm::dvec3(r.mean) * history + mean_new * n) / total;
+        r.mean = glm::vec3(mean);
+        r.feedback = glm::vec3(feedbackMean(r, mean_new, mean));
+        r.weight = total;
+        r.last_iteration = iteration;
+        r.total_samples = samples > ~r.total_samples ? ~0u : r.total_samples + samples;
+    }
+    for (auto& sum : acc.sums) sum.store(0, std::memory_order_relaxed);
+    for (auto& carry : acc.carries) carry.store(0, std::memory_order_relaxed);
+    acc.samples.store(0, std::memory_order_relaxed);
+    acc.touched.store(0, std::memory_order_relaxed);
+    // Radiance that arrived without a sample of its own cannot happen with the update pass as
+    // written; the caller counts it so a regression shows up in the stats.
+    return samples == 0;
+}
+
 void SharcCache::resolve(uint32_t iteration) {
     sumIntoCoarserLevels();
     const double inverse_scale = 1.0 / radiance_scale_;
     std::vector<uint8_t> orphan(touched_.size(), 0);
-    tbb::parallel_for(size_t(0), touched_.size(), [&](size_t i) {
-        const uint32_t slot = touched_[i];
-        AccumulationEntry& acc = accumulation_[slot];
-        ResolvedEntry& r = resolved_[slot];
-        const uint32_t samples = acc.samples.load(std::memory_order_relaxed);
-        if (samples == 0) {
-            // Radiance arrived without a sample of its own (cannot happen with the update pass
-            // as written; counted so a regression shows up in the stats).
-            orphan[i] = 1;
-        } else {
-            double sums[3];
-            for (int c = 0; c < 3; ++c) {
-                // A saturated sum's low word may have wrapped once more: read it as the ceiling.
-                const uint8_t carries = acc.carries[c].load(std::memory_order_relaxed);
-                sums[c] = carries == kMaxCarries ? 0x1p72
-                                                 : double(acc.sums[c].load(std::memory_order_relaxed)) +
-                                                       std::ldexp(double(carries), 64);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, touched_.size()), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            if (i + kPrefetchDistance < range.end()) {
+                prefetchForWrite(&accumulation_[touched_[i + kPrefetchDistance]]);
+                prefetchForWrite(&resolved_[touched_[i + kPrefetchDistance]]);
             }
-            const double n = double(samples);
-            const glm::dvec3 mean_new = glm::dvec3(sums[0], sums[1], sums[2]) * (inverse_scale / n);
-            r.frames += 1;
-            const double history = r.weight * settings_.history.historyFactor(r.frames);
-            const double total = history + n;
-            const glm::dvec3 mean = (glm::dvec3(r.mean) * history + mean_new * n) / total;
-            r.mean = glm::vec3(mean);
-            r.feedback = glm::vec3(feedbackMean(r, mean_new, mean));
-            r.weight = total;
-            r.last_iteration = iteration;
-            r.total_samples = samples > ~r.total_samples ? ~0u : r.total_samples + samples;
+            orphan[i] = resolveSlot(touched_[i], iteration, inverse_scale);
         }
-        for (auto& sum : acc.sums) sum.store(0, std::memory_order_relaxed);
-        for (auto& carry : acc.carries) carry.store(0, std::memory_order_relaxed);
-        acc.samples.store(0, std::memory_order_relaxed);
-        acc.touched.store(0, std::memory_order_relaxed);
     });
     for (size_t i = 0; i < touched_.size(); ++i) numerics_.orphan_sums += orphan[i];
     touched_.clear();

@@ -224,6 +224,9 @@ private:
     /// increasing slot order of their finer voxels (so slots are the same on every run); integer
     /// sums commute, so the sums are too.
     void sumIntoCoarserLevels();
+    /// Folds one touched slot's accumulation into its resolved entry and clears it; true when
+    /// the slot had radiance but no sample (an orphan sum, dropped).
+    bool resolveSlot(uint32_t slot, uint32_t iteration, double inverse_scale);
     /// The voxel's new short-window feedback value (r.frames already counts this iteration).
     glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
 
