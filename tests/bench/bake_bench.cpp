@@ -10,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <tbb/info.h>
 
 #include <chrono>
@@ -78,7 +79,10 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
     }
     int width = 0, height = 0;
     parseResolution(o.resolution, width, height);
-    const BakeRun bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations);
+    // Exactly `threads` workers for the bake (a task arena), as `sharcbake bake --threads` does.
+    BakeRun bake;
+    tbb::task_arena arena{int(threads)};
+    arena.execute([&] { bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations); });
     const double after = measurePairsPerSecond(s.tracer, pairs, best_api, o.repetitions);
     const double ray_limit = std::max(best, after);
     const double rate = bake.segmentsPerSecond();
@@ -87,14 +91,17 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
                 "\"bake_segments_per_second\": %.4g, \"ratio\": %.3f, \"iterations\": %u, \"paths\": %llu, "
                 "\"segments\": %llu, \"shadow_rays\": %llu, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
                 "\"resolve\": %.4f, \"other\": %.4f, \"bake\": %.4f, \"setup\": %.4f}, \"live_voxels\": %llu, "
-                "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f}\n",
+                "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f, \"file_fnv1a\": \"%016llx\", "
+                "\"bytes_per_path_in_flight\": %zu, \"deposits_per_path\": %.2f}\n",
                 series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, capacity, per_api.c_str(),
                 toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit, bake.iterations,
                 (unsigned long long)bake.paths, (unsigned long long)bake.segments,
                 (unsigned long long)bake.shadow_rays, bake.update_seconds, bake.commit_seconds, bake.resolve_seconds,
                 bake.wall_seconds - bake.bakeSeconds(), bake.wall_seconds, bake.setup_seconds,
                 (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
-                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0);
+                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0,
+                (unsigned long long)bake.file_digest, UpdateWavefront::bytesPerPathInFlight(),
+                bake.paths ? double(bake.deposits) / double(bake.paths) : 0.0);
     std::fflush(stdout);
 }
 

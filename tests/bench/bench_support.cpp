@@ -269,6 +269,7 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     run.setup_seconds = secondsSince(setup_start);
     for (uint32_t i = 0; i < warmup; ++i) baker.runIteration();
     const UpdateCounters before = baker.counters();
+    const uint64_t deposits_before = baker.cache().numerics().deposits;
     const StageSeconds seconds_before = baker.seconds();
     const auto start = std::chrono::steady_clock::now();
     for (uint32_t i = 0; i < iterations; ++i) baker.runIteration();
@@ -280,12 +281,15 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     run.paths = baker.counters().paths - before.paths;
     run.segments = baker.counters().segments - before.segments;
     run.shadow_rays = baker.counters().shadow_rays - before.shadow_rays;
+    run.deposits = baker.cache().numerics().deposits - deposits_before;
     const CacheData data = toCacheData(baker.cache());
     std::vector<uint8_t> bytes;
     std::string message;
     if (encodeCacheFile(data, &bytes, &message) != CacheFileStatus::kOk) throw std::runtime_error(message);
     run.live_voxels = data.voxels.size();
     run.file_bytes = bytes.size();
+    run.file_digest = 0xcbf29ce484222325ull;
+    for (const uint8_t byte : bytes) run.file_digest = (run.file_digest ^ byte) * 0x100000001b3ull;
     return run;
 }
 

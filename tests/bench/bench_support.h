@@ -61,8 +61,10 @@ struct BakeRun {
     double wall_seconds = 0.0;   ///< the timed iterations, end to end
     double setup_seconds = 0.0;  ///< cache allocation (Baker construction)
     uint64_t paths = 0, segments = 0, shadow_rays = 0;
+    uint64_t deposits = 0;  ///< deposits the update paths made (the commit's input)
     uint64_t live_voxels = 0;
     uint64_t file_bytes = 0;  ///< the .sharc file the bake would write
+    uint64_t file_digest = 0;  ///< FNV-1a (64-bit) of that file: equal for every thread count
 
     double bakeSeconds() const { return update_seconds + commit_seconds + resolve_seconds; }
     double segmentsPerSecond() const { return double(segments) / wall_seconds; }
