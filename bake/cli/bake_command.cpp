@@ -1267,7 +1267,7 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
     cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
         ->capture_default_str()->check(CLI::NonNegativeNumber)->check(kFiniteNumber);
-    cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
+    cmd->add_option("--threads", o->threads, "Worker threads: exactly this many, even beyond the core count (0 = one per core). The cache does not depend on it")->capture_default_str();
     cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
     cmd->add_option("--scene-scale", o->scene_scale,
                     "SHaRC scene scale S: a voxel at camera distance d is about d/S wide, in any units (larger = "
