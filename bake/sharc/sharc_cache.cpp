@@ -169,8 +169,8 @@ SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
 }
 
 const ResolvedEntry* SharcCache::findResolved(uint64_t key) const {
-    const std::optional<uint32_t> slot = table_.find(key);
-    return slot ? &resolved_[*slot] : nullptr;
+    const Probe probe = probeBucket(key, bucketBaseOf(key));
+    return probe.found ? &resolved_[probe.slot] : nullptr;
 }
 
 void SharcCache::commit(const std::vector<Deposit>& deposits, uint32_t iteration) {
@@ -260,6 +260,7 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
     constexpr size_t kRecent = 4;
     uint64_t recent_keys[kRecent] = {};  // key 0 never occurs
     uint32_t recent_slots[kRecent] = {};
+    uint32_t recent_bases[kRecent] = {};  // a recent key may be missing too: its base is listed again
     size_t next_recent = 0;
     for (size_t i = 0; i < deposits.size(); ++i) {
         const Deposit& d = deposits[i];
@@ -271,15 +272,16 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
         deposited += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
         size_t r = 0;
         while (r < kRecent && recent_keys[r] != d.key) ++r;
-        if (r < kRecent) {
-            slots[i] = recent_slots[r];
-        } else {
-            slots[i] = table_.find(d.key).value_or(kMissing);
-            recent_keys[next_recent] = d.key;
-            recent_slots[next_recent] = slots[i];
+        if (r == kRecent) {
+            r = next_recent;
             next_recent = (next_recent + 1) % kRecent;
+            recent_keys[r] = d.key;
+            recent_bases[r] = bucketBaseOf(d.key);
+            const Probe probe = probeBucket(d.key, recent_bases[r]);
+            recent_slots[r] = probe.found ? probe.slot : kMissing;
         }
-        if (slots[i] == kMissing) missing.push_back(NewKey{d.key, bucketBaseOf(d.key), uint32_t(chunk), uint32_t(i)});
+        slots[i] = recent_slots[r];
+        if (slots[i] == kMissing) missing.push_back(NewKey{d.key, recent_bases[r], uint32_t(chunk), uint32_t(i)});
     }
 }
 
@@ -294,6 +296,23 @@ void SharcCache::insertNewKeys() {
 
 uint32_t SharcCache::bucketBaseOf(uint64_t key) const {
     return bucketBase(hashGridHash(key), table_.capacity(), table_.bucketSize());
+}
+
+// HashGridTable::find scans the whole window because the runtime's tables may have holes
+// (eviction). A bake's table never has: no key is ever removed (grow builds a new table;
+// restoreSlot's clearSlot only undoes the insert it just made), and insert claims the first slot
+// that is empty or holds the key, so every slot between a key's bucket base and the key stays
+// occupied. The first empty slot therefore ends the search, which for a key not in the table
+// saves most of the window's loads.
+SharcCache::Probe SharcCache::probeBucket(uint64_t key, uint32_t base) const {
+    if (key == kHashGridInvalidKey) return {kNoSlot, false};  // never stored (an empty slot is 0)
+    const uint32_t end = base + bucketProbeCount(table_.capacity(), table_.bucketSize());
+    for (uint32_t slot = base; slot < end; ++slot) {
+        const uint64_t stored = table_.keyAt(slot);
+        if (stored == key) return {slot, true};
+        if (stored == kHashGridInvalidKey) return {slot, false};
+    }
+    return {kNoSlot, false};
 }
 
 // A stable counting sort by range: blocks of consecutive lists count their keys per range in
@@ -361,10 +380,15 @@ uint64_t SharcCache::insertByRange(const KeysByRange& grouped, Store&& store) {
                 const NewKey& k = grouped.keys[i];
                 // A key listed several times (one per deposit, or per finer voxel) is inserted by
                 // its first occurrence; the later ones find it.
-                const bool is_new = !table_.find(k.key);
-                const std::optional<uint32_t> slot = table_.insert(k.key);
-                range_fresh += slot && is_new;
-                store(k, slot.value_or(kNoSlot));
+                const Probe probe = probeBucket(k.key, k.base);
+                if (probe.found || probe.slot == kNoSlot) {
+                    store(k, probe.slot);
+                } else {
+                    // No other range writes this window now, so the insert takes probe.slot.
+                    const std::optional<uint32_t> slot = table_.insert(k.key);
+                    range_fresh += slot.has_value();
+                    store(k, slot.value_or(kNoSlot));
+                }
             }
             fresh.fetch_add(range_fresh, std::memory_order_relaxed);
         });
@@ -514,10 +538,12 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
         for (size_t i = block * kLinkBlock; i < last; ++i) {
             const uint32_t slot = sorted_slots[i];
             const uint64_t parent_key = coarserKey(table_.keyAt(slot), settings_.grid);
-            if (const std::optional<uint32_t> parent = table_.find(parent_key)) {
-                accumulation_[slot].coarser_slot = *parent + 1;
+            const uint32_t base = bucketBaseOf(parent_key);
+            const Probe parent = probeBucket(parent_key, base);
+            if (parent.found) {
+                accumulation_[slot].coarser_slot = parent.slot + 1;
             } else {
-                missing[block].push_back(NewKey{parent_key, bucketBaseOf(parent_key), slot, 0});
+                missing[block].push_back(NewKey{parent_key, base, slot, 0});
             }
         }
     });

@@ -228,6 +228,16 @@ private:
 
     /// The first slot of `key`'s bucket.
     uint32_t bucketBaseOf(uint64_t key) const;
+    /// Where `key` is (found) or would be inserted: the slot holding it, else the first empty slot
+    /// of its bucket (`base` = bucketBaseOf(key)), else kHashGridInvalidIndex (a full bucket, or
+    /// key 0). Stops at the first empty slot, which is exact only because a bake never removes a
+    /// key (HashGridTable::find cannot assume that). Thread-safe while no insert touches the
+    /// bucket.
+    struct Probe {
+        uint32_t slot;
+        bool found;
+    };
+    Probe probeBucket(uint64_t key, uint32_t base) const;
     /// Groups the keys of `lists` (taken in order) by insert range, in parallel, keeping their
     /// order within each range.
     KeysByRange groupByRange(const std::vector<std::vector<NewKey>>& lists) const;

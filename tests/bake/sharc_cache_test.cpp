@@ -294,6 +294,43 @@ TEST(SharcCache, TinyTablesInsertAsOneRange) {
         }
     }
 }
+
+/// findResolved stops at the first empty slot of a bucket (a bake never removes a key); it must
+/// agree with HashGridTable::find, which scans the whole bucket, in a crowded table and in one
+/// restored slot by slot, where a refused restoreSlot undoes its insert.
+TEST(SharcCache, LookupsStoppingAtAnEmptySlotFindEveryKey) {
+    SharcSettings settings = smallSettings(600);
+    SharcCache baked(settings, SharcCache::chooseRadianceScale(1.0));
+    std::vector<Deposit> deposits;
+    for (int i = 0; i < 500; ++i) deposits.push_back(Deposit{keyAt(i), glm::vec3(1.0f), 1});
+    baked.commit(deposits);
+    baked.resolve(0);
+    ASSERT_GT(baked.numerics().failed_inserts, 0u);  // some buckets are full
+    SharcCache restored(settings, SharcCache::chooseRadianceScale(1.0));
+    uint32_t refused = 0;
+    for (uint32_t slot = 0; slot < baked.capacity(); ++slot) {
+        const uint64_t key = baked.table().keyAt(slot);
+        if (key == kHashGridInvalidKey) continue;
+        if (slot % 7 == 0 && slot + 1 < baked.capacity()) {
+            // Offered to the next (still empty) slot first: the key lands in `slot`, so the
+            // restore is refused and its insert undone.
+            EXPECT_FALSE(restored.restoreSlot(slot + 1, key, baked.resolved()[slot])) << slot;
+            ++refused;
+        }
+        ASSERT_TRUE(restored.restoreSlot(slot, key, baked.resolved()[slot])) << slot;
+    }
+    EXPECT_GT(refused, 0u);
+    for (const SharcCache* cache : {&baked, &restored}) {
+        for (int i = 0; i < 520; ++i) {
+            const std::optional<uint32_t> slot = cache->table().find(keyAt(i));
+            const ResolvedEntry* entry = cache->findResolved(keyAt(i));
+            ASSERT_EQ(entry != nullptr, slot.has_value()) << i;
+            if (slot) {
+                EXPECT_EQ(entry, &cache->resolved()[*slot]) << i;
+            }
+        }
+    }
+}
 }  // namespace
 /// Every voxel feeds its coarser voxels (SharcSettings::coarsest_level): each coarser level holds
 /// the same samples as the deposits below it, with its own history, and nothing beyond it.
