@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -155,8 +156,8 @@ private:
 
 /// What accumulating one chunk counted, added up in chunk order afterwards.
 struct SharcCache::ChunkNumerics {
-    uint64_t negative = 0, clamped = 0, saturated = 0;
-    glm::dvec3 clamped_energy{0.0};
+    uint64_t failed = 0, negative = 0, clamped = 0, saturated = 0;
+    glm::dvec3 failed_energy{0.0}, clamped_energy{0.0};
     std::vector<uint32_t> touched;
 };
 
@@ -181,8 +182,13 @@ SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
 }
 
 const ResolvedEntry* SharcCache::findResolved(uint64_t key) const {
-    const std::optional<uint32_t> slot = table_.find(key);
-    return slot ? &resolved_[*slot] : nullptr;
+    const Probe probe = probeBucket(key, bucketBaseOf(key));
+    return probe.found ? &resolved_[probe.slot] : nullptr;
+}
+
+uint32_t SharcCache::findSlot(uint64_t key) const {
+    const Probe probe = probeBucket(key, bucketBaseOf(key));
+    return probe.found ? probe.slot : kNoSlot;
 }
 
 void SharcCache::commit(const std::vector<Deposit>& deposits, uint32_t iteration) {
@@ -190,9 +196,46 @@ void SharcCache::commit(const std::vector<Deposit>& deposits, uint32_t iteration
 }
 
 namespace {
-constexpr uint32_t kMissing = kHashGridInvalidIndex;      // key not in the table yet
-constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;  // non-finite or failed insert
+constexpr uint32_t kMissing = kHashGridInvalidIndex;           // key not in the table yet
+constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;       // non-finite deposit
+constexpr uint32_t kFailedInsert = kHashGridInvalidIndex - 2;  // the key's bucket was full
+constexpr uint32_t kNoSlot = kHashGridInvalidIndex;            // insertByRange: the bucket was full
+
+/// The fixed slot ranges of the parallel insert (SharcCache::insertByRange). A key belongs to the
+/// range holding its bucket's first slot. They depend on the capacity only, never on the thread
+/// count, so neither do the slots the keys get.
+struct InsertRanges {
+    uint32_t shift = 0;  ///< range of a bucket base = base >> shift
+    size_t count = 1;
+    size_t of(uint32_t base) const { return base >> shift; }
+};
+
+/// At least 4096 slots a range, so a task has work worth its scheduling and a range is far
+/// longer than the bucket_size - 1 slots a window reaches past its end; at most about 1024
+/// ranges, so grouping keys by range stays cheap (measured, BENCHMARKS.md).
+constexpr uint32_t kMinRangeShift = 12;
+constexpr uint32_t kMaxRanges = 1024;
+
+InsertRanges insertRanges(uint32_t capacity, uint32_t probes) {
+    uint32_t shift = kMinRangeShift;
+    while ((uint64_t(1) << shift) < probes || (capacity >> shift) > kMaxRanges) ++shift;
+    const uint32_t last_base = capacity - probes;  // bucketBase never returns more
+    return {shift, size_t(last_base >> shift) + 1};
+}
+
+/// Blocks of input lists that groupByRange counts and scatters in parallel: at most 64, and one
+/// per 4096 keys. The result does not depend on them (the sort is stable).
+constexpr size_t kGroupBlocks = 64;
+constexpr size_t kKeysPerGroupBlock = 4096;
+/// Finer voxels per task when their coarser keys are looked up.
+constexpr size_t kLinkBlock = 1024;
 }  // namespace
+
+/// Keys to insert, grouped by insert range; each range's keys keep the order of the input lists.
+struct SharcCache::KeysByRange {
+    std::unique_ptr<NewKey[]> keys;   ///< left uninitialised until scattered: no serial zero fill
+    std::vector<size_t> range_begin;  ///< range r holds keys[range_begin[r], range_begin[r + 1])
+};
 
 void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration) {
     chunk_slots_.resize(chunks.size());
@@ -202,12 +245,19 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         lookUpSlots(chunks[chunk], chunk, chunk_non_finite[chunk], chunk_deposited[chunk]);
     });
-    insertNewKeys(chunks, chunk_non_finite, chunk_deposited);
+    for (size_t chunk = 0; chunk < chunks.size(); ++chunk) {
+        numerics_.deposits += chunks[chunk].size();
+        numerics_.non_finite_deposits += chunk_non_finite[chunk];
+        numerics_.deposited_energy += chunk_deposited[chunk];
+    }
+    insertNewKeys();
     std::vector<ChunkNumerics> chunk_numerics(chunks.size());
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         accumulateChunk(chunks[chunk], chunk, iteration, chunk_numerics[chunk]);
     });
     for (const ChunkNumerics& n : chunk_numerics) {
+        numerics_.failed_inserts += n.failed;
+        numerics_.failed_insert_energy += n.failed_energy;
         numerics_.negative_deposits += n.negative;
         numerics_.clamped_deposits += n.clamped;
         numerics_.clamped_energy += n.clamped_energy;
@@ -222,12 +272,13 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
 void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk, uint64_t& non_finite,
                              glm::dvec3& deposited) {
     std::vector<uint32_t>& slots = chunk_slots_[chunk];
-    std::vector<uint32_t>& missing = chunk_missing_[chunk];
+    std::vector<NewKey>& missing = chunk_missing_[chunk];
     slots.resize(deposits.size());
     missing.clear();
     constexpr size_t kRecent = 4;
     uint64_t recent_keys[kRecent] = {};  // key 0 never occurs
     uint32_t recent_slots[kRecent] = {};
+    uint32_t recent_bases[kRecent] = {};  // a recent key may be missing too: its base is listed again
     size_t next_recent = 0;
     for (size_t i = 0; i < deposits.size(); ++i) {
         const Deposit& d = deposits[i];
@@ -239,46 +290,128 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
         deposited += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
         size_t r = 0;
         while (r < kRecent && recent_keys[r] != d.key) ++r;
-        if (r < kRecent) {
-            slots[i] = recent_slots[r];
-        } else {
-            slots[i] = table_.find(d.key).value_or(kMissing);
-            recent_keys[next_recent] = d.key;
-            recent_slots[next_recent] = slots[i];
+        if (r == kRecent) {
+            r = next_recent;
             next_recent = (next_recent + 1) % kRecent;
+            recent_keys[r] = d.key;
+            recent_bases[r] = bucketBaseOf(d.key);
+            const Probe probe = probeBucket(d.key, recent_bases[r]);
+            recent_slots[r] = probe.found ? probe.slot : kMissing;
         }
-        if (slots[i] == kMissing) missing.push_back(uint32_t(i));
+        slots[i] = recent_slots[r];
+        if (slots[i] == kMissing) missing.push_back(NewKey{d.key, recent_bases[r], uint32_t(chunk), uint32_t(i)});
     }
 }
 
-// 2. Serial, in chunk (= path) order: insert the new keys. Slot assignment is therefore the same
-//    on every run, whatever thread traced which path. Only the deposits listed as new are
-//    visited, so this serial step shrinks to almost nothing once the cache is warm.
-void SharcCache::insertNewKeys(const std::vector<std::vector<Deposit>>& chunks,
-                               const std::vector<uint64_t>& chunk_non_finite,
-                               const std::vector<glm::dvec3>& chunk_deposited) {
-    for (size_t chunk = 0; chunk < chunks.size(); ++chunk) {
-        const std::vector<Deposit>& deposits = chunks[chunk];
-        std::vector<uint32_t>& slots = chunk_slots_[chunk];
-        numerics_.deposits += deposits.size();
-        numerics_.non_finite_deposits += chunk_non_finite[chunk];
-        numerics_.deposited_energy += chunk_deposited[chunk];
-        for (const uint32_t i : chunk_missing_[chunk]) {
-            const Deposit& d = deposits[i];
-            // A key new to this iteration comes back here once per deposit: the first inserts
-            // it, the later ones find it.
-            const bool fresh = !table_.find(d.key);
-            const std::optional<uint32_t> inserted = table_.insert(d.key);
-            if (inserted) {
-                slots[i] = *inserted;
-                occupied_ += fresh;
-            } else {
-                slots[i] = kDropped;
-                ++numerics_.failed_inserts;
-                numerics_.failed_insert_energy += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
-            }
+// 2. Parallel by slot range, in chunk (= path) order within each range: insert the new keys.
+//    Slot assignment therefore depends only on the paths, never on the threads (insertByRange).
+//    Only the deposits listed as new are visited.
+void SharcCache::insertNewKeys() {
+    occupied_ += insertByRange(groupByRange(chunk_missing_), [this](const NewKey& k, uint32_t slot) {
+        chunk_slots_[k.owner][k.index] = slot == kNoSlot ? kFailedInsert : slot;
+    });
+}
+
+uint32_t SharcCache::bucketBaseOf(uint64_t key) const {
+    return bucketBase(hashGridHash(key), table_.capacity(), table_.bucketSize());
+}
+
+// HashGridTable::find scans the whole window because the runtime's tables may have holes
+// (eviction). A bake's table never has: no key is ever removed (grow builds a new table;
+// restoreSlot's clearSlot only undoes the insert it just made), and insert claims the first slot
+// that is empty or holds the key, so every slot between a key's bucket base and the key stays
+// occupied. The first empty slot therefore ends the search, which for a key not in the table
+// saves most of the window's loads.
+SharcCache::Probe SharcCache::probeBucket(uint64_t key, uint32_t base) const {
+    if (key == kHashGridInvalidKey) return {kNoSlot, false};  // never stored (an empty slot is 0)
+    const uint32_t end = base + bucketProbeCount(table_.capacity(), table_.bucketSize());
+    for (uint32_t slot = base; slot < end; ++slot) {
+        const uint64_t stored = table_.keyAt(slot);
+        if (stored == key) return {slot, true};
+        if (stored == kHashGridInvalidKey) return {slot, false};
+    }
+    return {kNoSlot, false};
+}
+
+// A stable counting sort by range: blocks of consecutive lists count their keys per range in
+// parallel, the counts become offsets (range by range, block by block), and the blocks scatter
+// their keys in parallel. Each range thus holds its keys in list order, then order within a list.
+SharcCache::KeysByRange SharcCache::groupByRange(const std::vector<std::vector<NewKey>>& lists) const {
+    const InsertRanges ranges = insertRanges(table_.capacity(),
+                                             bucketProbeCount(table_.capacity(), table_.bucketSize()));
+    size_t total = 0;
+    for (const std::vector<NewKey>& list : lists) total += list.size();
+    // Few keys (a warm cache) need few blocks: each block's counters cost O(ranges).
+    const size_t blocks = std::min({lists.size(), kGroupBlocks, total / kKeysPerGroupBlock + 1});
+    const auto blockLists = [&](size_t block) {
+        return std::pair(lists.size() * block / blocks, lists.size() * (block + 1) / blocks);
+    };
+    std::vector<size_t> offsets(blocks * ranges.count, 0);  // [block][range]: counts, then offsets
+    tbb::parallel_for(size_t(0), blocks, [&](size_t block) {
+        size_t* counts = &offsets[block * ranges.count];
+        const auto [first, last] = blockLists(block);
+        for (size_t list = first; list < last; ++list) {
+            for (const NewKey& k : lists[list]) ++counts[ranges.of(k.base)];
+        }
+    });
+    KeysByRange grouped;
+    grouped.range_begin.assign(ranges.count + 1, 0);
+    for (size_t block = 0; block < blocks; ++block) {  // each range's size (memory order, no strides)
+        const size_t* counts = &offsets[block * ranges.count];
+        for (size_t range = 0; range < ranges.count; ++range) grouped.range_begin[range + 1] += counts[range];
+    }
+    for (size_t range = 0; range < ranges.count; ++range) grouped.range_begin[range + 1] += grouped.range_begin[range];
+    std::vector<size_t> next(grouped.range_begin.begin(), grouped.range_begin.end() - 1);
+    for (size_t block = 0; block < blocks; ++block) {  // a block's keys follow the earlier blocks' in each range
+        for (size_t range = 0; range < ranges.count; ++range) {
+            const size_t count = offsets[block * ranges.count + range];
+            offsets[block * ranges.count + range] = next[range];
+            next[range] += count;
         }
     }
+    grouped.keys.reset(new NewKey[total]);
+    tbb::parallel_for(size_t(0), blocks, [&](size_t block) {
+        size_t* next_key = &offsets[block * ranges.count];
+        const auto [first, last] = blockLists(block);
+        for (size_t list = first; list < last; ++list) {
+            for (const NewKey& k : lists[list]) grouped.keys[next_key[ranges.of(k.base)]++] = k;
+        }
+    });
+    return grouped;
+}
+
+// Ranges run in two phases, the even ones in parallel and then the odd ones, each inserting its
+// keys serially in their order. A key whose bucket starts in range r probes only up to
+// bucket_size - 1 slots past r's end, i.e. into range r + 1, never further (ranges are longer
+// than that): two ranges of one phase therefore never read or write the same slot, and every
+// range sees the table exactly as the previous phase left it. Slots depend on the keys' order
+// and the ranges (the capacity) only.
+template <typename Store>
+uint64_t SharcCache::insertByRange(const KeysByRange& grouped, Store&& store) {
+    const size_t ranges = grouped.range_begin.size() - 1;
+    std::atomic<uint64_t> fresh{0};
+    for (size_t parity = 0; parity < 2; ++parity) {
+        tbb::parallel_for(size_t(0), (ranges + 1 - parity) / 2, [&](size_t half) {
+            const size_t range = 2 * half + parity;
+            uint64_t range_fresh = 0;
+            for (size_t i = grouped.range_begin[range]; i < grouped.range_begin[range + 1]; ++i) {
+                const NewKey& k = grouped.keys[i];
+                // A key listed several times (one per deposit, or per finer voxel) is inserted by
+                // its first occurrence; the later ones find it.
+                const Probe probe = probeBucket(k.key, k.base);
+                if (probe.found || probe.slot == kNoSlot) {
+                    store(k, probe.slot);
+                } else {
+                    // No other range writes this window now, so the insert takes probe.slot.
+                    const std::optional<uint32_t> slot = table_.insert(k.key);
+                    range_fresh += slot.has_value();
+                    store(k, slot.value_or(kNoSlot));
+                }
+            }
+            fresh.fetch_add(range_fresh, std::memory_order_relaxed);
+        });
+    }
+    return fresh.load();
 }
 
 // 3. Parallel over chunks: fixed-point conversion and integer atomic adds, which commute, so the
@@ -299,11 +432,16 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
     };
     PendingSums pending;
     for (size_t i = 0; i < deposits.size(); ++i) {
-        if (i + kPrefetchDistance < deposits.size() && slots[i + kPrefetchDistance] < kDropped) {
+        if (i + kPrefetchDistance < deposits.size() && slots[i + kPrefetchDistance] < kFailedInsert) {
             prefetchForWrite(&accumulation_[slots[i + kPrefetchDistance]]);
         }
-        if (slots[i] >= kDropped) continue;
         const Deposit& d = deposits[i];
+        if (slots[i] == kFailedInsert) {
+            ++numerics.failed;
+            numerics.failed_energy += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
+            continue;
+        }
+        if (slots[i] == kDropped) continue;
         PendingSums::Sum& sum = pending.at(slots[i], flush);
         bool negative = false, clamped = false;
         std::array<double, 3> dither{};
@@ -377,25 +515,14 @@ void SharcCache::sumIntoCoarserLevels() {
         const std::vector<uint32_t>& slots = by_level[level];
         if (slots.empty()) continue;
         // The coarser voxel of each voxel is looked up once (then remembered in coarser_slot).
-        // New coarser keys are inserted serially in slot order, so their slots do not depend on
-        // the thread count.
         tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
             if (accumulation_[slots[i]].coarser_slot == 0) unknown.local().push_back(slots[i]);
         });
         std::vector<uint32_t> lookups;
         gather(unknown, lookups);
-        std::sort(lookups.begin(), lookups.end());
-        for (const uint32_t slot : lookups) {
-            const uint64_t parent_key = coarserKey(table_.keyAt(slot), settings_.grid);
-            const bool fresh = !table_.find(parent_key);
-            const std::optional<uint32_t> parent = table_.insert(parent_key);
-            if (!parent) {
-                ++numerics_.failed_inserts;  // the finer voxel keeps its samples; this level lacks it
-                continue;
-            }
-            occupied_ += fresh;
-            accumulation_[slot].coarser_slot = *parent + 1;
-        }
+        // Sorted, so the coarser keys' slots do not depend on which thread listed which voxel.
+        tbb::parallel_sort(lookups.begin(), lookups.end());
+        linkCoarserVoxels(lookups);
         // Integer adds commute, so the coarser sums do not depend on the order either.
         std::atomic<uint64_t> saturated{0};
         tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
@@ -454,6 +581,36 @@ bool SharcCache::resolveSlot(uint32_t slot, uint32_t iteration, double inverse_s
     // Radiance that arrived without a sample of its own cannot happen with the update pass as
     // written; the caller counts it so a regression shows up in the stats.
     return samples == 0;
+}
+
+// Parallel over fixed blocks of the finer voxels: each computes its coarser key and links the
+// coarser voxels already in the table; the new ones are inserted by range in increasing slot
+// order of their finer voxels (insertByRange), so their slots do not depend on the thread count.
+void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
+    std::vector<std::vector<NewKey>> missing((sorted_slots.size() + kLinkBlock - 1) / kLinkBlock);
+    tbb::parallel_for(size_t(0), missing.size(), [&](size_t block) {
+        const size_t last = std::min(sorted_slots.size(), (block + 1) * kLinkBlock);
+        for (size_t i = block * kLinkBlock; i < last; ++i) {
+            const uint32_t slot = sorted_slots[i];
+            const uint64_t parent_key = coarserKey(table_.keyAt(slot), settings_.grid);
+            const uint32_t base = bucketBaseOf(parent_key);
+            const Probe parent = probeBucket(parent_key, base);
+            if (parent.found) {
+                accumulation_[slot].coarser_slot = parent.slot + 1;
+            } else {
+                missing[block].push_back(NewKey{parent_key, base, slot, 0});
+            }
+        }
+    });
+    std::atomic<uint64_t> failed{0};
+    occupied_ += insertByRange(groupByRange(missing), [&](const NewKey& k, uint32_t parent) {
+        if (parent == kNoSlot) {
+            failed.fetch_add(1, std::memory_order_relaxed);  // the finer voxel keeps its samples; this level lacks it
+        } else {
+            accumulation_[k.owner].coarser_slot = parent + 1;
+        }
+    });
+    numerics_.failed_inserts += failed.load();
 }
 
 void SharcCache::resolve(uint32_t iteration) {

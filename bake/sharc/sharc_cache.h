@@ -160,7 +160,7 @@ public:
     /// resolvedAt. findSlot returns kNoSlot when the key is absent.
     static constexpr uint32_t kNoSlot = ~0u;
     void prefetchKey(uint64_t key) const { table_.prefetch(key); }
-    uint32_t findSlot(uint64_t key) const { return table_.find(key).value_or(kNoSlot); }
+    uint32_t findSlot(uint64_t key) const;
     void prefetchResolved(uint32_t slot) const {
 #if defined(__GNUC__) || defined(__clang__)
         __builtin_prefetch(&resolved_[slot]);
@@ -169,8 +169,9 @@ public:
     const ResolvedEntry& resolvedAt(uint32_t slot) const { return resolved_[slot]; }
 
     /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,
-    /// inserts the new ones serially in chunk order (so slot assignment is the same on every
-    /// run), then adds the fixed-point radiance in parallel with integer atomics.
+    /// inserts the new ones in parallel by slot range, each range in chunk order (so slot
+    /// assignment is the same on every run and for any thread count, insertByRange), then adds
+    /// the fixed-point radiance in parallel with integer atomics.
     /// `iteration` keys the rounding dither (with the chunk and the deposit's place in it), so
     /// the sums do not depend on the thread count, a resumed bake or a shard.
     void commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration);
@@ -211,22 +212,59 @@ public:
 
 private:
     struct ChunkNumerics;
-    /// commitChunks' stages: look the keys up (parallel), insert the new ones in chunk order
-    /// (serial), add the deposits' fixed-point values (parallel).
+    /// A key missing from the table, waiting for insertByRange: the first slot of its bucket, and
+    /// where its slot goes (a commit: chunk and deposit index; coarser levels: the finer voxel's
+    /// slot, index unused). Trivial, so a grouped array of them is not zero-filled first.
+    struct NewKey {
+        uint64_t key;
+        uint32_t base;
+        uint32_t owner;
+        uint32_t index;
+    };
+    struct KeysByRange;
+    /// commitChunks' stages: look the keys up (parallel), insert the new ones (parallel by slot
+    /// range, see insertByRange), add the deposits' fixed-point values (parallel).
     void lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk, uint64_t& non_finite, glm::dvec3& deposited);
-    void insertNewKeys(const std::vector<std::vector<Deposit>>& chunks, const std::vector<uint64_t>& chunk_non_finite,
-                       const std::vector<glm::dvec3>& chunk_deposited);
+    void insertNewKeys();
     void accumulateChunk(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
                          ChunkNumerics& numerics);
 
     /// Adds this iteration's accumulation of every touched voxel below SharcSettings::coarsest_level
-    /// to its coarser voxel, level by level from the finest, inserting coarser keys that are new in
-    /// increasing slot order of their finer voxels (so slots are the same on every run); integer
-    /// sums commute, so the sums are too.
+    /// to its coarser voxel, level by level from the finest, inserting coarser keys that are new by
+    /// range in increasing slot order of their finer voxels (so slots are the same on every run);
+    /// integer sums commute, so the sums are too.
     void sumIntoCoarserLevels();
     /// Folds one touched slot's accumulation into its resolved entry and clears it; true when
     /// the slot had radiance but no sample (an orphan sum, dropped).
     bool resolveSlot(uint32_t slot, uint32_t iteration, double inverse_scale);
+    /// Sets coarser_slot of the given finer voxels (sorted by slot), inserting the coarser keys
+    /// that are new; a failed insert is counted and leaves coarser_slot at 0.
+    void linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots);
+
+    /// The first slot of `key`'s bucket.
+    uint32_t bucketBaseOf(uint64_t key) const;
+    /// Where `key` is (found) or would be inserted: the slot holding it, else the first empty slot
+    /// of its bucket (`base` = bucketBaseOf(key)), else kHashGridInvalidIndex (a full bucket, or
+    /// key 0). Stops at the first empty slot, which is exact only because a bake never removes a
+    /// key (HashGridTable::find cannot assume that). Thread-safe while no insert touches the
+    /// bucket.
+    struct Probe {
+        uint32_t slot;
+        bool found;
+    };
+    Probe probeBucket(uint64_t key, uint32_t base) const;
+    /// Groups the keys of `lists` (taken in order) by insert range, in parallel, keeping their
+    /// order within each range.
+    KeysByRange groupByRange(const std::vector<std::vector<NewKey>>& lists) const;
+    /// The deterministic parallel insert. The table is cut into fixed ranges of at least 4096
+    /// slots (a function of the capacity only); a key belongs to the range of its bucket's first
+    /// slot. All even ranges insert their keys in parallel, then all odd ranges, each range
+    /// serially in its keys' order: ranges running together never share a slot, so a key's slot
+    /// depends on the keys and their order only, never on the thread count or the scheduling.
+    /// Calls store(key, slot) per key (kHashGridInvalidIndex when its bucket is full) and returns
+    /// how many keys were new to the table.
+    template <typename Store>
+    uint64_t insertByRange(const KeysByRange& grouped, Store&& store);
     /// The voxel's new short-window feedback value (r.frames already counts this iteration).
     glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
 
@@ -239,7 +277,7 @@ private:
     ZeroedArray<ResolvedEntry> resolved_;
     std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
-    std::vector<std::vector<uint32_t>> chunk_missing_;  ///< commit scratch: deposits with a new key
+    std::vector<std::vector<NewKey>> chunk_missing_;  ///< commit scratch: deposits with a new key
     NumericsCounters numerics_;
     uint64_t occupied_ = 0;
 };

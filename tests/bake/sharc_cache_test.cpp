@@ -3,8 +3,14 @@
 #include "sharc/sharc_cache.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <random>
+#include <set>
 
 namespace sharcbake {
 namespace {
@@ -140,6 +146,191 @@ TEST(SharcCache, ResultDoesNotDependOnDepositOrderWithinOneSlot) {
     EXPECT_EQ(a.findResolved(keyAt(1))->mean, b.findResolved(keyAt(1))->mean);
 }
 
+/// Deposits of `iterations` iterations of `chunks` chunks (paths): level-1 keys in a block of the
+/// grid that moves each iteration (so every iteration brings new keys), a path often depositing
+/// into its previous voxel again, some propagated deposits (no sample) and some non-finite ones.
+std::vector<std::vector<std::vector<Deposit>>> manyNewKeys(uint32_t iterations, size_t chunks, size_t per_chunk) {
+    std::mt19937_64 random(12345);
+    std::vector<std::vector<std::vector<Deposit>>> all(iterations);
+    for (uint32_t iteration = 0; iteration < iterations; ++iteration) {
+        for (size_t chunk = 0; chunk < chunks; ++chunk) {
+            std::vector<Deposit> deposits;
+            uint64_t key = 0;
+            for (size_t i = 0; i < per_chunk; ++i) {
+                if (key == 0 || random() % 3 != 0) {
+                    const int x = int(iteration * 6 + random() % 30), y = int(random() % 30), z = int(random() % 30);
+                    key = packHashGridKey(Int3{x, y, z}, 1, uint32_t(random() % 2));
+                }
+                const float value = float(random() % 1000) * 0.01f;
+                const glm::vec3 radiance = random() % 97 == 0 ? glm::vec3(NAN) : glm::vec3(value, 0.5f * value, 2.0f);
+                deposits.push_back(Deposit{key, radiance, uint32_t(random() % 4 != 0)});
+            }
+            all[iteration].push_back(std::move(deposits));
+        }
+    }
+    return all;
+}
+
+/// Everything a bake keeps of a cache: the key and resolved entry of every slot, and the counters.
+struct CacheState {
+    std::vector<uint64_t> keys;
+    std::vector<ResolvedEntry> resolved;  ///< default entries where the slot is empty
+    NumericsCounters numerics;
+    uint64_t occupied = 0;
+};
+
+CacheState bakeInArena(int threads, const SharcSettings& settings,
+                       const std::vector<std::vector<std::vector<Deposit>>>& iterations) {
+    tbb::task_arena arena(threads);
+    CacheState state;
+    arena.execute([&] {
+        SharcCache cache(settings, SharcCache::chooseRadianceScale(10.0));
+        for (uint32_t iteration = 0; iteration < iterations.size(); ++iteration) {
+            cache.commitChunks(iterations[iteration], iteration);
+            cache.resolve(iteration);
+        }
+        for (uint32_t slot = 0; slot < cache.capacity(); ++slot) {
+            state.keys.push_back(cache.table().keyAt(slot));
+            state.resolved.push_back(state.keys.back() ? cache.resolved()[slot] : ResolvedEntry{});
+        }
+        state.numerics = cache.numerics();
+        state.occupied = cache.occupiedSlots();
+        EXPECT_EQ(state.occupied, cache.liveEntries()) << threads << " threads";
+    });
+    return state;
+}
+
+void expectSameState(const CacheState& a, const CacheState& b, int threads) {
+    SCOPED_TRACE(std::to_string(threads) + " threads against 1");
+    ASSERT_EQ(a.keys, b.keys);  // every key in the same slot
+    for (size_t slot = 0; slot < a.resolved.size(); ++slot) {
+        const ResolvedEntry &x = a.resolved[slot], &y = b.resolved[slot];
+        ASSERT_TRUE(x.mean == y.mean && x.feedback == y.feedback && x.frames == y.frames && x.weight == y.weight &&
+                    x.last_iteration == y.last_iteration && x.total_samples == y.total_samples)
+            << "slot " << slot;
+    }
+    const NumericsCounters &m = a.numerics, &n = b.numerics;
+    EXPECT_EQ(m.deposits, n.deposits);
+    EXPECT_EQ(m.deposited_energy, n.deposited_energy);
+    EXPECT_EQ(m.failed_inserts, n.failed_inserts);
+    EXPECT_EQ(m.failed_insert_energy, n.failed_insert_energy);
+    EXPECT_EQ(m.non_finite_deposits, n.non_finite_deposits);
+    EXPECT_EQ(m.negative_deposits, n.negative_deposits);
+    EXPECT_EQ(m.clamped_deposits, n.clamped_deposits);
+    EXPECT_EQ(m.clamped_energy, n.clamped_energy);
+    EXPECT_EQ(m.saturated_sums, n.saturated_sums);
+    EXPECT_EQ(m.orphan_sums, n.orphan_sums);
+    EXPECT_EQ(a.occupied, b.occupied);
+}
+
+/// The keys a cache must hold: every finite deposit's and, up to `coarsest`, its coarser voxels'.
+std::set<uint64_t> expectedKeys(const std::vector<std::vector<std::vector<Deposit>>>& iterations,
+                                const SharcSettings& settings) {
+    std::set<uint64_t> keys;
+    for (const auto& chunks : iterations) {
+        for (const auto& deposits : chunks) {
+            for (const Deposit& d : deposits) {
+                if (!std::isfinite(d.radiance.x)) continue;
+                uint64_t key = d.key;
+                // A key already listed has its coarser keys listed too.
+                while (keys.insert(key).second && decodeHashGridKey(key).level < settings.coarsest_level) {
+                    key = coarserKey(key, settings.grid);
+                }
+            }
+        }
+    }
+    return keys;
+}
+
+/// The parallel insert (by slot range, in two phases) gives every key the same slot, every voxel
+/// the same state and every counter the same value for any thread count, in a small table whose
+/// buckets overflow (several ranges, failed inserts) and in a large one (256 ranges).
+TEST(SharcCache, CommitIsTheSameForAnyThreadCount) {
+    // task_arena alone stays at the machine's core count; this lets it really run 16 threads.
+    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, 16);
+    const auto iterations = manyNewKeys(5, 150, 80);
+    for (const uint32_t capacity : {3u * 4096u + 1000u, 20u * 4096u + 1234u, 1u << 20}) {
+        SCOPED_TRACE("capacity " + std::to_string(capacity));
+        SharcSettings settings = smallSettings(capacity);
+        settings.coarsest_level = 3;  // coarser keys are inserted too
+        const CacheState one = bakeInArena(1, settings, iterations);
+        const std::set<uint64_t> expected = expectedKeys(iterations, settings);
+        std::printf("capacity %u: %zu distinct keys, %llu stored, %llu failed inserts\n", capacity, expected.size(),
+                    (unsigned long long)one.occupied, (unsigned long long)one.numerics.failed_inserts);
+        EXPECT_GT(one.numerics.non_finite_deposits, 0u);
+        std::set<uint64_t> stored(one.keys.begin(), one.keys.end());
+        stored.erase(kHashGridInvalidKey);
+        EXPECT_EQ(stored.size(), one.occupied);  // no key twice, occupied counts only new keys
+        EXPECT_TRUE(std::includes(expected.begin(), expected.end(), stored.begin(), stored.end()));
+        if (4 * expected.size() < capacity) {
+            EXPECT_EQ(one.numerics.failed_inserts, 0u);
+            EXPECT_EQ(stored, expected);
+        } else {  // buckets overflow
+            EXPECT_GT(one.numerics.failed_inserts, 0u);
+            EXPECT_GT(one.numerics.failed_insert_energy.x, 0.0);
+            EXPECT_LT(stored.size(), expected.size());
+        }
+        for (const int threads : {2, 7, 16}) expectSameState(one, bakeInArena(threads, settings, iterations), threads);
+    }
+}
+
+/// Tables smaller than a bucket or than one range: a single range takes every key.
+TEST(SharcCache, TinyTablesInsertAsOneRange) {
+    for (const uint32_t capacity : {5u, 16u, 17u, 100u}) {
+        SCOPED_TRACE("capacity " + std::to_string(capacity));
+        SharcCache cache(smallSettings(capacity), SharcCache::chooseRadianceScale(1.0));
+        std::vector<Deposit> deposits;  // 20 keys, two deposits each
+        for (int i = 0; i < 40; ++i) deposits.push_back(Deposit{keyAt(i % 20), glm::vec3(1.0f), 1});
+        cache.commit(deposits);
+        cache.resolve(0);
+        const uint64_t occupied = cache.occupiedSlots();
+        EXPECT_EQ(occupied, cache.liveEntries());
+        EXPECT_EQ(cache.numerics().failed_inserts, 2u * (20u - occupied));  // both deposits of a key not stored
+        if (capacity <= 16) {
+            EXPECT_EQ(occupied, capacity);  // one bucket: every slot fills
+        } else {
+            EXPECT_GE(occupied, 16u);
+            EXPECT_LE(occupied, std::min(20u, capacity));
+        }
+    }
+}
+
+/// findResolved stops at the first empty slot of a bucket (a bake never removes a key); it must
+/// agree with HashGridTable::find, which scans the whole bucket, in a crowded table and in one
+/// restored slot by slot, where a refused restoreSlot undoes its insert.
+TEST(SharcCache, LookupsStoppingAtAnEmptySlotFindEveryKey) {
+    SharcSettings settings = smallSettings(600);
+    SharcCache baked(settings, SharcCache::chooseRadianceScale(1.0));
+    std::vector<Deposit> deposits;
+    for (int i = 0; i < 500; ++i) deposits.push_back(Deposit{keyAt(i), glm::vec3(1.0f), 1});
+    baked.commit(deposits);
+    baked.resolve(0);
+    ASSERT_GT(baked.numerics().failed_inserts, 0u);  // some buckets are full
+    SharcCache restored(settings, SharcCache::chooseRadianceScale(1.0));
+    uint32_t refused = 0;
+    for (uint32_t slot = 0; slot < baked.capacity(); ++slot) {
+        const uint64_t key = baked.table().keyAt(slot);
+        if (key == kHashGridInvalidKey) continue;
+        if (slot % 7 == 0 && slot + 1 < baked.capacity()) {
+            // Offered to the next (still empty) slot first: the key lands in `slot`, so the
+            // restore is refused and its insert undone.
+            EXPECT_FALSE(restored.restoreSlot(slot + 1, key, baked.resolved()[slot])) << slot;
+            ++refused;
+        }
+        ASSERT_TRUE(restored.restoreSlot(slot, key, baked.resolved()[slot])) << slot;
+    }
+    EXPECT_GT(refused, 0u);
+    for (const SharcCache* cache : {&baked, &restored}) {
+        for (int i = 0; i < 520; ++i) {
+            const std::optional<uint32_t> slot = cache->table().find(keyAt(i));
+            const ResolvedEntry* entry = cache->findResolved(keyAt(i));
+            ASSERT_EQ(entry != nullptr, slot.has_value()) << i;
+            if (slot) {
+                EXPECT_EQ(entry, &cache->resolved()[*slot]) << i;
+            }
+        }
+    }
+}
 }  // namespace
 /// Every voxel feeds its coarser voxels (SharcSettings::coarsest_level): each coarser level holds
 /// the same samples as the deposits below it, with its own history, and nothing beyond it.
