@@ -505,10 +505,14 @@ void SharcCache::sumIntoCoarserLevels() {
         }
     };
     // The touched voxels by level; coarser voxels join the next level's list as they are touched.
+    // The keys are read in parallel (each a cache miss in a large table), then listed in order.
+    std::vector<uint16_t> touched_levels(touched_.size());  // levels reach 511
+    tbb::parallel_for(size_t(0), touched_.size(), [&](size_t i) {
+        touched_levels[i] = uint16_t(decodeHashGridKey(table_.keyAt(touched_[i])).level);
+    });
     std::vector<std::vector<uint32_t>> by_level(size_t(coarsest) + 1);
-    for (const uint32_t slot : touched_) {
-        const uint32_t level = decodeHashGridKey(table_.keyAt(slot)).level;
-        if (level < coarsest) by_level[level].push_back(slot);
+    for (size_t i = 0; i < touched_.size(); ++i) {
+        if (touched_levels[i] < coarsest) by_level[touched_levels[i]].push_back(touched_[i]);
     }
     SlotLists unknown, newly_touched;
     for (uint32_t level = kHashGridLevelMin; level < coarsest; ++level) {
