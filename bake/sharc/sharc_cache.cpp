@@ -227,6 +227,8 @@ InsertRanges insertRanges(uint32_t capacity, uint32_t probes) {
 /// per 4096 keys. The result does not depend on them (the sort is stable).
 constexpr size_t kGroupBlocks = 64;
 constexpr size_t kKeysPerGroupBlock = 4096;
+/// Below this many keys the ranges are inserted one after another on the calling thread.
+constexpr size_t kParallelInsertFrom = 4096;
 /// Finer voxels per task when their coarser keys are looked up.
 constexpr size_t kLinkBlock = 1024;
 }  // namespace
@@ -389,26 +391,37 @@ SharcCache::KeysByRange SharcCache::groupByRange(const std::vector<std::vector<N
 template <typename Store>
 uint64_t SharcCache::insertByRange(const KeysByRange& grouped, Store&& store) {
     const size_t ranges = grouped.range_begin.size() - 1;
+    const size_t total = grouped.range_begin.back();
+    if (total == 0) return 0;
+    const auto insertRange = [&](size_t range) {
+        uint64_t range_fresh = 0;
+        for (size_t i = grouped.range_begin[range]; i < grouped.range_begin[range + 1]; ++i) {
+            const NewKey& k = grouped.keys[i];
+            // A key listed several times (one per deposit, or per finer voxel) is inserted by
+            // its first occurrence; the later ones find it.
+            const Probe probe = probeBucket(k.key, k.base);
+            if (probe.found || probe.slot == kNoSlot) {
+                store(k, probe.slot);
+            } else {
+                // No other range writes this window now, so the insert takes probe.slot.
+                const std::optional<uint32_t> slot = table_.insert(k.key);
+                range_fresh += slot.has_value();
+                store(k, slot.value_or(kNoSlot));
+            }
+        }
+        return range_fresh;
+    };
     std::atomic<uint64_t> fresh{0};
     for (size_t parity = 0; parity < 2; ++parity) {
-        tbb::parallel_for(size_t(0), (ranges + 1 - parity) / 2, [&](size_t half) {
-            const size_t range = 2 * half + parity;
-            uint64_t range_fresh = 0;
-            for (size_t i = grouped.range_begin[range]; i < grouped.range_begin[range + 1]; ++i) {
-                const NewKey& k = grouped.keys[i];
-                // A key listed several times (one per deposit, or per finer voxel) is inserted by
-                // its first occurrence; the later ones find it.
-                const Probe probe = probeBucket(k.key, k.base);
-                if (probe.found || probe.slot == kNoSlot) {
-                    store(k, probe.slot);
-                } else {
-                    // No other range writes this window now, so the insert takes probe.slot.
-                    const std::optional<uint32_t> slot = table_.insert(k.key);
-                    range_fresh += slot.has_value();
-                    store(k, slot.value_or(kNoSlot));
-                }
-            }
-            fresh.fetch_add(range_fresh, std::memory_order_relaxed);
+        const size_t count = (ranges + 1 - parity) / 2;
+        if (total < kParallelInsertFrom) {
+            // A warm cache's few new keys: the same ranges in the same order, on this thread
+            // (the result is the same, without a thousand near-empty tasks).
+            for (size_t half = 0; half < count; ++half) fresh += insertRange(2 * half + parity);
+            continue;
+        }
+        tbb::parallel_for(size_t(0), count, [&](size_t half) {
+            fresh.fetch_add(insertRange(2 * half + parity), std::memory_order_relaxed);
         });
     }
     return fresh.load();
@@ -526,7 +539,7 @@ void SharcCache::sumIntoCoarserLevels() {
         gather(unknown, lookups);
         // Sorted, so the coarser keys' slots do not depend on which thread listed which voxel.
         tbb::parallel_sort(lookups.begin(), lookups.end());
-        linkCoarserVoxels(lookups);
+        if (!lookups.empty()) linkCoarserVoxels(lookups);
         // Integer adds commute, so the coarser sums do not depend on the order either.
         std::atomic<uint64_t> saturated{0};
         tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
