@@ -103,7 +103,8 @@ void Baker::runIteration() {
     traceUpdatePaths(work_iteration, chunk_deposits_, counters_);
     seconds_.update += secondsSince(start);
 
-    // Commit: new keys inserted in chunk order, so the same slots and sums on every run.
+    // Commit: new keys inserted by fixed slot ranges, each in chunk order (SharcCache::commitChunks),
+    // so the same slots and sums on every run and for any thread count.
     start = std::chrono::steady_clock::now();
     cache_.commitChunks(chunk_deposits_, work_iteration);
     seconds_.commit += secondsSince(start);
