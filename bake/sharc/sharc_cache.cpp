@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/sharc_cache.h"
 
+#include "support/prefetch.h"
 #include "tracing/sampling.h"
 
 #include <tbb/blocked_range.h>
@@ -99,22 +100,14 @@ bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, u
     return count + carries <= kMaxCarries;
 }
 
+/// How many entries ahead the loops over scattered slots prefetch (enough to cover a memory
+/// latency).
+constexpr size_t kPrefetchDistance = 8;
+
 /// Up to kSlots per-slot sums of one chunk's deposits, 96 bits wide per channel, added to the
 /// shared accumulation one slot at a time: a path deposits into the same voxels several times,
 /// and the bright voxels are shared by every thread, so one atomic add per slot and chunk
 /// instead of one per deposit cuts the contention.
-/// A hint to start loading the line at `address` for writing; no effect on results. Slots are
-/// scattered over a table far larger than the caches, so loops over slots ask a few entries ahead.
-inline void prefetchForWrite(const void* address) {
-#if defined(__GNUC__) || defined(__clang__)
-    __builtin_prefetch(address, 1);
-#else
-    (void)address;
-#endif
-}
-/// How many entries ahead those loops prefetch (enough to cover a memory latency).
-constexpr size_t kPrefetchDistance = 8;
-
 class PendingSums {
 public:
     struct Sum {
@@ -186,8 +179,14 @@ const ResolvedEntry* SharcCache::findResolved(uint64_t key) const {
     return probe.found ? &resolved_[probe.slot] : nullptr;
 }
 
-uint32_t SharcCache::findSlot(uint64_t key) const {
-    const Probe probe = probeBucket(key, bucketBaseOf(key));
+uint32_t SharcCache::prefetchKey(uint64_t key) const {
+    const uint32_t base = bucketBaseOf(key);
+    table_.prefetchBucket(base);
+    return base;
+}
+
+uint32_t SharcCache::findSlot(uint64_t key, uint32_t base) const {
+    const Probe probe = probeBucket(key, base);
     return probe.found ? probe.slot : kNoSlot;
 }
 

@@ -16,6 +16,7 @@
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/zeroed_array.h"
+#include "support/prefetch.h"
 
 #include <glm/glm.hpp>
 
@@ -156,16 +157,13 @@ public:
     /// threads while no commit or resolve runs.
     const ResolvedEntry* findResolved(uint64_t key) const;
     /// findResolved in steps, for a batch of lookups whose memory latency should overlap:
-    /// prefetchKey for every key, then findSlot (and prefetchResolved) for every key, then
-    /// resolvedAt. findSlot returns kNoSlot when the key is absent.
+    /// prefetchKey for every key (it returns the key's bucket base), then findSlot (and
+    /// prefetchResolved) for every key, then resolvedAt. findSlot returns kNoSlot when the key
+    /// is absent.
     static constexpr uint32_t kNoSlot = ~0u;
-    void prefetchKey(uint64_t key) const { table_.prefetch(key); }
-    uint32_t findSlot(uint64_t key) const;
-    void prefetchResolved(uint32_t slot) const {
-#if defined(__GNUC__) || defined(__clang__)
-        __builtin_prefetch(&resolved_[slot]);
-#endif
-    }
+    uint32_t prefetchKey(uint64_t key) const;
+    uint32_t findSlot(uint64_t key, uint32_t base) const;
+    void prefetchResolved(uint32_t slot) const { prefetchForRead(&resolved_[slot]); }
     const ResolvedEntry& resolvedAt(uint32_t slot) const { return resolved_[slot]; }
 
     /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,

@@ -75,6 +75,7 @@ struct UpdateWavefront::Path {
     glm::vec2 u_select_resample{0.0f};
     glm::vec2 u_light_point{0.0f};
     uint64_t feedback_key = 0;            ///< the voxel cache resampling reads; 0 = not this vertex
+    uint32_t feedback_base = 0;           ///< its bucket's first slot (from the prefetch pass)
     uint32_t feedback_slot = SharcCache::kNoSlot;
     std::optional<GltfBsdf> bsdf;
     glm::vec3 wo{0.0f};
@@ -82,6 +83,7 @@ struct UpdateWavefront::Path {
     glm::vec3 emitted{0.0f};
     float emission_weight = 0.0f;
     ShadowQuery shadow;
+    bool shadow_blocked = false;  ///< the batch's answer for `shadow`
 };
 
 UpdateWavefront::UpdateWavefront(const Tracer& tracer, const LightSampler& lights, const SharcCache& cache,
@@ -93,7 +95,7 @@ UpdateWavefront::~UpdateWavefront() = default;
 size_t UpdateWavefront::bytesPerPathInFlight() {
     // The path's state, its entries in the batch's index lists, its ray and hit, its shadow ray,
     // and Embree's copies of both. Its deposits come on top (sizeof(Deposit) each).
-    return sizeof(Path) + sizeof(uint32_t) * 3 + sizeof(Ray) * 2 + sizeof(RayHit) + sizeof(uint8_t) * 3 +
+    return sizeof(Path) + sizeof(uint32_t) * 4 + sizeof(Ray) * 2 + sizeof(RayHit) + sizeof(uint8_t) * 2 +
            sizeof(RTCRayHit) + sizeof(RTCRay);
 }
 
@@ -152,7 +154,7 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
         if (endOnCache(path, counters)) continue;
         prepareLocalLight(path);
         if (path.shadow.needed) {
-            shadow_paths_.push_back(uint32_t(next_active_.size()));
+            shadow_paths_.push_back(index);
             shadow_rays_.push_back(path.shadow.ray);
         }
         next_active_.push_back(index);
@@ -160,15 +162,12 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
     blocked_.resize(shadow_rays_.size());
     tracer_.occludedMany(shadow_rays_.data(), shadow_rays_.size(), blocked_.data(), embree_rays_);
     counters.shadow_rays += shadow_rays_.size();
-    shadow_blocked_.assign(next_active_.size(), 0);
-    for (size_t s = 0; s < shadow_paths_.size(); ++s) shadow_blocked_[shadow_paths_[s]] = blocked_[s];
+    for (size_t s = 0; s < shadow_paths_.size(); ++s) paths_[shadow_paths_[s]].shadow_blocked = blocked_[s] != 0;
 
     // Deposit, then continue the survivors; the batch keeps its order.
     active_.clear();
-    for (size_t i = 0; i < next_active_.size(); ++i) {
-        if (depositAndContinue(paths_[next_active_[i]], shadow_blocked_[i] != 0, bounce, depth, counters)) {
-            active_.push_back(next_active_[i]);
-        }
+    for (const uint32_t index : next_active_) {
+        if (depositAndContinue(paths_[index], bounce, depth, counters)) active_.push_back(index);
     }
 }
 
@@ -209,12 +208,13 @@ void UpdateWavefront::findFeedbackVoxels() {
     // Two passes, each prefetching what the next one reads: the table's buckets, then the
     // resolved entries. Their cache misses (the table is far larger than any cache) overlap.
     for (const uint32_t index : shaded_) {
-        if (paths_[index].feedback_key) cache_.prefetchKey(paths_[index].feedback_key);
+        Path& path = paths_[index];
+        if (path.feedback_key) path.feedback_base = cache_.prefetchKey(path.feedback_key);
     }
     for (const uint32_t index : shaded_) {
         Path& path = paths_[index];
         if (!path.feedback_key) continue;
-        path.feedback_slot = cache_.findSlot(path.feedback_key);
+        path.feedback_slot = cache_.findSlot(path.feedback_key, path.feedback_base);
         if (path.feedback_slot != SharcCache::kNoSlot) cache_.prefetchResolved(path.feedback_slot);
     }
 }
@@ -228,11 +228,10 @@ void UpdateWavefront::prepareLocalLight(Path& path) const {
                                       : ShadowQuery{};
 }
 
-bool UpdateWavefront::depositAndContinue(Path& path, bool shadow_blocked, uint32_t bounce, uint32_t depth,
-                                         UpdateCounters& counters) const {
+bool UpdateWavefront::depositAndContinue(Path& path, uint32_t bounce, uint32_t depth, UpdateCounters& counters) const {
     glm::vec3 direct(0.0f);
     if (lights_.hasLights()) {
-        direct = finiteOrZero(path.shadow.needed && !shadow_blocked ? path.shadow.unoccluded : glm::vec3(0.0f),
+        direct = finiteOrZero(path.shadow.needed && !path.shadow_blocked ? path.shadow.unoccluded : glm::vec3(0.0f),
                               counters.non_finite);
     }
     // Its own voxel stores the full outgoing radiance (emission included, as the SDK's default

@@ -87,8 +87,7 @@ private:
     void prepareLocalLight(Path& path) const;
     /// The vertex's deposits once its shadow ray is answered; then Russian roulette and the
     /// BSDF sample. False when the path ends.
-    bool depositAndContinue(Path& path, bool shadow_blocked, uint32_t bounce, uint32_t depth,
-                            UpdateCounters& counters) const;
+    bool depositAndContinue(Path& path, uint32_t bounce, uint32_t depth, UpdateCounters& counters) const;
     /// SharcUpdateMiss: the sky's radiance, MIS-weighted, to the vertices still waiting.
     void depositSkyMiss(Path& path, uint32_t bounce, UpdateCounters& counters) const;
     /// Cache resampling: ends the path on its feedback voxel's resolved value (less the
@@ -109,10 +108,9 @@ private:
     std::vector<Ray> rays_;                 ///< this bounce's rays, one per active path
     std::vector<RayHit> hits_;
     std::vector<uint8_t> found_;
-    std::vector<uint32_t> shadow_paths_;    ///< active paths (indices into active_) with a shadow ray
+    std::vector<uint32_t> shadow_paths_;    ///< the paths of shadow_rays_, one each
     std::vector<Ray> shadow_rays_;
-    std::vector<uint8_t> blocked_;
-    std::vector<uint8_t> shadow_blocked_;   ///< per active path
+    std::vector<uint8_t> blocked_;          ///< Embree's answer per shadow ray
     std::vector<RTCRayHit> embree_hits_;
     std::vector<RTCRay> embree_rays_;
 };

@@ -6,6 +6,7 @@
 // boundaries.
 #include "sharcbake/hash_grid.h"
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -364,11 +365,10 @@ std::optional<uint32_t> HashGridTable::find(uint64_t key) const {
     return std::nullopt;
 }
 
-void HashGridTable::prefetch(uint64_t key) const {
+void HashGridTable::prefetchBucket(uint32_t base) const {
     const uint32_t n = capacity();
-    if (key == kHashGridInvalidKey || n == 0) return;
-    const uint32_t base = bucketBase(hashGridHash(key), n, bucket_size_);
-    const uint32_t last = base + bucketProbeCount(n, bucket_size_) - 1;
+    if (base >= n) return;
+    const uint32_t last = std::min(n - 1, base + bucketProbeCount(n, bucket_size_) - 1);
 #if defined(__GNUC__) || defined(__clang__)
     // A 16-slot window spans two or three 64-byte lines: its first and last slot cover both ends.
     __builtin_prefetch(&keys_[base]);

@@ -270,10 +270,10 @@ public:
     /// exit on empty slots). std::nullopt if absent or key == 0.
     std::optional<uint32_t> find(uint64_t key) const;
 
-    /// @brief Asks the CPU to start loading the key's bucket (a hint: no effect on results).
-    /// Code that looks up many keys prefetches a batch of them first, so that their cache
-    /// misses overlap instead of following one another.
-    void prefetch(uint64_t key) const;
+    /// @brief Asks the CPU to start loading the bucket window that starts at slot `base` (from
+    /// bucketBase; a hint, no effect on results). Code that looks up many keys prefetches a batch
+    /// of them first, so that their cache misses overlap instead of following one another.
+    void prefetchBucket(uint32_t base) const;
 
     /// Key stored in `slot` (0 = empty). `slot` must be < capacity().
     uint64_t keyAt(uint32_t slot) const { return keys_[slot].load(std::memory_order_acquire); }
