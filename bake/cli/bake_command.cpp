@@ -483,15 +483,6 @@ BakeJob bakeJobFromOptions(const BakeOptions& o) {
     return job;
 }
 
-/// The levels of a cache's voxels, ascending.
-std::vector<uint32_t> levelsOf(const CacheData& data) {
-    std::vector<uint32_t> levels;
-    for (const CacheVoxel& v : data.voxels) levels.push_back(decodeHashGridKey(v.key).level);
-    std::sort(levels.begin(), levels.end());
-    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-    return levels;
-}
-
 /// "1,2,5"
 std::string joined(const std::vector<uint32_t>& values) {
     std::string text;
@@ -936,7 +927,7 @@ private:
             gpu_warning_ = written.gpuRadianceCheck().warning;
         }
         live_voxels_ = data.voxels.size();
-        written_levels_ = levelsOf(data);
+        written_levels_ = levelsPresent(data);
         finish_seconds_ = secondsSince(finish_start);
         stability_ = makeStabilityReport(cache, baker_->counters(), scene_.bounds_min, scene_.bounds_max, levels_);
     }

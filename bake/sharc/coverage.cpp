@@ -18,6 +18,12 @@ std::vector<uint32_t> levelsPresent(const SharcCache& cache) {
     return {levels.begin(), levels.end()};
 }
 
+std::vector<uint32_t> levelsPresent(const CacheData& data) {
+    std::set<uint32_t> levels;
+    for (const CacheVoxel& v : data.voxels) levels.insert(decodeHashGridKey(v.key).level);
+    return {levels.begin(), levels.end()};
+}
+
 CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, const std::vector<uint32_t>& levels,
                                uint32_t points) {
     CoverageReport report;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "sharc/sharc_cache.h"
+#include "sharcbake/cache_file.h"
 #include "sharcbake/scene.h"
 
 #include <cstdint>
@@ -14,6 +15,8 @@ namespace sharcbake {
 
 /// Levels that occur among the cache's live keys, ascending.
 std::vector<uint32_t> levelsPresent(const SharcCache& cache);
+/// Levels that occur among a cache file's voxels, ascending.
+std::vector<uint32_t> levelsPresent(const CacheData& data);
 
 struct CoverageReport {
     uint32_t points = 0;          ///< surface points tested (area-weighted)

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/voxel_materials.h"
 
+#include "sharc/coverage.h"
 #include "sharcbake/sdk_target.h"
 #include "tracing/surface_points.h"
 
@@ -25,26 +26,12 @@ struct VoxelSums {
     uint64_t points = 0;
 };
 
-/// One side of a surface point: where it is keyed and what it adds.
-struct PointSide {
-    glm::vec3 normal;
-    glm::vec3 emission;
-};
-
 Float3 toFloat3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
 
 uint64_t voxelIndex(const std::vector<CacheVoxel>& voxels, uint64_t key) {
     const auto it = std::lower_bound(voxels.begin(), voxels.end(), key,
                                      [](const CacheVoxel& v, uint64_t k) { return v.key < k; });
     return it != voxels.end() && it->key == key ? uint64_t(it - voxels.begin()) : kNoVoxel;
-}
-
-std::vector<uint32_t> levelsOf(const std::vector<CacheVoxel>& voxels) {
-    std::vector<uint32_t> levels;
-    for (const CacheVoxel& v : voxels) levels.push_back(decodeHashGridKey(v.key).level);
-    std::sort(levels.begin(), levels.end());
-    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-    return levels;
 }
 
 /// Adds a batch of points: their keys (two sides x every level) are looked up in parallel, then
@@ -55,13 +42,13 @@ void addBatch(const Scene& scene, const CacheData& data, const std::vector<uint3
     const HashGridParameters grid = data.gridParameters();
     const size_t per_point = 2 * levels.size();
     std::vector<uint64_t> voxel(per_point * (end - begin), kNoVoxel);
-    std::vector<std::array<glm::vec3, 3>> values(end - begin);  // front emission, back emission, factor
+    std::vector<std::array<glm::vec3, 2>> values(end - begin);  // emission (either side), demodulation factor
     tbb::parallel_for(tbb::blocked_range<size_t>(begin, end), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const SurfacePoint& p = points[i];
             const SurfaceHit hit = makeSurfacePoint(scene, p.triangle, p.barycentrics.x, p.barycentrics.y);
             const ShadingMaterial material = evaluateMaterial(scene, hit);
-            values[i - begin] = {material.emission, material.emission, demodulationFactor(material)};
+            values[i - begin] = {material.emission, demodulationFactor(material)};
             // The back of a single-sided surface is not meant to be seen (glTF culls it): counting
             // it would mix, at coarse levels, the outside of a room's wall into the voxel of the
             // opposite wall's inside, which faces the same way.
@@ -75,14 +62,14 @@ void addBatch(const Scene& scene, const CacheData& data, const std::vector<uint3
         }
     });
     for (size_t i = begin; i < end; ++i) {
-        const std::array<glm::vec3, 3>& v = values[i - begin];
-        factor_sum += glm::dvec3(v[2]);
+        const std::array<glm::vec3, 2>& v = values[i - begin];
+        factor_sum += glm::dvec3(v[1]);
         for (size_t k = 0; k < per_point; ++k) {
             const uint64_t index = voxel[(i - begin) * per_point + k];
             if (index == kNoVoxel) continue;
             VoxelSums& s = sums[size_t(index)];
-            s.emission += glm::dvec3(k < levels.size() ? v[0] : v[1]);
-            s.demodulation += glm::dvec3(v[2]);
+            s.emission += glm::dvec3(v[0]);
+            s.demodulation += glm::dvec3(v[1]);
             ++s.points;
         }
     }
@@ -118,7 +105,7 @@ std::vector<CacheVoxelMaterial> computeVoxelMaterials(const Scene& scene, const 
     const uint64_t wanted = uint64_t(points_per_voxel) * data.voxels.size();
     const uint32_t count = uint32_t(std::clamp<uint64_t>(wanted, kMinPoints, kMaxPoints));
     const std::vector<SurfacePoint> points = sampleSurfacePoints(scene, count, /*seed=*/0x564d4154u);
-    const std::vector<uint32_t> levels = levelsOf(data.voxels);
+    const std::vector<uint32_t> levels = levelsPresent(data);
     std::vector<VoxelSums> sums(data.voxels.size());
     glm::dvec3 factor_sum{0.0};
     for (size_t begin = 0; begin < points.size(); begin += kPointsPerBatch) {
