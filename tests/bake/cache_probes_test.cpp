@@ -2,6 +2,7 @@
 // The probe reference of `bake --report`: its references are right where the answer is known,
 // its noise is taken out, and a cache biased in one region is caught in that region.
 #include "sharc/baker.h"
+#include "test_bake_scene.h"
 #include "reports/cache_probes.h"
 #include "sharc/cache_query.h"
 #include "sharc/camera_path.h"
@@ -16,10 +17,6 @@
 
 namespace sharcbake {
 namespace {
-
-std::string scenePath(const std::string& name) {
-    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
-}
 
 /// A short bake with coarse voxels, as the furnace tests make it.
 struct ShortBake {

@@ -2,6 +2,7 @@
 // `render --cache`: SHaRC's query eligibility tests, BakedCache lookups, and a cached render of
 // the rho = 0.9 furnace, whose every surface has outgoing radiance Le / (1 - rho) = 10.
 #include "sharc/baker.h"
+#include "test_bake_scene.h"
 #include "sharc/cache_query.h"
 #include "sharc/camera_path.h"
 #include "tracing/lights.h"
@@ -21,10 +22,6 @@
 
 namespace sharcbake {
 namespace {
-
-std::string scenePath(const std::string& name) {
-    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
-}
 
 // ---- Eligibility (docs/sharc_algorithm.md §6.2, app-side tests) ---------------------------------
 

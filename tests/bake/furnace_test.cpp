@@ -3,6 +3,7 @@
 // Le / (1 - rho): the reference path tracer's image and the baked cache's voxels must match it.
 // Also: renders and bakes are identical for any thread count.
 #include "sharc/baker.h"
+#include "test_bake_scene.h"
 #include "sharc/camera_path.h"
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
@@ -21,10 +22,6 @@
 
 namespace sharcbake {
 namespace {
-
-std::string scenePath(const std::string& name) {
-    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
-}
 
 struct FurnaceCase {
     const char* scene;
@@ -81,24 +78,17 @@ TEST(Determinism, RenderIsIdenticalForAnyThreadCount) {
 
 /// A small bake of a furnace room from its glTF camera path plus exploration.
 struct SmallBake {
-    Scene scene;
-    std::unique_ptr<Tracer> tracer;
-    std::unique_ptr<LightSampler> lights;
-    std::unique_ptr<CameraPath> path;
+    TestBakeScene scene;
     std::unique_ptr<Baker> baker;
 
-    SmallBake(const std::string& name, uint32_t iterations, HistorySchedule history, int resolution = 160) {
-        scene = loadGltf(scenePath(name));
-        tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
-        path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
+    SmallBake(const std::string& name, uint32_t iterations, HistorySchedule history, int resolution = 160)
+        : scene(name) {
         BakeSettings settings;
         settings.width = settings.height = resolution;
         settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
         settings.sharc.history = history;
-        baker = std::make_unique<Baker>(*tracer, *lights, *path, settings,
-                                        SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        baker = scene.makeBaker(settings);
         for (uint32_t i = 0; i < iterations; ++i) baker->runIteration();
     }
 };

@@ -5,6 +5,7 @@
 // uninterrupted bake, byte for byte. A growing table (--capacity auto) bakes the same voxels as
 // a large fixed one, and resumes across its growth.
 #include "sharc/baker.h"
+#include "test_bake_scene.h"
 #include "sharc/capacity.h"
 #include "sharc/camera_path.h"
 #include "sharc/checkpoint.h"
@@ -25,22 +26,10 @@
 namespace sharcbake {
 namespace {
 
-std::string scenePath(const std::string& name) {
-    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
-}
-
-/// A scene with its tracer and an exploring camera path (what `bake` sets up).
-struct BakeScene {
-    Scene scene;
-    std::unique_ptr<Tracer> tracer;
-    std::unique_ptr<LightSampler> lights;
-    std::unique_ptr<CameraPath> path;
-    explicit BakeScene(const std::string& name) {
-        scene = loadGltf(scenePath(name));
-        tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
-        path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
-    }
+/// A scene with its tracer and an exploring camera path (what `bake` sets up), and the bakes
+/// these tests compare.
+struct BakeScene : TestBakeScene {
+    using TestBakeScene::TestBakeScene;
     std::unique_ptr<Baker> baker(uint32_t shard_index, uint32_t shard_count, uint32_t capacity = 1u << 16,
                                  bool grow = false) const {
         BakeSettings settings;
@@ -50,8 +39,7 @@ struct BakeScene {
         settings.sharc.grid.capacity = capacity;
         settings.sharc.grow_when_loaded = grow;
         settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
-        return std::make_unique<Baker>(*tracer, *lights, *path, settings,
-                                       SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        return makeBaker(settings);
     }
     CacheData bake(uint32_t iterations, uint32_t shard_index = 0, uint32_t shard_count = 1) const {
         std::unique_ptr<Baker> b = baker(shard_index, shard_count);

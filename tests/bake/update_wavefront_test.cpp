@@ -2,6 +2,7 @@
 // The wavefront is a schedule, not an approximation: a batch of update paths deposits exactly
 // what the same paths deposit traced one at a time, in the same order, and counts the same.
 #include "sharc/baker.h"
+#include "test_bake_scene.h"
 #include "sharc/camera_path.h"
 #include "sharc/sharc_update.h"
 #include "tracing/lights.h"
@@ -19,10 +20,6 @@
 namespace sharcbake {
 namespace {
 
-std::string scenePath(const std::string& name) {
-    return std::string(SHARCBAKE_SCENES_DIR) + "/" + name + "/" + name + ".gltf";
-}
-
 bool sameDeposits(const std::vector<Deposit>& a, const std::vector<Deposit>& b) {
     if (a.size() != b.size()) return false;
     for (size_t i = 0; i < a.size(); ++i) {
@@ -35,26 +32,17 @@ bool sameDeposits(const std::vector<Deposit>& a, const std::vector<Deposit>& b) 
     return true;
 }
 
-struct WarmBake {
-    Scene scene;
-    std::unique_ptr<Tracer> tracer;
-    std::unique_ptr<LightSampler> lights;
-    std::unique_ptr<CameraPath> path;
+struct WarmBake : TestBakeScene {
     std::unique_ptr<Baker> baker;
 
     /// A few iterations, so later paths end on cached voxels (cache resampling) as well.
-    explicit WarmBake(const std::string& name, bool resample_at_end) {
-        scene = loadGltf(scenePath(name));
-        tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
-        path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
+    WarmBake(const std::string& name, bool resample_at_end) : TestBakeScene(name) {
         BakeSettings settings;
         settings.width = 160;
         settings.height = 90;
         settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.resample_at_end = resample_at_end;
-        baker = std::make_unique<Baker>(*tracer, *lights, *path, settings,
-                                        SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        baker = makeBaker(settings);
         for (int i = 0; i < 6; ++i) baker->runIteration();
     }
 

@@ -169,6 +169,13 @@ struct TestCache {
     std::vector<Float3> points, normals;
 };
 
+/// Encodes `data` into `bytes` and opens `view` on them (ASSERT_NO_FATAL_FAILURE at the call).
+void encodeAndOpen(const CacheData& data, std::vector<uint8_t>* bytes, CacheView* view) {
+    std::string message;
+    ASSERT_EQ(encodeCacheFile(data, bytes, &message), CacheFileStatus::kOk) << message;
+    ASSERT_EQ(CacheView::openMemory(bytes->data(), bytes->size(), view, nullptr), CacheFileStatus::kOk);
+}
+
 void makeTestCache(size_t live, TestCache* out, uint32_t seed = 18) {
     std::mt19937 random(seed);
     std::vector<Float3> points, normals;
@@ -189,9 +196,7 @@ void makeTestCache(size_t live, TestCache* out, uint32_t seed = 18) {
         v.sample_weight = 8.0f + float(i % 5);
     }
     out->data = std::move(data);
-    std::string message;
-    ASSERT_EQ(encodeCacheFile(out->data, &out->bytes, &message), CacheFileStatus::kOk) << message;
-    ASSERT_EQ(CacheView::openMemory(out->bytes.data(), out->bytes.size(), &out->view, nullptr), CacheFileStatus::kOk);
+    encodeAndOpen(out->data, &out->bytes, &out->view);
 }
 
 void expectHalfNear(float got, float want) { EXPECT_NEAR(got, want, std::max(want, 1.0f) * 1e-3f); }
@@ -650,9 +655,8 @@ CacheData brightCache(float bright, float dim) {
 TEST(GpuRadianceScale, ClippingIsReportedWithTheScaleThatFixesIt) {
     const CacheData data = brightCache(1.0e6f, 1.0f);
     std::vector<uint8_t> bytes;
-    ASSERT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
     CacheView view;
-    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, nullptr), CacheFileStatus::kOk);
+    ASSERT_NO_FATAL_FAILURE(encodeAndOpen(data, &bytes, &view));
     GpuBufferOptions options;
     options.capacity = 64;
     GpuBuffers buffers;
@@ -690,9 +694,8 @@ TEST(GpuRadianceScale, ClippingIsReportedWithTheScaleThatFixesIt) {
 TEST(GpuRadianceScale, LightTooDimForFp16IsReported) {
     const CacheData data = brightCache(1.0f, 1.0e-9f);
     std::vector<uint8_t> bytes;
-    ASSERT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
     CacheView view;
-    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, nullptr), CacheFileStatus::kOk);
+    ASSERT_NO_FATAL_FAILURE(encodeAndOpen(data, &bytes, &view));
     GpuInsertList list;
     ASSERT_EQ(view.gpuInsertList(GpuBufferOptions{}, &list, nullptr), CacheFileStatus::kOk);
     EXPECT_EQ(list.radiance.flushed_voxels, 1u);
@@ -725,9 +728,8 @@ float half(uint16_t bits) { return halfToFloat(bits); }
 TEST(VoxelMaterials, AreStoredReadBackAndMerged) {
     const CacheData data = cacheWithMaterials();
     std::vector<uint8_t> bytes;
-    ASSERT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
     CacheView view;
-    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, nullptr), CacheFileStatus::kOk);
+    ASSERT_NO_FATAL_FAILURE(encodeAndOpen(data, &bytes, &view));
     ASSERT_TRUE(view.hasVoxelMaterials());
     for (uint64_t i = 0; i < view.voxelCount(); ++i) {
         const CacheVoxelMaterial m = view.voxelMaterial(i);
@@ -743,10 +745,9 @@ TEST(VoxelMaterials, AreStoredReadBackAndMerged) {
     CacheData plain = data;
     plain.voxel_materials.clear();
     std::vector<uint8_t> plain_bytes;
-    ASSERT_EQ(encodeCacheFile(plain, &plain_bytes, nullptr), CacheFileStatus::kOk);
-    EXPECT_EQ(bytes.size() - plain_bytes.size(), data.voxels.size() * 24 + kCacheSectionEntrySize);  // records + table entry
     CacheView plain_view;
-    ASSERT_EQ(CacheView::openMemory(plain_bytes.data(), plain_bytes.size(), &plain_view, nullptr), CacheFileStatus::kOk);
+    ASSERT_NO_FATAL_FAILURE(encodeAndOpen(plain, &plain_bytes, &plain_view));
+    EXPECT_EQ(bytes.size() - plain_bytes.size(), data.voxels.size() * 24 + kCacheSectionEntrySize);  // records + table entry
     EXPECT_FALSE(plain_view.hasVoxelMaterials());
 
     // Merging: shards' means weighted by sample weight; all inputs keep materials or none.
@@ -786,9 +787,8 @@ TEST(VoxelMaterials, TheWriterRefusesWhatTheReaderWould) {
 TEST(VoxelMaterials, EachBuildReadsBackThePlainRadiance) {
     const CacheData data = cacheWithMaterials();
     std::vector<uint8_t> bytes;
-    ASSERT_EQ(encodeCacheFile(data, &bytes, nullptr), CacheFileStatus::kOk);
     CacheView view;
-    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, nullptr), CacheFileStatus::kOk);
+    ASSERT_NO_FATAL_FAILURE(encodeAndOpen(data, &bytes, &view));
     GpuInsertList plain;
     ASSERT_EQ(view.gpuInsertList(GpuBufferOptions{}, &plain, nullptr), CacheFileStatus::kOk);
     for (const bool emissive : {false, true}) {
