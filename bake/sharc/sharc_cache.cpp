@@ -198,7 +198,6 @@ namespace {
 constexpr uint32_t kMissing = kHashGridInvalidIndex;           // key not in the table yet
 constexpr uint32_t kDropped = kHashGridInvalidIndex - 1;       // non-finite deposit
 constexpr uint32_t kFailedInsert = kHashGridInvalidIndex - 2;  // the key's bucket was full
-constexpr uint32_t kNoSlot = kHashGridInvalidIndex;            // insertByRange: the bucket was full
 
 /// The fixed slot ranges of the parallel insert (SharcCache::insertByRange). A key belongs to the
 /// range holding its bucket's first slot. They depend on the capacity only, never on the thread

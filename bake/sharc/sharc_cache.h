@@ -160,7 +160,7 @@ public:
     /// prefetchKey for every key (it returns the key's bucket base), then findSlot (and
     /// prefetchResolved) for every key, then resolvedAt. findSlot returns kNoSlot when the key
     /// is absent.
-    static constexpr uint32_t kNoSlot = ~0u;
+    static constexpr uint32_t kNoSlot = kHashGridInvalidIndex;  ///< also insertByRange's full bucket
     uint32_t prefetchKey(uint64_t key) const;
     uint32_t findSlot(uint64_t key, uint32_t base) const;
     void prefetchResolved(uint32_t slot) const { prefetchForRead(&resolved_[slot]); }
