@@ -37,7 +37,7 @@ struct BakeSettings {
 /// Seconds spent per stage, summed over iterations.
 struct StageSeconds {
     double update = 0.0;   ///< tracing update paths (parallel)
-    double commit = 0.0;   ///< inserting keys and adding deposits (serial, fixed order)
+    double commit = 0.0;   ///< inserting keys and adding deposits (parallel; slots and sums independent of the threads)
     double resolve = 0.0;  ///< folding accumulation into the resolved entries (parallel)
 };
 

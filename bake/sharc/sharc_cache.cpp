@@ -2,6 +2,7 @@
 #include "sharc/sharc_cache.h"
 
 #include "support/prefetch.h"
+#include "support/stopwatch.h"
 #include "tracing/sampling.h"
 
 #include <tbb/blocked_range.h>
@@ -242,6 +243,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
     chunk_missing_.resize(chunks.size());
     std::vector<uint64_t> chunk_non_finite(chunks.size(), 0);
     std::vector<glm::dvec3> chunk_deposited(chunks.size(), glm::dvec3(0.0));
+    auto start = std::chrono::steady_clock::now();
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         lookUpSlots(chunks[chunk], chunk, chunk_non_finite[chunk], chunk_deposited[chunk]);
     });
@@ -250,7 +252,11 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
         numerics_.non_finite_deposits += chunk_non_finite[chunk];
         numerics_.deposited_energy += chunk_deposited[chunk];
     }
+    stage_seconds_.look_up += secondsSince(start);
+    start = std::chrono::steady_clock::now();
     insertNewKeys();
+    stage_seconds_.insert += secondsSince(start);
+    start = std::chrono::steady_clock::now();
     std::vector<ChunkNumerics> chunk_numerics(chunks.size());
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
         accumulateChunk(chunks[chunk], chunk, iteration, chunk_numerics[chunk]);
@@ -264,6 +270,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
         numerics_.saturated_sums += n.saturated;
         touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
     }
+    stage_seconds_.accumulate += secondsSince(start);
 }
 
 // 1. Parallel over chunks: look every key up (the table is read-only here). A path deposits into
@@ -629,7 +636,10 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
 }
 
 void SharcCache::resolve(uint32_t iteration) {
+    auto start = std::chrono::steady_clock::now();
     sumIntoCoarserLevels();
+    stage_seconds_.coarser_levels += secondsSince(start);
+    start = std::chrono::steady_clock::now();
     const double inverse_scale = 1.0 / radiance_scale_;
     std::vector<uint8_t> orphan(touched_.size(), 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, touched_.size()), [&](const tbb::blocked_range<size_t>& range) {
@@ -643,6 +653,7 @@ void SharcCache::resolve(uint32_t iteration) {
     });
     for (size_t i = 0; i < touched_.size(); ++i) numerics_.orphan_sums += orphan[i];
     touched_.clear();
+    stage_seconds_.resolve += secondsSince(start);
 }
 
 bool SharcCache::restoreSlot(uint32_t slot, uint64_t key, const ResolvedEntry& resolved) {

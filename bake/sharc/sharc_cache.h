@@ -144,6 +144,16 @@ struct NumericsCounters {
     uint64_t orphan_sums = 0;              ///< radiance without a sample (dropped at resolve)
 };
 
+/// Wall-clock seconds of the cache's own stages, summed over iterations: where the commit and the
+/// resolve spend their time, and which of their steps keep a bake from scaling with threads.
+struct CacheStageSeconds {
+    double look_up = 0.0;         ///< commit: finding each deposit's slot (parallel)
+    double insert = 0.0;          ///< commit: inserting new keys by slot range (parallel by range)
+    double accumulate = 0.0;      ///< commit: fixed-point adds (parallel), and gathering the touched slots
+    double coarser_levels = 0.0;  ///< resolve: summing voxels into their coarser voxels
+    double resolve = 0.0;         ///< resolve: folding the accumulation into the resolved entries
+};
+
 class SharcCache {
 public:
     /// @param radiance_scale fixed-point scale of the sums (a power of two, see chooseRadianceScale)
@@ -182,6 +192,7 @@ public:
     void resolve(uint32_t iteration);
 
     const NumericsCounters& numerics() const { return numerics_; }
+    const CacheStageSeconds& stageSeconds() const { return stage_seconds_; }
     /// Slots holding a key (O(capacity)).
     uint64_t liveEntries() const { return table_.occupiedSlots(); }
     /// Slots holding a key, counted as keys are inserted (O(1)).
@@ -277,6 +288,7 @@ private:
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<NewKey>> chunk_missing_;  ///< commit scratch: deposits with a new key
     NumericsCounters numerics_;
+    CacheStageSeconds stage_seconds_;
     uint64_t occupied_ = 0;
 };
 

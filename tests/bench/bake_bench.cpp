@@ -92,7 +92,7 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
                 "\"segments\": %llu, \"shadow_rays\": %llu, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
                 "\"resolve\": %.4f, \"other\": %.4f, \"bake\": %.4f, \"setup\": %.4f}, \"live_voxels\": %llu, "
                 "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f, \"file_fnv1a\": \"%016llx\", "
-                "\"bytes_per_path_in_flight\": %zu, \"deposits_per_path\": %.2f}\n",
+                "\"bytes_per_path_in_flight\": %zu, \"deposits_per_path\": %.2f, %s}\n",
                 series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, capacity, per_api.c_str(),
                 toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit, bake.iterations,
                 (unsigned long long)bake.paths, (unsigned long long)bake.segments,
@@ -101,7 +101,7 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
                 (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
                 bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0,
                 (unsigned long long)bake.file_digest, UpdateWavefront::bytesPerPathInFlight(),
-                bake.paths ? double(bake.deposits) / double(bake.paths) : 0.0);
+                bake.paths ? double(bake.deposits) / double(bake.paths) : 0.0, cacheStagesJson(bake.cache_stages).c_str());
     std::fflush(stdout);
 }
 
@@ -120,12 +120,13 @@ void measureOneBake(const Options& o) {
                 "\"bake_segments_per_second\": %.4g, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
                 "\"resolve\": %.4f, \"bake\": %.4f, \"setup\": %.4f}, \"seconds_per_iteration\": %.4f, "
                 "\"peak_rss_bytes\": %llu, \"peak_rss_before_bake_bytes\": %llu, \"peak_rss_at_start_bytes\": %llu, "
-                "\"live_voxels\": %llu, \"file_bytes_per_live_voxel\": %.2f}\n",
+                "\"live_voxels\": %llu, \"file_bytes_per_live_voxel\": %.2f, %s}\n",
                 sceneName(o, *s).c_str(), o.capacity, bake.iterations, bake.segmentsPerSecond(),
                 bake.update_seconds, bake.commit_seconds, bake.resolve_seconds, bake.wall_seconds, bake.setup_seconds,
                 bake.wall_seconds / bake.iterations, (unsigned long long)peak, (unsigned long long)scene_peak,
                 (unsigned long long)before, (unsigned long long)bake.live_voxels,
-                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0);
+                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0,
+                cacheStagesJson(bake.cache_stages).c_str());
     std::fflush(stdout);
 }
 

@@ -271,6 +271,7 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     const UpdateCounters before = baker.counters();
     const uint64_t deposits_before = baker.cache().numerics().deposits;
     const StageSeconds seconds_before = baker.seconds();
+    const CacheStageSeconds stages_before = baker.cache().stageSeconds();
     const auto start = std::chrono::steady_clock::now();
     for (uint32_t i = 0; i < iterations; ++i) baker.runIteration();
     run.wall_seconds = secondsSince(start);
@@ -278,6 +279,12 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     run.update_seconds = baker.seconds().update - seconds_before.update;
     run.commit_seconds = baker.seconds().commit - seconds_before.commit;
     run.resolve_seconds = baker.seconds().resolve - seconds_before.resolve;
+    const CacheStageSeconds& stages = baker.cache().stageSeconds();
+    run.cache_stages.look_up = stages.look_up - stages_before.look_up;
+    run.cache_stages.insert = stages.insert - stages_before.insert;
+    run.cache_stages.accumulate = stages.accumulate - stages_before.accumulate;
+    run.cache_stages.coarser_levels = stages.coarser_levels - stages_before.coarser_levels;
+    run.cache_stages.resolve = stages.resolve - stages_before.resolve;
     run.paths = baker.counters().paths - before.paths;
     run.segments = baker.counters().segments - before.segments;
     run.shadow_rays = baker.counters().shadow_rays - before.shadow_rays;
@@ -300,6 +307,15 @@ uint64_t peakResidentBytes() {
         if (line.rfind("VmHWM:", 0) == 0) return uint64_t(std::stoull(line.substr(6))) * 1024u;
     }
     return 0;
+}
+
+std::string cacheStagesJson(const CacheStageSeconds& stages) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "\"cache_stages\": {\"look_up\": %.4f, \"insert\": %.4f, \"accumulate\": %.4f, "
+                  "\"coarser_levels\": %.4f, \"resolve\": %.4f}",
+                  stages.look_up, stages.insert, stages.accumulate, stages.coarser_levels, stages.resolve);
+    return text;
 }
 
 }  // namespace sharcbake::bench

@@ -65,10 +65,14 @@ struct BakeRun {
     uint64_t live_voxels = 0;
     uint64_t file_bytes = 0;  ///< the .sharc file the bake would write
     uint64_t file_digest = 0;  ///< FNV-1a (64-bit) of that file: equal for every thread count
+    CacheStageSeconds cache_stages;  ///< the commit's and the resolve's steps (timed iterations)
 
     double bakeSeconds() const { return update_seconds + commit_seconds + resolve_seconds; }
     double segmentsPerSecond() const { return double(segments) / wall_seconds; }
 };
+
+/// `"cache_stages": {...}`: a run's cache stage seconds as a JSON member.
+std::string cacheStagesJson(const CacheStageSeconds& stages);
 
 /// Everything a bake needs besides its settings, built once per scene.
 struct BakeScene {
