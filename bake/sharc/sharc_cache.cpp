@@ -105,6 +105,14 @@ bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, u
 /// latency).
 constexpr size_t kPrefetchDistance = 8;
 
+/// True for the one caller that marks the entry touched first (it lists the slot). Most calls
+/// find it marked already; a plain load spares them the locked exchange, which stalls the
+/// thread's later loads until its stores drain.
+bool claimTouched(AccumulationEntry& entry) {
+    return entry.touched.load(std::memory_order_relaxed) == 0 &&
+           entry.touched.exchange(1, std::memory_order_relaxed) == 0;
+}
+
 /// Up to kSlots per-slot sums of one chunk's deposits, 96 bits wide per channel, added to the
 /// shared accumulation one slot at a time: a path deposits into the same voxels several times,
 /// and the bright voxels are shared by every thread, so one atomic add per slot and chunk
@@ -440,7 +448,7 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
     const std::vector<uint32_t>& slots = chunk_slots_[chunk];
     const auto flush = [&](const PendingSums::Sum& p) {
         AccumulationEntry& entry = accumulation_[p.slot];
-        if (entry.touched.exchange(1, std::memory_order_relaxed) == 0) numerics.touched.push_back(p.slot);
+        if (claimTouched(entry)) numerics.touched.push_back(p.slot);
         for (int c = 0; c < 3; ++c) {
             if ((p.sums[c] || p.carries[c]) && !addToSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
                 ++numerics.saturated;
@@ -552,7 +560,7 @@ void SharcCache::sumIntoCoarserLevels() {
             if (child.coarser_slot == 0) return;
             const uint32_t parent_slot = child.coarser_slot - 1;
             AccumulationEntry& parent = accumulation_[parent_slot];
-            if (parent.touched.exchange(1, std::memory_order_relaxed) == 0) newly_touched.local().push_back(parent_slot);
+            if (claimTouched(parent)) newly_touched.local().push_back(parent_slot);
             for (int c = 0; c < 3; ++c) {
                 const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
                 const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);

@@ -44,8 +44,9 @@ SurfaceHit interpolate(const Scene& scene, uint32_t triangle, float b1, float b2
     SurfaceHit s;
     const glm::uvec3 tri = scene.triangles[triangle];
     const float b0 = 1.0f - b1 - b2;
-    const glm::vec3 p0 = scene.positions[tri.x], p1 = scene.positions[tri.y],
-                    p2 = scene.positions[tri.z];
+    // References: copies of the 12-byte vectors went through the stack, and reading them back
+    // as 8-byte pairs stalled on store forwarding (the hottest instructions of the function).
+    const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
     s.position = b0 * p0 + b1 * p1 + b2 * p2;
     s.face_normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
     s.geometric_normal = s.face_normal;
