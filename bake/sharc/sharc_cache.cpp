@@ -87,22 +87,8 @@ std::array<double, 3> roundingDither(uint32_t iteration, size_t chunk, size_t in
     return {double(a & 0xFFFFu) * kUnit, double(a >> 16) * kUnit, double(b & 0xFFFFu) * kUnit};
 }
 
-/// Adds `low + carries x 2^64` to a 72-bit sum; false when its carry count saturated (the sum
-/// then reads as its ceiling).
-bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, uint64_t low, uint32_t carries) {
-    const uint64_t before = word.fetch_add(low, std::memory_order_relaxed);
-    carries += before + low < before;  // this add wrapped the word
-    if (carries == 0) return true;
-    uint8_t count = word_carries.load(std::memory_order_relaxed);
-    do {
-        if (count == kMaxCarries) return false;
-    } while (!word_carries.compare_exchange_weak(
-        count, uint8_t(std::min<uint32_t>(kMaxCarries, count + carries)), std::memory_order_relaxed));
-    return count + carries <= kMaxCarries;
-}
-
-/// addToSum for a sum that only the calling thread writes (plain loads and stores, no locked
-/// instructions); the same result.
+/// Adds `low + carries x 2^64` to a 72-bit sum that only the calling thread writes (plain loads
+/// and stores); false when its carry count saturated (the sum then reads as its ceiling).
 bool addToOwnedSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, uint64_t low, uint32_t carries) {
     const uint64_t before = word.load(std::memory_order_relaxed);
     word.store(before + low, std::memory_order_relaxed);
@@ -118,13 +104,6 @@ bool addToOwnedSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carri
 /// latency).
 constexpr size_t kPrefetchDistance = 8;
 
-/// True for the one caller that marks the entry touched first (it lists the slot). Most calls
-/// find it marked already; a plain load spares them the locked exchange, which stalls the
-/// thread's later loads until its stores drain.
-bool claimTouched(AccumulationEntry& entry) {
-    return entry.touched.load(std::memory_order_relaxed) == 0 &&
-           entry.touched.exchange(1, std::memory_order_relaxed) == 0;
-}
 
 /// Up to kSlots per-slot sums of one chunk's deposits, 96 bits wide per channel, passed on one
 /// slot at a time: a path deposits into the same voxels several times, so one sum per slot and
@@ -358,7 +337,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
         numerics_.clamped_deposits += n.clamped;
         numerics_.clamped_energy += n.clamped_energy;
     }
-    addChunkSums();
+    addSumsByRange(chunk_sums_, touched_);
     stage_seconds_.accumulate += secondsSince(start);
 }
 
@@ -535,17 +514,17 @@ void SharcCache::sumChunkDeposits(const std::vector<Deposit>& deposits, size_t c
     pending.flushAll(flush);
 }
 
-// 4. Parallel by slot range: a range's sums in chunk order. No two ranges share an entry, so
+// 4. Parallel by slot range: a range's sums in list order. No two ranges share an entry, so
 //    plain loads and stores add; the entries of a range lie together in memory.
-void SharcCache::addChunkSums() {
+void SharcCache::addSumsByRange(const std::vector<std::vector<ChunkVoxelSums>>& lists, std::vector<uint32_t>& touched) {
     const SlotRanges ranges = slotRanges(table_.capacity());
     const ByRange<ChunkVoxelSums> grouped =
-        groupByRange(chunk_sums_, ranges.count, [&](const ChunkVoxelSums& p) { return ranges.of(p.slot); });
+        groupByRange(lists, ranges.count, [&](const ChunkVoxelSums& p) { return ranges.of(p.slot); });
     range_touched_.resize(ranges.count);
     std::atomic<uint64_t> saturated{0};
     const auto addRange = [&](size_t range) {
-        std::vector<uint32_t>& touched = range_touched_[range];
-        touched.clear();
+        std::vector<uint32_t>& first_touched = range_touched_[range];
+        first_touched.clear();
         uint64_t range_saturated = 0;
         const size_t end = grouped.range_begin[range + 1];
         for (size_t i = grouped.range_begin[range]; i < end; ++i) {
@@ -554,7 +533,7 @@ void SharcCache::addChunkSums() {
             AccumulationEntry& entry = accumulation_[p.slot];
             if (entry.touched.load(std::memory_order_relaxed) == 0) {
                 entry.touched.store(1, std::memory_order_relaxed);
-                touched.push_back(p.slot);
+                first_touched.push_back(p.slot);
             }
             for (int c = 0; c < 3; ++c) {
                 if ((p.sums[c] || p.carries[c]) && !addToOwnedSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
@@ -571,7 +550,7 @@ void SharcCache::addChunkSums() {
         tbb::parallel_for(size_t(0), ranges.count, addRange);
     }
     numerics_.saturated_sums += saturated.load();
-    for (const std::vector<uint32_t>& touched : range_touched_) touched_.insert(touched_.end(), touched.begin(), touched.end());
+    for (const std::vector<uint32_t>& list : range_touched_) touched.insert(touched.end(), list.begin(), list.end());
 }
 
 glm::dvec3 SharcCache::feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const {
@@ -603,7 +582,7 @@ void SharcCache::sumIntoCoarserLevels() {
     for (size_t i = 0; i < touched_.size(); ++i) {
         if (touched_levels[i] < coarsest) by_level[touched_levels[i]].push_back(touched_[i]);
     }
-    SlotLists unknown, newly_touched;
+    SlotLists unknown;
     for (uint32_t level = kHashGridLevelMin; level < coarsest; ++level) {
         const std::vector<uint32_t>& slots = by_level[level];
         if (slots.empty()) continue;
@@ -616,26 +595,29 @@ void SharcCache::sumIntoCoarserLevels() {
         // Sorted, so the coarser keys' slots do not depend on which thread listed which voxel.
         tbb::parallel_sort(lookups.begin(), lookups.end());
         if (!lookups.empty()) linkCoarserVoxels(lookups);
-        // Integer adds commute, so the coarser sums do not depend on the order either.
-        std::atomic<uint64_t> saturated{0};
-        tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
-            AccumulationEntry& child = accumulation_[slots[i]];
-            if (child.coarser_slot == 0) return;
-            const uint32_t parent_slot = child.coarser_slot - 1;
-            AccumulationEntry& parent = accumulation_[parent_slot];
-            if (claimTouched(parent)) newly_touched.local().push_back(parent_slot);
-            for (int c = 0; c < 3; ++c) {
-                const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
-                const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);
-                if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries)) {
-                    saturated.fetch_add(1, std::memory_order_relaxed);
+        // Each voxel's sums go to its coarser voxel through the same range-by-range adds as the
+        // commit's (integer adds commute, so the coarser sums do not depend on the order).
+        std::vector<std::vector<ChunkVoxelSums>>& blocks = level_sums_;
+        blocks.resize((slots.size() + kLinkBlock - 1) / kLinkBlock);
+        tbb::parallel_for(size_t(0), blocks.size(), [&](size_t block) {
+            std::vector<ChunkVoxelSums>& sums = blocks[block];
+            sums.clear();
+            const size_t last = std::min(slots.size(), (block + 1) * kLinkBlock);
+            for (size_t i = block * kLinkBlock; i < last; ++i) {
+                if (i + kPrefetchDistance < last) prefetchForRead(&accumulation_[slots[i + kPrefetchDistance]]);
+                const AccumulationEntry& child = accumulation_[slots[i]];
+                if (child.coarser_slot == 0) continue;
+                ChunkVoxelSums& p = sums.emplace_back();
+                p.slot = child.coarser_slot - 1;
+                p.samples = child.samples.load(std::memory_order_relaxed);
+                for (int c = 0; c < 3; ++c) {
+                    p.sums[c] = child.sums[c].load(std::memory_order_relaxed);
+                    p.carries[c] = child.carries[c].load(std::memory_order_relaxed);
                 }
             }
-            parent.samples.fetch_add(child.samples.load(std::memory_order_relaxed), std::memory_order_relaxed);
         });
-        numerics_.saturated_sums += saturated.load();
         const size_t before = touched_.size();
-        gather(newly_touched, touched_);
+        addSumsByRange(blocks, touched_);
         if (level + 1 < coarsest) {
             by_level[level + 1].insert(by_level[level + 1].end(), touched_.begin() + std::ptrdiff_t(before), touched_.end());
         }

@@ -123,8 +123,9 @@ struct ResolvedEntry {
     uint32_t total_samples = 0;   ///< samples ever received (saturating)
 };
 
-/// One chunk's deposits into one voxel, in fixed point, on their way to the accumulation
-/// (SharcCache::commitChunks): per channel a 64-bit word and its wraps, and the samples.
+/// Fixed-point sums on their way to one voxel's accumulation: a chunk's deposits into it
+/// (SharcCache::commitChunks) or a finer voxel's accumulation (the coarser levels). Per channel
+/// a 64-bit word and its wraps, and the samples.
 struct ChunkVoxelSums {
     uint32_t slot = 0;
     uint32_t samples = 0;
@@ -247,11 +248,12 @@ private:
     void insertNewKeys();
     void sumChunkDeposits(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
                           ChunkNumerics& numerics);
-    /// Adds chunk_sums_ to the accumulation, grouped by fixed slot ranges: each range's entries
-    /// are written by one task only, so the adds need no atomics, and a range's entries are close
-    /// together in memory. Lists the slots touched first in this iteration in touched_, in range
-    /// order (the same for any thread count).
-    void addChunkSums();
+    /// Adds per-voxel sums (a commit's chunks, or the finer voxels of a level) to the
+    /// accumulation, grouped by fixed slot ranges: each range's entries are written by one task
+    /// only, so the adds need no atomics, and a range's entries are close together in memory.
+    /// Appends the slots touched first in this iteration to `touched`, in range order (the same
+    /// for any thread count).
+    void addSumsByRange(const std::vector<std::vector<ChunkVoxelSums>>& lists, std::vector<uint32_t>& touched);
 
     /// Adds this iteration's accumulation of every touched voxel below SharcSettings::coarsest_level
     /// to its coarser voxel, level by level from the finest, inserting coarser keys that are new by
@@ -301,7 +303,8 @@ private:
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<NewKey>> chunk_missing_;  ///< commit scratch: deposits with a new key
     std::vector<std::vector<ChunkVoxelSums>> chunk_sums_;  ///< commit scratch: each chunk's sums per voxel
-    std::vector<std::vector<uint32_t>> range_touched_;     ///< commit scratch: slots first touched, per range
+    std::vector<std::vector<uint32_t>> range_touched_;     ///< addSumsByRange scratch: slots first touched, per range
+    std::vector<std::vector<ChunkVoxelSums>> level_sums_;  ///< sumIntoCoarserLevels scratch: finer voxels' sums
     NumericsCounters numerics_;
     CacheStageSeconds stage_seconds_;
     uint64_t occupied_ = 0;
