@@ -355,8 +355,20 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
     uint32_t recent_slots[kRecent] = {};
     uint32_t recent_bases[kRecent] = {};  // a recent key may be missing too: its base is listed again
     size_t next_recent = 0;
+    // The buckets of the next few deposits are prefetched, so their table misses overlap.
+    uint32_t ahead_bases[kPrefetchDistance];
+    for (size_t j = 0; j < std::min(kPrefetchDistance, deposits.size()); ++j) {
+        ahead_bases[j] = bucketBaseOf(deposits[j].key);
+        table_.prefetchBucket(ahead_bases[j]);
+    }
     for (size_t i = 0; i < deposits.size(); ++i) {
         const Deposit& d = deposits[i];
+        const uint32_t base = ahead_bases[i % kPrefetchDistance];
+        if (i + kPrefetchDistance < deposits.size()) {
+            const uint32_t ahead = bucketBaseOf(deposits[i + kPrefetchDistance].key);
+            ahead_bases[i % kPrefetchDistance] = ahead;
+            table_.prefetchBucket(ahead);
+        }
         if (!isFiniteColor(d.radiance)) {
             slots[i] = kDropped;
             ++non_finite;
@@ -369,7 +381,7 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
             r = next_recent;
             next_recent = (next_recent + 1) % kRecent;
             recent_keys[r] = d.key;
-            recent_bases[r] = bucketBaseOf(d.key);
+            recent_bases[r] = base;
             const Probe probe = probeBucket(d.key, recent_bases[r]);
             recent_slots[r] = probe.found ? probe.slot : kMissing;
         }
