@@ -87,16 +87,17 @@ std::array<double, 3> roundingDither(uint32_t iteration, size_t chunk, size_t in
     return {double(a & 0xFFFFu) * kUnit, double(a >> 16) * kUnit, double(b & 0xFFFFu) * kUnit};
 }
 
-/// Adds `low + carries x 2^64` to a 72-bit sum that only the calling thread writes (plain loads
-/// and stores); false when its carry count saturated (the sum then reads as its ceiling).
-bool addToOwnedSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, uint64_t low, uint32_t carries) {
-    const uint64_t before = word.load(std::memory_order_relaxed);
-    word.store(before + low, std::memory_order_relaxed);
+/// Adds `low + carries x 2^64` to a 72-bit sum; false when its carry count saturated (the sum
+/// then reads as its ceiling).
+bool addToSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carries, uint64_t low, uint32_t carries) {
+    const uint64_t before = word.fetch_add(low, std::memory_order_relaxed);
     carries += before + low < before;  // this add wrapped the word
     if (carries == 0) return true;
-    const uint8_t count = word_carries.load(std::memory_order_relaxed);
-    if (count == kMaxCarries) return false;
-    word_carries.store(uint8_t(std::min<uint32_t>(kMaxCarries, count + carries)), std::memory_order_relaxed);
+    uint8_t count = word_carries.load(std::memory_order_relaxed);
+    do {
+        if (count == kMaxCarries) return false;
+    } while (!word_carries.compare_exchange_weak(
+        count, uint8_t(std::min<uint32_t>(kMaxCarries, count + carries)), std::memory_order_relaxed));
     return count + carries <= kMaxCarries;
 }
 
@@ -104,13 +105,26 @@ bool addToOwnedSum(std::atomic<uint64_t>& word, std::atomic<uint8_t>& word_carri
 /// latency).
 constexpr size_t kPrefetchDistance = 8;
 
+/// True for the one caller that marks the entry touched first (it lists the slot). Most calls
+/// find it marked already; a plain load spares them the locked exchange, which stalls the
+/// thread's later loads until its stores drain.
+bool claimTouched(AccumulationEntry& entry) {
+    return entry.touched.load(std::memory_order_relaxed) == 0 &&
+           entry.touched.exchange(1, std::memory_order_relaxed) == 0;
+}
 
-/// Up to kSlots per-slot sums of one chunk's deposits, 96 bits wide per channel, passed on one
-/// slot at a time: a path deposits into the same voxels several times, so one sum per slot and
-/// chunk instead of one per deposit.
+/// Up to kSlots per-slot sums of one chunk's deposits, 96 bits wide per channel, added to the
+/// shared accumulation one slot at a time: a path deposits into the same voxels several times,
+/// and the bright voxels are shared by every thread, so one atomic add per slot and chunk
+/// instead of one per deposit cuts the contention.
 class PendingSums {
 public:
-    using Sum = ChunkVoxelSums;
+    struct Sum {
+        uint32_t slot = 0;
+        uint32_t samples = 0;
+        uint64_t sums[3] = {0, 0, 0};
+        uint32_t carries[3] = {0, 0, 0};  ///< wraps of sums[c]
+    };
 
     /// The pending sum of `slot`; when all are taken, the oldest is flushed to make room.
     template <typename Flush>
@@ -144,8 +158,9 @@ private:
 
 /// What accumulating one chunk counted, added up in chunk order afterwards.
 struct SharcCache::ChunkNumerics {
-    uint64_t failed = 0, negative = 0, clamped = 0;
+    uint64_t failed = 0, negative = 0, clamped = 0, saturated = 0;
     glm::dvec3 failed_energy{0.0}, clamped_energy{0.0};
+    std::vector<uint32_t> touched;
 };
 
 double SharcCache::chooseRadianceScale(double max_radiance) {
@@ -215,25 +230,6 @@ InsertRanges insertRanges(uint32_t capacity, uint32_t probes) {
     return {shift, size_t(last_base >> shift) + 1};
 }
 
-/// Fixed slot ranges for the accumulation's adds (SharcCache::addChunkSums): at least 4096 slots
-/// (160 KiB of accumulation entries: a task's adds stay in its core's caches), at most about 1024
-/// ranges. A function of the capacity only.
-struct SlotRanges {
-    uint32_t shift = kMinRangeShift;
-    size_t count = 1;
-    size_t of(uint32_t slot) const { return slot >> shift; }
-};
-
-SlotRanges slotRanges(uint32_t capacity) {
-    SlotRanges ranges;
-    while ((capacity >> ranges.shift) > kMaxRanges) ++ranges.shift;
-    ranges.count = size_t((capacity - 1) >> ranges.shift) + 1;
-    return ranges;
-}
-
-/// Below this many per-voxel sums the ranges are added one after another on the calling thread.
-constexpr size_t kParallelAddFrom = 4096;
-
 /// Blocks of input lists that groupByRange counts and scatters in parallel: at most 64, and one
 /// per 4096 keys. The result does not depend on them (the sort is stable).
 constexpr size_t kGroupBlocks = 64;
@@ -242,70 +238,14 @@ constexpr size_t kKeysPerGroupBlock = 4096;
 constexpr size_t kParallelInsertFrom = 4096;
 /// Finer voxels per task when their coarser keys are looked up.
 constexpr size_t kLinkBlock = 1024;
-
-/// Items grouped by slot range (groupByRange).
-template <typename T> struct ByRange {
-    std::unique_ptr<T[]> items;       ///< left uninitialised until scattered: no serial zero fill
-    std::vector<size_t> range_begin;  ///< range r holds items[range_begin[r], range_begin[r + 1])
-};
-
-// A stable counting sort by range: blocks of consecutive lists count their items per range in
-// parallel, the counts become offsets (range by range, block by block), and the blocks scatter
-// their items in parallel. Each range thus holds its items in list order, then order within a
-// list, whatever the thread count.
-template <typename T, typename RangeOf>
-ByRange<T> groupByRange(const std::vector<std::vector<T>>& lists, size_t range_count, RangeOf&& range_of) {
-    size_t total = 0;
-    for (const std::vector<T>& list : lists) total += list.size();
-    // Few items (a warm cache) need few blocks: each block's counters cost O(ranges).
-    const size_t blocks = std::min({lists.size(), kGroupBlocks, total / kKeysPerGroupBlock + 1});
-    const auto blockLists = [&](size_t block) {
-        return std::pair(lists.size() * block / blocks, lists.size() * (block + 1) / blocks);
-    };
-    std::vector<size_t> offsets(blocks * range_count, 0);  // [block][range]: counts, then offsets
-    tbb::parallel_for(size_t(0), blocks, [&](size_t block) {
-        size_t* counts = &offsets[block * range_count];
-        const auto [first, last] = blockLists(block);
-        for (size_t list = first; list < last; ++list) {
-            for (const T& item : lists[list]) ++counts[range_of(item)];
-        }
-    });
-    ByRange<T> grouped;
-    grouped.range_begin.assign(range_count + 1, 0);
-    for (size_t block = 0; block < blocks; ++block) {  // each range's size (memory order, no strides)
-        const size_t* counts = &offsets[block * range_count];
-        for (size_t range = 0; range < range_count; ++range) grouped.range_begin[range + 1] += counts[range];
-    }
-    for (size_t range = 0; range < range_count; ++range) grouped.range_begin[range + 1] += grouped.range_begin[range];
-    std::vector<size_t> next(grouped.range_begin.begin(), grouped.range_begin.end() - 1);
-    for (size_t block = 0; block < blocks; ++block) {  // a block's items follow the earlier blocks' in each range
-        for (size_t range = 0; range < range_count; ++range) {
-            const size_t count = offsets[block * range_count + range];
-            offsets[block * range_count + range] = next[range];
-            next[range] += count;
-        }
-    }
-    grouped.items.reset(new T[total]);
-    tbb::parallel_for(size_t(0), blocks, [&](size_t block) {
-        size_t* next_item = &offsets[block * range_count];
-        const auto [first, last] = blockLists(block);
-        for (size_t list = first; list < last; ++list) {
-            for (const T& item : lists[list]) grouped.items[next_item[range_of(item)]++] = item;
-        }
-    });
-    return grouped;
-}
-
-/// New keys grouped by the insert range of their bucket's first slot (insertByRange).
-template <typename Key>
-ByRange<Key> groupByInsertRange(const std::vector<std::vector<Key>>& lists, const HashGridTable& table) {
-    const InsertRanges ranges = insertRanges(table.capacity(), bucketProbeCount(table.capacity(), table.bucketSize()));
-    return groupByRange(lists, ranges.count, [&](const Key& k) { return ranges.of(k.base); });
-}
-
 }  // namespace
 
 /// Keys to insert, grouped by insert range; each range's keys keep the order of the input lists.
+struct SharcCache::KeysByRange {
+    std::unique_ptr<NewKey[]> keys;   ///< left uninitialised until scattered: no serial zero fill
+    std::vector<size_t> range_begin;  ///< range r holds keys[range_begin[r], range_begin[r + 1])
+};
+
 void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration) {
     chunk_slots_.resize(chunks.size());
     chunk_missing_.resize(chunks.size());
@@ -325,10 +265,9 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
     insertNewKeys();
     stage_seconds_.insert += secondsSince(start);
     start = std::chrono::steady_clock::now();
-    chunk_sums_.resize(chunks.size());
     std::vector<ChunkNumerics> chunk_numerics(chunks.size());
     tbb::parallel_for(size_t(0), chunks.size(), [&](size_t chunk) {
-        sumChunkDeposits(chunks[chunk], chunk, iteration, chunk_numerics[chunk]);
+        accumulateChunk(chunks[chunk], chunk, iteration, chunk_numerics[chunk]);
     });
     for (const ChunkNumerics& n : chunk_numerics) {
         numerics_.failed_inserts += n.failed;
@@ -336,8 +275,9 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
         numerics_.negative_deposits += n.negative;
         numerics_.clamped_deposits += n.clamped;
         numerics_.clamped_energy += n.clamped_energy;
+        numerics_.saturated_sums += n.saturated;
+        touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
     }
-    addSumsByRange(chunk_sums_, touched_);
     stage_seconds_.accumulate += secondsSince(start);
 }
 
@@ -394,7 +334,7 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
 //    Slot assignment therefore depends only on the paths, never on the threads (insertByRange).
 //    Only the deposits listed as new are visited.
 void SharcCache::insertNewKeys() {
-    occupied_ += insertByRange(groupByInsertRange(chunk_missing_, table_), [this](const NewKey& k, uint32_t slot) {
+    occupied_ += insertByRange(groupByRange(chunk_missing_), [this](const NewKey& k, uint32_t slot) {
         chunk_slots_[k.owner][k.index] = slot == kNoSlot ? kFailedInsert : slot;
     });
 }
@@ -420,21 +360,68 @@ SharcCache::Probe SharcCache::probeBucket(uint64_t key, uint32_t base) const {
     return {kNoSlot, false};
 }
 
+// A stable counting sort by range: blocks of consecutive lists count their keys per range in
+// parallel, the counts become offsets (range by range, block by block), and the blocks scatter
+// their keys in parallel. Each range thus holds its keys in list order, then order within a list.
+SharcCache::KeysByRange SharcCache::groupByRange(const std::vector<std::vector<NewKey>>& lists) const {
+    const InsertRanges ranges = insertRanges(table_.capacity(),
+                                             bucketProbeCount(table_.capacity(), table_.bucketSize()));
+    size_t total = 0;
+    for (const std::vector<NewKey>& list : lists) total += list.size();
+    // Few keys (a warm cache) need few blocks: each block's counters cost O(ranges).
+    const size_t blocks = std::min({lists.size(), kGroupBlocks, total / kKeysPerGroupBlock + 1});
+    const auto blockLists = [&](size_t block) {
+        return std::pair(lists.size() * block / blocks, lists.size() * (block + 1) / blocks);
+    };
+    std::vector<size_t> offsets(blocks * ranges.count, 0);  // [block][range]: counts, then offsets
+    tbb::parallel_for(size_t(0), blocks, [&](size_t block) {
+        size_t* counts = &offsets[block * ranges.count];
+        const auto [first, last] = blockLists(block);
+        for (size_t list = first; list < last; ++list) {
+            for (const NewKey& k : lists[list]) ++counts[ranges.of(k.base)];
+        }
+    });
+    KeysByRange grouped;
+    grouped.range_begin.assign(ranges.count + 1, 0);
+    for (size_t block = 0; block < blocks; ++block) {  // each range's size (memory order, no strides)
+        const size_t* counts = &offsets[block * ranges.count];
+        for (size_t range = 0; range < ranges.count; ++range) grouped.range_begin[range + 1] += counts[range];
+    }
+    for (size_t range = 0; range < ranges.count; ++range) grouped.range_begin[range + 1] += grouped.range_begin[range];
+    std::vector<size_t> next(grouped.range_begin.begin(), grouped.range_begin.end() - 1);
+    for (size_t block = 0; block < blocks; ++block) {  // a block's keys follow the earlier blocks' in each range
+        for (size_t range = 0; range < ranges.count; ++range) {
+            const size_t count = offsets[block * ranges.count + range];
+            offsets[block * ranges.count + range] = next[range];
+            next[range] += count;
+        }
+    }
+    grouped.keys.reset(new NewKey[total]);
+    tbb::parallel_for(size_t(0), blocks, [&](size_t block) {
+        size_t* next_key = &offsets[block * ranges.count];
+        const auto [first, last] = blockLists(block);
+        for (size_t list = first; list < last; ++list) {
+            for (const NewKey& k : lists[list]) grouped.keys[next_key[ranges.of(k.base)]++] = k;
+        }
+    });
+    return grouped;
+}
+
 // Ranges run in two phases, the even ones in parallel and then the odd ones, each inserting its
 // keys serially in their order. A key whose bucket starts in range r probes only up to
 // bucket_size - 1 slots past r's end, i.e. into range r + 1, never further (ranges are longer
 // than that): two ranges of one phase therefore never read or write the same slot, and every
 // range sees the table exactly as the previous phase left it. Slots depend on the keys' order
 // and the ranges (the capacity) only.
-template <typename Grouped, typename Store>
-uint64_t SharcCache::insertByRange(const Grouped& grouped, Store&& store) {
+template <typename Store>
+uint64_t SharcCache::insertByRange(const KeysByRange& grouped, Store&& store) {
     const size_t ranges = grouped.range_begin.size() - 1;
     const size_t total = grouped.range_begin.back();
     if (total == 0) return 0;
     const auto insertRange = [&](size_t range) {
         uint64_t range_fresh = 0;
         for (size_t i = grouped.range_begin[range]; i < grouped.range_begin[range + 1]; ++i) {
-            const NewKey& k = grouped.items[i];
+            const NewKey& k = grouped.keys[i];
             // A key listed several times (one per deposit, or per finer voxel) is inserted by
             // its first occurrence; the later ones find it.
             const Probe probe = probeBucket(k.key, k.base);
@@ -465,17 +452,27 @@ uint64_t SharcCache::insertByRange(const Grouped& grouped, Store&& store) {
     return fresh.load();
 }
 
-// 3. Parallel over chunks: fixed-point conversion, summed per voxel within the chunk. Integer
-//    addition with carries is associative, so the 72-bit sums end up bit-identical however
-//    PendingSums and the ranges group them.
-void SharcCache::sumChunkDeposits(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
-                                  ChunkNumerics& numerics) {
+// 3. Parallel over chunks: fixed-point conversion and integer atomic adds, which commute, so the
+//    sums do not depend on the order either. Integer addition with carries is associative, so
+//    the 72-bit sums are bit-identical however PendingSums groups them.
+void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
+                                 ChunkNumerics& numerics) {
     const std::vector<uint32_t>& slots = chunk_slots_[chunk];
-    std::vector<ChunkVoxelSums>& sums = chunk_sums_[chunk];
-    sums.clear();
-    const auto flush = [&](const ChunkVoxelSums& p) { sums.push_back(p); };
+    const auto flush = [&](const PendingSums::Sum& p) {
+        AccumulationEntry& entry = accumulation_[p.slot];
+        if (claimTouched(entry)) numerics.touched.push_back(p.slot);
+        for (int c = 0; c < 3; ++c) {
+            if ((p.sums[c] || p.carries[c]) && !addToSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
+                ++numerics.saturated;
+            }
+        }
+        if (p.samples) entry.samples.fetch_add(p.samples, std::memory_order_relaxed);
+    };
     PendingSums pending;
     for (size_t i = 0; i < deposits.size(); ++i) {
+        if (i + kPrefetchDistance < deposits.size() && slots[i + kPrefetchDistance] < kFailedInsert) {
+            prefetchForWrite(&accumulation_[slots[i + kPrefetchDistance]]);
+        }
         const Deposit& d = deposits[i];
         if (slots[i] == kFailedInsert) {
             ++numerics.failed;
@@ -526,45 +523,6 @@ void SharcCache::sumChunkDeposits(const std::vector<Deposit>& deposits, size_t c
     pending.flushAll(flush);
 }
 
-// 4. Parallel by slot range: a range's sums in list order. No two ranges share an entry, so
-//    plain loads and stores add; the entries of a range lie together in memory.
-void SharcCache::addSumsByRange(const std::vector<std::vector<ChunkVoxelSums>>& lists, std::vector<uint32_t>& touched) {
-    const SlotRanges ranges = slotRanges(table_.capacity());
-    const ByRange<ChunkVoxelSums> grouped =
-        groupByRange(lists, ranges.count, [&](const ChunkVoxelSums& p) { return ranges.of(p.slot); });
-    range_touched_.resize(ranges.count);
-    std::atomic<uint64_t> saturated{0};
-    const auto addRange = [&](size_t range) {
-        std::vector<uint32_t>& first_touched = range_touched_[range];
-        first_touched.clear();
-        uint64_t range_saturated = 0;
-        const size_t end = grouped.range_begin[range + 1];
-        for (size_t i = grouped.range_begin[range]; i < end; ++i) {
-            if (i + kPrefetchDistance < end) prefetchForWrite(&accumulation_[grouped.items[i + kPrefetchDistance].slot]);
-            const ChunkVoxelSums& p = grouped.items[i];
-            AccumulationEntry& entry = accumulation_[p.slot];
-            if (entry.touched.load(std::memory_order_relaxed) == 0) {
-                entry.touched.store(1, std::memory_order_relaxed);
-                first_touched.push_back(p.slot);
-            }
-            for (int c = 0; c < 3; ++c) {
-                if ((p.sums[c] || p.carries[c]) && !addToOwnedSum(entry.sums[c], entry.carries[c], p.sums[c], p.carries[c])) {
-                    ++range_saturated;
-                }
-            }
-            entry.samples.store(entry.samples.load(std::memory_order_relaxed) + p.samples, std::memory_order_relaxed);
-        }
-        if (range_saturated) saturated.fetch_add(range_saturated, std::memory_order_relaxed);
-    };
-    if (grouped.range_begin.back() < kParallelAddFrom) {
-        for (size_t range = 0; range < ranges.count; ++range) addRange(range);  // same result, no near-empty tasks
-    } else {
-        tbb::parallel_for(size_t(0), ranges.count, addRange);
-    }
-    numerics_.saturated_sums += saturated.load();
-    for (const std::vector<uint32_t>& list : range_touched_) touched.insert(touched.end(), list.begin(), list.end());
-}
-
 glm::dvec3 SharcCache::feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const {
     const uint32_t window = settings_.feedback_window;
     if (window == 0) return mean;
@@ -594,7 +552,7 @@ void SharcCache::sumIntoCoarserLevels() {
     for (size_t i = 0; i < touched_.size(); ++i) {
         if (touched_levels[i] < coarsest) by_level[touched_levels[i]].push_back(touched_[i]);
     }
-    SlotLists unknown;
+    SlotLists unknown, newly_touched;
     for (uint32_t level = kHashGridLevelMin; level < coarsest; ++level) {
         const std::vector<uint32_t>& slots = by_level[level];
         if (slots.empty()) continue;
@@ -607,29 +565,26 @@ void SharcCache::sumIntoCoarserLevels() {
         // Sorted, so the coarser keys' slots do not depend on which thread listed which voxel.
         tbb::parallel_sort(lookups.begin(), lookups.end());
         if (!lookups.empty()) linkCoarserVoxels(lookups);
-        // Each voxel's sums go to its coarser voxel through the same range-by-range adds as the
-        // commit's (integer adds commute, so the coarser sums do not depend on the order).
-        std::vector<std::vector<ChunkVoxelSums>>& blocks = level_sums_;
-        blocks.resize((slots.size() + kLinkBlock - 1) / kLinkBlock);
-        tbb::parallel_for(size_t(0), blocks.size(), [&](size_t block) {
-            std::vector<ChunkVoxelSums>& sums = blocks[block];
-            sums.clear();
-            const size_t last = std::min(slots.size(), (block + 1) * kLinkBlock);
-            for (size_t i = block * kLinkBlock; i < last; ++i) {
-                if (i + kPrefetchDistance < last) prefetchForRead(&accumulation_[slots[i + kPrefetchDistance]]);
-                const AccumulationEntry& child = accumulation_[slots[i]];
-                if (child.coarser_slot == 0) continue;
-                ChunkVoxelSums& p = sums.emplace_back();
-                p.slot = child.coarser_slot - 1;
-                p.samples = child.samples.load(std::memory_order_relaxed);
-                for (int c = 0; c < 3; ++c) {
-                    p.sums[c] = child.sums[c].load(std::memory_order_relaxed);
-                    p.carries[c] = child.carries[c].load(std::memory_order_relaxed);
+        // Integer adds commute, so the coarser sums do not depend on the order either.
+        std::atomic<uint64_t> saturated{0};
+        tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
+            AccumulationEntry& child = accumulation_[slots[i]];
+            if (child.coarser_slot == 0) return;
+            const uint32_t parent_slot = child.coarser_slot - 1;
+            AccumulationEntry& parent = accumulation_[parent_slot];
+            if (claimTouched(parent)) newly_touched.local().push_back(parent_slot);
+            for (int c = 0; c < 3; ++c) {
+                const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
+                const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);
+                if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries)) {
+                    saturated.fetch_add(1, std::memory_order_relaxed);
                 }
             }
+            parent.samples.fetch_add(child.samples.load(std::memory_order_relaxed), std::memory_order_relaxed);
         });
+        numerics_.saturated_sums += saturated.load();
         const size_t before = touched_.size();
-        addSumsByRange(blocks, touched_);
+        gather(newly_touched, touched_);
         if (level + 1 < coarsest) {
             by_level[level + 1].insert(by_level[level + 1].end(), touched_.begin() + std::ptrdiff_t(before), touched_.end());
         }
@@ -690,7 +645,7 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
         }
     });
     std::atomic<uint64_t> failed{0};
-    occupied_ += insertByRange(groupByInsertRange(missing, table_), [&](const NewKey& k, uint32_t parent) {
+    occupied_ += insertByRange(groupByRange(missing), [&](const NewKey& k, uint32_t parent) {
         if (parent == kNoSlot) {
             failed.fetch_add(1, std::memory_order_relaxed);  // the finer voxel keeps its samples; this level lacks it
         } else {

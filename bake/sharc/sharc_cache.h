@@ -95,8 +95,7 @@ inline constexpr double kGrowAtLoad = 0.25;
 inline constexpr uint32_t kMaxCacheCapacity = 1u << 28;
 
 /// Per-slot accumulation of one iteration: fixed-point radiance sums and the sample count.
-/// Integer adds commute, so the sums do not depend on which thread adds first (the commit adds
-/// without atomics, each slot range on one thread; the coarser levels with atomic adds).
+/// Integer atomic adds commute, so the sums do not depend on which thread adds first.
 /// Each sum is 72 bits wide: a 64-bit word plus a count of its wraps (which also commutes: the
 /// number of wraps is floor(total / 2^64) whatever the order), saturating at 255.
 struct AccumulationEntry {
@@ -121,16 +120,6 @@ struct ResolvedEntry {
     double weight = 0.0;      ///< effective sample count of the history (0 = no data yet)
     uint32_t last_iteration = 0;  ///< iteration of the newest samples
     uint32_t total_samples = 0;   ///< samples ever received (saturating)
-};
-
-/// Fixed-point sums on their way to one voxel's accumulation: a chunk's deposits into it
-/// (SharcCache::commitChunks) or a finer voxel's accumulation (the coarser levels). Per channel
-/// a 64-bit word and its wraps, and the samples.
-struct ChunkVoxelSums {
-    uint32_t slot = 0;
-    uint32_t samples = 0;
-    uint64_t sums[3] = {0, 0, 0};
-    uint32_t carries[3] = {0, 0, 0};
 };
 
 /// One deposit of an update path into a voxel: radiance x weight, and whether it counts as a
@@ -189,8 +178,8 @@ public:
 
     /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,
     /// inserts the new ones in parallel by slot range, each range in chunk order (so slot
-    /// assignment is the same on every run and for any thread count, insertByRange), then sums
-    /// the fixed-point radiance per chunk and voxel and adds the sums in parallel by slot range.
+    /// assignment is the same on every run and for any thread count, insertByRange), then adds
+    /// the fixed-point radiance in parallel with integer atomics.
     /// `iteration` keys the rounding dither (with the chunk and the deposit's place in it), so
     /// the sums do not depend on the thread count, a resumed bake or a shard.
     void commitChunks(const std::vector<std::vector<Deposit>>& chunks, uint32_t iteration);
@@ -241,19 +230,13 @@ private:
         uint32_t owner;
         uint32_t index;
     };
+    struct KeysByRange;
     /// commitChunks' stages: look the keys up (parallel), insert the new ones (parallel by slot
-    /// range, see insertByRange), turn each chunk's deposits into fixed-point sums per voxel
-    /// (parallel), add those to the accumulation (parallel by slot range, addChunkSums).
+    /// range, see insertByRange), add the deposits' fixed-point values (parallel).
     void lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk, uint64_t& non_finite, glm::dvec3& deposited);
     void insertNewKeys();
-    void sumChunkDeposits(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
-                          ChunkNumerics& numerics);
-    /// Adds per-voxel sums (a commit's chunks, or the finer voxels of a level) to the
-    /// accumulation, grouped by fixed slot ranges: each range's entries are written by one task
-    /// only, so the adds need no atomics, and a range's entries are close together in memory.
-    /// Appends the slots touched first in this iteration to `touched`, in range order (the same
-    /// for any thread count).
-    void addSumsByRange(const std::vector<std::vector<ChunkVoxelSums>>& lists, std::vector<uint32_t>& touched);
+    void accumulateChunk(const std::vector<Deposit>& deposits, size_t chunk, uint32_t iteration,
+                         ChunkNumerics& numerics);
 
     /// Adds this iteration's accumulation of every touched voxel below SharcSettings::coarsest_level
     /// to its coarser voxel, level by level from the finest, inserting coarser keys that are new by
@@ -279,6 +262,9 @@ private:
         bool found;
     };
     Probe probeBucket(uint64_t key, uint32_t base) const;
+    /// Groups the keys of `lists` (taken in order) by insert range, in parallel, keeping their
+    /// order within each range.
+    KeysByRange groupByRange(const std::vector<std::vector<NewKey>>& lists) const;
     /// The deterministic parallel insert. The table is cut into fixed ranges of at least 4096
     /// slots (a function of the capacity only); a key belongs to the range of its bucket's first
     /// slot. All even ranges insert their keys in parallel, then all odd ranges, each range
@@ -286,9 +272,8 @@ private:
     /// depends on the keys and their order only, never on the thread count or the scheduling.
     /// Calls store(key, slot) per key (kHashGridInvalidIndex when its bucket is full) and returns
     /// how many keys were new to the table.
-    /// `grouped` holds the keys by insert range (groupByRange in the .cpp).
-    template <typename Grouped, typename Store>
-    uint64_t insertByRange(const Grouped& grouped, Store&& store);
+    template <typename Store>
+    uint64_t insertByRange(const KeysByRange& grouped, Store&& store);
     /// The voxel's new short-window feedback value (r.frames already counts this iteration).
     glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
 
@@ -302,9 +287,6 @@ private:
     std::vector<uint32_t> touched_;  ///< slots with accumulation this iteration (any order)
     std::vector<std::vector<uint32_t>> chunk_slots_;  ///< commit scratch: each deposit's slot
     std::vector<std::vector<NewKey>> chunk_missing_;  ///< commit scratch: deposits with a new key
-    std::vector<std::vector<ChunkVoxelSums>> chunk_sums_;  ///< commit scratch: each chunk's sums per voxel
-    std::vector<std::vector<uint32_t>> range_touched_;     ///< addSumsByRange scratch: slots first touched, per range
-    std::vector<std::vector<ChunkVoxelSums>> level_sums_;  ///< sumIntoCoarserLevels scratch: finer voxels' sums
     NumericsCounters numerics_;
     CacheStageSeconds stage_seconds_;
     uint64_t occupied_ = 0;
