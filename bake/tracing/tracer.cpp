@@ -158,15 +158,13 @@ void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked, std::
 glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
     // Near the origin floats are dense, so a fixed tiny offset is used there; elsewhere the
     // position is nudged by a number of ULPs proportional to the normal component.
-    constexpr float kOriginRegion = 1.0f / 32.0f;
-    constexpr float kFloatScale = 1.0f / 65536.0f;
     constexpr float kIntScale = 256.0f;
     glm::vec3 result;
     for (int axis = 0; axis < 3; ++axis) {
         const int32_t offset = int32_t(kIntScale * normal[axis]);
         const float p = position[axis];
         const float stepped = intAsFloat(floatAsInt(p) + (p < 0.0f ? -offset : offset));
-        result[axis] = std::abs(p) < kOriginRegion ? p + kFloatScale * normal[axis] : stepped;
+        result[axis] = std::abs(p) < kRayOffsetOriginRegion ? p + kRayOffsetNearOrigin * normal[axis] : stepped;
     }
     return result;
 }

@@ -72,4 +72,10 @@ private:
 /// @param normal the geometric normal on the side the ray leaves from.
 glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal);
 
+/// offsetRayOrigin's two regimes: a coordinate within kRayOffsetOriginRegion of 0 moves a fixed
+/// kRayOffsetNearOrigin along the normal (floats are dense there); any other moves 256 float32
+/// steps. A scene that lies wholly near the origin therefore gets the fixed offset everywhere.
+inline constexpr float kRayOffsetOriginRegion = 1.0f / 32.0f;
+inline constexpr float kRayOffsetNearOrigin = 1.0f / 65536.0f;
+
 }  // namespace sharcbake

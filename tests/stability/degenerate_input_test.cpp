@@ -219,5 +219,32 @@ TEST(TablePressure, FailedInsertsAndTheirEnergyAreCountedAndReported) {
     EXPECT_GT(report.deposited_energy, report.failed_insert_energy);
 }
 
+/// The ray-offset warning's advice depends on why the offset is large: a scene wholly near the
+/// origin gets the tracer's fixed guard (moving it cannot help; scaling it up does), one far from
+/// the origin gets 256 float32 steps (moving it does). Cornell box voxel sizes, 1 mm and moved.
+TEST(ExtremeScaleAdvice, TinySceneIsToldToScaleUpAndAFarOneToMove) {
+    SharcSettings settings;
+    settings.grid.capacity = 1024;
+    settings.grid.scene_scale = 50.0f;
+    settings.grid.level_bias = 12.48f;  // level 1 about 7e-6 wide: the grid fit's choice for a 1 mm box
+    const SharcCache tiny_cache(settings, 1.0);
+    const StabilityReport tiny =
+        makeStabilityReport(tiny_cache, UpdateCounters{}, glm::vec3(0.0f), glm::vec3(1e-3f), {1});
+    EXPECT_GT(tiny.ray_offset, tiny.finest_voxel_size);
+    ASSERT_EQ(tiny.warnings.size(), 1u);
+    EXPECT_NE(tiny.warnings.front().find("scale it up"), std::string::npos) << tiny.warnings.front();
+    EXPECT_EQ(tiny.warnings.front().find("towards the origin"), std::string::npos) << tiny.warnings.front();
+
+    settings.grid.level_bias = -2.0f;  // level 1 several centimetres wide
+    const SharcCache far_cache(settings, 1.0);
+    const StabilityReport far =
+        makeStabilityReport(far_cache, UpdateCounters{}, glm::vec3(1e6f, 0.0f, 0.0f), glm::vec3(1e6f + 1.0f), {1});
+    EXPECT_GT(far.ray_offset, far.finest_voxel_size);
+    bool move_advice = false;
+    for (const std::string& w : far.warnings) move_advice |= w.find("ray origins") != std::string::npos &&
+                                                             w.find("towards the origin") != std::string::npos;
+    EXPECT_TRUE(move_advice);
+}
+
 }  // namespace
 }  // namespace sharcbake::stability
