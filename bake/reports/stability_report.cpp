@@ -79,10 +79,17 @@ void addWarnings(StabilityReport& r) {
         }
     }
     if (r.float_spacing > kPositionBiasWarningFactor * double(kHashGridPositionBias)) {
+        // Centring a scene brings its far corner in by at most its largest side: when the corner is
+        // no farther than that, the scene's own size is the cause (CAD in millimetres, say).
+        const bool own_size = r.far_corner_distance <= r.largest_side;
         r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g) is %.0f times SHaRC's position "
                                     "bias (1e-4): surfaces lying on voxel boundaries split between two voxels, which "
-                                    "then average light from both sides; move the scene towards the origin",
-                                    r.float_spacing, r.float_spacing / double(kHashGridPositionBias)));
+                                    "then average light from both sides; ",
+                                    r.float_spacing, r.float_spacing / double(kHashGridPositionBias)) +
+                             (own_size ? "the scene is very large in its units (the bias is an absolute 1e-4, made "
+                                         "for metres): scale it down (millimetres to metres: a scale of 0.001 on its "
+                                         "root node, or the exporter's unit setting)"
+                                       : "move the scene towards the origin"));
     }
     if (r.precisionShare() > kPrecisionWarningShare) {
         r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g from the origin) is %.3g, "
@@ -117,6 +124,8 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
 
     const glm::vec3 extent = glm::max(glm::abs(bounds_min), glm::abs(bounds_max));
     r.far_corner_distance = double(std::max({extent.x, extent.y, extent.z}));
+    const glm::vec3 sides = glm::max(bounds_max - bounds_min, glm::vec3(0.0f));
+    r.largest_side = double(std::max({sides.x, sides.y, sides.z}));
     r.float_spacing = floatSpacing(r.far_corner_distance);
     const glm::vec3 corner(float(r.far_corner_distance));
     r.ray_offset = double(glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner));

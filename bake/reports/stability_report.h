@@ -52,6 +52,7 @@ struct StabilityReport {
 
     // Coordinates, for the levels present in the cache.
     double far_corner_distance = 0.0;  ///< largest |coordinate| of the scene bounds
+    double largest_side = 0.0;         ///< largest side of the scene bounds (chooses the warnings' advice)
     double float_spacing = 0.0;        ///< float32 spacing (ulp) at that coordinate
     double ray_offset = 0.0;           ///< how far the tracer moves ray origins off a surface there
     uint32_t finest_level = 0;         ///< 0 when the cache is empty

@@ -219,10 +219,12 @@ TEST(TablePressure, FailedInsertsAndTheirEnergyAreCountedAndReported) {
     EXPECT_GT(report.deposited_energy, report.failed_insert_energy);
 }
 
-/// The ray-offset warning's advice depends on why the offset is large: a scene wholly near the
+/// The precision warnings' advice depends on the cause. The ray offset: a scene wholly near the
 /// origin gets the tracer's fixed guard (moving it cannot help; scaling it up does), one far from
-/// the origin gets 256 float32 steps (moving it does). Cornell box voxel sizes, 1 mm and moved.
-TEST(ExtremeScaleAdvice, TinySceneIsToldToScaleUpAndAFarOneToMove) {
+/// the origin gets 256 float32 steps (moving it does). The float spacing: a scene whose own size
+/// puts its far corner there must scale down; one far from the origin must move.
+/// Voxel sizes of the grid fit's choices for a 1 mm Cornell box and for larger scenes.
+TEST(ExtremeScaleAdvice, TinySceneIsToldToScaleUpHugeOneToScaleDownAndAFarOneToMove) {
     SharcSettings settings;
     settings.grid.capacity = 1024;
     settings.grid.scene_scale = 50.0f;
@@ -238,12 +240,27 @@ TEST(ExtremeScaleAdvice, TinySceneIsToldToScaleUpAndAFarOneToMove) {
     settings.grid.level_bias = -2.0f;  // level 1 several centimetres wide
     const SharcCache far_cache(settings, 1.0);
     const StabilityReport far =
-        makeStabilityReport(far_cache, UpdateCounters{}, glm::vec3(1e6f, 0.0f, 0.0f), glm::vec3(1e6f + 1.0f), {1});
+        makeStabilityReport(far_cache, UpdateCounters{}, glm::vec3(1e6f, 0.0f, 0.0f), glm::vec3(1e6f + 1.0f, 1.0f, 1.0f), {1});
     EXPECT_GT(far.ray_offset, far.finest_voxel_size);
     bool move_advice = false;
     for (const std::string& w : far.warnings) move_advice |= w.find("ray origins") != std::string::npos &&
                                                              w.find("towards the origin") != std::string::npos;
     EXPECT_TRUE(move_advice);
+
+    // Float spacing against SHaRC's 1e-4 position bias: a 100 km scene around the origin (CAD in
+    // millimetres of a 100 m site) is told to scale down; a 1 unit scene 1e6 away, to move.
+    const StabilityReport huge =
+        makeStabilityReport(far_cache, UpdateCounters{}, glm::vec3(-5e4f), glm::vec3(5e4f), {1});
+    const auto advice = [](const StabilityReport& report, const char* text) {
+        for (const std::string& w : report.warnings) {
+            if (w.find("position bias") != std::string::npos && w.find(text) != std::string::npos) return true;
+        }
+        return false;
+    };
+    EXPECT_TRUE(advice(huge, "scale it down"));
+    EXPECT_FALSE(advice(huge, "towards the origin"));
+    EXPECT_TRUE(advice(far, "towards the origin"));
+    EXPECT_FALSE(advice(far, "scale it down"));
 }
 
 }  // namespace
