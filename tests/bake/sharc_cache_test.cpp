@@ -7,6 +7,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -50,6 +51,37 @@ TEST(HistorySchedule, FactorsFollowTheirDefinitions) {
     EXPECT_DOUBLE_EQ(window.historyFactor(500), 20.0 / 21.0);
     EXPECT_DOUBLE_EQ(ramp.historyFactor(4), 0.75);
     EXPECT_DOUBLE_EQ(ramp.historyFactor(1), 0.0);
+}
+
+/// The cache times its own stages: nothing before any work; after a commit and a resolve every
+/// stage has counted time, the stages sum to no more than the calls took, and they only grow.
+TEST(SharcCache, StageSecondsCountEachStageOfTheCommitAndTheResolve) {
+    SharcSettings settings = smallSettings(1u << 12);
+    settings.coarsest_level = 3;  // so the coarser-level summing has work
+    SharcCache cache(settings, SharcCache::chooseRadianceScale(10.0));
+    const auto total = [](const CacheStageSeconds& t) {
+        return t.look_up + t.insert + t.accumulate + t.coarser_levels + t.resolve;
+    };
+    EXPECT_EQ(total(cache.stageSeconds()), 0.0);
+    std::vector<Deposit> deposits;
+    for (int x = 0; x < 200; ++x) deposits.push_back(Deposit{keyAt(x), glm::vec3(1.0f), 1});
+    const auto start = std::chrono::steady_clock::now();
+    cache.commit(deposits, 0);
+    cache.resolve(0);
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const CacheStageSeconds first = cache.stageSeconds();
+    EXPECT_GT(first.look_up, 0.0);
+    EXPECT_GT(first.insert, 0.0);
+    EXPECT_GT(first.accumulate, 0.0);
+    EXPECT_GT(first.coarser_levels, 0.0);
+    EXPECT_GT(first.resolve, 0.0);
+    EXPECT_LE(total(first), elapsed);
+    cache.commit(deposits, 1);
+    cache.resolve(1);
+    const CacheStageSeconds second = cache.stageSeconds();
+    EXPECT_GT(second.look_up, first.look_up);
+    EXPECT_GT(second.accumulate, first.accumulate);
+    EXPECT_GT(second.resolve, first.resolve);
 }
 
 /// With the ramp, iteration k weighs k: the mean of values v_k = k is sum(k^2)/sum(k).
