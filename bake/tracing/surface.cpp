@@ -9,7 +9,7 @@ namespace {
 
 glm::vec4 fetch(const Scene& scene, const TextureRef& ref, const SurfaceHit& hit) {
     if (!ref.isSet() || size_t(ref.texture) >= scene.textures.size()) return glm::vec4(1.0f);
-    return scene.textures[size_t(ref.texture)].sample(ref.texcoord == 1 ? hit.uv1 : hit.uv0);
+    return scene.textures[size_t(ref.texture)].sample(ref.uv(hit.uv0, hit.uv1));
 }
 
 template <typename T>
@@ -31,7 +31,7 @@ void applyNormalMap(const Scene& scene, const Material& m, const glm::uvec3& tri
     tangent /= length;
     const glm::vec3 bitangent = glm::cross(n, tangent) * (t0.w < 0.0f ? -1.0f : 1.0f);
     const glm::vec3 texel = glm::vec3(scene.textures[size_t(m.normal_texture.texture)].sample(
-                                m.normal_texture.texcoord == 1 ? s.uv1 : s.uv0)) * 2.0f - 1.0f;
+                                m.normal_texture.uv(s.uv0, s.uv1))) * 2.0f - 1.0f;
     glm::vec3 mapped = tangent * (texel.x * m.normal_scale) + bitangent * (texel.y * m.normal_scale) + n * texel.z;
     constexpr float kLowestCosine = 0.01f;
     const float cosine = glm::dot(mapped, s.face_normal);
@@ -103,7 +103,7 @@ bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2) {
     if (m.base_color_texture.isSet()) {
         const std::vector<glm::vec2>& uvs = m.base_color_texture.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
         const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : barycentric(uvs, tri, b0, b1, b2);
-        alpha *= scene.textures[size_t(m.base_color_texture.texture)].sample(uv).a;
+        alpha *= scene.textures[size_t(m.base_color_texture.texture)].sample(m.base_color_texture.transform.apply(uv)).a;
     }
     if (m.alpha_mode == AlphaMode::Mask) return alpha < m.alpha_cutoff;
     // BLEND: a fixed random number per point (triangle and barycentric bits), so the pattern is

@@ -42,9 +42,9 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 5> kSupportedRequiredExtensions = {
+const std::array<const char*, 6> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior", "KHR_mesh_quantization"};
+    "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform"};
 
 /// Text from the scene file for a message: control characters and bytes >= 0x7F are shown as
 /// \xNN, so a crafted name cannot drive the terminal.
@@ -100,6 +100,7 @@ bool isFinite(const glm::vec3& v) {
 struct TextureSlot {
     int index = -1;
     int texcoord = 0;
+    const tinygltf::Value* transform = nullptr;  ///< its KHR_texture_transform object, if any
 };
 
 /// Where an accessor's elements live in memory, after range checks.
@@ -389,7 +390,7 @@ private:
     }
 
     /// Extensions that are only "used" may be ignored by a loader, but some change what the
-    /// scene looks like (instancing, texture transforms, transmission), so say so.
+    /// scene looks like (instancing, transmission), so say so.
     void warnAboutIgnoredExtensions() {
         for (const std::string& ext : model_.extensionsUsed) {
             const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
@@ -678,8 +679,12 @@ private:
         if (geo.normals.empty()) makeFlatShaded(geo);
         else repairNormals(geo, label);
         const uint32_t material = materialForPrimitive(prim, label);
-        if (const TextureRef& map = scene_.materials[material].normal_texture; map.isSet() && geo.tangents.empty()) {
-            computeTangents(geo, map.texcoord == 1 ? geo.uv1 : geo.uv0, label);
+        if (const TextureRef& map = scene_.materials[material].normal_texture; map.isSet()) {
+            if (geo.tangents.empty()) {
+                computeTangents(geo, transformedUvs(map.texcoord == 1 ? geo.uv1 : geo.uv0, map.transform), label);
+            } else if (!map.transform.identity) {
+                turnTangents(geo, map.transform);
+            }
         }
         appendGeometry(geo, material);
     }
@@ -853,6 +858,35 @@ private:
         }
     }
 
+    static std::vector<glm::vec2> transformedUvs(const std::vector<glm::vec2>& uv, const UvTransform& transform) {
+        if (transform.identity) return uv;
+        std::vector<glm::vec2> out(uv.size());
+        for (size_t i = 0; i < uv.size(); ++i) out[i] = transform.apply(uv[i]);
+        return out;
+    }
+
+    /// A normal map read through a UV transform (KHR_texture_transform) needs the tangent frame
+    /// of the transformed UVs: its tangent is dP/du', not the file's dP/du. With the file's frame
+    /// (T along growing u, w (N x T) along falling v, equally long as UV charts are locally
+    /// conformal), dP/d(u', v') = [dP/du dP/dv] M^-1 for the transform's linear part M.
+    static void turnTangents(PrimitiveGeometry& geo, const UvTransform& transform) {
+        const glm::dmat2 m(glm::dvec2(transform.column_u), glm::dvec2(transform.column_v));
+        if (!(std::abs(glm::determinant(m)) > 1e-20)) return;  // a degenerate transform: the map is flat anyway
+        const glm::dmat2 inverse = glm::inverse(m);
+        for (size_t i = 0; i < geo.tangents.size(); ++i) {
+            const glm::vec4 t = geo.tangents[i];
+            const glm::dvec3 n(geo.normals[i]);
+            const glm::dvec3 along_u{glm::vec3(t)};
+            const glm::dvec3 along_v = -glm::cross(n, along_u) * (t.w < 0.0f ? -1.0 : 1.0);
+            const glm::dvec3 new_u = along_u * inverse[0][0] + along_v * inverse[0][1];
+            const glm::dvec3 new_v = along_u * inverse[1][0] + along_v * inverse[1][1];
+            const double length = glm::length(new_u);
+            if (!(length > 1e-12)) continue;
+            const double handedness = glm::dot(glm::cross(n, new_u), new_v) < 0.0 ? 1.0 : -1.0;
+            geo.tangents[i] = glm::vec4(glm::vec3(new_u / length), float(handedness));
+        }
+    }
+
     /// Replaces NaN, infinite or zero normals with the area-weighted geometric normal of the
     /// triangles around the vertex, and says how many were fixed.
     void repairNormals(PrimitiveGeometry& geo, const std::string& label) {
@@ -952,11 +986,10 @@ private:
         m.roughness = static_cast<float>(pbr.roughnessFactor);
         m.emissive = vec3Or(src.emissiveFactor, glm::vec3(0.0f));
         m.double_sided = src.doubleSided;
-        m.base_color_texture = textureRef({pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord}, true, label);
-        m.metallic_roughness_texture =
-            textureRef({pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord}, false, label);
-        m.emissive_texture = textureRef({src.emissiveTexture.index, src.emissiveTexture.texCoord}, true, label);
-        m.normal_texture = textureRef({src.normalTexture.index, src.normalTexture.texCoord}, false, label);
+        m.base_color_texture = textureRef(textureSlot(pbr.baseColorTexture), true, label);
+        m.metallic_roughness_texture = textureRef(textureSlot(pbr.metallicRoughnessTexture), false, label);
+        m.emissive_texture = textureRef(textureSlot(src.emissiveTexture), true, label);
+        m.normal_texture = textureRef(textureSlot(src.normalTexture), false, label);
         m.normal_scale = static_cast<float>(src.normalTexture.scale);
         if (src.occlusionTexture.index >= 0) {
             // Not lost light: ambient occlusion is an approximation of what the path tracer
@@ -1037,13 +1070,52 @@ private:
         return v;
     }
 
+    static std::optional<glm::vec2> vec2Value(const tinygltf::Value& object, const char* key) {
+        if (!object.Has(key)) return std::nullopt;
+        const tinygltf::Value& a = object.Get(key);
+        if (!a.IsArray() || a.ArrayLen() != 2 || !a.Get(0).IsNumber() || !a.Get(1).IsNumber()) return std::nullopt;
+        return glm::vec2(static_cast<float>(a.Get(0).GetNumberAsDouble()), static_cast<float>(a.Get(1).GetNumberAsDouble()));
+    }
+
+    /// A core textureInfo (base colour, metallic-roughness, emissive, normal).
+    template <typename Info>
+    static TextureSlot textureSlot(const Info& info) {
+        return TextureSlot{info.index, info.texCoord, extension(info.extensions, "KHR_texture_transform")};
+    }
+
+    /// A textureInfo inside an extension's JSON (KHR_materials_specular's textures).
     static TextureSlot textureSlot(const tinygltf::Value& object, const char* key) {
         TextureSlot slot;
         if (!object.Has(key) || !object.Get(key).IsObject()) return slot;
         const tinygltf::Value& info = object.Get(key);
         if (auto i = number(info, "index")) slot.index = static_cast<int>(*i);
         if (auto t = number(info, "texCoord")) slot.texcoord = static_cast<int>(*t);
+        if (info.Has("extensions") && info.Get("extensions").IsObject()) {
+            const tinygltf::Value& extensions = info.Get("extensions");
+            if (extensions.Has("KHR_texture_transform") && extensions.Get("KHR_texture_transform").IsObject())
+                slot.transform = &extensions.Get("KHR_texture_transform");
+        }
         return slot;
+    }
+
+    /// KHR_texture_transform's offset, rotation and scale, and its texCoord, which overrides the
+    /// textureInfo's. A malformed transform is ignored with a warning (the texture is still read
+    /// through the untransformed UVs) rather than failing the scene.
+    UvTransform readTextureTransform(const tinygltf::Value& t, int& texcoord, const std::string& what) {
+        const bool has_offset = t.Has("offset"), has_scale = t.Has("scale"), has_rotation = t.Has("rotation");
+        const std::optional<glm::vec2> offset = vec2Value(t, "offset"), scale = vec2Value(t, "scale");
+        const std::optional<double> rotation = number(t, "rotation");
+        const bool valid = (!has_offset || (offset && std::isfinite(offset->x) && std::isfinite(offset->y))) &&
+                           (!has_scale || (scale && std::isfinite(scale->x) && std::isfinite(scale->y))) &&
+                           (!has_rotation || (rotation && std::isfinite(*rotation)));
+        if (!valid) {
+            warn(what + ": KHR_texture_transform needs offset and scale as two finite numbers and a finite rotation; "
+                        "transform ignored");
+            return UvTransform{};
+        }
+        if (auto override_texcoord = number(t, "texCoord")) texcoord = static_cast<int>(*override_texcoord);
+        return UvTransform::fromGltf(offset.value_or(glm::vec2(0.0f)), static_cast<float>(rotation.value_or(0.0)),
+                                     scale.value_or(glm::vec2(1.0f)));
     }
 
     void readMaterialExtensions(const tinygltf::Material& src, Material& m, const std::string& label) {
@@ -1075,6 +1147,10 @@ private:
         if (slot.index < 0) return ref;
         if (static_cast<size_t>(slot.index) >= model_.textures.size())
             fail(label + ": texture " + std::to_string(slot.index) + " does not exist");
+        if (slot.transform) {
+            ref.transform = readTextureTransform(*slot.transform, slot.texcoord,
+                                                 label + ": texture " + std::to_string(slot.index));
+        }
         if (slot.texcoord < 0 || slot.texcoord > 1) {
             warn(label + ": texture " + std::to_string(slot.index) + " uses TEXCOORD_" + std::to_string(slot.texcoord) +
                  "; only TEXCOORD_0 and TEXCOORD_1 are loaded, texture ignored");

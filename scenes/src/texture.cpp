@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file texture.cpp
-/// @brief Texture::sample: bilinear or nearest lookup with glTF wrap modes.
+/// @brief Texture::sample: bilinear or nearest lookup with glTF wrap modes; UvTransform.
 #include "sharcbake/scene.h"
 
 #include <algorithm>
@@ -41,6 +41,21 @@ int wrapIndex(int64_t i, int n, WrapMode mode) {
 }
 
 }  // namespace
+
+UvTransform UvTransform::fromGltf(glm::vec2 offset, float rotation, glm::vec2 scale) {
+    UvTransform t;
+    if (offset == glm::vec2(0.0f) && rotation == 0.0f && scale == glm::vec2(1.0f)) return t;
+    // glTF's translation * rotation * scale, with the rotation as the extension's reference
+    // implementations and sample model read it (u' = u cos + v sin, v' = v cos - u sin): the
+    // specification's example, offset [0, 1], rotation pi/2 and scale 0.5, then maps the unit
+    // square onto the image's lower-left quadrant, as it says.
+    const float c = std::cos(rotation), s = std::sin(rotation);
+    t.column_u = glm::vec2(c, -s) * scale.x;
+    t.column_v = glm::vec2(s, c) * scale.y;
+    t.offset = offset;
+    t.identity = false;
+    return t;
+}
 
 glm::vec4 Texture::sample(glm::vec2 uv) const {
     // An empty texture is neutral: textures multiply factors, so white changes nothing.

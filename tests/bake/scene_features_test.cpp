@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // What scenes from other tools carry, from the glTF to the traced surface: vertex colours
-// (COLOR_0), tangent-space normal maps (with TANGENT or tangents computed from the UVs), alpha
-// cut-outs (MASK, and BLEND as a stochastic cut-out) and the occlusion map that is dropped with
-// a warning. Each case is a 2 m quad at y = 0 facing +Y, with u along +X and v along +Z.
+// (COLOR_0), tangent-space normal maps (with TANGENT or tangents computed from the UVs), UV
+// transforms (KHR_texture_transform), alpha cut-outs (MASK, and BLEND as a stochastic cut-out)
+// and the occlusion map that is dropped with a warning. Each case is a 2 m quad at y = 0 facing +Y, with u along +X and v along +Z.
 #include "gltf_builder.h"
 #include "sharcbake/scene_loader.h"
 #include "tracing/surface.h"
@@ -194,6 +194,114 @@ TEST(NormalMaps, AMapSteeperThanTheSurfaceStaysAboveIt) {
     ASSERT_TRUE(hit);
     EXPECT_GT(glm::dot(hit->shading_normal, hit->geometric_normal), 0.0f);
     EXPECT_NEAR(glm::length(hit->shading_normal), 1.0f, 1e-5f);
+}
+
+/// A 4x4 data texture (metallic-roughness, read linearly) whose texel (column, row) holds
+/// green = 16 column + row + 1 (out of 255): which texel a lookup read is plain to see.
+std::vector<uint8_t> numberedTexels() {
+    std::vector<uint8_t> rgba;
+    for (int row = 0; row < 4; ++row)
+        for (int column = 0; column < 4; ++column) rgba.insert(rgba.end(), {0, uint8_t(16 * column + row + 1), 0, 255});
+    return rgba;
+}
+
+/// The (column, row) of the numbered texel the metallic-roughness lookup at (u, v) read.
+glm::ivec2 texelReadAt(const Scene& scene, const Tracer& tracer, float u, float v) {
+    const auto hit = hitAt(scene, tracer, 2.0f * u - 1.0f, 2.0f * v - 1.0f);
+    if (!hit) return glm::ivec2(-1);
+    const int number = int(std::lround(evaluateMaterial(scene, *hit).roughness * 255.0f)) - 1;
+    return glm::ivec2(number / 16, number % 16);
+}
+
+TEST(TextureTransforms, TheSpecificationsExampleReadsTheLowerLeftQuadrantTurned) {
+    // KHR_texture_transform's example: offset [0, 1], rotation pi/2, scale 0.5 "utilizes only the
+    // lower left quadrant of the source image, rotated clockwise 90 degrees": uv' = (v/2, 1 - u/2).
+    QuadScene quad;
+    const int texture = quad.addTexture(png(4, 4, numberedTexels()), true);
+    quad.material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {
+        {"index", texture},
+        {"extensions",
+         {{"KHR_texture_transform", {{"offset", {0.0, 1.0}}, {"rotation", 1.57079632679}, {"scale", {0.5, 0.5}}}}}}};
+    quad.gltf.doc["extensionsUsed"] = {"KHR_texture_transform"};
+    quad.gltf.doc["extensionsRequired"] = {"KHR_texture_transform"};
+    const Scene scene = quad.load();
+    EXPECT_TRUE(scene.stats.warnings.empty());
+    const Tracer tracer(scene);
+    struct Case {
+        glm::vec2 uv;
+        glm::ivec2 texel;  ///< floor(4 uv')
+    };
+    for (const Case& c : {Case{{0.1f, 0.3f}, {0, 3}}, Case{{0.7f, 0.2f}, {0, 2}}, Case{{0.45f, 0.9f}, {1, 3}},
+                          Case{{0.9f, 0.6f}, {1, 2}}}) {
+        const glm::ivec2 read = texelReadAt(scene, tracer, c.uv.x, c.uv.y);
+        EXPECT_EQ(read, c.texel) << "uv " << c.uv.x << ", " << c.uv.y;
+    }
+}
+
+TEST(TextureTransforms, TilingWithRepeatAndTheExtensionsTexCoord) {
+    QuadScene quad;
+    const int texture = quad.addTexture(png(4, 4, numberedTexels()), true);
+    quad.gltf.doc["samplers"][texture]["wrapS"] = 10497;  // REPEAT
+    quad.gltf.doc["samplers"][texture]["wrapT"] = 10497;
+    // The extension's texCoord (1) overrides the textureInfo's (0); TEXCOORD_1 runs u backwards.
+    quad.extra_attributes["TEXCOORD_1"] =
+        quad.gltf.addData(std::vector<float>{1, 0, 0, 0, 0, 1, 1, 1}, test::kFloat, "VEC2");
+    quad.material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {
+        {"index", texture},
+        {"texCoord", 0},
+        {"extensions", {{"KHR_texture_transform", {{"offset", {0.25, 0.0}}, {"scale", {3.0, 1.0}}, {"texCoord", 1}}}}}};
+    const Scene scene = quad.load();
+    EXPECT_EQ(scene.materials.at(0).metallic_roughness_texture.texcoord, 1u);
+    const Tracer tracer(scene);
+    // uv' = (3 (1 - u) + 0.25, v), wrapped into [0, 1).
+    for (const float u : {0.05f, 0.3f, 0.55f, 0.8f}) {
+        const float wrapped = 3.0f * (1.0f - u) + 0.25f - std::floor(3.0f * (1.0f - u) + 0.25f);
+        EXPECT_EQ(texelReadAt(scene, tracer, u, 0.6f), glm::ivec2(int(4.0f * wrapped), 2)) << "u " << u;
+    }
+}
+
+TEST(TextureTransforms, AMalformedTransformIsIgnoredWithAWarning) {
+    QuadScene quad;
+    const int texture = quad.addTexture(png(4, 4, numberedTexels()), true);
+    quad.material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {
+        {"index", texture}, {"extensions", {{"KHR_texture_transform", {{"scale", {2.0}}, {"texCoord", 1}}}}}};
+    const Scene scene = quad.load();
+    EXPECT_TRUE(warnedAbout(scene, "KHR_texture_transform needs offset and scale as two finite numbers"));
+    EXPECT_EQ(scene.materials.at(0).metallic_roughness_texture.texcoord, 0u);  // the transform's texCoord too
+    const Tracer tracer(scene);
+    EXPECT_EQ(texelReadAt(scene, tracer, 0.3f, 0.6f), glm::ivec2(1, 2));  // the plain UVs
+}
+
+TEST(TextureTransforms, ANormalMapTurnsWithItsUvs) {
+    // Rotated by pi/2, u' = v grows along +Z: the map's +X (0.6, 0, 0.8) now tilts the normal
+    // towards +Z, whether the tangents are computed from the turned UVs or given (along +X for
+    // the untransformed UVs) and turned.
+    for (const bool given_tangents : {false, true}) {
+        QuadScene quad;
+        quad.material["normalTexture"] = {
+            {"index", quad.addTexture(normalTexel({0.6f, 0.0f, 0.8f}))},
+            {"extensions", {{"KHR_texture_transform", {{"rotation", 1.5707963267948966}}}}}};
+        if (given_tangents) {
+            quad.extra_attributes["TANGENT"] = quad.gltf.addData(
+                std::vector<float>{1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1}, test::kFloat, "VEC4");
+        }
+        const Scene scene = quad.load();
+        ASSERT_EQ(scene.tangents.size(), 4u);
+        expectNear(glm::vec3(scene.tangents[0]), {0.0f, 0.0f, 1.0f}, 1e-6f);
+        const Tracer tracer(scene);
+        const auto hit = hitAt(scene, tracer, 0.2f, 0.4f);
+        ASSERT_TRUE(hit);
+        expectNear(hit->shading_normal, {0.0f, 0.8f, 0.6f}, 0.01f);
+    }
+    // The map's +Y (image up) follows falling v' = u: towards +X.
+    QuadScene quad;
+    quad.material["normalTexture"] = {{"index", quad.addTexture(normalTexel({0.0f, 0.6f, 0.8f}))},
+                                      {"extensions", {{"KHR_texture_transform", {{"rotation", 1.5707963267948966}}}}}};
+    const Scene scene = quad.load();
+    const Tracer tracer(scene);
+    const auto hit = hitAt(scene, tracer, 0.2f, 0.4f);
+    ASSERT_TRUE(hit);
+    expectNear(hit->shading_normal, {0.6f, 0.8f, 0.0f}, 0.01f);
 }
 
 TEST(AlphaCutouts, MaskFactorBelowTheCutoffLetsRaysThrough) {

@@ -37,11 +37,28 @@ struct Texture {
     glm::vec4 sample(glm::vec2 uv) const;
 };
 
-/// A material's reference to a texture: index into Scene::textures and which UV set to use.
+/// KHR_texture_transform: an affine map from a mesh's UVs to the texture's,
+/// uv' = offset + rotation(angle) * (scale * uv), where the rotation turns UVs counter-clockwise
+/// in glTF's v-down texture space: u' = u cos + v sin, v' = v cos - u sin (before the offset).
+struct UvTransform {
+    glm::vec2 column_u{1.0f, 0.0f};  ///< what one unit of u becomes
+    glm::vec2 column_v{0.0f, 1.0f};  ///< what one unit of v becomes
+    glm::vec2 offset{0.0f};
+    bool identity = true;  ///< no extension: the UVs are used as they are, bit for bit
+
+    static UvTransform fromGltf(glm::vec2 offset, float rotation, glm::vec2 scale);
+    glm::vec2 apply(glm::vec2 uv) const { return identity ? uv : column_u * uv.x + column_v * uv.y + offset; }
+};
+
+/// A material's reference to a texture: index into Scene::textures, which UV set to use and
+/// the UV transform (KHR_texture_transform) applied before the lookup.
 struct TextureRef {
     int32_t texture = -1;   ///< -1: no texture
     uint32_t texcoord = 0;  ///< 0 = TEXCOORD_0, 1 = TEXCOORD_1
+    UvTransform transform;
     bool isSet() const { return texture >= 0; }
+    /// The texture's UV at a point whose two UV sets are uv0 and uv1.
+    glm::vec2 uv(glm::vec2 uv0, glm::vec2 uv1) const { return transform.apply(texcoord == 1 ? uv1 : uv0); }
 };
 
 /// glTF alphaMode. MASK cuts out where alpha < alpha_cutoff; BLEND is traced as a stochastic
