@@ -26,6 +26,9 @@ struct PathHistory {
     void applyThroughput(glm::vec3 throughput) {
         for (uint32_t j = 0; j < length; ++j) weights[j] *= throughput;
     }
+    /// Forget every vertex. Only the first `length` entries are ever read, so the arrays keep
+    /// their stale values (zeroing them was a third of trace()'s own time).
+    void clear() { length = 0; }
     /// Shift the history and make `key` the most recent vertex.
     void push(uint64_t key, uint32_t depth) {
         for (uint32_t j = std::min(length, depth - 1); j > 0; --j) {
@@ -106,7 +109,7 @@ void UpdateWavefront::trace(const std::vector<UpdatePathStart>& starts, const De
     for (size_t i = 0; i < starts.size(); ++i) {
         Path& path = paths_[i];
         path.sampler = starts[i].sampler;
-        path.history = PathHistory{};
+        path.history.clear();
         path.ray = starts[i].camera_ray;
         path.previous_bsdf_pdf = 0.0f;
         path.previous_position = path.ray.origin;

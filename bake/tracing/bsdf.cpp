@@ -163,7 +163,15 @@ glm::vec3 multipleScatteringFresnel(glm::vec3 f0, glm::vec3 f90, float e_avg) {
 
 }  // namespace
 
-GltfBsdf::Lobes GltfBsdf::lobes(float cos_o) const {
+const GltfBsdf::Lobes& GltfBsdf::lobes(float cos_o) const {
+    if (!(cos_o == lobes_cos_o_)) {
+        lobes_ = computeLobes(cos_o);
+        lobes_cos_o_ = cos_o;
+    }
+    return lobes_;
+}
+
+GltfBsdf::Lobes GltfBsdf::computeLobes(float cos_o) const {
     Lobes l;
     if (!has_specular_) {
         l.diffuse = l.albedo = diffuse_color_;
@@ -213,7 +221,7 @@ GltfBsdf::Evaluation GltfBsdf::evaluate(glm::vec3 wo_world, glm::vec3 wi_world) 
     if (wo.z <= 0.0f || wi.z <= 0.0f) return e;
     const glm::vec3 h = glm::normalize(wo + wi);
     const float cos_oh = std::max(0.0f, glm::dot(wo, h));
-    const Lobes l = lobes(wo.z);
+    const Lobes& l = lobes(wo.z);
     const float p_spec = l.p_specular;
 
     // Diffuse base, scaled by what the dielectric layer leaves (albedo scaling), the

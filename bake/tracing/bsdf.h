@@ -24,6 +24,8 @@
 
 #include <glm/glm.hpp>
 
+#include <limits>
+
 namespace sharcbake {
 
 /// GGX helpers on a local frame with the normal along +Z. alpha = roughness^2.
@@ -86,7 +88,10 @@ private:
         glm::vec3 albedo{0.0f};               ///< the whole BRDF's, towards this direction
         float p_specular = 0.0f;              ///< single-scattering lobe vs cosine, by albedo
     };
-    Lobes lobes(float cos_o) const;
+    /// The lobes towards cos_o, computed once per outgoing direction: a path vertex asks for
+    /// the same wo three times (light sampling, Russian roulette, the next direction).
+    const Lobes& lobes(float cos_o) const;
+    Lobes computeLobes(float cos_o) const;
 
     Frame frame_;
     glm::vec3 geometric_normal_;
@@ -99,6 +104,10 @@ private:
     float roughness_;
     float alpha_;
     bool has_specular_;           ///< false for pure Lambert (metallic 0, specular weight 0)
+    // The last lobes() answer (NaN: none yet). A GltfBsdf belongs to one path vertex, on one
+    // thread, so the memo needs no synchronisation.
+    mutable float lobes_cos_o_ = std::numeric_limits<float>::quiet_NaN();
+    mutable Lobes lobes_;
 };
 
 }  // namespace sharcbake
