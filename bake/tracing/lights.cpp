@@ -156,18 +156,17 @@ bool LightSampler::sample(const SurfaceHit& at, float u_select, glm::vec2 u, Lig
 bool LightSampler::sampleTriangle(uint32_t triangle, float pmf, const SurfaceHit& at, glm::vec2 u,
                                   LightSample& out) const {
     const glm::vec2 b = sampleUniformTriangle(u);
-    const SurfaceHit point = makeSurfacePoint(scene_, triangle, b.x, b.y);
+    const EmitterPoint point = makeEmitterPoint(scene_, triangle, b.x, b.y);
     const glm::vec3 to_light = point.position - at.position;
     const float distance2 = glm::dot(to_light, to_light);
     if (!(distance2 > 0.0f)) return false;
     const float distance = std::sqrt(distance2);
     const glm::vec3 wi = to_light / distance;
     const float cos_light = -glm::dot(point.face_normal, wi);
-    const ShadingMaterial material = evaluateMaterial(scene_, point);
-    if (cos_light == 0.0f || (cos_light < 0.0f && !material.double_sided)) return false;
+    if (cos_light == 0.0f || (cos_light < 0.0f && !point.double_sided)) return false;
     out.wi = wi;
     out.distance = distance;
-    out.radiance = material.emission;
+    out.radiance = point.emission;
     out.pdf = pmf * distance2 / (triangle_area_[triangle] * std::abs(cos_light));
     out.is_delta = false;
     return out.pdf > 0.0f && std::isfinite(out.pdf);

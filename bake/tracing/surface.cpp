@@ -93,6 +93,28 @@ SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, flo
     return s;
 }
 
+EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, float b2) {
+    // Each value by the same expression as interpolate() and evaluateMaterial(), so a light
+    // sample is bit for bit what the full surface point would give.
+    EmitterPoint e;
+    const glm::uvec3 tri = scene.triangles[triangle];
+    const float b0 = 1.0f - b1 - b2;
+    const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
+    e.position = b0 * p0 + b1 * p1 + b2 * p2;
+    e.face_normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    const Material& m = scene.materials[scene.triangle_materials[triangle]];
+    e.double_sided = m.double_sided;
+    if (!m.isEmissive()) return e;
+    glm::vec3 texel(1.0f);
+    if (m.emissive_texture.isSet() && size_t(m.emissive_texture.texture) < scene.textures.size()) {
+        const std::vector<glm::vec2>& uvs = m.emissive_texture.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
+        const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : b0 * uvs[tri.x] + b1 * uvs[tri.y] + b2 * uvs[tri.z];
+        texel = glm::vec3(scene.textures[size_t(m.emissive_texture.texture)].sample(m.emissive_texture.transform.apply(uv)));
+    }
+    e.emission = m.emissive * m.emissive_strength * texel;
+    return e;
+}
+
 bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2) {
     const Material& m = scene.materials[scene.triangle_materials[triangle]];
     if (!m.cutsOut()) return false;

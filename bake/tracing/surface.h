@@ -32,6 +32,17 @@ SurfaceHit makeSurfaceHit(const Scene& scene, const RayHit& hit, glm::vec3 ray_d
 /// the winding's normal (used for light sampling, where there is no incoming ray).
 SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, float b2);
 
+/// What light sampling needs of a point on an emissive triangle: where it is, which way the
+/// winding faces and what it emits. The same values as makeSurfacePoint() and
+/// evaluateMaterial() give, without the shading frame and the BSDF inputs they also build.
+struct EmitterPoint {
+    glm::vec3 position{0.0f};
+    glm::vec3 face_normal{0.0f, 0.0f, 1.0f};  ///< unit, from the winding
+    glm::vec3 emission{0.0f};                 ///< ShadingMaterial::emission there
+    bool double_sided = false;
+};
+EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, float b2);
+
 /// True where a ray passes through the surface at barycentrics (b1, b2) of `triangle`: its
 /// material is MASK with alpha below the cut-off, or BLEND and this point's fixed random number
 /// is at least alpha. Alpha is baseColorFactor.a x base colour texture alpha x COLOR_0 alpha.

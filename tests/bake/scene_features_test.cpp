@@ -304,6 +304,35 @@ TEST(TextureTransforms, ANormalMapTurnsWithItsUvs) {
     expectNear(hit->shading_normal, {0.6f, 0.8f, 0.0f}, 0.01f);
 }
 
+TEST(EmitterPoints, AreBitForBitTheFullSurfacePointsEmission) {
+    // Light sampling reads emitters through makeEmitterPoint; it must give exactly what the full
+    // surface point and material give, or caches would depend on which path computed a light.
+    QuadScene quad;
+    quad.material["emissiveFactor"] = {0.9, 0.7, 0.3};
+    quad.material["emissiveTexture"] = {
+        {"index", quad.addTexture(png(4, 4, numberedTexels()))},
+        {"extensions", {{"KHR_texture_transform", {{"offset", {0.1, 0.2}}, {"rotation", 0.3}, {"scale", {2.0, 1.5}}}}}}};
+    quad.material["extensions"] = {{"KHR_materials_emissive_strength", {{"emissiveStrength", 7.0}}}};
+    quad.material["doubleSided"] = true;
+    const Scene scene = quad.load();
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    for (uint32_t triangle = 0; triangle < scene.triangles.size(); ++triangle) {
+        for (int i = 0; i < 200; ++i) {
+            float b1 = uniform(random), b2 = uniform(random);
+            if (b1 + b2 > 1.0f) b1 = 1.0f - b1, b2 = 1.0f - b2;
+            const EmitterPoint e = makeEmitterPoint(scene, triangle, b1, b2);
+            const SurfaceHit point = makeSurfacePoint(scene, triangle, b1, b2);
+            const ShadingMaterial material = evaluateMaterial(scene, point);
+            EXPECT_EQ(e.position, point.position);
+            EXPECT_EQ(e.face_normal, point.face_normal);
+            EXPECT_EQ(e.emission, material.emission);
+            EXPECT_EQ(e.double_sided, material.double_sided);
+            EXPECT_GT(e.emission.x + e.emission.y + e.emission.z, 0.0f);
+        }
+    }
+}
+
 TEST(AlphaCutouts, MaskFactorBelowTheCutoffLetsRaysThrough) {
     for (const double alpha : {0.3, 0.7}) {
         QuadScene quad;
