@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "tracing/surface.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -118,18 +119,33 @@ EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, f
 bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2) {
     const Material& m = scene.materials[scene.triangle_materials[triangle]];
     if (!m.cutsOut()) return false;
-    float alpha = m.base_alpha;
     const glm::uvec3 tri = scene.triangles[triangle];
     const float b0 = 1.0f - b1 - b2;
-    if (!scene.colors.empty()) alpha *= barycentric(scene.colors, tri, b0, b1, b2).a;
-    if (m.base_color_texture.isSet()) {
-        const std::vector<glm::vec2>& uvs = m.base_color_texture.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
+    const auto texel = [&](const TextureRef& ref) {
+        const std::vector<glm::vec2>& uvs = ref.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
         const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : barycentric(uvs, tri, b0, b1, b2);
-        alpha *= scene.textures[size_t(m.base_color_texture.texture)].sample(m.base_color_texture.transform.apply(uv)).a;
+        return scene.textures[size_t(ref.texture)].sample(ref.transform.apply(uv));
+    };
+    // The share of this point that stops rays: alpha for BLEND, and what transmission leaves.
+    float opacity = 1.0f;
+    if (m.alpha_mode != AlphaMode::Opaque) {
+        float alpha = m.base_alpha;
+        if (!scene.colors.empty()) alpha *= barycentric(scene.colors, tri, b0, b1, b2).a;
+        if (m.base_color_texture.isSet()) alpha *= texel(m.base_color_texture).a;
+        if (m.alpha_mode == AlphaMode::Mask) {
+            if (alpha < m.alpha_cutoff) return true;
+        } else {
+            opacity = alpha;
+        }
     }
-    if (m.alpha_mode == AlphaMode::Mask) return alpha < m.alpha_cutoff;
-    // BLEND: a fixed random number per point (triangle and barycentric bits), so the pattern is
-    // the same for every ray and thread count, and opaque in a share alpha of the surface.
+    if (m.transmission > 0.0f) {
+        float transmission = m.transmission;
+        if (m.transmission_texture.isSet()) transmission *= texel(m.transmission_texture).r;
+        opacity *= 1.0f - std::clamp(transmission, 0.0f, 1.0f);
+    }
+    if (opacity >= 1.0f) return false;
+    // A fixed random number per point (triangle and barycentric bits), so the pattern is the
+    // same for every ray and thread count, and opaque in a share `opacity` of the surface.
     uint32_t b1_bits, b2_bits;
     std::memcpy(&b1_bits, &b1, sizeof b1_bits);
     std::memcpy(&b2_bits, &b2, sizeof b2_bits);
@@ -137,7 +153,7 @@ bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2) {
     h ^= h >> 31;
     h *= 0xBF58476D1CE4E5B9ull;
     h ^= h >> 29;
-    return float(h >> 40) * 0x1.0p-24f >= alpha;
+    return float(h >> 40) * 0x1.0p-24f >= opacity;
 }
 
 ShadingMaterial evaluateMaterial(const Scene& scene, const SurfaceHit& hit) {

@@ -42,9 +42,9 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 6> kSupportedRequiredExtensions = {
+const std::array<const char*, 7> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform"};
+    "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission"};
 
 /// Text from the scene file for a message: control characters and bytes >= 0x7F are shown as
 /// \xNN, so a crafted name cannot drive the terminal.
@@ -1029,7 +1029,7 @@ private:
         }
         for (size_t i = 0; i < scene_.materials.size(); ++i) {
             Material& m = scene_.materials[i];
-            if (!m.cutsOut()) continue;
+            if (m.alpha_mode == AlphaMode::Opaque) continue;
             bool texture_alpha = false;
             if (m.base_color_texture.isSet()) {
                 for (const glm::vec4& texel : scene_.textures[size_t(m.base_color_texture.texture)].texels)
@@ -1123,6 +1123,17 @@ private:
             m.emissive_strength = static_cast<float>(number(*ext, "emissiveStrength").value_or(1.0));
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_ior"))
             m.ior = static_cast<float>(number(*ext, "ior").value_or(1.5));
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_transmission")) {
+            m.transmission = std::clamp(static_cast<float>(number(*ext, "transmissionFactor").value_or(0.0)), 0.0f, 1.0f);
+            m.transmission_texture = textureRef(textureSlot(*ext, "transmissionTexture"), false, label);
+            if (m.transmission > 0.0f) {
+                // Blender's glass (Principled Transmission) exports as this. Opaque, it would
+                // keep daylight out of every room behind a window.
+                warn(label + ": KHR_materials_transmission is traced as thin see-through glass: a share " +
+                     "transmissionFactor of each surface lets rays through unbent and untinted; the glass's colour " +
+                     "and the reflection of the transmitted share are not modelled");
+            }
+        }
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_specular")) {
             m.specular = static_cast<float>(number(*ext, "specularFactor").value_or(1.0));
             m.specular_color = vec3Value(*ext, "specularColorFactor").value_or(glm::vec3(1.0f));

@@ -396,6 +396,64 @@ TEST(AlphaCutouts, MaterialsThatAreOpaqueEverywhereAreTracedAsOpaque) {
     }
 }
 
+/// The share of 20000 rays straight down through random points of the quad that pass it; each
+/// point's answer is checked to be the same for closest-hit and occlusion rays, and repeatable.
+double passingShare(const Scene& scene) {
+    const Tracer tracer(scene);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> coordinate(-0.99f, 0.99f);
+    constexpr int kRays = 20000;
+    int through = 0;
+    for (int i = 0; i < kRays; ++i) {
+        const float x = coordinate(rng), z = coordinate(rng);
+        const bool passes = passesThrough(tracer, x, z);
+        through += passes;
+        EXPECT_EQ(passes, !hitAt(scene, tracer, x, z).has_value()) << "closest hit and occlusion agree";
+        EXPECT_EQ(passes, passesThrough(tracer, x, z)) << "the same point gives the same answer";
+    }
+    return double(through) / kRays;
+}
+
+TEST(Transmission, GlassLetsItsTransmissionFactorOfRaysThrough) {
+    // Binomial standard deviation at most sqrt(0.25 / 20000) = 0.0035: 0.018 is 5 sigma.
+    for (const double factor : {1.0, 0.6, 0.25}) {
+        QuadScene quad;
+        quad.material["extensions"] = {{"KHR_materials_transmission", {{"transmissionFactor", factor}}}};
+        quad.gltf.doc["extensionsUsed"] = {"KHR_materials_transmission"};
+        quad.gltf.doc["extensionsRequired"] = {"KHR_materials_transmission"};
+        const Scene scene = quad.load();
+        EXPECT_FLOAT_EQ(scene.materials.at(0).transmission, float(factor));
+        EXPECT_TRUE(warnedAbout(scene, "KHR_materials_transmission is traced as thin see-through glass"));
+        EXPECT_FALSE(warnedAbout(scene, "is not supported"));
+        EXPECT_NEAR(passingShare(scene), factor, 0.018) << factor;
+    }
+}
+
+TEST(Transmission, TextureAndBlendAlphaCombine) {
+    // The texture's R (0 on the left half, 1 on the right: u grows along +X) scales the factor,
+    // and BLEND alpha 0.5 makes half of what transmission leaves opaque see-through as well.
+    QuadScene quad;
+    const int texture = quad.addTexture(png(2, 1, {0, 0, 0, 255, 255, 255, 255, 255}), true);
+    quad.material["extensions"] = {
+        {"KHR_materials_transmission", {{"transmissionFactor", 0.5}, {"transmissionTexture", {{"index", texture}}}}}};
+    quad.material["alphaMode"] = "BLEND";
+    quad.material["pbrMetallicRoughness"]["baseColorFactor"] = {1.0, 1.0, 1.0, 0.5};
+    const Scene scene = quad.load();
+    ASSERT_TRUE(scene.materials.at(0).transmission_texture.isSet());
+    // Left half: opacity 0.5 (alpha) x 1 (no transmission): 0.5 through. Right half: 0.5 x 0.5
+    // = 0.25 opaque: 0.75 through. Over the quad: 0.625.
+    EXPECT_NEAR(passingShare(scene), 0.625, 0.018);
+}
+
+TEST(Transmission, AbsentOrZeroKeepsTheSurfaceOpaque) {
+    QuadScene quad;
+    quad.material["extensions"] = {{"KHR_materials_transmission", {{"transmissionFactor", 0.0}}}};
+    const Scene scene = quad.load();
+    EXPECT_FALSE(scene.materials.at(0).cutsOut());
+    EXPECT_TRUE(scene.stats.warnings.empty());
+    EXPECT_EQ(passingShare(scene), 0.0);
+}
+
 TEST(OcclusionMaps, AreDroppedWithAWarning) {
     QuadScene quad;
     quad.material["occlusionTexture"] = {{"index", quad.addTexture(png(1, 1, {128, 128, 128, 255}))}};

@@ -89,9 +89,13 @@ struct Material {
     AlphaMode alpha_mode = AlphaMode::Opaque;
     float alpha_cutoff = 0.5f;              ///< MASK threshold
     float base_alpha = 1.0f;                ///< baseColorFactor's alpha
+    /// KHR_materials_transmission transmissionFactor, traced as thin see-through glass: each
+    /// point lets rays through (unbent, untinted) with this probability (times the texture's R).
+    float transmission = 0.0f;
+    TextureRef transmission_texture;        ///< R channel (linear)
 
     /// True when rays may pass through some of this material's surface.
-    bool cutsOut() const { return alpha_mode != AlphaMode::Opaque; }
+    bool cutsOut() const { return alpha_mode != AlphaMode::Opaque || transmission > 0.0f; }
 
     /// True when some surface with this material emits light.
     bool isEmissive() const {
