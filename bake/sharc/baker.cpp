@@ -58,6 +58,7 @@ Baker::Baker(const Tracer& tracer, const LightSampler& lights, const CameraPath&
     const uint32_t stride = std::max(1u, settings_.update_stride);
     blocks_x_ = (uint32_t(settings_.width) + stride - 1) / stride;
     blocks_y_ = (uint32_t(settings_.height) + stride - 1) / stride;
+    prepareBsdfTables();
 }
 
 void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<Deposit>>& chunk_deposits,

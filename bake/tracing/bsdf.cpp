@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 namespace sharcbake {
 namespace {
 
@@ -92,19 +95,26 @@ struct GgxAlbedoTable {
     GgxAlbedo entries[kAlbedoRoughnessSteps][kAlbedoTableSize];  ///< [roughness][cos_o], both 0..1
     float average[kAlbedoRoughnessSteps];                         ///< [roughness]: 2 int E(mu) mu dmu
     GgxAlbedoTable() {
-        for (int r = 0; r < kAlbedoRoughnessSteps; ++r) {
-            for (int c = 0; c < kAlbedoTableSize; ++c) {
-                const float cos_o = std::max(float(c) / (kAlbedoTableSize - 1), 1e-3f);
-                entries[r][c] = integrateGgxAlbedo(cos_o, float(r) / (kAlbedoRoughnessSteps - 1));
-            }
-            // Trapezoid rule on the row (the integrand 2 mu E(mu) is smooth).
-            double sum = 0.0;
-            for (int c = 0; c + 1 < kAlbedoTableSize; ++c) {
-                const double m0 = double(c) / (kAlbedoTableSize - 1), m1 = double(c + 1) / (kAlbedoTableSize - 1);
-                sum += (m1 - m0) * (m0 * entries[r][c].e + m1 * entries[r][c + 1].e);
-            }
-            average[r] = float(sum);
+        // Two million samples (about 0.1 s on one core): the rows are independent, so they are
+        // filled in parallel, each the same on any thread. Isolated, so a thread waiting for its
+        // rows cannot pick up an outer task that would ask for the table being built.
+        tbb::this_task_arena::isolate([&] {
+            tbb::parallel_for(0, kAlbedoRoughnessSteps, [&](int r) { fillRow(r); });
+        });
+    }
+
+    void fillRow(int r) {
+        for (int c = 0; c < kAlbedoTableSize; ++c) {
+            const float cos_o = std::max(float(c) / (kAlbedoTableSize - 1), 1e-3f);
+            entries[r][c] = integrateGgxAlbedo(cos_o, float(r) / (kAlbedoRoughnessSteps - 1));
         }
+        // Trapezoid rule on the row (the integrand 2 mu E(mu) is smooth).
+        double sum = 0.0;
+        for (int c = 0; c + 1 < kAlbedoTableSize; ++c) {
+            const double m0 = double(c) / (kAlbedoTableSize - 1), m1 = double(c + 1) / (kAlbedoTableSize - 1);
+            sum += (m1 - m0) * (m0 * entries[r][c].e + m1 * entries[r][c + 1].e);
+        }
+        average[r] = float(sum);
     }
 };
 
@@ -114,6 +124,8 @@ const GgxAlbedoTable& albedoTable() {
 }
 
 }  // namespace
+
+void prepareBsdfTables() { albedoTable(); }
 
 float ggxAverageAlbedo(float roughness) {
     const GgxAlbedoTable& table = albedoTable();

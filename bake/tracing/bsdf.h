@@ -46,6 +46,9 @@ struct GgxAlbedo {
 GgxAlbedo ggxAlbedo(float cos_theta_o, float roughness);
 /// E_avg = 2 int E(mu) mu dmu for a roughness, from the same table.
 float ggxAverageAlbedo(float roughness);
+/// Builds the albedo table now (on every core, about 0.1 s of one), so that a bake or render
+/// pays for it in its setup instead of stalling its first shading call. Later calls return at once.
+void prepareBsdfTables();
 
 class GltfBsdf {
 public:

@@ -4,6 +4,7 @@
 /// importance sampling (power heuristic) for area, punctual and sky lights, Russian roulette.
 #pragma once
 
+#include "tracing/bsdf.h"
 #include "tracing/lights.h"
 #include "tracing/sampling.h"
 #include "tracing/tracer.h"
@@ -88,7 +89,9 @@ class PathTracer {
 public:
     PathTracer(const Tracer& tracer, const LightSampler& lights, PathTracerSettings settings,
                const RadianceCache* cache = nullptr)
-        : tracer_(tracer), lights_(lights), settings_(settings), cache_(cache) {}
+        : tracer_(tracer), lights_(lights), settings_(settings), cache_(cache) {
+        prepareBsdfTables();
+    }
 
     /// Radiance arriving along `ray` (towards its origin). `sampler` must be positioned at the
     /// first dimension after the camera's.
