@@ -106,7 +106,7 @@ public:
     /// @param pixel_id   a unique id of the pixel (or update path) within the pass
     /// @param sample     the sample (or iteration) index
     PixelSampler(uint32_t seed, uint32_t pixel_id, uint32_t sample)
-        : pixel_hash_(hashCombine(hashUint32(seed), pixel_id)), sample_(sample) {}
+        : pixel_hash_(hashCombine(hashUint32(seed), pixel_id)), reversed_sample_(reverseBits(sample)) {}
 
     /// Starts the dimension stream at a fixed offset, e.g. one block of dimensions per bounce,
     /// so that a path's bounce k always uses the same dimensions whatever earlier bounces used.
@@ -114,7 +114,8 @@ public:
 
     glm::vec2 next2D() {
         const uint32_t pair_seed = hashCombine(pixel_hash_, dimension_++);
-        const uint32_t index = nestedUniformScramble(sample_, pair_seed);
+        // nestedUniformScramble(sample, pair_seed), with the sample's reversal done once.
+        const uint32_t index = reverseBits(laineKarrasPermutation(reversed_sample_, pair_seed));
         // nestedUniformScramble(v) reverses v's bits first; sobolDimension0 is itself a reversal,
         // and dimension 1 comes reversed from its table: the same values, three reversals fewer.
         const uint32_t x = reverseBits(laineKarrasPermutation(index, hashCombine(pair_seed, 1u)));
@@ -126,7 +127,7 @@ public:
 
 private:
     uint32_t pixel_hash_;
-    uint32_t sample_;
+    uint32_t reversed_sample_;
     uint32_t dimension_ = 0;
 };
 
