@@ -238,6 +238,20 @@ constexpr size_t kKeysPerGroupBlock = 4096;
 constexpr size_t kParallelInsertFrom = 4096;
 /// Finer voxels per task when their coarser keys are looked up.
 constexpr size_t kLinkBlock = 1024;
+/// Below this many items a loop runs on the calling thread: waking the workers costs more.
+constexpr size_t kParallelLoopFrom = 2048;
+
+/// Calls body(first, last) over [0, count): in parallel blocks, or once on this thread when
+/// count is small. Bodies must not depend on how the range is split.
+template <typename Body>
+void forEachIndex(size_t count, Body&& body) {
+    if (count < kParallelLoopFrom) {
+        if (count > 0) body(size_t(0), count);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, kParallelLoopFrom / 4),
+                      [&](const tbb::blocked_range<size_t>& range) { body(range.begin(), range.end()); });
+}
 }  // namespace
 
 /// Keys to insert, grouped by insert range; each range's keys keep the order of the input lists.
@@ -535,58 +549,75 @@ glm::dvec3 SharcCache::feedbackMean(const ResolvedEntry& r, const glm::dvec3& ne
 void SharcCache::sumIntoCoarserLevels() {
     const uint32_t coarsest = settings_.coarsest_level;
     if (coarsest == 0 || touched_.empty()) return;
-    using SlotLists = tbb::enumerable_thread_specific<std::vector<uint32_t>>;
-    const auto gather = [](SlotLists& lists, std::vector<uint32_t>& out) {
-        for (std::vector<uint32_t>& list : lists) {
-            out.insert(out.end(), list.begin(), list.end());
-            list.clear();
+    // Per level up to the coarsest: the touched voxels, and those of them whose coarser voxel is
+    // not linked yet. Listed per thread, then joined: the order within a list does not matter
+    // (integer adds commute, and the unlinked ones are sorted before they are looked up).
+    using LevelLists = std::vector<std::vector<uint32_t>>;
+    const auto emptyLists = [coarsest] { return LevelLists(size_t(coarsest) + 1); };
+    tbb::enumerable_thread_specific<LevelLists> local_touched(emptyLists), local_unlinked(emptyLists);
+    LevelLists by_level = emptyLists(), unlinked = emptyLists();
+    const auto join = [](tbb::enumerable_thread_specific<LevelLists>& local, uint32_t level, std::vector<uint32_t>& out) {
+        for (LevelLists& lists : local) {
+            out.insert(out.end(), lists[level].begin(), lists[level].end());
+            lists[level].clear();
         }
     };
-    // The touched voxels by level; coarser voxels join the next level's list as they are touched.
-    // The keys are read in parallel (each a cache miss in a large table), then listed in order.
-    std::vector<uint16_t> touched_levels(touched_.size());  // levels reach 511
-    tbb::parallel_for(size_t(0), touched_.size(), [&](size_t i) {
-        touched_levels[i] = uint16_t(decodeHashGridKey(table_.keyAt(touched_[i])).level);
+    // Each key read is a cache miss in a large table: read them in parallel.
+    forEachIndex(touched_.size(), [&](size_t first, size_t last) {
+        LevelLists& touched = local_touched.local();
+        LevelLists& new_links = local_unlinked.local();
+        for (size_t i = first; i < last; ++i) {
+            const uint32_t slot = touched_[i];
+            const uint32_t level = decodeHashGridKey(table_.keyAt(slot)).level;
+            if (level >= coarsest) continue;
+            touched[level].push_back(slot);
+            if (accumulation_[slot].coarser_slot == 0) new_links[level].push_back(slot);
+        }
     });
-    std::vector<std::vector<uint32_t>> by_level(size_t(coarsest) + 1);
-    for (size_t i = 0; i < touched_.size(); ++i) {
-        if (touched_levels[i] < coarsest) by_level[touched_levels[i]].push_back(touched_[i]);
+    for (uint32_t level = kHashGridLevelMin; level < coarsest; ++level) {
+        join(local_touched, level, by_level[level]);
+        join(local_unlinked, level, unlinked[level]);
     }
-    SlotLists unknown, newly_touched;
     for (uint32_t level = kHashGridLevelMin; level < coarsest; ++level) {
         const std::vector<uint32_t>& slots = by_level[level];
         if (slots.empty()) continue;
-        // The coarser voxel of each voxel is looked up once (then remembered in coarser_slot).
-        tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
-            if (accumulation_[slots[i]].coarser_slot == 0) unknown.local().push_back(slots[i]);
-        });
-        std::vector<uint32_t> lookups;
-        gather(unknown, lookups);
-        // Sorted, so the coarser keys' slots do not depend on which thread listed which voxel.
-        tbb::parallel_sort(lookups.begin(), lookups.end());
-        if (!lookups.empty()) linkCoarserVoxels(lookups);
-        // Integer adds commute, so the coarser sums do not depend on the order either.
+        // The coarser voxel of each voxel is looked up once (then remembered in coarser_slot),
+        // in slot order, so the new coarser keys' slots do not depend on the threads.
+        std::vector<uint32_t>& lookups = unlinked[level];
+        if (!lookups.empty()) {
+            tbb::parallel_sort(lookups.begin(), lookups.end());
+            linkCoarserVoxels(lookups);
+        }
+        const bool has_coarser = level + 1 < coarsest;
         std::atomic<uint64_t> saturated{0};
-        tbb::parallel_for(size_t(0), slots.size(), [&](size_t i) {
-            AccumulationEntry& child = accumulation_[slots[i]];
-            if (child.coarser_slot == 0) return;
-            const uint32_t parent_slot = child.coarser_slot - 1;
-            AccumulationEntry& parent = accumulation_[parent_slot];
-            if (claimTouched(parent)) newly_touched.local().push_back(parent_slot);
-            for (int c = 0; c < 3; ++c) {
-                const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
-                const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);
-                if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries)) {
-                    saturated.fetch_add(1, std::memory_order_relaxed);
+        forEachIndex(slots.size(), [&](size_t first, size_t last) {
+            uint64_t range_saturated = 0;
+            for (size_t i = first; i < last; ++i) {
+                AccumulationEntry& child = accumulation_[slots[i]];
+                if (child.coarser_slot == 0) continue;
+                const uint32_t parent_slot = child.coarser_slot - 1;
+                AccumulationEntry& parent = accumulation_[parent_slot];
+                if (claimTouched(parent)) {  // touched here for the first time: the next level lists it
+                    local_touched.local()[level + 1].push_back(parent_slot);
+                    if (has_coarser && parent.coarser_slot == 0) local_unlinked.local()[level + 1].push_back(parent_slot);
                 }
+                for (int c = 0; c < 3; ++c) {
+                    const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
+                    const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);
+                    if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries)) ++range_saturated;
+                }
+                parent.samples.fetch_add(child.samples.load(std::memory_order_relaxed), std::memory_order_relaxed);
             }
-            parent.samples.fetch_add(child.samples.load(std::memory_order_relaxed), std::memory_order_relaxed);
+            if (range_saturated) saturated.fetch_add(range_saturated, std::memory_order_relaxed);
         });
         numerics_.saturated_sums += saturated.load();
+        // The newly touched voxels go to the resolve's list, and below the coarsest level to the
+        // next level's.
         const size_t before = touched_.size();
-        gather(newly_touched, touched_);
-        if (level + 1 < coarsest) {
+        join(local_touched, level + 1, touched_);
+        if (has_coarser) {
             by_level[level + 1].insert(by_level[level + 1].end(), touched_.begin() + std::ptrdiff_t(before), touched_.end());
+            join(local_unlinked, level + 1, unlinked[level + 1]);
         }
     }
 }
