@@ -567,6 +567,10 @@ void SharcCache::sumIntoCoarserLevels() {
         LevelLists& touched = local_touched.local();
         LevelLists& new_links = local_unlinked.local();
         for (size_t i = first; i < last; ++i) {
+            if (i + kPrefetchDistance < last) {
+                table_.prefetchBucket(touched_[i + kPrefetchDistance]);
+                prefetchForRead(&accumulation_[touched_[i + kPrefetchDistance]]);
+            }
             const uint32_t slot = touched_[i];
             const uint32_t level = decodeHashGridKey(table_.keyAt(slot)).level;
             if (level >= coarsest) continue;
@@ -593,6 +597,13 @@ void SharcCache::sumIntoCoarserLevels() {
         forEachIndex(slots.size(), [&](size_t first, size_t last) {
             uint64_t range_saturated = 0;
             for (size_t i = first; i < last; ++i) {
+                // Children and parents are scattered over the table: fetch the child two
+                // distances ahead, and its parent (whose slot the child holds) one ahead.
+                if (i + 2 * kPrefetchDistance < last) prefetchForRead(&accumulation_[slots[i + 2 * kPrefetchDistance]]);
+                if (i + kPrefetchDistance < last) {
+                    const uint32_t ahead = accumulation_[slots[i + kPrefetchDistance]].coarser_slot;
+                    if (ahead != 0) prefetchForWrite(&accumulation_[ahead - 1]);
+                }
                 AccumulationEntry& child = accumulation_[slots[i]];
                 if (child.coarser_slot == 0) continue;
                 const uint32_t parent_slot = child.coarser_slot - 1;
@@ -664,6 +675,11 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
     tbb::parallel_for(size_t(0), missing.size(), [&](size_t block) {
         const size_t last = std::min(sorted_slots.size(), (block + 1) * kLinkBlock);
         for (size_t i = block * kLinkBlock; i < last; ++i) {
+            // The finer voxel's key two distances ahead, its coarser key's bucket one ahead.
+            if (i + 2 * kPrefetchDistance < last) table_.prefetchBucket(sorted_slots[i + 2 * kPrefetchDistance]);
+            if (i + kPrefetchDistance < last) {
+                table_.prefetchBucket(bucketBaseOf(coarserKey(table_.keyAt(sorted_slots[i + kPrefetchDistance]), settings_.grid)));
+            }
             const uint32_t slot = sorted_slots[i];
             const uint64_t parent_key = coarserKey(table_.keyAt(slot), settings_.grid);
             const uint32_t base = bucketBaseOf(parent_key);
