@@ -485,7 +485,7 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
     PendingSums pending;
     for (size_t i = 0; i < deposits.size(); ++i) {
         if (i + kPrefetchDistance < deposits.size() && slots[i + kPrefetchDistance] < kFailedInsert) {
-            prefetchForWrite(&accumulation_[slots[i + kPrefetchDistance]]);
+            prefetchObjectForWrite(&accumulation_[slots[i + kPrefetchDistance]]);
         }
         const Deposit& d = deposits[i];
         if (slots[i] == kFailedInsert) {
@@ -569,7 +569,7 @@ void SharcCache::sumIntoCoarserLevels() {
         for (size_t i = first; i < last; ++i) {
             if (i + kPrefetchDistance < last) {
                 table_.prefetchBucket(touched_[i + kPrefetchDistance]);
-                prefetchForRead(&accumulation_[touched_[i + kPrefetchDistance]]);
+                prefetchForRead(&accumulation_[touched_[i + kPrefetchDistance]].coarser_slot);  // all the split reads
             }
             const uint32_t slot = touched_[i];
             const uint32_t level = decodeHashGridKey(table_.keyAt(slot)).level;
@@ -599,10 +599,10 @@ void SharcCache::sumIntoCoarserLevels() {
             for (size_t i = first; i < last; ++i) {
                 // Children and parents are scattered over the table: fetch the child two
                 // distances ahead, and its parent (whose slot the child holds) one ahead.
-                if (i + 2 * kPrefetchDistance < last) prefetchForRead(&accumulation_[slots[i + 2 * kPrefetchDistance]]);
+                if (i + 2 * kPrefetchDistance < last) prefetchObjectForRead(&accumulation_[slots[i + 2 * kPrefetchDistance]]);
                 if (i + kPrefetchDistance < last) {
                     const uint32_t ahead = accumulation_[slots[i + kPrefetchDistance]].coarser_slot;
-                    if (ahead != 0) prefetchForWrite(&accumulation_[ahead - 1]);
+                    if (ahead != 0) prefetchObjectForWrite(&accumulation_[ahead - 1]);
                 }
                 AccumulationEntry& child = accumulation_[slots[i]];
                 if (child.coarser_slot == 0) continue;
@@ -712,8 +712,8 @@ void SharcCache::resolve(uint32_t iteration) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, touched_.size()), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t i = range.begin(); i != range.end(); ++i) {
             if (i + kPrefetchDistance < range.end()) {
-                prefetchForWrite(&accumulation_[touched_[i + kPrefetchDistance]]);
-                prefetchForWrite(&resolved_[touched_[i + kPrefetchDistance]]);
+                prefetchObjectForWrite(&accumulation_[touched_[i + kPrefetchDistance]]);
+                prefetchObjectForWrite(&resolved_[touched_[i + kPrefetchDistance]]);
             }
             orphan[i] = resolveSlot(touched_[i], iteration, inverse_scale);
         }

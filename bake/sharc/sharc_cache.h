@@ -173,7 +173,7 @@ public:
     static constexpr uint32_t kNoSlot = kHashGridInvalidIndex;  ///< also insertByRange's full bucket
     uint32_t prefetchKey(uint64_t key) const;
     uint32_t findSlot(uint64_t key, uint32_t base) const;
-    void prefetchResolved(uint32_t slot) const { prefetchForRead(&resolved_[slot]); }
+    void prefetchResolved(uint32_t slot) const { prefetchObjectForRead(&resolved_[slot]); }
     const ResolvedEntry& resolvedAt(uint32_t slot) const { return resolved_[slot]; }
 
     /// Adds the deposits of consecutive chunks of update paths: looks keys up in parallel,

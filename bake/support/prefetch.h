@@ -23,4 +23,18 @@ inline void prefetchForWrite(const void* address) {
 #endif
 }
 
+/// Both ends of an object: table entries of 40 or 48 bytes straddle two cache lines at half or
+/// more of their slots, and a hint for the first line alone leaves the second to miss.
+template <typename T>
+void prefetchObjectForRead(const T* object) {
+    prefetchForRead(object);
+    prefetchForRead(reinterpret_cast<const char*>(object) + sizeof(T) - 1);
+}
+
+template <typename T>
+void prefetchObjectForWrite(const T* object) {
+    prefetchForWrite(object);
+    prefetchForWrite(reinterpret_cast<const char*>(object) + sizeof(T) - 1);
+}
+
 }  // namespace sharcbake
