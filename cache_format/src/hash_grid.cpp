@@ -46,13 +46,16 @@ float powF32(float x, float y) { return exp2F32(y * log2F32(x)); }
 float maxNum(float a, float b) { return std::isnan(a) ? b : (a >= b ? a : b); }
 float minNum(float a, float b) { return std::isnan(a) ? b : (a <= b ? a : b); }
 
-// float -> int32 like GPU hardware conversion: truncation with saturation, NaN -> 0. (In C++ an
-// out-of-range conversion is UB; the input here is already floor()ed.)
-int32_t saturateToInt32(float value) {
+// floor(value) converted to int32 like GPU hardware: saturating, NaN -> 0 (in C++ an
+// out-of-range conversion is UB). By truncation and a step down for negative fractions, since
+// std::floor is a library call on x86-64 without SSE4.1; a float at or beyond 2^23 in magnitude
+// is an integer already, so the truncation is exact wherever a fraction exists.
+int32_t floorToInt32(float value) {
     if (std::isnan(value)) return 0;
     if (value <= -2147483648.0f) return INT32_MIN;
     if (value >= 2147483648.0f) return INT32_MAX;
-    return static_cast<int32_t>(value);
+    const int32_t truncated = static_cast<int32_t>(value);
+    return static_cast<float>(truncated) > value ? truncated - 1 : truncated;
 }
 
 // SDK debug palette: R from bits 0-9, G from bits 11-21, B from bits 22-31.
@@ -189,9 +192,8 @@ float voxelSize(uint32_t level, const HashGridParameters& params) {
 }
 
 Int3 quantisePosition(const Float3& position, float voxel_size) {
-    return Int3{saturateToInt32(std::floor(position.x / voxel_size)),
-                saturateToInt32(std::floor(position.y / voxel_size)),
-                saturateToInt32(std::floor(position.z / voxel_size))};
+    return Int3{floorToInt32(position.x / voxel_size), floorToInt32(position.y / voxel_size),
+                floorToInt32(position.z / voxel_size)};
 }
 
 HashGridCell gridCell(const Float3& position, const HashGridParameters& params) {

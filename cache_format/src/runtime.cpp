@@ -746,7 +746,7 @@ void CacheView::keysFor(size_t count, const Float3* positions, const Float3* nor
         const __m128 minus_two31 = _mm_set1_ps(-2147483648.0f);
         const __m128i int_max = _mm_set1_epi32(INT32_MAX);
         const __m128i int_min = _mm_set1_epi32(INT32_MIN);
-        // floor(q), then saturation to int32 with NaN -> 0 (saturateToInt32 in hash_grid.cpp).
+        // floor(q), then saturation to int32 with NaN -> 0 (floorToInt32 in hash_grid.cpp).
         auto floorToInt = [&](__m128 q) {
             __m128i t = _mm_cvttps_epi32(q);  // truncation; out of range or NaN gives INT32_MIN
             t = _mm_add_epi32(t, _mm_castps_si128(_mm_cmpgt_ps(_mm_cvtepi32_ps(t), q)));  // -1 below

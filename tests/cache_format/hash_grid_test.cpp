@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -264,6 +266,47 @@ TEST(HashGridKey, CoarserKeyOfOtherBasesHoldsTheCentre) {
         EXPECT_EQ(cell.grid.z, expected.z);
     }
     EXPECT_EQ(coarserKey(packHashGridKey(Int3{1, 2, 3}, kHashGridLevelMax, 0), params), kHashGridInvalidKey);
+}
+
+// quantisePosition is floor, then a conversion to int32 that saturates and sends NaN to 0 (as
+// GPU hardware converts): checked against that definition, written out with std::floor, on
+// random values of every magnitude, every sign, fractions near integers, and the specials.
+TEST(HashGridKey, QuantisationIsFloorThenSaturation) {
+    const auto reference = [](float v) -> int32_t {
+        const float f = std::floor(v);
+        if (std::isnan(f)) return 0;
+        if (f <= -2147483648.0f) return INT32_MIN;
+        if (f >= 2147483648.0f) return INT32_MAX;
+        return static_cast<int32_t>(f);
+    };
+    std::vector<float> values = {0.0f, -0.0f, 0.5f, -0.5f, 1.0f, -1.0f, 0x1p-149f, -0x1p-149f,
+                                 std::nextafter(1.0f, 0.0f), -std::nextafter(1.0f, 0.0f), 0x1p23f, -0x1p23f,
+                                 0x1p23f - 0.5f, -(0x1p23f - 0.5f), 0x1p31f, -0x1p31f, std::nextafter(0x1p31f, 0.0f),
+                                 -std::nextafter(0x1p31f, 0.0f), 1e30f, -1e30f,
+                                 std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                                 std::numeric_limits<float>::quiet_NaN(), -std::numeric_limits<float>::quiet_NaN()};
+    std::mt19937 rng(23);
+    for (int i = 0; i < 200000; ++i) {
+        uint32_t bits = rng();
+        float v;
+        std::memcpy(&v, &bits, sizeof v);  // every exponent and sign
+        values.push_back(v);
+    }
+    std::uniform_real_distribution<float> small(-1000.0f, 1000.0f);
+    for (int i = 0; i < 100000; ++i) values.push_back(small(rng));
+    for (int k = -1000; k <= 1000; ++k) {  // either side of each integer
+        values.push_back(std::nextafter(float(k), -INFINITY));
+        values.push_back(std::nextafter(float(k), INFINITY));
+    }
+    for (float v : values) {
+        const Int3 q = quantisePosition(Float3{v, -v, v}, 1.0f);
+        ASSERT_EQ(q.x, reference(v)) << v;
+        ASSERT_EQ(q.y, reference(-v)) << -v;
+    }
+    // A voxel size divides first.
+    EXPECT_EQ(quantisePosition(Float3{-0.25f, 0.75f, 3.0f}, 0.5f).x, -1);
+    EXPECT_EQ(quantisePosition(Float3{-0.25f, 0.75f, 3.0f}, 0.5f).y, 1);
+    EXPECT_EQ(quantisePosition(Float3{-0.25f, 0.75f, 3.0f}, 0.5f).z, 6);
 }
 
 TEST(HashGridKey, NormalBits) {
