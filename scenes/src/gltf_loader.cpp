@@ -42,9 +42,15 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 7> kSupportedRequiredExtensions = {
+const std::array<const char*, 8> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission"};
+    "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
+    "EXT_mesh_gpu_instancing"};
+
+/// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
+/// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
+/// from one instanced node the file is refused instead of exhausting memory.
+constexpr uint64_t kMaxInstancedTriangles = uint64_t(1) << 26;
 
 /// Text from the scene file for a message: control characters and bytes >= 0x7F are shown as
 /// \xNN, so a crafted name cannot drive the terminal.
@@ -623,7 +629,16 @@ private:
             on_path_[index] = true;
             const tinygltf::Node& node = model_.nodes[index];
             const glm::dmat4 world = parent_world * localTransform(node);
-            if (node.mesh >= 0) addMesh(node.mesh, world, index);
+            if (node.mesh >= 0) {
+                const auto instancing = node.extensions.find("EXT_mesh_gpu_instancing");
+                if (instancing == node.extensions.end()) {
+                    addMesh(node.mesh, world, index);
+                } else {
+                    // The node's mesh is drawn once per instance, each relative to the node.
+                    for (const glm::dmat4& instance : instanceTransforms(index, instancing->second))
+                        addMesh(node.mesh, world * instance, index);
+                }
+            }
             if (node.camera >= 0) addCamera(node, world);
             addNodeLight(node, world);
             stack.push_back(Frame{index, world, 0});
@@ -641,6 +656,80 @@ private:
                 stack.pop_back();
             }
         }
+    }
+
+    /// EXT_mesh_gpu_instancing: one T * R * S per instance from the TRANSLATION, ROTATION and
+    /// SCALE accessors (each optional, at least one given, all of one count); other attributes
+    /// (the extension allows application-specific ones starting with "_") are ignored.
+    std::vector<glm::dmat4> instanceTransforms(int nodeIndex, const tinygltf::Value& extension) {
+        const std::string label = "node " + std::to_string(nodeIndex) + " EXT_mesh_gpu_instancing";
+        const tinygltf::Value& attributes = extension.Get("attributes");
+        const auto accessorOf = [&](const char* name) {
+            if (!attributes.IsObject() || !attributes.Has(name)) return -1;
+            const tinygltf::Value& v = attributes.Get(name);
+            if (!v.IsInt() || v.GetNumberAsInt() < 0) fail(label + ": " + name + " is not an accessor index");
+            return v.GetNumberAsInt();
+        };
+        const int t = accessorOf("TRANSLATION"), r = accessorOf("ROTATION"), sc = accessorOf("SCALE");
+        if (t < 0 && r < 0 && sc < 0) fail(label + ": \"attributes\" has none of TRANSLATION, ROTATION and SCALE");
+        const std::vector<glm::vec3> translations = t >= 0 ? readVec3(t, label + " TRANSLATION") : std::vector<glm::vec3>();
+        const std::vector<glm::vec4> rotations = r >= 0 ? readVec4(r, label + " ROTATION") : std::vector<glm::vec4>();
+        const std::vector<glm::vec3> scales = sc >= 0 ? readVec3(sc, label + " SCALE") : std::vector<glm::vec3>();
+        const size_t count = t >= 0 ? translations.size() : r >= 0 ? rotations.size() : scales.size();
+        const auto checkCount = [&](int accessor, size_t n, const char* name) {
+            if (accessor >= 0 && n != count)
+                fail(label + ": " + name + " has " + std::to_string(n) + " elements, the other attributes " +
+                     std::to_string(count));
+        };
+        checkCount(t, translations.size(), "TRANSLATION");
+        checkCount(r, rotations.size(), "ROTATION");
+        checkCount(sc, scales.size(), "SCALE");
+        const uint64_t triangles = meshTriangleBound(model_.nodes[nodeIndex].mesh);
+        if (triangles > 0 && uint64_t(count) > kMaxInstancedTriangles / triangles)
+            fail(label + ": " + std::to_string(count) + " instances of a mesh of up to " + std::to_string(triangles) +
+                 " triangles would make more than " + std::to_string(kMaxInstancedTriangles) +
+                 " triangles; sharcbake copies every instance into the traced scene");
+
+        std::vector<glm::dmat4> transforms(count, glm::dmat4(1.0));
+        for (size_t i = 0; i < count; ++i) {
+            const std::string which = label + ": instance " + std::to_string(i);
+            glm::dmat4& m = transforms[i];
+            if (t >= 0) {
+                if (!isFinite(translations[i])) fail(which + " has a NaN or infinite TRANSLATION");
+                m = glm::translate(m, glm::dvec3(translations[i]));
+            }
+            if (r >= 0) {
+                const glm::dvec4 q(rotations[i]);
+                const double length = glm::length(q);
+                if (!std::isfinite(length) || length < 1e-6) fail(which + " has a zero, NaN or infinite ROTATION");
+                m *= glm::mat4_cast(glm::dquat(q.w, q.x, q.y, q.z) / length);  // stored (x, y, z, w)
+            }
+            if (sc >= 0) {
+                if (!isFinite(scales[i])) fail(which + " has a NaN or infinite SCALE");
+                m = glm::scale(m, glm::dvec3(scales[i]));
+            }
+        }
+        return transforms;
+    }
+
+    /// At most how many triangles one copy of a mesh adds, from its accessors' counts (before
+    /// degenerate triangles are dropped).
+    uint64_t meshTriangleBound(int meshIndex) const {
+        if (meshIndex < 0 || static_cast<size_t>(meshIndex) >= model_.meshes.size()) return 0;
+        uint64_t triangles = 0;
+        for (const tinygltf::Primitive& prim : model_.meshes[meshIndex].primitives) {
+            if (!isTriangleMode(prim.mode)) continue;
+            int counted = prim.indices;
+            if (counted < 0) {
+                const auto position = prim.attributes.find("POSITION");
+                counted = position == prim.attributes.end() ? -1 : position->second;
+            }
+            if (counted < 0 || static_cast<size_t>(counted) >= model_.accessors.size()) continue;
+            const uint64_t n = model_.accessors[counted].count;
+            const bool list = prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP && prim.mode != TINYGLTF_MODE_TRIANGLE_FAN;
+            triangles += list ? n / 3 : (n > 2 ? n - 2 : 0);
+        }
+        return triangles;
     }
 
     // ---------------------------------------------------------------- geometry

@@ -10,8 +10,10 @@
 #include <algorithm>
 #include <stb_image_write.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 
 namespace sharcbake {
@@ -377,12 +379,113 @@ TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
     GltfBuilder b;
     const int node = b.addMeshNode(unitTrianglePrimitive(b));
     b.setScene({node});
-    b.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
-    const Scene scene = loadGltf(b.writeEmbedded(dir, "instancing.gltf"));
+    b.doc["extensionsUsed"] = {"KHR_materials_clearcoat"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "clearcoat.gltf"));
     EXPECT_EQ(scene.triangles.size(), 1u);
     bool warned = false;
-    for (const std::string& w : scene.stats.warnings) warned |= w.find("EXT_mesh_gpu_instancing") != std::string::npos;
+    for (const std::string& w : scene.stats.warnings) warned |= w.find("KHR_materials_clearcoat") != std::string::npos;
     EXPECT_TRUE(warned);
+}
+
+// ------------------------------------------------------------------------------ GPU instancing
+
+std::vector<std::array<glm::vec3, 3>> trianglesOf(const Scene& scene) {
+    std::vector<std::array<glm::vec3, 3>> out;
+    for (const glm::uvec3& t : scene.triangles) out.push_back({scene.positions[t.x], scene.positions[t.y], scene.positions[t.z]});
+    return out;
+}
+
+TEST(GpuInstancing, EachInstanceIsTheMeshByItsTrsAfterTheNode) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const float h = std::sqrt(0.5f);  // 90 degrees about +Z: (x, y, z, w) = (0, 0, h, h)
+    const json attributes = {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, 5, 0, 0, 0, 5, 0}, test::kFloat, "VEC3")},
+                             {"ROTATION", b.addData(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, h, h}, test::kFloat, "VEC4")},
+                             {"SCALE", b.addData(std::vector<float>{1, 1, 1, 1, 1, 1, 2, 2, 2}, test::kFloat, "VEC3")}};
+    const int node = b.addMeshNode(prim, {{"translation", {0, 0, 10}},
+                                          {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", attributes}}}}}});
+    b.setScene({node});
+    b.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+    b.doc["extensionsRequired"] = {"EXT_mesh_gpu_instancing"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "instanced.gltf"));
+    const auto triangles = trianglesOf(scene);
+    ASSERT_EQ(triangles.size(), 3u);  // the instances only: the node itself draws nothing more
+    const std::array<std::array<glm::vec3, 3>, 3> expected = {{
+        {glm::vec3(0, 0, 10), glm::vec3(1, 0, 10), glm::vec3(0, 1, 10)},
+        {glm::vec3(5, 0, 10), glm::vec3(6, 0, 10), glm::vec3(5, 1, 10)},
+        {glm::vec3(0, 5, 10), glm::vec3(0, 7, 10), glm::vec3(-2, 5, 10)},  // scaled by 2, then turned
+    }};
+    for (size_t i = 0; i < 3; ++i)
+        for (size_t v = 0; v < 3; ++v) expectVec3Near(triangles[i][v], expected[i][v]);
+    for (const std::string& w : scene.stats.warnings) EXPECT_EQ(w.find("EXT_mesh_gpu_instancing"), std::string::npos) << w;
+    EXPECT_EQ(scene.bounds_min.x, -2.0f);
+}
+
+TEST(GpuInstancing, NormalizedShortRotationsAndTranslationOnly) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const int16_t h = 23170;  // round(sqrt(0.5) * 32767)
+    const json rotated = {{"ROTATION", b.addData(std::vector<int16_t>{0, 0, h, h}, test::kShort, "VEC4", true)}};
+    const json moved = {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 1, 0, 0, 2}, test::kFloat, "VEC3")}};
+    const int a = b.addMeshNode(prim, {{"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", rotated}}}}}});
+    const int c = b.addNode({{"mesh", 0}, {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", moved}}}}}});
+    b.setScene({a, c});
+    b.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+    const auto triangles = trianglesOf(loadGltf(b.writeEmbedded(dir, "short.gltf")));
+    ASSERT_EQ(triangles.size(), 3u);
+    expectVec3Near(triangles[0][1], {0, 1, 0}, 1e-4f);  // (1, 0, 0) turned 90 degrees about +Z
+    expectVec3Near(triangles[0][2], {-1, 0, 0}, 1e-4f);
+    expectVec3Near(triangles[1][0], {0, 0, 1});
+    expectVec3Near(triangles[2][0], {0, 0, 2});
+}
+
+TEST(GpuInstancing, MalformedInstancesAreRefusedNamingTheNode) {
+    TempDir dir;
+    const auto errorFor = [&](const std::function<json(GltfBuilder&)>& extension) {
+        GltfBuilder b;
+        const json prim = unitTrianglePrimitive(b);
+        const int node = b.addMeshNode(prim, {{"extensions", {{"EXT_mesh_gpu_instancing", extension(b)}}}});
+        b.setScene({node});
+        b.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+        return loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "bad.gltf")); });
+    };
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const std::string mismatch = errorFor([](GltfBuilder& b) {
+        return json{{"attributes", {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, 1, 0, 0}, test::kFloat, "VEC3")},
+                                    {"SCALE", b.addData(std::vector<float>{1, 1, 1}, test::kFloat, "VEC3")}}}};
+    });
+    EXPECT_NE(mismatch.find("node 0 EXT_mesh_gpu_instancing"), std::string::npos) << mismatch;
+    EXPECT_NE(mismatch.find("SCALE has 1 elements"), std::string::npos) << mismatch;
+    const std::string not_finite = errorFor([&](GltfBuilder& b) {
+        return json{{"attributes", {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, nan, 0, 0}, test::kFloat, "VEC3")}}}};
+    });
+    EXPECT_NE(not_finite.find("instance 1 has a NaN or infinite TRANSLATION"), std::string::npos) << not_finite;
+    const std::string zero_rotation = errorFor([](GltfBuilder& b) {
+        return json{{"attributes", {{"ROTATION", b.addData(std::vector<float>{0, 0, 0, 0}, test::kFloat, "VEC4")}}}};
+    });
+    EXPECT_NE(zero_rotation.find("instance 0 has a zero"), std::string::npos) << zero_rotation;
+    const std::string empty = errorFor([](GltfBuilder&) { return json{{"attributes", json::object()}}; });
+    EXPECT_NE(empty.find("none of TRANSLATION, ROTATION and SCALE"), std::string::npos) << empty;
+    const std::string no_attributes = errorFor([](GltfBuilder&) { return json::object(); });
+    EXPECT_NE(no_attributes.find("none of TRANSLATION, ROTATION and SCALE"), std::string::npos) << no_attributes;
+}
+
+TEST(GpuInstancing, InstancesThatWouldMakeBillionsOfTrianglesAreRefusedBeforeReading) {
+    // 2048 instances (24 KB of translations) of a mesh declaring 65,536 triangles: 2^27 in all.
+    TempDir dir;
+    GltfBuilder b;
+    const int positions = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const uint32_t few[3] = {0, 1, 2};  // the count is refused before anything is read
+    const int indices = b.addAccessor(b.addView(few, sizeof few), test::kUnsignedInt, 3 * 65536, "SCALAR");
+    const json attributes = {{"TRANSLATION", b.addData(std::vector<float>(3 * 2048, 0.0f), test::kFloat, "VEC3")}};
+    const int node = b.addMeshNode({{"attributes", {{"POSITION", positions}}}, {"indices", indices}},
+                                   {{"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", attributes}}}}}});
+    b.setScene({node});
+    b.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "many.gltf")); });
+    EXPECT_NE(msg.find("2048 instances of a mesh of up to 65536 triangles"), std::string::npos) << msg;
 }
 
 TEST(GltfLoaderErrors, KnownRequiredExtensionAccepted) {
