@@ -42,10 +42,10 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 8> kSupportedRequiredExtensions = {
+const std::array<const char*, 9> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
-    "EXT_mesh_gpu_instancing"};
+    "EXT_mesh_gpu_instancing", "KHR_materials_pbrSpecularGlossiness"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -235,6 +235,7 @@ private:
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
     /// colour and as data needs two decoded copies.
     std::map<std::pair<int, bool>, int> texture_cache_;
+    std::map<std::pair<int, float>, int> roughness_from_glossiness_;  ///< (texture, glossiness) -> converted
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
     std::set<std::string> warned_;
 
@@ -1087,7 +1088,55 @@ private:
         }
         readAlpha(src, m, label);
         readMaterialExtensions(src, m, label);
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness"))
+            readSpecularGlossiness(*ext, m, label);
         return m;
+    }
+
+    /// KHR_materials_pbrSpecularGlossiness (older exporters and sample models; it takes the
+    /// place of pbrMetallicRoughness, which is then only a fallback) as the metallic-roughness
+    /// material with the same BRDF: a dielectric (metallic 0) whose base colour is the diffuse
+    /// colour and whose F0 is the specular colour (KHR_materials_specular's colour, divided by
+    /// the 0.04 of ior 1.5), roughness 1 - glossiness.
+    void readSpecularGlossiness(const tinygltf::Value& ext, Material& m, const std::string& label) {
+        constexpr float kDielectricF0 = 0.04f;  // ((1.5 - 1) / (1.5 + 1))^2
+        const std::optional<glm::vec4> diffuse = vec4Value(ext, "diffuseFactor");
+        m.base_color = diffuse ? glm::vec3(*diffuse) : glm::vec3(1.0f);
+        m.base_alpha = diffuse ? std::clamp(diffuse->w, 0.0f, 1.0f) : 1.0f;
+        m.base_color_texture = textureRef(textureSlot(ext, "diffuseTexture"), true, label);
+        m.metallic = 0.0f;
+        m.ior = 1.5f;
+        m.specular = 1.0f;
+        m.specular_texture = TextureRef();
+        m.specular_color = vec3Value(ext, "specularFactor").value_or(glm::vec3(1.0f)) / kDielectricF0;
+        const float glossiness = std::clamp(static_cast<float>(number(ext, "glossinessFactor").value_or(1.0)), 0.0f, 1.0f);
+        const TextureSlot slot = textureSlot(ext, "specularGlossinessTexture");
+        m.specular_color_texture = textureRef(slot, true, label);  // RGB: the specular colour, sRGB
+        m.roughness = 1.0f - glossiness;
+        m.metallic_roughness_texture = TextureRef();
+        if (slot.index >= 0) {
+            // A: glossiness (linear). Roughness is 1 - factor x A, which no factor on a texture
+            // can express: the texture is converted once into metallic-roughness form.
+            m.metallic_roughness_texture = textureRef(slot, false, label);
+            if (m.metallic_roughness_texture.isSet()) {
+                m.metallic_roughness_texture.texture = roughnessFromGlossiness(m.metallic_roughness_texture.texture, glossiness);
+                m.roughness = 1.0f;
+            }
+        }
+    }
+
+    /// A texture whose G is 1 - glossiness x A of `texture` (metallic-roughness form: G
+    /// roughness, B metallic 0), made once per (texture, glossiness).
+    int roughnessFromGlossiness(int texture, float glossiness) {
+        const auto key = std::make_pair(texture, glossiness);
+        if (const auto it = roughness_from_glossiness_.find(key); it != roughness_from_glossiness_.end()) return it->second;
+        Texture converted = scene_.textures[static_cast<size_t>(texture)];
+        converted.name += " (roughness from glossiness)";
+        for (glm::vec4& t : converted.texels) t = glm::vec4(0.0f, 1.0f - glossiness * t.a, 0.0f, 1.0f);
+        scene_.textures.push_back(std::move(converted));
+        const int index = static_cast<int>(scene_.textures.size()) - 1;
+        roughness_from_glossiness_.emplace(key, index);
+        return index;
     }
 
     /// alphaMode, alphaCutoff and the base colour's alpha. MASK and BLEND materials let rays
@@ -1145,6 +1194,18 @@ private:
     static std::optional<double> number(const tinygltf::Value& object, const char* key) {
         if (!object.Has(key) || !object.Get(key).IsNumber()) return std::nullopt;
         return object.Get(key).GetNumberAsDouble();
+    }
+
+    static std::optional<glm::vec4> vec4Value(const tinygltf::Value& object, const char* key) {
+        if (!object.Has(key)) return std::nullopt;
+        const tinygltf::Value& a = object.Get(key);
+        if (!a.IsArray() || a.ArrayLen() != 4) return std::nullopt;
+        glm::vec4 v;
+        for (int i = 0; i < 4; ++i) {
+            if (!a.Get(i).IsNumber()) return std::nullopt;
+            v[i] = static_cast<float>(a.Get(i).GetNumberAsDouble());
+        }
+        return v;
     }
 
     static std::optional<glm::vec3> vec3Value(const tinygltf::Value& object, const char* key) {

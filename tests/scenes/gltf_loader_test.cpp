@@ -597,6 +597,77 @@ std::vector<uint8_t> tinyPng() {
 
 float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
+// ------------------------------------------------------------- KHR_materials_pbrSpecularGlossiness
+
+TEST(SpecularGlossiness, FactorsBecomeADielectricWithThatF0AndRoughness) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = unitTrianglePrimitive(b);
+    // The metallic-roughness part is only a fallback for viewers without the extension.
+    prim["material"] = b.addMaterial(
+        {{"pbrMetallicRoughness", {{"baseColorFactor", {1, 0, 0, 1}}, {"metallicFactor", 1}, {"roughnessFactor", 0}}},
+         {"extensions",
+          {{"KHR_materials_pbrSpecularGlossiness",
+            {{"diffuseFactor", {0.5, 0.25, 0.125, 0.8}}, {"specularFactor", {0.1, 0.2, 0.3}}, {"glossinessFactor", 0.7}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    b.doc["extensionsUsed"] = {"KHR_materials_pbrSpecularGlossiness"};
+    b.doc["extensionsRequired"] = {"KHR_materials_pbrSpecularGlossiness"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "specgloss.gltf"));
+    const Material& m = scene.materials.at(0);
+    expectVec3Near(m.base_color, {0.5f, 0.25f, 0.125f});
+    EXPECT_FLOAT_EQ(m.base_alpha, 0.8f);
+    EXPECT_EQ(m.metallic, 0.0f);
+    EXPECT_NEAR(m.roughness, 0.3f, 1e-6f);
+    EXPECT_EQ(m.ior, 1.5f);
+    EXPECT_EQ(m.specular, 1.0f);
+    // The BSDF's dielectric F0 is min(((ior - 1) / (ior + 1))^2 x specular colour, 1): the
+    // specular factor itself.
+    const float r = (m.ior - 1.0f) / (m.ior + 1.0f);
+    expectVec3Near(glm::min(r * r * m.specular_color, glm::vec3(1.0f)), {0.1f, 0.2f, 0.3f}, 1e-6f);
+    for (const std::string& w : scene.stats.warnings) EXPECT_EQ(w.find("pbrSpecularGlossiness"), std::string::npos) << w;
+
+    // Absent factors are the extension's defaults: white diffuse, white specular, glossiness 1.
+    GltfBuilder d;
+    json plain = unitTrianglePrimitive(d);
+    plain["material"] = d.addMaterial({{"extensions", {{"KHR_materials_pbrSpecularGlossiness", json::object()}}}});
+    d.setScene({d.addMeshNode(plain)});
+    const Material& white = loadGltf(d.writeEmbedded(dir, "defaults.gltf")).materials.at(0);
+    expectVec3Near(white.base_color, {1, 1, 1});
+    EXPECT_EQ(white.metallic, 0.0f);
+    EXPECT_EQ(white.roughness, 0.0f);
+    expectVec3Near(glm::min(0.04f * white.specular_color, glm::vec3(1.0f)), {1, 1, 1}, 1e-6f);
+}
+
+TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha) {
+    TempDir dir;
+    GltfBuilder b;
+    // tinyPng: row 0 = (0, 128, 255, A 255), (255, 0, 0, A 128); row 1 = grey 64 and white, A 255.
+    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
+    b.doc["textures"] = json::array({{{"source", 0}}});
+    json prim = unitTrianglePrimitive(b);
+    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    prim["material"] = b.addMaterial(
+        {{"extensions",
+          {{"KHR_materials_pbrSpecularGlossiness",
+            {{"diffuseTexture", {{"index", 0}}}, {"specularGlossinessTexture", {{"index", 0}}}, {"glossinessFactor", 0.5}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "specgloss_textured.gltf"));
+    const Material& m = scene.materials.at(0);
+    ASSERT_TRUE(m.base_color_texture.isSet());
+    ASSERT_TRUE(m.specular_color_texture.isSet());
+    ASSERT_TRUE(m.metallic_roughness_texture.isSet());
+    EXPECT_EQ(m.base_color_texture.texture, m.specular_color_texture.texture);  // both the sRGB decode
+    EXPECT_EQ(m.roughness, 1.0f);  // the texture holds 1 - 0.5 A
+    const Texture& colour = scene.textures[m.specular_color_texture.texture];
+    EXPECT_NEAR(colour.texels[0].y, srgb(128 / 255.0f), 1e-6f);
+    const Texture& rough = scene.textures[m.metallic_roughness_texture.texture];
+    ASSERT_EQ(rough.texels.size(), 4u);
+    EXPECT_NEAR(rough.texels[0].g, 0.5f, 1e-6f);                         // A 255: glossiness 0.5
+    EXPECT_NEAR(rough.texels[1].g, 1.0f - 0.5f * 128 / 255.0f, 1e-6f);   // A 128, linear
+    EXPECT_EQ(rough.texels[1].b, 0.0f);                                  // metallic 0
+    EXPECT_EQ(m.metallic, 0.0f);
+}
+
 TEST(GltfLoaderMaterials, BaseColourTextureDecodedFromSrgbAndDataTextureLinear) {
     TempDir dir;
     GltfBuilder b;
