@@ -8,8 +8,11 @@
 /// because a bad scene must fail loudly at load time rather than render wrong hours later.
 #include "sharcbake/scene_loader.h"
 
+#include "draco_mesh.h"
+
 #include <stb_image.h>
 #include <tiny_gltf.h>
+#include <nlohmann/json.hpp>
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -42,10 +45,10 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 9> kSupportedRequiredExtensions = {
+const std::array<const char*, 10> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
-    "EXT_mesh_gpu_instancing", "KHR_materials_pbrSpecularGlossiness"};
+    "EXT_mesh_gpu_instancing", "KHR_materials_pbrSpecularGlossiness", "KHR_draco_mesh_compression"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -235,6 +238,7 @@ private:
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
     /// colour and as data needs two decoded copies.
     std::map<std::pair<int, bool>, int> texture_cache_;
+    std::map<std::pair<int, int>, uint64_t> draco_index_counts_;  ///< (mesh, primitive) -> indices' count
     std::map<std::pair<int, float>, int> roughness_from_glossiness_;  ///< (texture, glossiness) -> converted
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
     std::set<std::string> warned_;
@@ -311,9 +315,7 @@ private:
     static constexpr double kMaxWorldCoordinate = 1e9;
 
     /// Refuses absurd nesting in the glTF's JSON (the file, or a GLB's JSON chunk) before parsing.
-    void checkJsonNesting() {
-        std::ifstream in(path_, std::ios::binary);
-        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    void checkJsonNesting(const std::string& bytes) {
         size_t begin = 0, end = bytes.size();
         if (bytes.size() >= 20 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
             uint32_t length = 0;
@@ -373,12 +375,28 @@ private:
         parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
                                                     &readAndRecordFile, &tinygltf::WriteWholeFile,
                                                     &access});
-        checkJsonNesting();
+        std::ifstream in(path_, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        checkJsonNesting(bytes);
         std::string err;
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.
-        const bool ok = hasGlbMagic(path_) ? parser.LoadBinaryFromFile(&model_, &err, &warnings, path_)
-                                           : parser.LoadASCIIFromFile(&model_, &err, &warnings, path_);
+        const bool glb = hasGlbMagic(path_);
+        bool ok = false;
+        if (const std::optional<std::string> rewritten = withoutDracoIndices(bytes, glb)) {
+            // Parsed from memory: record the file as tinygltf's reader would have (the first
+            // file recorded is also what later buffers and images must sit beside).
+            scene_.source_files.push_back(std::filesystem::path(path_).lexically_normal().string());
+            const std::string base_dir = std::filesystem::path(path_).parent_path().string();
+            ok = glb ? parser.LoadBinaryFromMemory(&model_, &err, &warnings,
+                                                   reinterpret_cast<const unsigned char*>(rewritten->data()),
+                                                   static_cast<unsigned int>(rewritten->size()), base_dir)
+                     : parser.LoadASCIIFromString(&model_, &err, &warnings, rewritten->data(),
+                                                  static_cast<unsigned int>(rewritten->size()), base_dir);
+        } else {
+            ok = glb ? parser.LoadBinaryFromFile(&model_, &err, &warnings, path_)
+                     : parser.LoadASCIIFromFile(&model_, &err, &warnings, path_);
+        }
         std::istringstream lines(warnings);
         for (std::string line; std::getline(lines, line);)
             if (!line.empty()) warn("tinygltf: " + line);
@@ -386,6 +404,63 @@ private:
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }
+    }
+
+    /// tinygltf 2.7 refuses an `indices` accessor without a bufferView, which is how every
+    /// KHR_draco_mesh_compression primitive declares its indices (they are in the Draco data).
+    /// Returns the file with those primitives' `indices` removed (their counts kept for
+    /// meshTriangleBound), or nothing when no primitive needs it or the JSON does not parse
+    /// (tinygltf then reports the file as it is).
+    std::optional<std::string> withoutDracoIndices(const std::string& bytes, bool glb) {
+        if (bytes.find("KHR_draco_mesh_compression") == std::string::npos) return std::nullopt;
+        size_t json_begin = 0, json_size = bytes.size(), glb_end = bytes.size();
+        if (glb) {
+            if (bytes.size() < 20 || std::memcmp(bytes.data() + 16, "JSON", 4) != 0) return std::nullopt;
+            uint32_t total = 0, chunk = 0;
+            std::memcpy(&total, bytes.data() + 8, 4);
+            std::memcpy(&chunk, bytes.data() + 12, 4);
+            if (total > bytes.size() || chunk > total - 20) return std::nullopt;
+            json_begin = 20;
+            json_size = chunk;
+            glb_end = total;
+        }
+        nlohmann::json doc = nlohmann::json::parse(bytes.begin() + std::ptrdiff_t(json_begin),
+                                                   bytes.begin() + std::ptrdiff_t(json_begin + json_size), nullptr,
+                                                   /*allow_exceptions=*/false);
+        if (doc.is_discarded() || !doc.is_object() || !doc.contains("meshes") || !doc["meshes"].is_array())
+            return std::nullopt;
+        const nlohmann::json* accessors = doc.contains("accessors") && doc["accessors"].is_array() ? &doc["accessors"] : nullptr;
+        bool changed = false;
+        for (size_t m = 0; m < doc["meshes"].size(); ++m) {
+            nlohmann::json& mesh = doc["meshes"][m];
+            if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
+            for (size_t p = 0; p < mesh["primitives"].size(); ++p) {
+                nlohmann::json& prim = mesh["primitives"][p];
+                if (!prim.is_object() || !prim.contains("indices") || !prim.contains("extensions") ||
+                    !prim["extensions"].is_object() || !prim["extensions"].contains("KHR_draco_mesh_compression"))
+                    continue;
+                const nlohmann::json& indices = prim["indices"];
+                if (accessors && indices.is_number_unsigned() && indices.get<uint64_t>() < accessors->size()) {
+                    const nlohmann::json& accessor = (*accessors)[indices.get<size_t>()];
+                    if (accessor.is_object() && accessor.contains("count") && accessor["count"].is_number_unsigned())
+                        draco_index_counts_[{int(m), int(p)}] = accessor["count"].get<uint64_t>();
+                }
+                prim.erase("indices");
+                changed = true;
+            }
+        }
+        if (!changed) return std::nullopt;
+        std::string json = doc.dump();
+        if (!glb) return json;
+        while (json.size() % 4 != 0) json += ' ';
+        std::string out(20, '\0');
+        const std::string rest = bytes.substr(json_begin + json_size, glb_end - (json_begin + json_size));
+        const uint32_t total = uint32_t(20 + json.size() + rest.size()), chunk = uint32_t(json.size());
+        std::memcpy(out.data(), bytes.data(), 8);  // magic and version
+        std::memcpy(out.data() + 8, &total, 4);
+        std::memcpy(out.data() + 12, &chunk, 4);
+        std::memcpy(out.data() + 16, "JSON", 4);
+        return out + json + rest;
     }
 
     void checkRequiredExtensions() const {
@@ -718,8 +793,13 @@ private:
     uint64_t meshTriangleBound(int meshIndex) const {
         if (meshIndex < 0 || static_cast<size_t>(meshIndex) >= model_.meshes.size()) return 0;
         uint64_t triangles = 0;
-        for (const tinygltf::Primitive& prim : model_.meshes[meshIndex].primitives) {
+        for (size_t p = 0; p < model_.meshes[meshIndex].primitives.size(); ++p) {
+            const tinygltf::Primitive& prim = model_.meshes[meshIndex].primitives[p];
             if (!isTriangleMode(prim.mode)) continue;
+            if (const auto draco = draco_index_counts_.find({meshIndex, int(p)}); draco != draco_index_counts_.end()) {
+                triangles += draco->second / 3;  // Draco decodes to a triangle list
+                continue;
+            }
             int counted = prim.indices;
             if (counted < 0) {
                 const auto position = prim.attributes.find("POSITION");
@@ -756,13 +836,20 @@ private:
             ++scene_.stats.primitives_skipped;  // points and lines have no surface to hit
             return;
         }
-        PrimitiveGeometry geo = readPrimitive(prim, label);
-        const std::vector<uint32_t> indices = primitiveIndices(prim, geo.positions.size(), label);
-        if (prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP && prim.mode != TINYGLTF_MODE_TRIANGLE_FAN &&
-            indices.size() % 3 != 0)
+        PrimitiveGeometry geo;
+        std::vector<uint32_t> indices;
+        int mode = prim.mode;
+        if (const tinygltf::Value* draco = extension(prim.extensions, "KHR_draco_mesh_compression")) {
+            readDracoPrimitive(prim, *draco, label, geo, indices);
+            mode = TINYGLTF_MODE_TRIANGLES;  // Draco decodes to a triangle list whatever the mode
+        } else {
+            geo = readPrimitive(prim, label);
+            indices = primitiveIndices(prim, geo.positions.size(), label);
+        }
+        if (mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN && indices.size() % 3 != 0)
             warn(label + ": " + std::to_string(indices.size()) + " indices is not a multiple of 3; the last " +
                  std::to_string(indices.size() % 3) + " ignored");
-        geo.triangles = assembleTriangles(prim.mode, indices);
+        geo.triangles = assembleTriangles(mode, indices);
 
         transformToWorld(geo, world, label);
         dropDegenerateTriangles(geo);
@@ -777,6 +864,103 @@ private:
             }
         }
         appendGeometry(geo, material);
+    }
+
+    /// KHR_draco_mesh_compression: the attributes the extension names, and the indices, come
+    /// from the Draco data in its bufferView; attributes it does not name are read from their
+    /// accessors as usual. The rules of readPrimitive apply to what comes out.
+    void readDracoPrimitive(const tinygltf::Primitive& prim, const tinygltf::Value& ext, const std::string& label,
+                            PrimitiveGeometry& geo, std::vector<uint32_t>& indices) {
+        const std::string what = label + " KHR_draco_mesh_compression";
+        const std::optional<double> view = number(ext, "bufferView");
+        if (!view || *view < 0 || *view != std::floor(*view)) fail(what + ": no bufferView");
+        const int viewIndex = static_cast<int>(*view);
+        if (static_cast<size_t>(viewIndex) >= model_.bufferViews.size())
+            fail(what + ": bufferView " + std::to_string(viewIndex) + " does not exist");
+        const size_t bytes = model_.bufferViews[static_cast<size_t>(viewIndex)].byteLength;
+        const ElementLayout data = layoutInView(viewIndex, 0, bytes, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, 1, false, what);
+        std::optional<DracoMesh> mesh;
+        try {
+            mesh.emplace(data.data, bytes);
+        } catch (const std::runtime_error& e) {
+            fail(what + " (bufferView " + std::to_string(viewIndex) + "): " + e.what());
+        }
+        const tinygltf::Value* ids = ext.Has("attributes") && ext.Get("attributes").IsObject() ? &ext.Get("attributes") : nullptr;
+        const auto dracoId = [&](const char* name) {
+            if (!ids || !ids->Has(name) || !ids->Get(name).IsInt()) return -1;
+            return ids->Get(name).GetNumberAsInt();
+        };
+        const size_t points = mesh->pointCount();
+        // One glTF attribute, from the Draco data if the extension names it, else its accessor.
+        const auto read = [&](const char* name, int components, std::vector<float>& out) {
+            const auto accessor = prim.attributes.find(name);
+            const int id = dracoId(name);
+            if (id < 0) {
+                if (accessor == prim.attributes.end()) return false;
+                const std::vector<double> raw = readAccessor(accessor->second, components == 2 ? TINYGLTF_TYPE_VEC2 : components == 3 ? TINYGLTF_TYPE_VEC3 : TINYGLTF_TYPE_VEC4, label + " " + name);
+                out.assign(raw.begin(), raw.end());
+            } else {
+                if (mesh->componentCount(id) == 0)
+                    fail(what + ": attribute " + name + " names Draco attribute " + std::to_string(id) + ", which it lacks");
+                const bool normalized = accessor != prim.attributes.end() && accessor->second >= 0 &&
+                                        static_cast<size_t>(accessor->second) < model_.accessors.size() &&
+                                        model_.accessors[static_cast<size_t>(accessor->second)].normalized;
+                out = mesh->attribute(id, components, normalized);
+            }
+            if (out.size() != points * size_t(components))
+                fail(label + ": " + name + " has " + std::to_string(out.size() / size_t(components)) +
+                     " elements but the Draco data has " + std::to_string(points) + " points");
+            return true;
+        };
+        std::vector<float> values;
+        if (dracoId("POSITION") < 0) fail(what + ": the extension names no POSITION attribute");
+        read("POSITION", 3, values);
+        geo.positions.resize(points);
+        for (size_t i = 0; i < points; ++i) {
+            geo.positions[i] = glm::vec3(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+            if (!isFinite(geo.positions[i]))
+                fail(what + ": POSITION of point " + std::to_string(i) + " is NaN or infinite");
+        }
+        if (read("NORMAL", 3, values)) {
+            geo.normals.resize(points);
+            for (size_t i = 0; i < points; ++i) geo.normals[i] = glm::vec3(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+        }
+        for (auto [name, uv] : {std::pair{"TEXCOORD_0", &geo.uv0}, std::pair{"TEXCOORD_1", &geo.uv1}}) {
+            if (!read(name, 2, values)) continue;
+            uv->resize(points);
+            for (size_t i = 0; i < points; ++i) (*uv)[i] = glm::vec2(values[2 * i], values[2 * i + 1]);
+        }
+        if (read("TANGENT", 4, values)) {
+            geo.tangents.resize(points);
+            for (size_t i = 0; i < points; ++i)
+                geo.tangents[i] = glm::vec4(values[4 * i], values[4 * i + 1], values[4 * i + 2], values[4 * i + 3]);
+        }
+        if (const int id = dracoId("COLOR_0"); id >= 0 || prim.attributes.count("COLOR_0")) {
+            if (id < 0) {
+                geo.colors = readColors(prim.attributes.at("COLOR_0"), label + " COLOR_0");
+            } else {
+                const int components = mesh->componentCount(id) == 4 ? 4 : 3;
+                read("COLOR_0", components, values);
+                geo.colors.assign(points, glm::vec4(1.0f));
+                size_t clamped = 0;
+                for (size_t i = 0; i < points; ++i) {
+                    for (int c = 0; c < components; ++c) {
+                        const float v = values[i * size_t(components) + size_t(c)];
+                        const float safe = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 1.0f;
+                        clamped += safe != v;
+                        geo.colors[i][c] = safe;
+                    }
+                }
+                if (clamped > 0) warn(label + " COLOR_0: " + std::to_string(clamped) + " values outside [0, 1] clamped");
+            }
+            if (geo.colors.size() != points) fail(label + ": COLOR_0 does not have one colour per Draco point");
+        }
+        indices = mesh->indices();
+        for (size_t i = 0; i < indices.size(); ++i) {
+            if (indices[i] >= points)
+                fail(what + ": index " + std::to_string(indices[i]) + " at position " + std::to_string(i) +
+                     " out of range (" + std::to_string(points) + " points)");
+        }
     }
 
     PrimitiveGeometry readPrimitive(const tinygltf::Primitive& prim, const std::string& label) {

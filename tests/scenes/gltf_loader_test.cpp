@@ -367,11 +367,11 @@ TEST(GltfLoaderErrors, UnknownRequiredExtension) {
     GltfBuilder b;
     const int node = b.addMeshNode(unitTrianglePrimitive(b));
     b.setScene({node});
-    b.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
-    b.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
-    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "draco.gltf")); });
-    EXPECT_NE(msg.find("draco.gltf"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("KHR_draco_mesh_compression"), std::string::npos) << msg;
+    b.doc["extensionsUsed"] = {"EXT_meshopt_compression"};
+    b.doc["extensionsRequired"] = {"EXT_meshopt_compression"};
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "meshopt.gltf")); });
+    EXPECT_NE(msg.find("meshopt.gltf"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("EXT_meshopt_compression"), std::string::npos) << msg;
 }
 
 TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
