@@ -10,7 +10,7 @@ SHARCBAKE  := $(BUILD_DIR)/bin/sharcbake
 # Debian packages the build, the demo and the tests need.
 DEB_PACKAGES := build-essential cmake pkg-config python3 \
     libembree-dev libtbb-dev libopenvdb-dev libopenexr-dev libglm-dev libcli11-dev \
-    libtinygltf-dev libdraco-dev libmeshoptimizer-dev nlohmann-json3-dev libstb-dev libboost-iostreams-dev libgtest-dev libbenchmark-dev \
+    libtinygltf-dev libdraco-dev libmeshoptimizer-dev libwebp-dev nlohmann-json3-dev libstb-dev libboost-iostreams-dev libgtest-dev libbenchmark-dev \
     libopenvdb-tools python3-openvdb python3-jsonschema clang libclang-rt-14-dev gnuplot-nox parallel blender gltfpack
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)

@@ -14,6 +14,7 @@
 #include <tiny_gltf.h>
 #include <nlohmann/json.hpp>
 #include <meshoptimizer.h>
+#include <webp/decode.h>
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -47,11 +48,11 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 11> kSupportedRequiredExtensions = {
+const std::array<const char*, 12> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
     "EXT_mesh_gpu_instancing", "KHR_materials_pbrSpecularGlossiness", "KHR_draco_mesh_compression",
-    "EXT_meshopt_compression"};
+    "EXT_meshopt_compression", "EXT_texture_webp"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -346,11 +347,48 @@ private:
         }
     }
 
+    static bool isWebp(const unsigned char* bytes, int size) {
+        return size >= 12 && std::memcmp(bytes, "RIFF", 4) == 0 && std::memcmp(bytes + 8, "WEBP", 4) == 0;
+    }
+
+    /// EXT_texture_webp's images, which tinygltf's stb decoder cannot read, with libwebp: 8-bit
+    /// RGBA, behind the same size check as the other images.
+    static bool loadWebp(tinygltf::Image* image, int index, std::string* err, const unsigned char* bytes, int size,
+                         uint32_t max_side) {
+        int width = 0, height = 0;
+        if (!WebPGetInfo(bytes, size_t(size), &width, &height)) {
+            if (err) *err += "image " + std::to_string(index) + ": not a WebP image libwebp can read\n";
+            return false;
+        }
+        if (uint64_t(width) > max_side || uint64_t(height) > max_side) {
+            if (err) {
+                *err += "image " + std::to_string(index) + " is " + std::to_string(width) + "x" +
+                        std::to_string(height) + " texels, above the limit of " + std::to_string(max_side) +
+                        " per side (raise it with --max-texture-size)\n";
+            }
+            return false;
+        }
+        uint8_t* rgba = WebPDecodeRGBA(bytes, size_t(size), &width, &height);
+        if (!rgba) {
+            if (err) *err += "image " + std::to_string(index) + ": libwebp could not decode it\n";
+            return false;
+        }
+        image->width = width;
+        image->height = height;
+        image->component = 4;
+        image->bits = 8;
+        image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+        image->image.assign(rgba, rgba + size_t(width) * size_t(height) * 4);
+        WebPFree(rgba);
+        return true;
+    }
+
     /// tinygltf's image decoder behind a size check on the image header, so a small file that
     /// declares a huge image is refused before its texels are allocated.
     static bool loadImageBounded(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
                                  int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
         const uint32_t max_side = static_cast<const GltfLoadLimits*>(user)->max_texture_size;
+        if (isWebp(bytes, size)) return loadWebp(image, index, err, bytes, size, max_side);
         int width = 0, height = 0, channels = 0;
         if (stbi_info_from_memory(bytes, size, &width, &height, &channels) &&
             (uint64_t(width) > max_side || uint64_t(height) > max_side)) {
@@ -1742,15 +1780,21 @@ private:
     int decodeTexture(int textureIndex, bool srgb, const std::string& label) {
         const tinygltf::Texture& src = model_.textures[textureIndex];
         const std::string what = label + ": texture " + std::to_string(textureIndex);
-        if (src.source < 0 || static_cast<size_t>(src.source) >= model_.images.size()) {
+        // EXT_texture_webp names the WebP image, and `source` (if any) a fallback for viewers
+        // without WebP: the WebP one is read.
+        int source = src.source;
+        if (const tinygltf::Value* webp = extension(src.extensions, "EXT_texture_webp")) {
+            if (const std::optional<double> webp_source = number(*webp, "source")) source = static_cast<int>(*webp_source);
+        }
+        if (source < 0 || static_cast<size_t>(source) >= model_.images.size()) {
             warn(what + " has no image sharcbake can decode; texture ignored");
             return -1;
         }
-        const tinygltf::Image& image = model_.images[src.source];
+        const tinygltf::Image& image = model_.images[static_cast<size_t>(source)];
         Texture tex;
-        tex.name = imageName(image, src.source);
+        tex.name = imageName(image, source);
         if (!convertPixels(image, srgb, tex)) {
-            warn(what + ": image " + std::to_string(src.source) + " could not be decoded; texture ignored");
+            warn(what + ": image " + std::to_string(source) + " could not be decoded; texture ignored");
             return -1;
         }
         if (src.sampler >= 0 && static_cast<size_t>(src.sampler) < model_.samplers.size()) {
