@@ -161,9 +161,18 @@ GltfBsdf::GltfBsdf(const ShadingMaterial& m, const SurfaceHit& hit, float min_ro
     metallic_ = metallic;
     has_specular_ = metallic > 0.0f || m.specular_weight > 0.0f;
     e_avg_ = has_specular_ ? ggxAverageAlbedo(roughness_) : 1.0f;
+    coat_ = glm::clamp(m.clearcoat, 0.0f, 1.0f);
+    has_coat_ = coat_ > 0.0f;
+    if (has_coat_) {
+        coat_roughness_ = glm::clamp(std::max(m.clearcoat_roughness, min_roughness), 0.0f, 1.0f);
+        coat_alpha_ = std::max(coat_roughness_ * coat_roughness_, kMinAlpha);
+    }
 }
 
 namespace {
+
+/// KHR_materials_clearcoat's layer: a dielectric of ior 1.5, ((1.5 - 1) / (1.5 + 1))^2.
+constexpr float kClearcoatF0 = 0.04f;
 
 /// Kulla and Conty's colour of the multiple-scattering lobe for a Schlick Fresnel: the average
 /// Fresnel F_avg = F0 + (F90 - F0) / 21 (cosine-weighted), then F_avg^2 E_avg / (1 - F_avg (1 - E_avg)),
@@ -184,6 +193,23 @@ const GltfBsdf::Lobes& GltfBsdf::lobes(float cos_o) const {
 }
 
 GltfBsdf::Lobes GltfBsdf::computeLobes(float cos_o) const {
+    Lobes l = computeBaseLobes(cos_o);
+    if (!has_coat_) return l;
+    // The clearcoat reflects c = clearcoat (F0 E + (1 - F0) E5) at its roughness (single
+    // scattering: with F0 0.04 its multiple scattering is a fraction of a percent); the layers
+    // beneath get 1 - c.
+    const GgxAlbedo a = ggxAlbedo(cos_o, coat_roughness_);
+    l.coat = coat_ * (kClearcoatF0 * a.e + (1.0f - kClearcoatF0) * a.e5);
+    l.under_coat = 1.0f - l.coat;
+    const float base = luminance(l.albedo) * l.under_coat;
+    l.diffuse *= l.under_coat;
+    l.multiple_scattering *= l.under_coat;
+    l.albedo = glm::vec3(l.coat) + l.albedo * l.under_coat;
+    l.p_coat = l.coat + base > 0.0f ? l.coat / (l.coat + base) : 1.0f;
+    return l;
+}
+
+GltfBsdf::Lobes GltfBsdf::computeBaseLobes(float cos_o) const {
     Lobes l;
     if (!has_specular_) {
         l.diffuse = l.albedo = diffuse_color_;
@@ -250,9 +276,18 @@ GltfBsdf::Evaluation GltfBsdf::evaluate(glm::vec3 wo_world, glm::vec3 wi_world) 
         const float g1 = 1.0f / (1.0f + ggxLambda(wo, alpha_));
         const glm::vec3 fresnel = (1.0f - metallic_) * schlick(dielectric_f0_, glm::vec3(dielectric_f90_), cos_oh) +
                                   metallic_ * schlick(metal_f0_, glm::vec3(1.0f), cos_oh);
-        f_cos += fresnel * (d * g2 / (4.0f * wo.z));
+        // l.diffuse and l.multiple_scattering already carry the coat's 1 - c.
+        f_cos += fresnel * (d * g2 / (4.0f * wo.z) * l.under_coat);
         // Visible-normal pdf: G1(wo) D(h) max(0, wo.h) / wo.z, times the reflection Jacobian.
         pdf += p_spec * g1 * d / (4.0f * wo.z);
+    }
+    if (has_coat_) {
+        const float d = ggxD(h, coat_alpha_);
+        const float g2 = 1.0f / (1.0f + ggxLambda(wo, coat_alpha_) + ggxLambda(wi, coat_alpha_));
+        const float g1 = 1.0f / (1.0f + ggxLambda(wo, coat_alpha_));
+        const float fresnel = kClearcoatF0 + (1.0f - kClearcoatF0) * std::pow(1.0f - cos_oh, 5.0f);
+        f_cos += glm::vec3(coat_ * fresnel * d * g2 / (4.0f * wo.z));
+        pdf = (1.0f - l.p_coat) * pdf + l.p_coat * g1 * d / (4.0f * wo.z);
     }
     e.f_cos = f_cos;
     e.pdf = pdf;
@@ -264,14 +299,23 @@ GltfBsdf::Sample GltfBsdf::sample(glm::vec3 wo_world, float u_lobe, glm::vec2 u)
     if (glm::dot(wo_world, geometric_normal_) <= 0.0f) return s;
     const glm::vec3 wo = frame_.toLocal(wo_world);
     if (wo.z <= 0.0f) return s;
-    const float p_spec = lobes(wo.z).p_specular;
+    const Lobes& l = lobes(wo.z);
     glm::vec3 wi;
-    s.specular = u_lobe < p_spec;
-    if (s.specular) {
-        const glm::vec3 h = sampleGgxVisibleNormal(wo, alpha_, u);
-        wi = glm::reflect(-wo, h);
+    if (has_coat_ && u_lobe < l.p_coat) {
+        s.specular = true;
+        s.roughness = coat_roughness_;
+        wi = glm::reflect(-wo, sampleGgxVisibleNormal(wo, coat_alpha_, u));
     } else {
-        wi = sampleCosineHemisphere(u);
+        // The rest of [0, 1) picks among the layers beneath, as without a coat.
+        if (has_coat_) u_lobe = std::min((u_lobe - l.p_coat) / (1.0f - l.p_coat), kOneMinusEpsilon);
+        s.specular = u_lobe < l.p_specular;
+        if (s.specular) {
+            s.roughness = roughness_;
+            const glm::vec3 h = sampleGgxVisibleNormal(wo, alpha_, u);
+            wi = glm::reflect(-wo, h);
+        } else {
+            wi = sampleCosineHemisphere(u);
+        }
     }
     if (wi.z <= 0.0f) return s;
     s.wi = frame_.toWorld(wi);

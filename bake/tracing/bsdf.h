@@ -17,6 +17,11 @@
 ///   1 - F(v.h), so a white base under any layer reflects exactly 1.
 /// E and its Schlick split (E_spec = F0 E + (F90 - F0) E5) come from a table over (mu, roughness)
 /// computed once from this file's own D and G (ggxAlbedoTable).
+///
+/// KHR_materials_clearcoat adds a GGX layer on top (F0 0.04, F90 1, its own roughness, the
+/// shading normal), weighted by the clearcoat factor. Its single-scattering albedo towards the
+/// viewer, c = clearcoat E_spec,coat(mu_o), is what it reflects; everything beneath is scaled by
+/// 1 - c, the same albedo scaling as the base's, so a white furnace still reflects exactly 1.
 #pragma once
 
 #include "tracing/sampling.h"
@@ -68,14 +73,15 @@ public:
         glm::vec3 weight{0.0f};  ///< f * |cos| / pdf
         float pdf = 0.0f;
         bool valid = false;
-        bool specular = false;  ///< chosen from the GGX lobe (for SHaRC's cone-spread test)
+        bool specular = false;  ///< chosen from a GGX lobe (for SHaRC's cone-spread test)
+        float roughness = 1.0f; ///< that lobe's roughness (the clearcoat's or the base's); 1 for diffuse
     };
     /// Picks the diffuse or specular lobe with u_lobe, then a direction with u.
     Sample sample(glm::vec3 wo, float u_lobe, glm::vec2 u) const;
 
     float roughness() const { return roughness_; }
     /// True when the BRDF has no specular part (pure Lambert): its sampling is exact.
-    bool isDiffuseOnly() const { return !has_specular_; }
+    bool isDiffuseOnly() const { return !has_specular_ && !has_coat_; }
 
     /// The BRDF's directional albedo towards `wo` (what a white furnace would see reflected), per
     /// channel; at most 1. Russian roulette and lobe selection use it.
@@ -90,11 +96,15 @@ private:
         glm::vec3 multiple_scattering{0.0f};
         glm::vec3 albedo{0.0f};               ///< the whole BRDF's, towards this direction
         float p_specular = 0.0f;              ///< single-scattering lobe vs cosine, by albedo
+        float coat = 0.0f;                    ///< the clearcoat's albedo c towards this direction
+        float under_coat = 1.0f;              ///< 1 - c: what reaches the layers beneath
+        float p_coat = 0.0f;                  ///< the clearcoat lobe vs the rest, by albedo
     };
     /// The lobes towards cos_o, computed once per outgoing direction: a path vertex asks for
     /// the same wo three times (light sampling, Russian roulette, the next direction).
     const Lobes& lobes(float cos_o) const;
     Lobes computeLobes(float cos_o) const;
+    Lobes computeBaseLobes(float cos_o) const;  ///< everything beneath the clearcoat
 
     Frame frame_;
     glm::vec3 geometric_normal_;
@@ -107,6 +117,10 @@ private:
     float roughness_;
     float alpha_;
     bool has_specular_;           ///< false for pure Lambert (metallic 0, specular weight 0)
+    float coat_ = 0.0f;           ///< clearcoat factor (0: no coat)
+    float coat_roughness_ = 0.0f;
+    float coat_alpha_ = 1.0f;
+    bool has_coat_ = false;
     // The last lobes() answer (NaN: none yet). A GltfBsdf belongs to one path vertex, on one
     // thread, so the memo needs no synchronisation.
     mutable float lobes_cos_o_ = std::numeric_limits<float>::quiet_NaN();

@@ -119,7 +119,7 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
         const GltfBsdf::Sample s = bsdf.sample(wo, u_lobe_rr.x, sampler.next2D());
         if (!s.valid) break;
         throughput *= s.weight / survive;
-        cone_roughness += s.specular ? bsdf.roughness() : 1.0f;
+        cone_roughness += s.specular ? s.roughness : 1.0f;
         previous_bsdf_pdf = s.pdf;
         previous_position = hit.position;
         previous_shading_normal = hit.shading_normal;

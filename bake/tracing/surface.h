@@ -57,6 +57,8 @@ struct ShadingMaterial {
     float specular_weight = 1.0f;      ///< KHR_materials_specular: factor x texture alpha
     glm::vec3 specular_color{1.0f};    ///< KHR_materials_specular: factor x texture rgb
     float ior = 1.5f;
+    float clearcoat = 0.0f;            ///< KHR_materials_clearcoat: factor x texture red
+    float clearcoat_roughness = 0.0f;  ///< KHR_materials_clearcoat: factor x texture green
     glm::vec3 emission{0.0f};          ///< radiance emitted from the front (or both) sides
     bool double_sided = false;
 };

@@ -48,11 +48,11 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 12> kSupportedRequiredExtensions = {
+const std::array<const char*, 13> kSupportedRequiredExtensions = {
     "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
     "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
     "EXT_mesh_gpu_instancing", "KHR_materials_pbrSpecularGlossiness", "KHR_draco_mesh_compression",
-    "EXT_meshopt_compression", "EXT_texture_webp"};
+    "EXT_meshopt_compression", "EXT_texture_webp", "KHR_materials_clearcoat"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -1723,6 +1723,17 @@ private:
                 warn(label + ": KHR_materials_transmission is traced as thin see-through glass: a share " +
                      "transmissionFactor of each surface lets rays through unbent and untinted; the glass's colour " +
                      "and the reflection of the transmitted share are not modelled");
+            }
+        }
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_clearcoat")) {
+            m.clearcoat = std::clamp(static_cast<float>(number(*ext, "clearcoatFactor").value_or(0.0)), 0.0f, 1.0f);
+            m.clearcoat_roughness =
+                std::clamp(static_cast<float>(number(*ext, "clearcoatRoughnessFactor").value_or(0.0)), 0.0f, 1.0f);
+            m.clearcoat_texture = textureRef(textureSlot(*ext, "clearcoatTexture"), false, label);
+            m.clearcoat_roughness_texture = textureRef(textureSlot(*ext, "clearcoatRoughnessTexture"), false, label);
+            if (m.clearcoat > 0.0f && textureSlot(*ext, "clearcoatNormalTexture").index >= 0) {
+                warn(label + ": KHR_materials_clearcoat clearcoatNormalTexture ignored: the coat uses the "
+                             "material's shading normal");
             }
         }
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_specular")) {

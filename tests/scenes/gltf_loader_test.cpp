@@ -379,11 +379,11 @@ TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
     GltfBuilder b;
     const int node = b.addMeshNode(unitTrianglePrimitive(b));
     b.setScene({node});
-    b.doc["extensionsUsed"] = {"KHR_materials_clearcoat"};
-    const Scene scene = loadGltf(b.writeEmbedded(dir, "clearcoat.gltf"));
+    b.doc["extensionsUsed"] = {"KHR_materials_sheen"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "sheen.gltf"));
     EXPECT_EQ(scene.triangles.size(), 1u);
     bool warned = false;
-    for (const std::string& w : scene.stats.warnings) warned |= w.find("KHR_materials_clearcoat") != std::string::npos;
+    for (const std::string& w : scene.stats.warnings) warned |= w.find("KHR_materials_sheen") != std::string::npos;
     EXPECT_TRUE(warned);
 }
 
@@ -596,6 +596,42 @@ std::vector<uint8_t> tinyPng() {
 }
 
 float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+
+// ------------------------------------------------------------------------ KHR_materials_clearcoat
+
+TEST(Clearcoat, FactorsAndTexturesAreReadAsBlenderWritesThem) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
+    b.doc["textures"] = json::array({{{"source", 0}}});
+    json prim = unitTrianglePrimitive(b);
+    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    // As Blender 3.4 exports Principled Clearcoat 0.7, Clearcoat Roughness 0.15 (plus textures).
+    prim["material"] = b.addMaterial(
+        {{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.3, 0.1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 0.5}}},
+         {"extensions",
+          {{"KHR_materials_clearcoat",
+            {{"clearcoatFactor", 0.7}, {"clearcoatRoughnessFactor", 0.15}, {"clearcoatTexture", {{"index", 0}}},
+             {"clearcoatRoughnessTexture", {{"index", 0}}}, {"clearcoatNormalTexture", {{"index", 0}}}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    b.doc["extensionsUsed"] = {"KHR_materials_clearcoat"};
+    b.doc["extensionsRequired"] = {"KHR_materials_clearcoat"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "clearcoat.gltf"));
+    const Material& m = scene.materials.at(0);
+    EXPECT_FLOAT_EQ(m.clearcoat, 0.7f);
+    EXPECT_FLOAT_EQ(m.clearcoat_roughness, 0.15f);
+    ASSERT_TRUE(m.clearcoat_texture.isSet());
+    ASSERT_TRUE(m.clearcoat_roughness_texture.isSet());
+    // Both are data (linear): texel 0's green 128 stays 128/255.
+    EXPECT_NEAR(scene.textures[size_t(m.clearcoat_roughness_texture.texture)].texels[0].g, 128 / 255.0f, 1e-6f);
+    bool normal_warned = false, unsupported = false;
+    for (const std::string& w : scene.stats.warnings) {
+        normal_warned |= w.find("clearcoatNormalTexture ignored") != std::string::npos;
+        unsupported |= w.find("not supported") != std::string::npos;
+    }
+    EXPECT_TRUE(normal_warned);
+    EXPECT_FALSE(unsupported);
+}
 
 // ------------------------------------------------------------- KHR_materials_pbrSpecularGlossiness
 

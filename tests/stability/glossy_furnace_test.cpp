@@ -22,6 +22,7 @@ struct Lobe {
     float metallic;
     float specular_weight;
     glm::vec3 specular_colour;
+    float clearcoat = 0.0f;  ///< KHR_materials_clearcoat factor, at roughness 0.2
 };
 
 void PrintTo(const Lobe& l, std::ostream* out) { *out << l.name; }
@@ -34,6 +35,8 @@ Scene whiteFurnace(const Lobe& lobe) {
         m.metallic = lobe.metallic;
         m.specular = lobe.specular_weight;
         m.specular_color = lobe.specular_colour;
+        m.clearcoat = lobe.clearcoat;
+        m.clearcoat_roughness = 0.2f;
         m.emissive = glm::vec3(0.0f);
         m.double_sided = true;
     }
@@ -102,12 +105,13 @@ const Lobe kLobes[] = {
     {"default_layer", 0.3f, 0.0f, 1.0f, glm::vec3(1.0f)},            // glTF's default dielectric layer
     {"half_metal", 0.3f, 0.5f, 1.0f, glm::vec3(1.0f)},               // metallic 0.5
     {"blender_black_specular", 0.5f, 0.0f, 1.0f, glm::vec3(0.0f)},  // F0 0, F90 1: grazing only
+    {"clearcoat", 0.5f, 0.0f, 1.0f, glm::vec3(1.0f), 1.0f},          // a full coat over the default layer
 };
 /// And for the cache, a white rough metal: it absorbs nothing and its samples carry up to 1.43x
 /// the albedo (the multiple-scattering mixture), so single paths that stay in the box for dozens
 /// of bounces have heavy-tailed weights that 64 spp cannot bound; the cache averages them.
 const Lobe kCacheLobes[] = {
-    kLobes[0], kLobes[1], kLobes[2], {"rough_metal", 0.9f, 1.0f, 1.0f, glm::vec3(1.0f)},
+    kLobes[0], kLobes[1], kLobes[2], kLobes[3], {"rough_metal", 0.9f, 1.0f, 1.0f, glm::vec3(1.0f)},
 };
 
 INSTANTIATE_TEST_SUITE_P(Stability, GlossyFurnace, ::testing::ValuesIn(kLobes),

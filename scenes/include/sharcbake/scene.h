@@ -83,6 +83,10 @@ struct Material {
     TextureRef specular_texture;            ///< A channel
     TextureRef specular_color_texture;      ///< RGB
     float ior = 1.5f;                       ///< KHR_materials_ior (1.5 when absent)
+    float clearcoat = 0.0f;                 ///< KHR_materials_clearcoat clearcoatFactor
+    TextureRef clearcoat_texture;           ///< R channel (linear)
+    float clearcoat_roughness = 0.0f;       ///< clearcoatRoughnessFactor
+    TextureRef clearcoat_roughness_texture; ///< G channel (linear)
     bool double_sided = false;
     TextureRef normal_texture;              ///< tangent-space normal map (linear RGB)
     float normal_scale = 1.0f;              ///< scales the map's X and Y
@@ -105,7 +109,8 @@ struct Material {
     bool hasTextures() const {
         return base_color_texture.isSet() || metallic_roughness_texture.isSet() ||
                emissive_texture.isSet() || specular_texture.isSet() ||
-               specular_color_texture.isSet() || normal_texture.isSet();
+               specular_color_texture.isSet() || normal_texture.isSet() || clearcoat_texture.isSet() ||
+               clearcoat_roughness_texture.isSet();
     }
 };
 
