@@ -21,7 +21,8 @@ DracoMesh::DracoMesh(const unsigned char* data, size_t size) : impl_(new Impl) {
         buffer.Init(reinterpret_cast<const char*>(data), size);
         draco::Decoder decoder;
         auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-        if (!decoded.ok()) throw std::runtime_error("Draco could not decode it: " + decoded.status().error_msg_string());
+        if (!decoded.ok())
+            throw std::runtime_error("Draco could not decode it: " + decoded.status().error_msg_string());
         impl_->mesh = std::move(decoded).value();
         const draco::Mesh& mesh = *impl_->mesh;
         indices_.reserve(size_t(mesh.num_faces()) * 3);
@@ -51,13 +52,13 @@ namespace {
 /// 1 / the largest value of an integer data type (what normalization divides by), 0 for floats.
 double integerScale(draco::DataType type) {
     switch (type) {
-    case draco::DT_INT8: return 1.0 / std::numeric_limits<int8_t>::max();
-    case draco::DT_UINT8: return 1.0 / std::numeric_limits<uint8_t>::max();
-    case draco::DT_INT16: return 1.0 / std::numeric_limits<int16_t>::max();
-    case draco::DT_UINT16: return 1.0 / std::numeric_limits<uint16_t>::max();
-    case draco::DT_INT32: return 1.0 / std::numeric_limits<int32_t>::max();
-    case draco::DT_UINT32: return 1.0 / std::numeric_limits<uint32_t>::max();
-    default: return 0.0;
+        case draco::DT_INT8: return 1.0 / std::numeric_limits<int8_t>::max();
+        case draco::DT_UINT8: return 1.0 / std::numeric_limits<uint8_t>::max();
+        case draco::DT_INT16: return 1.0 / std::numeric_limits<int16_t>::max();
+        case draco::DT_UINT16: return 1.0 / std::numeric_limits<uint16_t>::max();
+        case draco::DT_INT32: return 1.0 / std::numeric_limits<int32_t>::max();
+        case draco::DT_UINT32: return 1.0 / std::numeric_limits<uint32_t>::max();
+        default: return 0.0;
     }
 }
 }  // namespace

@@ -30,7 +30,8 @@ struct DracoQuad {
 };
 
 DracoQuad encodeQuad(int position_bits) {
-    const std::array<std::array<float, 3>, 6> corners = {{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}}};
+    const std::array<std::array<float, 3>, 6> corners = {
+        {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}}};
     draco::TriangleSoupMeshBuilder builder;
     builder.Start(2);
     DracoQuad quad;
@@ -76,14 +77,18 @@ GltfBuilder dracoQuadFile(const DracoQuad& quad, bool required, std::vector<uint
     const int position = accessor("VEC3", test::kFloat, quad.points);
     b.doc["accessors"][size_t(position)]["min"] = {0, 0, 0};
     b.doc["accessors"][size_t(position)]["max"] = {1, 1, 0};
-    const json prim = {{"attributes", {{"POSITION", position}, {"NORMAL", accessor("VEC3", test::kFloat, quad.points)},
-                                       {"TEXCOORD_0", accessor("VEC2", test::kFloat, quad.points)}}},
-                       {"indices", accessor("SCALAR", test::kUnsignedShort, 6)},
-                       {"mode", 4},
-                       {"extensions",
-                        {{"KHR_draco_mesh_compression",
-                          {{"bufferView", view},
-                           {"attributes", {{"POSITION", quad.position_id}, {"NORMAL", quad.normal_id}, {"TEXCOORD_0", quad.uv_id}}}}}}}};
+    const json prim = {
+        {"attributes",
+         {{"POSITION", position},
+          {"NORMAL", accessor("VEC3", test::kFloat, quad.points)},
+          {"TEXCOORD_0", accessor("VEC2", test::kFloat, quad.points)}}},
+        {"indices", accessor("SCALAR", test::kUnsignedShort, 6)},
+        {"mode", 4},
+        {"extensions",
+         {{"KHR_draco_mesh_compression",
+           {{"bufferView", view},
+            {"attributes",
+             {{"POSITION", quad.position_id}, {"NORMAL", quad.normal_id}, {"TEXCOORD_0", quad.uv_id}}}}}}}};
     b.setScene({b.addMeshNode(prim, {{"translation", {0, 0, 2}}})});
     b.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
     if (required) b.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};

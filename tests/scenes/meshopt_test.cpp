@@ -40,9 +40,15 @@ GltfBuilder compressedQuad(std::vector<uint8_t>* vertex_stream = nullptr) {
     // described by the extension.
     json& views = b.doc["bufferViews"];
     const auto compressed = [&](int view, size_t length, int stride, int count, const char* mode) {
-        json ext = {{"buffer", 0}, {"byteOffset", views[size_t(view)]["byteOffset"]}, {"byteLength", views[size_t(view)]["byteLength"]},
-                    {"byteStride", stride}, {"count", count}, {"mode", mode}};
-        views[size_t(view)] = {{"buffer", 1}, {"byteOffset", 0}, {"byteLength", length},
+        json ext = {{"buffer", 0},
+                    {"byteOffset", views[size_t(view)]["byteOffset"]},
+                    {"byteLength", views[size_t(view)]["byteLength"]},
+                    {"byteStride", stride},
+                    {"count", count},
+                    {"mode", mode}};
+        views[size_t(view)] = {{"buffer", 1},
+                               {"byteOffset", 0},
+                               {"byteLength", length},
                                {"extensions", {{"EXT_meshopt_compression", ext}}}};
         if (std::string(mode) == "ATTRIBUTES") views[size_t(view)]["byteStride"] = stride;
     };
@@ -82,9 +88,9 @@ std::string writeWithFallback(const GltfBuilder& b, const TempDir& dir, const st
         return path;
     }
     json d = copy.doc;
-    d["buffers"] = json::array({{{"byteLength", copy.bin.size()},
-                                 {"uri", "data:application/octet-stream;base64," + test::base64(copy.bin)}},
-                                fallback});
+    d["buffers"] = json::array(
+        {{{"byteLength", copy.bin.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(copy.bin)}},
+         fallback});
     const std::string path = dir.file(name);
     test::writeFile(path, d.dump(2));
     return path;
@@ -125,7 +131,8 @@ TEST(Meshopt, CorruptOrImpossibleViewsAreRefusedNamingTheView) {
     GltfBuilder corrupt = compressedQuad();
     for (size_t i = 1; i < 8; ++i) corrupt.bin[i] ^= 0x5A;
     const std::string corrupted = errorOf(corrupt, "corrupt.gltf");
-    EXPECT_NE(corrupted.find("bufferView 0 EXT_meshopt_compression: meshoptimizer could not decode it"), std::string::npos)
+    EXPECT_NE(corrupted.find("bufferView 0 EXT_meshopt_compression: meshoptimizer could not decode it"),
+              std::string::npos)
         << corrupted;
 
     GltfBuilder huge = compressedQuad();

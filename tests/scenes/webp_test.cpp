@@ -53,7 +53,8 @@ Scene loadTextured(const TempDir& dir, const std::vector<ImageData>& images, con
     GltfBuilder b;
     for (size_t i = 0; i < images.size(); ++i) {
         if (external) {
-            const std::string name = "image" + std::to_string(i) + (std::string(images[i].mime) == "image/webp" ? ".webp" : ".png");
+            const std::string name = "image" + std::to_string(i) +
+                                     (std::string(images[i].mime) == "image/webp" ? ".webp" : ".png");
             test::writeFile(dir.file(name), images[i].bytes.data(), images[i].bytes.size());
             b.doc["images"].push_back({{"uri", name}});
         } else {
@@ -78,7 +79,8 @@ TEST(Webp, TheWebpImageIsReadAndTheFallbackIgnored) {
     const std::vector<uint8_t> grey = {128, 128, 128, 255, 128, 128, 128, 255};
     const std::vector<ImageData> images = {{png(grey, 2, 1), "image/png"}, {webp(texels, 2, 1), "image/webp"}};
     for (const bool external : {false, true}) {
-        const Scene scene = loadTextured(dir, images, {{"source", 0}, {"extensions", {{"EXT_texture_webp", {{"source", 1}}}}}},
+        const Scene scene = loadTextured(dir, images,
+                                         {{"source", 0}, {"extensions", {{"EXT_texture_webp", {{"source", 1}}}}}},
                                          false, external);
         const Material& m = scene.materials.at(0);
         ASSERT_TRUE(m.base_color_texture.isSet()) << (external ? "external" : "GLB");
@@ -103,8 +105,8 @@ TEST(Webp, WebpOnlyRequiredLoadsAndOversizeIsRefusedBeforeDecoding) {
     // 9000 x 1 texels: above the default limit of 8192 per side, refused from the header.
     const std::vector<uint8_t> wide(9000 * 4, 200);
     try {
-        loadTextured(dir, {{webp(wide, 9000, 1), "image/webp"}}, {{"extensions", {{"EXT_texture_webp", {{"source", 0}}}}}},
-                     true);
+        loadTextured(dir, {{webp(wide, 9000, 1), "image/webp"}},
+                     {{"extensions", {{"EXT_texture_webp", {{"source", 0}}}}}}, true);
         ADD_FAILURE() << "expected SceneLoadError";
     } catch (const SceneLoadError& e) {
         EXPECT_NE(std::string(e.what()).find("9000x1 texels, above the limit"), std::string::npos) << e.what();
