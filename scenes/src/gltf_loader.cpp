@@ -10,6 +10,7 @@
 
 #include "draco_mesh.h"
 #include "gltf_rewrite.h"
+#include "message_text.h"
 
 #include <stb_image.h>
 #include <tiny_gltf.h>
@@ -57,30 +58,6 @@ const std::array<const char*, 13> kSupportedRequiredExtensions = {
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
 /// from one instanced node the file is refused instead of exhausting memory.
 constexpr uint64_t kMaxInstancedTriangles = uint64_t(1) << 26;
-
-/// Text from the scene file for a message: control characters and bytes >= 0x7F are shown as
-/// \xNN, so a crafted name cannot drive the terminal.
-std::string printable(const std::string& s) {
-    std::string out;
-    for (const char ch : s) {
-        const auto c = static_cast<unsigned char>(ch);
-        if (c < 0x20 || c >= 0x7F) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\x%02X", c);
-            out += buf;
-        } else {
-            out += ch;
-        }
-    }
-    return out;
-}
-
-std::string quoted(const std::string& s) {
-    std::string out(1, '\'');
-    out += printable(s);
-    out += '\'';
-    return out;
-}
 
 /// tinygltf's error text without bytes of the files it read: the JSON parser quotes what it
 /// read last ("last read: '...'"), which for a file that is not glTF is its raw content.
@@ -188,19 +165,28 @@ std::vector<glm::uvec3> assembleTriangles(int mode, const std::vector<uint32_t>&
     return tris;
 }
 
+/// T * R * S, each part optional (identity where absent). `rotation` is glTF's (x, y, z, w),
+/// normalised here; a node's TRS and an EXT_mesh_gpu_instancing instance's both compose this way.
+glm::dmat4 composeTrs(const std::optional<glm::dvec3>& translation, const std::optional<glm::dvec4>& rotation,
+                      const std::optional<glm::dvec3>& scale) {
+    glm::dmat4 m(1.0);
+    if (translation) m = glm::translate(m, *translation);
+    if (rotation) m *= glm::mat4_cast(glm::normalize(glm::dquat(rotation->w, rotation->x, rotation->y, rotation->z)));
+    if (scale) m = glm::scale(m, *scale);
+    return m;
+}
+
 /// A node's local transform: the matrix if given, else T * R * S.
 glm::dmat4 localTransform(const tinygltf::Node& node) {
     if (node.matrix.size() == 16) return glm::make_mat4(node.matrix.data());  // column-major, like glm
-    glm::dmat4 m(1.0);
-    if (node.translation.size() == 3)
-        m = glm::translate(m, glm::dvec3(node.translation[0], node.translation[1], node.translation[2]));
-    if (node.rotation.size() == 4) {
-        // glTF stores quaternions as (x, y, z, w); glm's constructor takes w first.
-        const glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
-        m *= glm::mat4_cast(glm::normalize(q));
-    }
-    if (node.scale.size() == 3) m = glm::scale(m, glm::dvec3(node.scale[0], node.scale[1], node.scale[2]));
-    return m;
+    const auto vec3 = [](const std::vector<double>& v) {
+        return v.size() == 3 ? std::optional<glm::dvec3>(glm::dvec3(v[0], v[1], v[2])) : std::nullopt;
+    };
+    const std::optional<glm::dvec4> rotation =
+        node.rotation.size() == 4
+            ? std::optional<glm::dvec4>(glm::dvec4(node.rotation[0], node.rotation[1], node.rotation[2], node.rotation[3]))
+            : std::nullopt;
+    return composeTrs(vec3(node.translation), rotation, vec3(node.scale));
 }
 
 /// Builds the glTF-spec default material used by primitives without one.
@@ -346,6 +332,18 @@ private:
         }
     }
 
+    /// An image's size from its header against --max-texture-size; false (with the reason in
+    /// `err`) when a side is over it.
+    static bool withinTextureLimit(int index, int width, int height, uint32_t max_side, std::string* err) {
+        if (uint64_t(width) <= max_side && uint64_t(height) <= max_side) return true;
+        if (err) {
+            *err += "image " + std::to_string(index) + " is " + std::to_string(width) + "x" + std::to_string(height) +
+                    " texels, above the limit of " + std::to_string(max_side) +
+                    " per side (raise it with --max-texture-size)\n";
+        }
+        return false;
+    }
+
     static bool isWebp(const unsigned char* bytes, int size) {
         return size >= 12 && std::memcmp(bytes, "RIFF", 4) == 0 && std::memcmp(bytes + 8, "WEBP", 4) == 0;
     }
@@ -359,14 +357,7 @@ private:
             if (err) *err += "image " + std::to_string(index) + ": not a WebP image libwebp can read\n";
             return false;
         }
-        if (uint64_t(width) > max_side || uint64_t(height) > max_side) {
-            if (err) {
-                *err += "image " + std::to_string(index) + " is " + std::to_string(width) + "x" +
-                        std::to_string(height) + " texels, above the limit of " + std::to_string(max_side) +
-                        " per side (raise it with --max-texture-size)\n";
-            }
-            return false;
-        }
+        if (!withinTextureLimit(index, width, height, max_side, err)) return false;
         uint8_t* rgba = WebPDecodeRGBA(bytes, size_t(size), &width, &height);
         if (!rgba) {
             if (err) *err += "image " + std::to_string(index) + ": libwebp could not decode it\n";
@@ -390,14 +381,8 @@ private:
         if (isWebp(bytes, size)) return loadWebp(image, index, err, bytes, size, max_side);
         int width = 0, height = 0, channels = 0;
         if (stbi_info_from_memory(bytes, size, &width, &height, &channels) &&
-            (uint64_t(width) > max_side || uint64_t(height) > max_side)) {
-            if (err) {
-                *err += "image " + std::to_string(index) + " is " + std::to_string(width) + "x" +
-                        std::to_string(height) + " texels, above the limit of " + std::to_string(max_side) +
-                        " per side (raise it with --max-texture-size)\n";
-            }
+            !withinTextureLimit(index, width, height, max_side, err))
             return false;
-        }
         return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, nullptr);
     }
 
@@ -635,13 +620,19 @@ private:
         const tinygltf::Accessor& acc = accessorAt(index, what);
         const bool rgba = acc.type == TINYGLTF_TYPE_VEC4;
         const std::vector<double> raw = readAccessor(index, rgba ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, what);
-        const size_t components = rgba ? 4 : 3;
+        return colorsFromValues(raw, rgba ? 4 : 3, what);
+    }
+
+    /// RGB or RGBA colours, `components` values each, into RGBA (alpha 1 where absent); values
+    /// outside [0, 1] or not finite are clamped (non-finite to 1) with a warning.
+    template <typename T>
+    std::vector<glm::vec4> colorsFromValues(const std::vector<T>& raw, size_t components, const std::string& what) {
         std::vector<glm::vec4> out(raw.size() / components, glm::vec4(1.0f));
         size_t clamped = 0;
         for (size_t i = 0; i < out.size(); ++i) {
             for (size_t c = 0; c < components; ++c) {
-                const double v = raw[components * i + c];
-                const double safe = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0;
+                const T v = raw[components * i + c];
+                const T safe = std::isfinite(v) ? std::clamp(v, T(0), T(1)) : T(1);
                 clamped += safe != v;
                 out[i][int(c)] = float(safe);
             }
@@ -775,24 +766,18 @@ private:
                  " triangles would make more than " + std::to_string(kMaxInstancedTriangles) +
                  " triangles; sharcbake copies every instance into the traced scene");
 
-        std::vector<glm::dmat4> transforms(count, glm::dmat4(1.0));
+        std::vector<glm::dmat4> transforms(count);
         for (size_t i = 0; i < count; ++i) {
             const std::string which = label + ": instance " + std::to_string(i);
-            glm::dmat4& m = transforms[i];
-            if (t >= 0) {
-                if (!isFinite(translations[i])) fail(which + " has a NaN or infinite TRANSLATION");
-                m = glm::translate(m, glm::dvec3(translations[i]));
-            }
+            if (t >= 0 && !isFinite(translations[i])) fail(which + " has a NaN or infinite TRANSLATION");
             if (r >= 0) {
-                const glm::dvec4 q(rotations[i]);
-                const double length = glm::length(q);
+                const double length = glm::length(glm::dvec4(rotations[i]));
                 if (!std::isfinite(length) || length < 1e-6) fail(which + " has a zero, NaN or infinite ROTATION");
-                m *= glm::mat4_cast(glm::dquat(q.w, q.x, q.y, q.z) / length);  // stored (x, y, z, w)
             }
-            if (sc >= 0) {
-                if (!isFinite(scales[i])) fail(which + " has a NaN or infinite SCALE");
-                m = glm::scale(m, glm::dvec3(scales[i]));
-            }
+            if (sc >= 0 && !isFinite(scales[i])) fail(which + " has a NaN or infinite SCALE");
+            transforms[i] = composeTrs(t >= 0 ? std::optional<glm::dvec3>(translations[i]) : std::nullopt,
+                                       r >= 0 ? std::optional<glm::dvec4>(rotations[i]) : std::nullopt,
+                                       sc >= 0 ? std::optional<glm::dvec3>(scales[i]) : std::nullopt);
         }
         return transforms;
     }
@@ -950,17 +935,7 @@ private:
             } else {
                 const int components = mesh->componentCount(id) == 4 ? 4 : 3;
                 read("COLOR_0", components, values);
-                geo.colors.assign(points, glm::vec4(1.0f));
-                size_t clamped = 0;
-                for (size_t i = 0; i < points; ++i) {
-                    for (int c = 0; c < components; ++c) {
-                        const float v = values[i * size_t(components) + size_t(c)];
-                        const float safe = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 1.0f;
-                        clamped += safe != v;
-                        geo.colors[i][c] = safe;
-                    }
-                }
-                if (clamped > 0) warn(label + " COLOR_0: " + std::to_string(clamped) + " values outside [0, 1] clamped");
+                geo.colors = colorsFromValues(values, size_t(components), label + " COLOR_0");
             }
             if (geo.colors.size() != points) fail(label + ": COLOR_0 does not have one colour per Draco point");
         }
@@ -1293,7 +1268,7 @@ private:
     /// the 0.04 of ior 1.5), roughness 1 - glossiness.
     void readSpecularGlossiness(const tinygltf::Value& ext, Material& m, const std::string& label) {
         constexpr float kDielectricF0 = 0.04f;  // ((1.5 - 1) / (1.5 + 1))^2
-        const std::optional<glm::vec4> diffuse = vec4Value(ext, "diffuseFactor");
+        const std::optional<glm::vec4> diffuse = vecValue<4>(ext, "diffuseFactor");
         m.base_color = diffuse ? glm::vec3(*diffuse) : glm::vec3(1.0f);
         m.base_alpha = diffuse ? std::clamp(diffuse->w, 0.0f, 1.0f) : 1.0f;
         m.base_color_texture = textureRef(textureSlot(ext, "diffuseTexture"), true, label);
@@ -1301,7 +1276,7 @@ private:
         m.ior = 1.5f;
         m.specular = 1.0f;
         m.specular_texture = TextureRef();
-        m.specular_color = vec3Value(ext, "specularFactor").value_or(glm::vec3(1.0f)) / kDielectricF0;
+        m.specular_color = vecValue<3>(ext, "specularFactor").value_or(glm::vec3(1.0f)) / kDielectricF0;
         const float glossiness = std::clamp(static_cast<float>(number(ext, "glossinessFactor").value_or(1.0)), 0.0f, 1.0f);
         const TextureSlot slot = textureSlot(ext, "specularGlossinessTexture");
         m.specular_color_texture = textureRef(slot, true, label);  // RGB: the specular colour, sRGB
@@ -1389,24 +1364,14 @@ private:
         return object.Get(key).GetNumberAsDouble();
     }
 
-    static std::optional<glm::vec4> vec4Value(const tinygltf::Value& object, const char* key) {
+    /// A JSON array of N numbers, or nothing when absent or malformed.
+    template <int N>
+    static std::optional<glm::vec<N, float>> vecValue(const tinygltf::Value& object, const char* key) {
         if (!object.Has(key)) return std::nullopt;
         const tinygltf::Value& a = object.Get(key);
-        if (!a.IsArray() || a.ArrayLen() != 4) return std::nullopt;
-        glm::vec4 v;
-        for (int i = 0; i < 4; ++i) {
-            if (!a.Get(i).IsNumber()) return std::nullopt;
-            v[i] = static_cast<float>(a.Get(i).GetNumberAsDouble());
-        }
-        return v;
-    }
-
-    static std::optional<glm::vec3> vec3Value(const tinygltf::Value& object, const char* key) {
-        if (!object.Has(key)) return std::nullopt;
-        const tinygltf::Value& a = object.Get(key);
-        if (!a.IsArray() || a.ArrayLen() != 3) return std::nullopt;
-        glm::vec3 v;
-        for (int i = 0; i < 3; ++i) {
+        if (!a.IsArray() || a.ArrayLen() != size_t(N)) return std::nullopt;
+        glm::vec<N, float> v;
+        for (int i = 0; i < N; ++i) {
             if (!a.Get(i).IsNumber()) return std::nullopt;
             v[i] = static_cast<float>(a.Get(i).GetNumberAsDouble());
         }
@@ -1490,7 +1455,7 @@ private:
         }
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_specular")) {
             m.specular = static_cast<float>(number(*ext, "specularFactor").value_or(1.0));
-            m.specular_color = vec3Value(*ext, "specularColorFactor").value_or(glm::vec3(1.0f));
+            m.specular_color = vecValue<3>(*ext, "specularColorFactor").value_or(glm::vec3(1.0f));
             m.specular_texture = textureRef(textureSlot(*ext, "specularTexture"), false, label);
             m.specular_color_texture = textureRef(textureSlot(*ext, "specularColorTexture"), true, label);
             if (m.specular_color == glm::vec3(0.0f) && !m.specular_color_texture.isSet()) {
@@ -1707,7 +1672,7 @@ private:
         if (!model_.extras.IsObject() || !model_.extras.Has("sharcbake")) return;
         const tinygltf::Value& ours = model_.extras.Get("sharcbake");
         if (!ours.IsObject() || !ours.Has("sky_radiance")) return;
-        const std::optional<glm::vec3> sky = vec3Value(ours, "sky_radiance");
+        const std::optional<glm::vec3> sky = vecValue<3>(ours, "sky_radiance");
         if (!sky || !isFinite(*sky) || sky->x < 0.0f || sky->y < 0.0f || sky->z < 0.0f)
             fail("extras.sharcbake.sky_radiance must be an array of 3 finite, non-negative numbers");
         scene_.sky.uniform = *sky;
@@ -1719,7 +1684,7 @@ private:
         if (!model_.extras.IsObject() || !model_.extras.Has("sharcbake")) return;
         const tinygltf::Value& ours = model_.extras.Get("sharcbake");
         if (!ours.IsObject() || !ours.Has("expected_radiance")) return;
-        std::optional<glm::vec3> known = vec3Value(ours, "expected_radiance");
+        std::optional<glm::vec3> known = vecValue<3>(ours, "expected_radiance");
         if (!known) {
             if (const std::optional<double> scalar = number(ours, "expected_radiance")) known = glm::vec3(float(*scalar));
         }

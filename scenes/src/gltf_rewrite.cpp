@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "gltf_rewrite.h"
 
+#include "message_text.h"
+
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
 
@@ -12,23 +14,6 @@ namespace sharcbake {
 namespace {
 
 [[noreturn]] void fail(const std::string& what) { throw GltfRewriteError(what); }
-
-/// Text from the file for a message, in double quotes: control characters and bytes >= 0x7F
-/// as \xNN, so a crafted name cannot drive the terminal.
-std::string quotedText(const std::string& s) {
-    std::string out = "\"";
-    for (const unsigned char c : s) {
-        if (c < 0x20 || c >= 0x7F || c == '"' || c == '\\') {
-            static const char* hex = "0123456789abcdef";
-            out += "\\x";
-            out += hex[c >> 4];
-            out += hex[c & 15];
-        } else {
-            out += char(c);
-        }
-    }
-    return out + "\"";
-}
 
 /// Removes `indices` from every KHR_draco_mesh_compression primitive (see rewriteForTinygltf).
 bool removeDracoIndices(nlohmann::json& doc, std::map<std::pair<int, int>, uint64_t>& counts) {
@@ -135,11 +120,11 @@ std::string decodeMeshoptView(const nlohmann::json& ext, const char* data, size_
         result = mode == "TRIANGLES" ? meshopt_decodeIndexBuffer(out.data(), count, stride, src, size)
                                      : meshopt_decodeIndexSequence(out.data(), count, stride, src, size);
     } else {
-        fail(label + ": unknown mode " + quotedText(mode));
+        fail(label + ": unknown mode " + quoted(mode));
     }
     if (result != 0) fail(label + ": meshoptimizer could not decode it (error " + std::to_string(result) + ")");
     if (filter == "NONE") return out;
-    if (mode != "ATTRIBUTES") fail(label + ": filter " + quotedText(filter) + " on " + mode);
+    if (mode != "ATTRIBUTES") fail(label + ": filter " + quoted(filter) + " on " + mode);
     if (filter == "OCTAHEDRAL" && (stride == 4 || stride == 8)) {
         meshopt_decodeFilterOct(out.data(), count, stride);
     } else if (filter == "QUATERNION" && stride == 8) {
@@ -147,7 +132,7 @@ std::string decodeMeshoptView(const nlohmann::json& ext, const char* data, size_
     } else if (filter == "EXPONENTIAL" && stride % 4 == 0) {
         meshopt_decodeFilterExp(out.data(), count, stride);
     } else {
-        fail(label + ": filter " + quotedText(filter) + " with byteStride " + std::to_string(stride) +
+        fail(label + ": filter " + quoted(filter) + " with byteStride " + std::to_string(stride) +
              " is not one EXT_meshopt_compression defines");
     }
     return out;
