@@ -13,11 +13,14 @@ namespace {
 // Below this alpha the lobe is a near-mirror; clamping keeps D finite in float.
 constexpr float kMinAlpha = 1e-4f;
 
-glm::vec3 schlick(glm::vec3 f0, glm::vec3 f90, float cos_theta) {
+/// Schlick's (1 - cos)^5, the weight of F90 against F0.
+float schlickWeight(float cos_theta) {
     const float m = glm::clamp(1.0f - cos_theta, 0.0f, 1.0f);
     const float m2 = m * m;
-    return f0 + (f90 - f0) * (m2 * m2 * m);
+    return m2 * m2 * m;
 }
+
+glm::vec3 schlick(glm::vec3 f0, glm::vec3 f90, float cos_theta) { return f0 + (f90 - f0) * schlickWeight(cos_theta); }
 
 }  // namespace
 
@@ -285,7 +288,7 @@ GltfBsdf::Evaluation GltfBsdf::evaluate(glm::vec3 wo_world, glm::vec3 wi_world) 
         const float d = ggxD(h, coat_alpha_);
         const float g2 = 1.0f / (1.0f + ggxLambda(wo, coat_alpha_) + ggxLambda(wi, coat_alpha_));
         const float g1 = 1.0f / (1.0f + ggxLambda(wo, coat_alpha_));
-        const float fresnel = kClearcoatF0 + (1.0f - kClearcoatF0) * std::pow(1.0f - cos_oh, 5.0f);
+        const float fresnel = kClearcoatF0 + (1.0f - kClearcoatF0) * schlickWeight(cos_oh);
         f_cos += glm::vec3(coat_ * fresnel * d * g2 / (4.0f * wo.z));
         pdf = (1.0f - l.p_coat) * pdf + l.p_coat * g1 * d / (4.0f * wo.z);
     }

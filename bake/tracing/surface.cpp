@@ -18,6 +18,15 @@ T barycentric(const std::vector<T>& values, const glm::uvec3& tri, float b0, flo
     return b0 * values[tri.x] + b1 * values[tri.y] + b2 * values[tri.z];
 }
 
+/// The texel of `ref` at barycentric (b0, b1, b2) of triangle `tri` (white where unset), for
+/// the queries that need one texture at a point without its whole SurfaceHit.
+glm::vec4 texelAt(const Scene& scene, const TextureRef& ref, const glm::uvec3& tri, float b0, float b1, float b2) {
+    if (!ref.isSet() || size_t(ref.texture) >= scene.textures.size()) return glm::vec4(1.0f);
+    const std::vector<glm::vec2>& uvs = ref.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
+    const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : barycentric(uvs, tri, b0, b1, b2);
+    return scene.textures[size_t(ref.texture)].sample(ref.transform.apply(uv));
+}
+
 /// Bends the (front-facing) shading normal by the material's tangent-space normal map: X along
 /// the tangent, Y along the bitangent, Z along the normal, as glTF defines it. The result is
 /// kept just above the surface, where a steep map would otherwise shade from behind it.
@@ -101,18 +110,12 @@ EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, f
     const glm::uvec3 tri = scene.triangles[triangle];
     const float b0 = 1.0f - b1 - b2;
     const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
-    e.position = b0 * p0 + b1 * p1 + b2 * p2;
+    e.position = barycentric(scene.positions, tri, b0, b1, b2);
     e.face_normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
     const Material& m = scene.materials[scene.triangle_materials[triangle]];
     e.double_sided = m.double_sided;
     if (!m.isEmissive()) return e;
-    glm::vec3 texel(1.0f);
-    if (m.emissive_texture.isSet() && size_t(m.emissive_texture.texture) < scene.textures.size()) {
-        const std::vector<glm::vec2>& uvs = m.emissive_texture.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
-        const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : b0 * uvs[tri.x] + b1 * uvs[tri.y] + b2 * uvs[tri.z];
-        texel = glm::vec3(scene.textures[size_t(m.emissive_texture.texture)].sample(m.emissive_texture.transform.apply(uv)));
-    }
-    e.emission = m.emissive * m.emissive_strength * texel;
+    e.emission = m.emissive * m.emissive_strength * glm::vec3(texelAt(scene, m.emissive_texture, tri, b0, b1, b2));
     return e;
 }
 
@@ -121,11 +124,7 @@ bool isCutOut(const Scene& scene, uint32_t triangle, float b1, float b2) {
     if (!m.cutsOut()) return false;
     const glm::uvec3 tri = scene.triangles[triangle];
     const float b0 = 1.0f - b1 - b2;
-    const auto texel = [&](const TextureRef& ref) {
-        const std::vector<glm::vec2>& uvs = ref.texcoord == 1 ? scene.texcoords1 : scene.texcoords0;
-        const glm::vec2 uv = uvs.empty() ? glm::vec2(0.0f) : barycentric(uvs, tri, b0, b1, b2);
-        return scene.textures[size_t(ref.texture)].sample(ref.transform.apply(uv));
-    };
+    const auto texel = [&](const TextureRef& ref) { return texelAt(scene, ref, tri, b0, b1, b2); };
     // The share of this point that stops rays: alpha for BLEND, and what transmission leaves.
     float opacity = 1.0f;
     if (m.alpha_mode != AlphaMode::Opaque) {
