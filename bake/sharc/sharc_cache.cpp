@@ -673,16 +673,28 @@ bool SharcCache::resolveSlot(uint32_t slot, uint32_t iteration, double inverse_s
 void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
     std::vector<std::vector<NewKey>> missing((sorted_slots.size() + kLinkBlock - 1) / kLinkBlock);
     tbb::parallel_for(size_t(0), missing.size(), [&](size_t block) {
-        const size_t last = std::min(sorted_slots.size(), (block + 1) * kLinkBlock);
-        for (size_t i = block * kLinkBlock; i < last; ++i) {
-            // The finer voxel's key two distances ahead, its coarser key's bucket one ahead.
+        const size_t first = block * kLinkBlock, last = std::min(sorted_slots.size(), (block + 1) * kLinkBlock);
+        // Coarser keys are made a distance ahead, so their buckets are prefetched; the ring holds
+        // the next ones (as the commit's look-up does). The finer keys two distances ahead.
+        struct Parent {
+            uint64_t key;
+            uint32_t base;
+        };
+        Parent ahead[kPrefetchDistance];
+        const auto makeParent = [&](size_t i) {
+            const uint64_t key = coarserKey(table_.keyAt(sorted_slots[i]), settings_.grid);
+            const Parent p{key, bucketBaseOf(key)};
+            table_.prefetchBucket(p.base);
+            return p;
+        };
+        for (size_t i = first; i < std::min(first + kPrefetchDistance, last); ++i) ahead[(i - first) % kPrefetchDistance] = makeParent(i);
+        for (size_t i = first; i < last; ++i) {
             if (i + 2 * kPrefetchDistance < last) table_.prefetchBucket(sorted_slots[i + 2 * kPrefetchDistance]);
-            if (i + kPrefetchDistance < last) {
-                table_.prefetchBucket(bucketBaseOf(coarserKey(table_.keyAt(sorted_slots[i + kPrefetchDistance]), settings_.grid)));
-            }
+            const Parent next = ahead[(i - first) % kPrefetchDistance];
+            if (i + kPrefetchDistance < last) ahead[(i - first) % kPrefetchDistance] = makeParent(i + kPrefetchDistance);
             const uint32_t slot = sorted_slots[i];
-            const uint64_t parent_key = coarserKey(table_.keyAt(slot), settings_.grid);
-            const uint32_t base = bucketBaseOf(parent_key);
+            const uint64_t parent_key = next.key;
+            const uint32_t base = next.base;
             const Probe parent = probeBucket(parent_key, base);
             if (parent.found) {
                 accumulation_[slot].coarser_slot = parent.slot + 1;
