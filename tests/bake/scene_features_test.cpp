@@ -4,12 +4,12 @@
 // transforms (KHR_texture_transform), alpha cut-outs (MASK, and BLEND as a stochastic cut-out)
 // and the occlusion map that is dropped with a warning. Each case is a 2 m quad at y = 0 facing +Y, with u along +X and v along +Z.
 #include "gltf_builder.h"
+#include "png_bytes.h"
 #include "sharcbake/scene_loader.h"
 #include "tracing/surface.h"
 #include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
-#include <stb_image_write.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -20,17 +20,7 @@ namespace {
 
 using nlohmann::json;
 
-/// An 8-bit PNG of `width` x `height` RGBA pixels.
-std::vector<uint8_t> png(int width, int height, const std::vector<uint8_t>& rgba) {
-    std::vector<uint8_t> bytes;
-    stbi_write_png_to_func(
-        [](void* context, void* data, int size) {
-            auto* out = static_cast<std::vector<uint8_t>*>(context);
-            out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
-        },
-        &bytes, width, height, 4, rgba.data(), width * 4);
-    return bytes;
-}
+using test::png;
 
 /// One quad whose material and extra attributes each test sets.
 struct QuadScene {

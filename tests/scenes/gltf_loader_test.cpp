@@ -2,13 +2,13 @@
 /// @file gltf_loader_test.cpp
 /// @brief loadGltf on small glTF / GLB files written by the tests themselves.
 #include "gltf_builder.h"
+#include "png_bytes.h"
 
 #include "sharcbake/scene_loader.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <stb_image_write.h>
 
 #include <array>
 #include <cmath>
@@ -584,15 +584,16 @@ TEST(GltfLoaderMaterials, SceneWithoutMaterialsGetsDefault) {
 
 /// A 2x2 RGBA PNG: row 0 = (0, 128, 255, 255), (255, 0, 0, 128); row 1 = grey 64, white.
 std::vector<uint8_t> tinyPng() {
-    const uint8_t pixels[16] = {0, 128, 255, 255, 255, 0, 0, 128, 64, 64, 64, 255, 255, 255, 255, 255};
-    std::vector<uint8_t> png;
-    stbi_write_png_to_func(
-        [](void* ctx, void* data, int size) {
-            auto* out = static_cast<std::vector<uint8_t>*>(ctx);
-            out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
-        },
-        &png, 2, 2, 4, pixels, 8);
-    return png;
+    return test::png(2, 2, {0, 128, 255, 255, 255, 0, 0, 128, 64, 64, 64, 255, 255, 255, 255, 255});
+}
+
+/// The unit triangle with TEXCOORD_0 = its (x, y), and tinyPng as image 0 and texture 0.
+json tinyPngTexturedTriangle(GltfBuilder& b) {
+    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
+    b.doc["textures"] = json::array({{{"source", 0}}});
+    json prim = unitTrianglePrimitive(b);
+    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    return prim;
 }
 
 float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
@@ -602,10 +603,7 @@ float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) 
 TEST(Clearcoat, FactorsAndTexturesAreReadAsBlenderWritesThem) {
     TempDir dir;
     GltfBuilder b;
-    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
-    b.doc["textures"] = json::array({{{"source", 0}}});
-    json prim = unitTrianglePrimitive(b);
-    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    json prim = tinyPngTexturedTriangle(b);
     // As Blender 3.4 exports Principled Clearcoat 0.7, Clearcoat Roughness 0.15 (plus textures).
     prim["material"] = b.addMaterial(
         {{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.3, 0.1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 0.5}}},
@@ -678,10 +676,7 @@ TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha)
     TempDir dir;
     GltfBuilder b;
     // tinyPng: row 0 = (0, 128, 255, A 255), (255, 0, 0, A 128); row 1 = grey 64 and white, A 255.
-    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
-    b.doc["textures"] = json::array({{{"source", 0}}});
-    json prim = unitTrianglePrimitive(b);
-    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    json prim = tinyPngTexturedTriangle(b);
     prim["material"] = b.addMaterial(
         {{"extensions",
           {{"KHR_materials_pbrSpecularGlossiness",
@@ -707,11 +702,9 @@ TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha)
 TEST(GltfLoaderMaterials, BaseColourTextureDecodedFromSrgbAndDataTextureLinear) {
     TempDir dir;
     GltfBuilder b;
-    b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(tinyPng())}}});
+    json prim = tinyPngTexturedTriangle(b);
     b.doc["samplers"] = json::array({{{"magFilter", 9728}, {"wrapS", 33071}, {"wrapT", 33648}}});
-    b.doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
-    json prim = unitTrianglePrimitive(b);
-    prim["attributes"]["TEXCOORD_0"] = b.addData(std::vector<float>{0, 0, 1, 0, 0, 1}, test::kFloat, "VEC2");
+    b.doc["textures"][0]["sampler"] = 0;
     prim["material"] = b.addMaterial({{"pbrMetallicRoughness",
                                        {{"baseColorTexture", {{"index", 0}}},
                                         {"metallicRoughnessTexture", {{"index", 0}, {"texCoord", 1}}}}}});

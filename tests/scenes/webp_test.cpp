@@ -3,11 +3,11 @@
 // known exactly) and referenced the ways exporters do: with a PNG fallback in `source`, and
 // WebP only (the extension required).
 #include "gltf_builder.h"
+#include "png_bytes.h"
 
 #include "sharcbake/scene_loader.h"
 
 #include <gtest/gtest.h>
-#include <stb_image_write.h>
 #include <webp/encode.h>
 
 #include <cmath>
@@ -29,16 +29,6 @@ std::vector<uint8_t> webp(const std::vector<uint8_t>& rgba, int width, int heigh
     return bytes;
 }
 
-std::vector<uint8_t> png(const std::vector<uint8_t>& rgba, int width, int height) {
-    std::vector<uint8_t> bytes;
-    stbi_write_png_to_func(
-        [](void* ctx, void* data, int size) {
-            auto* out = static_cast<std::vector<uint8_t>*>(ctx);
-            out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
-        },
-        &bytes, width, height, 4, rgba.data(), width * 4);
-    return bytes;
-}
 
 /// An image: its bytes and MIME type, stored in a bufferView (as in a GLB) or in a file beside
 /// the scene (as a .gltf exporter writes it).
@@ -77,7 +67,7 @@ TEST(Webp, TheWebpImageIsReadAndTheFallbackIgnored) {
     // 2x1: linear-exact texels (0 and 255 map to 0 and 1 through sRGB) and an alpha.
     const std::vector<uint8_t> texels = {255, 0, 0, 255, 0, 0, 255, 128};
     const std::vector<uint8_t> grey = {128, 128, 128, 255, 128, 128, 128, 255};
-    const std::vector<ImageData> images = {{png(grey, 2, 1), "image/png"}, {webp(texels, 2, 1), "image/webp"}};
+    const std::vector<ImageData> images = {{test::png(2, 1, grey), "image/png"}, {webp(texels, 2, 1), "image/webp"}};
     for (const bool external : {false, true}) {
         const Scene scene = loadTextured(dir, images,
                                          {{"source", 0}, {"extensions", {{"EXT_texture_webp", {{"source", 1}}}}}},
