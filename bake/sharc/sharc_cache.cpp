@@ -556,7 +556,8 @@ void SharcCache::sumIntoCoarserLevels() {
     const auto emptyLists = [coarsest] { return LevelLists(size_t(coarsest) + 1); };
     tbb::enumerable_thread_specific<LevelLists> local_touched(emptyLists), local_unlinked(emptyLists);
     LevelLists by_level = emptyLists(), unlinked = emptyLists();
-    const auto join = [](tbb::enumerable_thread_specific<LevelLists>& local, uint32_t level, std::vector<uint32_t>& out) {
+    const auto join = [](tbb::enumerable_thread_specific<LevelLists>& local, uint32_t level,
+                         std::vector<uint32_t>& out) {
         for (LevelLists& lists : local) {
             out.insert(out.end(), lists[level].begin(), lists[level].end());
             lists[level].clear();
@@ -599,7 +600,8 @@ void SharcCache::sumIntoCoarserLevels() {
             for (size_t i = first; i < last; ++i) {
                 // Children and parents are scattered over the table: fetch the child two
                 // distances ahead, and its parent (whose slot the child holds) one ahead.
-                if (i + 2 * kPrefetchDistance < last) prefetchObjectForRead(&accumulation_[slots[i + 2 * kPrefetchDistance]]);
+                if (i + 2 * kPrefetchDistance < last)
+                    prefetchObjectForRead(&accumulation_[slots[i + 2 * kPrefetchDistance]]);
                 if (i + kPrefetchDistance < last) {
                     const uint32_t ahead = accumulation_[slots[i + kPrefetchDistance]].coarser_slot;
                     if (ahead != 0) prefetchObjectForWrite(&accumulation_[ahead - 1]);
@@ -610,12 +612,14 @@ void SharcCache::sumIntoCoarserLevels() {
                 AccumulationEntry& parent = accumulation_[parent_slot];
                 if (claimTouched(parent)) {  // touched here for the first time: the next level lists it
                     local_touched.local()[level + 1].push_back(parent_slot);
-                    if (has_coarser && parent.coarser_slot == 0) local_unlinked.local()[level + 1].push_back(parent_slot);
+                    if (has_coarser && parent.coarser_slot == 0)
+                        local_unlinked.local()[level + 1].push_back(parent_slot);
                 }
                 for (int c = 0; c < 3; ++c) {
                     const uint64_t low = child.sums[c].load(std::memory_order_relaxed);
                     const uint8_t carries = child.carries[c].load(std::memory_order_relaxed);
-                    if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries)) ++range_saturated;
+                    if ((low || carries) && !addToSum(parent.sums[c], parent.carries[c], low, carries))
+                        ++range_saturated;
                 }
                 parent.samples.fetch_add(child.samples.load(std::memory_order_relaxed), std::memory_order_relaxed);
             }
@@ -687,11 +691,13 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
             table_.prefetchBucket(p.base);
             return p;
         };
-        for (size_t i = first; i < std::min(first + kPrefetchDistance, last); ++i) ahead[(i - first) % kPrefetchDistance] = makeParent(i);
+        for (size_t i = first; i < std::min(first + kPrefetchDistance, last); ++i)
+            ahead[(i - first) % kPrefetchDistance] = makeParent(i);
         for (size_t i = first; i < last; ++i) {
             if (i + 2 * kPrefetchDistance < last) table_.prefetchBucket(sorted_slots[i + 2 * kPrefetchDistance]);
             const Parent next = ahead[(i - first) % kPrefetchDistance];
-            if (i + kPrefetchDistance < last) ahead[(i - first) % kPrefetchDistance] = makeParent(i + kPrefetchDistance);
+            if (i + kPrefetchDistance < last)
+                ahead[(i - first) % kPrefetchDistance] = makeParent(i + kPrefetchDistance);
             const uint32_t slot = sorted_slots[i];
             const uint64_t parent_key = next.key;
             const uint32_t base = next.base;

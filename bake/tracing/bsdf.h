@@ -73,8 +73,8 @@ public:
         glm::vec3 weight{0.0f};  ///< f * |cos| / pdf
         float pdf = 0.0f;
         bool valid = false;
-        bool specular = false;  ///< chosen from a GGX lobe (for SHaRC's cone-spread test)
-        float roughness = 1.0f; ///< that lobe's roughness (the clearcoat's or the base's); 1 for diffuse
+        bool specular = false;   ///< chosen from a GGX lobe (for SHaRC's cone-spread test)
+        float roughness = 1.0f;  ///< that lobe's roughness (the clearcoat's or the base's); 1 for diffuse
     };
     /// Picks the diffuse or specular lobe with u_lobe, then a direction with u.
     Sample sample(glm::vec3 wo, float u_lobe, glm::vec2 u) const;

@@ -167,8 +167,8 @@ ShadingMaterial evaluateMaterial(const Scene& scene, const SurfaceHit& hit) {
     out.ior = m.ior;
     if (m.clearcoat > 0.0f) {
         out.clearcoat = glm::clamp(m.clearcoat * fetch(scene, m.clearcoat_texture, hit).r, 0.0f, 1.0f);
-        out.clearcoat_roughness =
-            glm::clamp(m.clearcoat_roughness * fetch(scene, m.clearcoat_roughness_texture, hit).g, 0.0f, 1.0f);
+        out.clearcoat_roughness = glm::clamp(m.clearcoat_roughness * fetch(scene, m.clearcoat_roughness_texture, hit).g,
+                                             0.0f, 1.0f);
     }
     if (m.isEmissive()) {
         out.emission = m.emissive * m.emissive_strength * glm::vec3(fetch(scene, m.emissive_texture, hit));

@@ -49,10 +49,11 @@ constexpr double kLumensPerWatt = 683.0;
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
 const std::array<const char*, 13> kSupportedRequiredExtensions = {
-    "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior", "KHR_mesh_quantization", "KHR_texture_transform", "KHR_materials_transmission",
-    "EXT_mesh_gpu_instancing", "KHR_materials_pbrSpecularGlossiness", "KHR_draco_mesh_compression",
-    "EXT_meshopt_compression", "EXT_texture_webp", "KHR_materials_clearcoat"};
+    "KHR_lights_punctual",        "KHR_materials_emissive_strength", "KHR_materials_specular",
+    "KHR_materials_ior",          "KHR_mesh_quantization",           "KHR_texture_transform",
+    "KHR_materials_transmission", "EXT_mesh_gpu_instancing",         "KHR_materials_pbrSpecularGlossiness",
+    "KHR_draco_mesh_compression", "EXT_meshopt_compression",         "EXT_texture_webp",
+    "KHR_materials_clearcoat"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -183,9 +184,9 @@ glm::dmat4 localTransform(const tinygltf::Node& node) {
         return v.size() == 3 ? std::optional<glm::dvec3>(glm::dvec3(v[0], v[1], v[2])) : std::nullopt;
     };
     const std::optional<glm::dvec4> rotation =
-        node.rotation.size() == 4
-            ? std::optional<glm::dvec4>(glm::dvec4(node.rotation[0], node.rotation[1], node.rotation[2], node.rotation[3]))
-            : std::nullopt;
+        node.rotation.size() == 4 ? std::optional<glm::dvec4>(glm::dvec4(node.rotation[0], node.rotation[1],
+                                                                         node.rotation[2], node.rotation[3]))
+                                  : std::nullopt;
     return composeTrs(vec3(node.translation), rotation, vec3(node.scale));
 }
 
@@ -227,7 +228,7 @@ private:
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
     /// colour and as data needs two decoded copies.
     std::map<std::pair<int, bool>, int> texture_cache_;
-    std::map<std::pair<int, int>, uint64_t> draco_index_counts_;  ///< (mesh, primitive) -> indices' count
+    std::map<std::pair<int, int>, uint64_t> draco_index_counts_;      ///< (mesh, primitive) -> indices' count
     std::map<std::pair<int, float>, int> roughness_from_glossiness_;  ///< (texture, glossiness) -> converted
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
     std::set<std::string> warned_;
@@ -413,7 +414,8 @@ private:
             // sit beside it), since the rewritten file is parsed from memory.
             scene_.source_files.push_back(std::filesystem::path(path_).lexically_normal().string());
             try {
-                rewritten = rewriteForTinygltf(bytes, glb, [&](const std::string& uri) { return readBufferFile(uri, access); });
+                rewritten = rewriteForTinygltf(bytes, glb,
+                                               [&](const std::string& uri) { return readBufferFile(uri, access); });
             } catch (const GltfRewriteError& e) {
                 fail(e.what());
             }
@@ -425,11 +427,11 @@ private:
             if (rewritten->bytes.size() > std::numeric_limits<unsigned int>::max())
                 fail("more than 4 GiB once decompressed; tinygltf cannot parse it");
             const unsigned int size = static_cast<unsigned int>(rewritten->bytes.size());
-            ok = rewritten->glb ? parser.LoadBinaryFromMemory(
-                                      &model_, &err, &warnings,
-                                      reinterpret_cast<const unsigned char*>(rewritten->bytes.data()), size, base_dir)
-                                : parser.LoadASCIIFromString(&model_, &err, &warnings, rewritten->bytes.data(), size,
-                                                             base_dir);
+            ok = rewritten->glb
+                     ? parser.LoadBinaryFromMemory(&model_, &err, &warnings,
+                                                   reinterpret_cast<const unsigned char*>(rewritten->bytes.data()),
+                                                   size, base_dir)
+                     : parser.LoadASCIIFromString(&model_, &err, &warnings, rewritten->bytes.data(), size, base_dir);
         } else {
             ok = glb ? parser.LoadBinaryFromFile(&model_, &err, &warnings, path_)
                      : parser.LoadASCIIFromFile(&model_, &err, &warnings, path_);
@@ -452,7 +454,8 @@ private:
         const std::string file = (std::filesystem::path(path_).parent_path() / uriDecode(uri)).string();
         if (!readAndRecordFile(&data, &err, file, &confined)) {
             while (!err.empty() && err.back() == '\n') err.pop_back();
-            throw GltfRewriteError("buffer " + quoted(uri) + ": " + (err.empty() ? std::string("cannot be read") : printable(err)));
+            throw GltfRewriteError("buffer " + quoted(uri) + ": " +
+                                   (err.empty() ? std::string("cannot be read") : printable(err)));
         }
         return std::string(data.begin(), data.end());
     }
@@ -748,7 +751,8 @@ private:
         };
         const int t = accessorOf("TRANSLATION"), r = accessorOf("ROTATION"), sc = accessorOf("SCALE");
         if (t < 0 && r < 0 && sc < 0) fail(label + ": \"attributes\" has none of TRANSLATION, ROTATION and SCALE");
-        const std::vector<glm::vec3> translations = t >= 0 ? readVec3(t, label + " TRANSLATION") : std::vector<glm::vec3>();
+        const std::vector<glm::vec3> translations = t >= 0 ? readVec3(t, label + " TRANSLATION")
+                                                           : std::vector<glm::vec3>();
         const std::vector<glm::vec4> rotations = r >= 0 ? readVec4(r, label + " ROTATION") : std::vector<glm::vec4>();
         const std::vector<glm::vec3> scales = sc >= 0 ? readVec3(sc, label + " SCALE") : std::vector<glm::vec3>();
         const size_t count = t >= 0 ? translations.size() : r >= 0 ? rotations.size() : scales.size();
@@ -872,14 +876,16 @@ private:
         if (static_cast<size_t>(viewIndex) >= model_.bufferViews.size())
             fail(what + ": bufferView " + std::to_string(viewIndex) + " does not exist");
         const size_t bytes = model_.bufferViews[static_cast<size_t>(viewIndex)].byteLength;
-        const ElementLayout data = layoutInView(viewIndex, 0, bytes, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, 1, false, what);
+        const ElementLayout data = layoutInView(viewIndex, 0, bytes, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, 1, false,
+                                                what);
         std::optional<DracoMesh> mesh;
         try {
             mesh.emplace(data.data, bytes);
         } catch (const std::runtime_error& e) {
             fail(what + " (bufferView " + std::to_string(viewIndex) + "): " + e.what());
         }
-        const tinygltf::Value* ids = ext.Has("attributes") && ext.Get("attributes").IsObject() ? &ext.Get("attributes") : nullptr;
+        const tinygltf::Value* ids = ext.Has("attributes") && ext.Get("attributes").IsObject() ? &ext.Get("attributes")
+                                                                                               : nullptr;
         const auto dracoId = [&](const char* name) {
             if (!ids || !ids->Has(name) || !ids->Get(name).IsInt()) return -1;
             return ids->Get(name).GetNumberAsInt();
@@ -891,11 +897,16 @@ private:
             const int id = dracoId(name);
             if (id < 0) {
                 if (accessor == prim.attributes.end()) return false;
-                const std::vector<double> raw = readAccessor(accessor->second, components == 2 ? TINYGLTF_TYPE_VEC2 : components == 3 ? TINYGLTF_TYPE_VEC3 : TINYGLTF_TYPE_VEC4, label + " " + name);
+                const std::vector<double> raw = readAccessor(accessor->second,
+                                                             components == 2   ? TINYGLTF_TYPE_VEC2
+                                                             : components == 3 ? TINYGLTF_TYPE_VEC3
+                                                                               : TINYGLTF_TYPE_VEC4,
+                                                             label + " " + name);
                 out.assign(raw.begin(), raw.end());
             } else {
                 if (mesh->componentCount(id) == 0)
-                    fail(what + ": attribute " + name + " names Draco attribute " + std::to_string(id) + ", which it lacks");
+                    fail(what + ": attribute " + name + " names Draco attribute " + std::to_string(id) +
+                         ", which it lacks");
                 const bool normalized = accessor != prim.attributes.end() && accessor->second >= 0 &&
                                         static_cast<size_t>(accessor->second) < model_.accessors.size() &&
                                         model_.accessors[static_cast<size_t>(accessor->second)].normalized;
@@ -917,7 +928,8 @@ private:
         }
         if (read("NORMAL", 3, values)) {
             geo.normals.resize(points);
-            for (size_t i = 0; i < points; ++i) geo.normals[i] = glm::vec3(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+            for (size_t i = 0; i < points; ++i)
+                geo.normals[i] = glm::vec3(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
         }
         for (auto [name, uv] : {std::pair{"TEXCOORD_0", &geo.uv0}, std::pair{"TEXCOORD_1", &geo.uv1}}) {
             if (!read(name, 2, values)) continue;
@@ -1277,7 +1289,8 @@ private:
         m.specular = 1.0f;
         m.specular_texture = TextureRef();
         m.specular_color = vecValue<3>(ext, "specularFactor").value_or(glm::vec3(1.0f)) / kDielectricF0;
-        const float glossiness = std::clamp(static_cast<float>(number(ext, "glossinessFactor").value_or(1.0)), 0.0f, 1.0f);
+        const float glossiness = std::clamp(static_cast<float>(number(ext, "glossinessFactor").value_or(1.0)), 0.0f,
+                                            1.0f);
         const TextureSlot slot = textureSlot(ext, "specularGlossinessTexture");
         m.specular_color_texture = textureRef(slot, true, label);  // RGB: the specular colour, sRGB
         m.roughness = 1.0f - glossiness;
@@ -1287,7 +1300,8 @@ private:
             // can express: the texture is converted once into metallic-roughness form.
             m.metallic_roughness_texture = textureRef(slot, false, label);
             if (m.metallic_roughness_texture.isSet()) {
-                m.metallic_roughness_texture.texture = roughnessFromGlossiness(m.metallic_roughness_texture.texture, glossiness);
+                m.metallic_roughness_texture.texture = roughnessFromGlossiness(m.metallic_roughness_texture.texture,
+                                                                               glossiness);
                 m.roughness = 1.0f;
             }
         }
@@ -1297,7 +1311,8 @@ private:
     /// roughness, B metallic 0), made once per (texture, glossiness).
     int roughnessFromGlossiness(int texture, float glossiness) {
         const auto key = std::make_pair(texture, glossiness);
-        if (const auto it = roughness_from_glossiness_.find(key); it != roughness_from_glossiness_.end()) return it->second;
+        if (const auto it = roughness_from_glossiness_.find(key); it != roughness_from_glossiness_.end())
+            return it->second;
         Texture converted = scene_.textures[static_cast<size_t>(texture)];
         converted.name += " (roughness from glossiness)";
         for (glm::vec4& t : converted.texels) t = glm::vec4(0.0f, 1.0f - glossiness * t.a, 0.0f, 1.0f);
@@ -1449,8 +1464,9 @@ private:
             m.clearcoat_texture = textureRef(textureSlot(*ext, "clearcoatTexture"), false, label);
             m.clearcoat_roughness_texture = textureRef(textureSlot(*ext, "clearcoatRoughnessTexture"), false, label);
             if (m.clearcoat > 0.0f && textureSlot(*ext, "clearcoatNormalTexture").index >= 0) {
-                warn(label + ": KHR_materials_clearcoat clearcoatNormalTexture ignored: the coat uses the "
-                             "material's shading normal");
+                warn(label +
+                     ": KHR_materials_clearcoat clearcoatNormalTexture ignored: the coat uses the "
+                     "material's shading normal");
             }
         }
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_specular")) {
@@ -1512,7 +1528,8 @@ private:
         // without WebP: the WebP one is read.
         int source = src.source;
         if (const tinygltf::Value* webp = extension(src.extensions, "EXT_texture_webp")) {
-            if (const std::optional<double> webp_source = number(*webp, "source")) source = static_cast<int>(*webp_source);
+            if (const std::optional<double> webp_source = number(*webp, "source"))
+                source = static_cast<int>(*webp_source);
         }
         if (source < 0 || static_cast<size_t>(source) >= model_.images.size()) {
             warn(what + " has no image sharcbake can decode; texture ignored");

@@ -279,12 +279,30 @@ TEST(HashGridKey, QuantisationIsFloorThenSaturation) {
         if (f >= 2147483648.0f) return INT32_MAX;
         return static_cast<int32_t>(f);
     };
-    std::vector<float> values = {0.0f, -0.0f, 0.5f, -0.5f, 1.0f, -1.0f, 0x1p-149f, -0x1p-149f,
-                                 std::nextafter(1.0f, 0.0f), -std::nextafter(1.0f, 0.0f), 0x1p23f, -0x1p23f,
-                                 0x1p23f - 0.5f, -(0x1p23f - 0.5f), 0x1p31f, -0x1p31f, std::nextafter(0x1p31f, 0.0f),
-                                 -std::nextafter(0x1p31f, 0.0f), 1e30f, -1e30f,
-                                 std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
-                                 std::numeric_limits<float>::quiet_NaN(), -std::numeric_limits<float>::quiet_NaN()};
+    std::vector<float> values = {0.0f,
+                                 -0.0f,
+                                 0.5f,
+                                 -0.5f,
+                                 1.0f,
+                                 -1.0f,
+                                 0x1p-149f,
+                                 -0x1p-149f,
+                                 std::nextafter(1.0f, 0.0f),
+                                 -std::nextafter(1.0f, 0.0f),
+                                 0x1p23f,
+                                 -0x1p23f,
+                                 0x1p23f - 0.5f,
+                                 -(0x1p23f - 0.5f),
+                                 0x1p31f,
+                                 -0x1p31f,
+                                 std::nextafter(0x1p31f, 0.0f),
+                                 -std::nextafter(0x1p31f, 0.0f),
+                                 1e30f,
+                                 -1e30f,
+                                 std::numeric_limits<float>::infinity(),
+                                 -std::numeric_limits<float>::infinity(),
+                                 std::numeric_limits<float>::quiet_NaN(),
+                                 -std::numeric_limits<float>::quiet_NaN()};
     std::mt19937 rng(23);
     for (int i = 0; i < 200000; ++i) {
         uint32_t bits = rng();

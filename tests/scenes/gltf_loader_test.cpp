@@ -391,7 +391,8 @@ TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
 
 std::vector<std::array<glm::vec3, 3>> trianglesOf(const Scene& scene) {
     std::vector<std::array<glm::vec3, 3>> out;
-    for (const glm::uvec3& t : scene.triangles) out.push_back({scene.positions[t.x], scene.positions[t.y], scene.positions[t.z]});
+    for (const glm::uvec3& t : scene.triangles)
+        out.push_back({scene.positions[t.x], scene.positions[t.y], scene.positions[t.z]});
     return out;
 }
 
@@ -400,9 +401,10 @@ TEST(GpuInstancing, EachInstanceIsTheMeshByItsTrsAfterTheNode) {
     GltfBuilder b;
     const json prim = unitTrianglePrimitive(b);
     const float h = std::sqrt(0.5f);  // 90 degrees about +Z: (x, y, z, w) = (0, 0, h, h)
-    const json attributes = {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, 5, 0, 0, 0, 5, 0}, test::kFloat, "VEC3")},
-                             {"ROTATION", b.addData(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, h, h}, test::kFloat, "VEC4")},
-                             {"SCALE", b.addData(std::vector<float>{1, 1, 1, 1, 1, 1, 2, 2, 2}, test::kFloat, "VEC3")}};
+    const json attributes = {
+        {"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, 5, 0, 0, 0, 5, 0}, test::kFloat, "VEC3")},
+        {"ROTATION", b.addData(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, h, h}, test::kFloat, "VEC4")},
+        {"SCALE", b.addData(std::vector<float>{1, 1, 1, 1, 1, 1, 2, 2, 2}, test::kFloat, "VEC3")}};
     const int node = b.addMeshNode(prim, {{"translation", {0, 0, 10}},
                                           {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", attributes}}}}}});
     b.setScene({node});
@@ -418,7 +420,8 @@ TEST(GpuInstancing, EachInstanceIsTheMeshByItsTrsAfterTheNode) {
     }};
     for (size_t i = 0; i < 3; ++i)
         for (size_t v = 0; v < 3; ++v) expectVec3Near(triangles[i][v], expected[i][v]);
-    for (const std::string& w : scene.stats.warnings) EXPECT_EQ(w.find("EXT_mesh_gpu_instancing"), std::string::npos) << w;
+    for (const std::string& w : scene.stats.warnings)
+        EXPECT_EQ(w.find("EXT_mesh_gpu_instancing"), std::string::npos) << w;
     EXPECT_EQ(scene.bounds_min.x, -2.0f);
 }
 
@@ -453,13 +456,15 @@ TEST(GpuInstancing, MalformedInstancesAreRefusedNamingTheNode) {
     };
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const std::string mismatch = errorFor([](GltfBuilder& b) {
-        return json{{"attributes", {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, 1, 0, 0}, test::kFloat, "VEC3")},
-                                    {"SCALE", b.addData(std::vector<float>{1, 1, 1}, test::kFloat, "VEC3")}}}};
+        return json{{"attributes",
+                     {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, 1, 0, 0}, test::kFloat, "VEC3")},
+                      {"SCALE", b.addData(std::vector<float>{1, 1, 1}, test::kFloat, "VEC3")}}}};
     });
     EXPECT_NE(mismatch.find("node 0 EXT_mesh_gpu_instancing"), std::string::npos) << mismatch;
     EXPECT_NE(mismatch.find("SCALE has 1 elements"), std::string::npos) << mismatch;
     const std::string not_finite = errorFor([&](GltfBuilder& b) {
-        return json{{"attributes", {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, nan, 0, 0}, test::kFloat, "VEC3")}}}};
+        return json{
+            {"attributes", {{"TRANSLATION", b.addData(std::vector<float>{0, 0, 0, nan, 0, 0}, test::kFloat, "VEC3")}}}};
     });
     EXPECT_NE(not_finite.find("instance 1 has a NaN or infinite TRANSLATION"), std::string::npos) << not_finite;
     const std::string zero_rotation = errorFor([](GltfBuilder& b) {
@@ -606,11 +611,15 @@ TEST(Clearcoat, FactorsAndTexturesAreReadAsBlenderWritesThem) {
     json prim = tinyPngTexturedTriangle(b);
     // As Blender 3.4 exports Principled Clearcoat 0.7, Clearcoat Roughness 0.15 (plus textures).
     prim["material"] = b.addMaterial(
-        {{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.3, 0.1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 0.5}}},
+        {{"pbrMetallicRoughness",
+          {{"baseColorFactor", {0.5, 0.3, 0.1, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 0.5}}},
          {"extensions",
           {{"KHR_materials_clearcoat",
-            {{"clearcoatFactor", 0.7}, {"clearcoatRoughnessFactor", 0.15}, {"clearcoatTexture", {{"index", 0}}},
-             {"clearcoatRoughnessTexture", {{"index", 0}}}, {"clearcoatNormalTexture", {{"index", 0}}}}}}}});
+            {{"clearcoatFactor", 0.7},
+             {"clearcoatRoughnessFactor", 0.15},
+             {"clearcoatTexture", {{"index", 0}}},
+             {"clearcoatRoughnessTexture", {{"index", 0}}},
+             {"clearcoatNormalTexture", {{"index", 0}}}}}}}});
     b.setScene({b.addMeshNode(prim)});
     b.doc["extensionsUsed"] = {"KHR_materials_clearcoat"};
     b.doc["extensionsRequired"] = {"KHR_materials_clearcoat"};
@@ -642,7 +651,9 @@ TEST(SpecularGlossiness, FactorsBecomeADielectricWithThatF0AndRoughness) {
         {{"pbrMetallicRoughness", {{"baseColorFactor", {1, 0, 0, 1}}, {"metallicFactor", 1}, {"roughnessFactor", 0}}},
          {"extensions",
           {{"KHR_materials_pbrSpecularGlossiness",
-            {{"diffuseFactor", {0.5, 0.25, 0.125, 0.8}}, {"specularFactor", {0.1, 0.2, 0.3}}, {"glossinessFactor", 0.7}}}}}});
+            {{"diffuseFactor", {0.5, 0.25, 0.125, 0.8}},
+             {"specularFactor", {0.1, 0.2, 0.3}},
+             {"glossinessFactor", 0.7}}}}}});
     b.setScene({b.addMeshNode(prim)});
     b.doc["extensionsUsed"] = {"KHR_materials_pbrSpecularGlossiness"};
     b.doc["extensionsRequired"] = {"KHR_materials_pbrSpecularGlossiness"};
@@ -658,7 +669,8 @@ TEST(SpecularGlossiness, FactorsBecomeADielectricWithThatF0AndRoughness) {
     // specular factor itself.
     const float r = (m.ior - 1.0f) / (m.ior + 1.0f);
     expectVec3Near(glm::min(r * r * m.specular_color, glm::vec3(1.0f)), {0.1f, 0.2f, 0.3f}, 1e-6f);
-    for (const std::string& w : scene.stats.warnings) EXPECT_EQ(w.find("pbrSpecularGlossiness"), std::string::npos) << w;
+    for (const std::string& w : scene.stats.warnings)
+        EXPECT_EQ(w.find("pbrSpecularGlossiness"), std::string::npos) << w;
 
     // Absent factors are the extension's defaults: white diffuse, white specular, glossiness 1.
     GltfBuilder d;
@@ -677,10 +689,11 @@ TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha)
     GltfBuilder b;
     // tinyPng: row 0 = (0, 128, 255, A 255), (255, 0, 0, A 128); row 1 = grey 64 and white, A 255.
     json prim = tinyPngTexturedTriangle(b);
-    prim["material"] = b.addMaterial(
-        {{"extensions",
-          {{"KHR_materials_pbrSpecularGlossiness",
-            {{"diffuseTexture", {{"index", 0}}}, {"specularGlossinessTexture", {{"index", 0}}}, {"glossinessFactor", 0.5}}}}}});
+    prim["material"] = b.addMaterial({{"extensions",
+                                       {{"KHR_materials_pbrSpecularGlossiness",
+                                         {{"diffuseTexture", {{"index", 0}}},
+                                          {"specularGlossinessTexture", {{"index", 0}}},
+                                          {"glossinessFactor", 0.5}}}}}});
     b.setScene({b.addMeshNode(prim)});
     const Scene scene = loadGltf(b.writeEmbedded(dir, "specgloss_textured.gltf"));
     const Material& m = scene.materials.at(0);
@@ -688,14 +701,14 @@ TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha)
     ASSERT_TRUE(m.specular_color_texture.isSet());
     ASSERT_TRUE(m.metallic_roughness_texture.isSet());
     EXPECT_EQ(m.base_color_texture.texture, m.specular_color_texture.texture);  // both the sRGB decode
-    EXPECT_EQ(m.roughness, 1.0f);  // the texture holds 1 - 0.5 A
+    EXPECT_EQ(m.roughness, 1.0f);                                               // the texture holds 1 - 0.5 A
     const Texture& colour = scene.textures[m.specular_color_texture.texture];
     EXPECT_NEAR(colour.texels[0].y, srgb(128 / 255.0f), 1e-6f);
     const Texture& rough = scene.textures[m.metallic_roughness_texture.texture];
     ASSERT_EQ(rough.texels.size(), 4u);
-    EXPECT_NEAR(rough.texels[0].g, 0.5f, 1e-6f);                         // A 255: glossiness 0.5
-    EXPECT_NEAR(rough.texels[1].g, 1.0f - 0.5f * 128 / 255.0f, 1e-6f);   // A 128, linear
-    EXPECT_EQ(rough.texels[1].b, 0.0f);                                  // metallic 0
+    EXPECT_NEAR(rough.texels[0].g, 0.5f, 1e-6f);                        // A 255: glossiness 0.5
+    EXPECT_NEAR(rough.texels[1].g, 1.0f - 0.5f * 128 / 255.0f, 1e-6f);  // A 128, linear
+    EXPECT_EQ(rough.texels[1].b, 0.0f);                                 // metallic 0
     EXPECT_EQ(m.metallic, 0.0f);
 }
 

@@ -29,7 +29,6 @@ std::vector<uint8_t> webp(const std::vector<uint8_t>& rgba, int width, int heigh
     return bytes;
 }
 
-
 /// An image: its bytes and MIME type, stored in a bufferView (as in a GLB) or in a file beside
 /// the scene (as a .gltf exporter writes it).
 struct ImageData {

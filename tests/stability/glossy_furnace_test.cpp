@@ -102,10 +102,10 @@ TEST_P(GlossyFurnaceCache, TheCacheConvergesToRadianceOne) {
 }
 
 const Lobe kLobes[] = {
-    {"default_layer", 0.3f, 0.0f, 1.0f, glm::vec3(1.0f)},            // glTF's default dielectric layer
-    {"half_metal", 0.3f, 0.5f, 1.0f, glm::vec3(1.0f)},               // metallic 0.5
+    {"default_layer", 0.3f, 0.0f, 1.0f, glm::vec3(1.0f)},           // glTF's default dielectric layer
+    {"half_metal", 0.3f, 0.5f, 1.0f, glm::vec3(1.0f)},              // metallic 0.5
     {"blender_black_specular", 0.5f, 0.0f, 1.0f, glm::vec3(0.0f)},  // F0 0, F90 1: grazing only
-    {"clearcoat", 0.5f, 0.0f, 1.0f, glm::vec3(1.0f), 1.0f},          // a full coat over the default layer
+    {"clearcoat", 0.5f, 0.0f, 1.0f, glm::vec3(1.0f), 1.0f},         // a full coat over the default layer
 };
 /// And for the cache, a white rough metal: it absorbs nothing and its samples carry up to 1.43x
 /// the albedo (the multiple-scattering mixture), so single paths that stay in the box for dozens

@@ -86,7 +86,7 @@ struct Material {
     float clearcoat = 0.0f;                 ///< KHR_materials_clearcoat clearcoatFactor
     TextureRef clearcoat_texture;           ///< R channel (linear)
     float clearcoat_roughness = 0.0f;       ///< clearcoatRoughnessFactor
-    TextureRef clearcoat_roughness_texture; ///< G channel (linear)
+    TextureRef clearcoat_roughness_texture;  ///< G channel (linear)
     bool double_sided = false;
     TextureRef normal_texture;              ///< tangent-space normal map (linear RGB)
     float normal_scale = 1.0f;              ///< scales the map's X and Y
@@ -107,10 +107,9 @@ struct Material {
                (emissive.x > 0.0f || emissive.y > 0.0f || emissive.z > 0.0f);
     }
     bool hasTextures() const {
-        return base_color_texture.isSet() || metallic_roughness_texture.isSet() ||
-               emissive_texture.isSet() || specular_texture.isSet() ||
-               specular_color_texture.isSet() || normal_texture.isSet() || clearcoat_texture.isSet() ||
-               clearcoat_roughness_texture.isSet();
+        return base_color_texture.isSet() || metallic_roughness_texture.isSet() || emissive_texture.isSet() ||
+               specular_texture.isSet() || specular_color_texture.isSet() || normal_texture.isSet() ||
+               clearcoat_texture.isSet() || clearcoat_roughness_texture.isSet();
     }
 };
 
