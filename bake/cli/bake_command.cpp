@@ -210,7 +210,11 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                                " points); give a --camera-path or --camera-source gltf");
     }
     description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
-                  std::to_string(explored.candidates) + " tried)";
+                  std::to_string(explored.candidates) + " tried" +
+                  (explored.winding_ignored
+                       ? "; faces' winding ignored: it puts a glTF camera, or every point, inside a solid"
+                       : "") +
+                  ")";
     return std::move(*path);
 }
 

@@ -36,24 +36,29 @@ glm::vec3 probeDirection(int i) {
     return glm::normalize(kDirections[i]);
 }
 
-/// A point is in free space when most probe rays that hit something hit a surface's front
-/// (the side its winding faces): inside a closed solid every ray sees back faces. Points closer
-/// to a surface than `clearance` are rejected so the camera does not sit on a wall.
-bool isFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance) {
-    int hits = 0, back_hits = 0;
+/// A point is in free space when most probe rays that hit a single-sided surface hit its front
+/// (the side its winding faces): inside a closed solid every ray sees back faces. A double-sided
+/// surface has no inside in glTF (both sides are seen and lit, as in a room modelled from a cube
+/// whose normals face out), so its hits do not vote, and without `use_winding` no hit does: a
+/// point is then free when no surface is nearer than `clearance`, and reachability from the
+/// starts (exploreFreeSpace) keeps the space inside closed objects out of the path. Points
+/// closer to any surface than `clearance` are rejected so the camera does not sit on a wall.
+bool isFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, bool use_winding) {
+    int votes = 0, back_votes = 0;
+    const Scene& scene = tracer.scene();
     for (int i = 0; i < kProbeCount; ++i) {
         const glm::vec3 d = probeDirection(i);
         RayHit hit;
         if (!tracer.intersect(Ray{p, d}, hit)) continue;
         if (hit.t < clearance) return false;
-        const Scene& scene = tracer.scene();
+        if (!use_winding || scene.materials[scene.triangle_materials[hit.triangle]].double_sided) continue;
         const glm::uvec3 tri = scene.triangles[hit.triangle];
         const glm::vec3 n = glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
                                        scene.positions[tri.z] - scene.positions[tri.x]);
-        ++hits;
-        if (glm::dot(n, d) > 0.0f) ++back_hits;
+        ++votes;
+        if (glm::dot(n, d) > 0.0f) ++back_votes;
     }
-    return hits == 0 || 2 * back_hits < hits;
+    return votes == 0 || 2 * back_votes < votes;
 }
 
 bool visible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
@@ -131,7 +136,7 @@ std::vector<CameraPose> readCameraPathFile(const std::string& path) {
     return poses;
 }
 
-ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts,
+ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts, bool starts_are_cameras,
                                    uint32_t count, uint32_t seed) {
     const Scene& scene = tracer.scene();
     ExplorationResult result;
@@ -146,23 +151,40 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     // Candidates: the starts first, then stratified random points (8x more than needed).
     std::vector<glm::vec3> free_points;
     std::vector<bool> is_start;
-    for (const glm::vec3& s : starts) {
-        ++result.candidates;
-        if (isFreeSpace(tracer, s, 0.0f)) {
-            free_points.push_back(s);
-            is_start.push_back(true);
+    const auto collect = [&](bool use_winding) {
+        free_points.clear();
+        is_start.clear();
+        for (const glm::vec3& s : starts) {
+            ++result.candidates;
+            if (starts_are_cameras || isFreeSpace(tracer, s, 0.0f, use_winding)) {
+                free_points.push_back(s);
+                is_start.push_back(true);
+            }
         }
-    }
-    const uint32_t tries = 8 * count;
-    for (uint32_t i = 0; i < tries; ++i) {
-        const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
-        const glm::vec3 p = center + (2.0f * u - 1.0f) * half;
-        ++result.candidates;
-        if (isFreeSpace(tracer, p, clearance)) {
-            free_points.push_back(p);
-            is_start.push_back(false);
+        for (uint32_t i = 0; i < 8 * count; ++i) {
+            const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
+            const glm::vec3 p = center + (2.0f * u - 1.0f) * half;
+            ++result.candidates;
+            if (isFreeSpace(tracer, p, clearance, use_winding)) {
+                free_points.push_back(p);
+                is_start.push_back(false);
+            }
         }
+    };
+    // The scene's own cameras look from free space. Where the winding test puts one of them
+    // inside a solid, or finds no free space at all, the scene's winding does not tell inside from
+    // outside (single-sided faces facing away from the viewer, as a room modelled from a cube has
+    // them): it is ignored, and clearance and reachability decide alone.
+    bool use_winding = true;
+    if (starts_are_cameras) {
+        for (const glm::vec3& s : starts) use_winding = use_winding && isFreeSpace(tracer, s, 0.0f, true);
     }
+    collect(use_winding);
+    if (use_winding && free_points.empty()) {
+        use_winding = false;
+        collect(false);
+    }
+    result.winding_ignored = !use_winding;
     result.free = uint32_t(free_points.size());
     if (free_points.empty()) return result;
 
@@ -238,8 +260,9 @@ std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene&
                                               uint32_t seed, ExplorationResult* explored) {
     std::vector<glm::vec3> starts;
     for (const Camera& c : scene.cameras) starts.push_back(c.position);
+    const bool starts_are_cameras = !starts.empty();
     if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
-    const ExplorationResult result = exploreFreeSpace(tracer, starts, points, seed);
+    const ExplorationResult result = exploreFreeSpace(tracer, starts, starts_are_cameras, points, seed);
     if (explored) *explored = result;
     if (result.points.empty()) return std::nullopt;
     std::vector<CameraPose> poses;

@@ -61,13 +61,18 @@ struct ExplorationResult {
     std::vector<glm::vec3> points;  ///< reachable free-space positions, the order they are visited
     uint32_t candidates = 0;        ///< points tried
     uint32_t free = 0;              ///< not inside geometry
+    bool winding_ignored = false;   ///< faces' winding did not tell solids from free space: not used
 };
 
 /// Finds up to `count` positions inside the scene's bounds that are not inside geometry and are
-/// reachable, by unoccluded straight segments, from `starts` (the glTF cameras; the scene centre
-/// if there are none or none is in free space, in which case the largest connected set wins).
-/// Deterministic for a given seed.
-ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts,
+/// reachable, by unoccluded straight segments, from `starts` (when none of them is in free
+/// space, the largest connected set wins). Inside geometry means behind the single-sided faces
+/// most probe rays hit; double-sided faces have no inside. With `starts_are_cameras` (the
+/// scene's glTF cameras) the starts are free space by definition. If one of those cameras is
+/// behind single-sided faces, or no point is free at all, the winding cannot be trusted and is
+/// ignored for the whole scene (`winding_ignored`): then only the clearance from surfaces and
+/// reachability decide. Deterministic for a given seed.
+ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts, bool starts_are_cameras,
                                    uint32_t count, uint32_t seed);
 
 /// The camera of each bake iteration.

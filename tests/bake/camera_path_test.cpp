@@ -1,0 +1,136 @@
+// SPDX-License-Identifier: Apache-2.0
+// Free-space exploration (the default roaming camera) on rooms as other tools write them: walls
+// wound outwards (a cube scaled up into a room), double-sided or not, with and without a glTF
+// camera, and closed objects inside the room that the camera must not enter.
+#include "sharc/camera_path.h"
+#include "sharcbake/scene_loader.h"
+#include "tracing/tracer.h"
+
+#include "gltf_builder.h"
+
+#include <gtest/gtest.h>
+
+#include <optional>
+
+namespace sharcbake {
+namespace {
+
+/// The 12 triangles of an axis-aligned box from `lo` to `hi`, wound outwards (seen from outside,
+/// counter-clockwise), or inwards with `inwards`.
+void addBox(std::vector<float>& positions, std::vector<uint32_t>& indices, glm::vec3 lo, glm::vec3 hi, bool inwards) {
+    const uint32_t base = uint32_t(positions.size() / 3);
+    for (int corner = 0; corner < 8; ++corner) {
+        positions.push_back((corner & 1) ? hi.x : lo.x);
+        positions.push_back((corner & 2) ? hi.y : lo.y);
+        positions.push_back((corner & 4) ? hi.z : lo.z);
+    }
+    // Each face's corners counter-clockwise seen from outside.
+    const uint32_t faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+    for (const auto& f : faces) {
+        const uint32_t quad[6] = {f[0], f[1], f[2], f[0], f[2], f[3]};
+        for (int k = 0; k < 6; ++k) indices.push_back(base + quad[inwards ? 5 - k : k]);
+    }
+}
+
+struct RoomOptions {
+    bool double_sided = false;
+    bool walls_inwards = false;
+    bool camera = true;
+    bool closed_cube = false;  ///< a closed 1 m cube (wound outwards) on the floor
+};
+
+constexpr glm::vec3 kRoomMin{-2.0f, 0.0f, -2.5f}, kRoomMax{2.0f, 3.0f, 2.5f};
+constexpr glm::vec3 kCubeMin{0.5f, 0.0f, -1.5f}, kCubeMax{1.5f, 1.0f, -0.5f};
+
+Scene loadRoom(const test::TempDir& dir, const RoomOptions& options) {
+    test::GltfBuilder gltf;
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    addBox(positions, indices, kRoomMin, kRoomMax, options.walls_inwards);
+    if (options.closed_cube) addBox(positions, indices, kCubeMin, kCubeMax, false);
+    const int material = gltf.addMaterial(
+        {{"pbrMetallicRoughness", {{"metallicFactor", 0.0}}}, {"doubleSided", options.double_sided}});
+    const int mesh = gltf.addMesh(
+        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
+                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
+                                {"material", material}}}));
+    std::vector<int> roots{gltf.addNode({{"mesh", mesh}})};
+    if (options.camera) {
+        gltf.doc["cameras"] = nlohmann::json::array(
+            {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.01}}}}});
+        roots.push_back(gltf.addNode({{"camera", 0}, {"translation", {-1.0, 1.6, 1.8}}}));
+    }
+    gltf.setScene(roots);
+    return loadGltf(gltf.writeEmbedded(dir, "room.gltf"));
+}
+
+bool inside(glm::vec3 p, glm::vec3 lo, glm::vec3 hi) {
+    return p.x > lo.x && p.x < hi.x && p.y > lo.y && p.y < hi.y && p.z > lo.z && p.z < hi.z;
+}
+
+struct Explored {
+    ExplorationResult result;
+    bool has_path = false;
+};
+
+Explored explore(const Scene& scene) {
+    const Tracer tracer(scene);
+    Explored out;
+    out.has_path = exploringCameraPath(tracer, scene, 32, 7, &out.result).has_value();
+    return out;
+}
+
+/// Every explored point lies inside the room, none inside the cube, and there are enough of them.
+void expectPointsFillTheRoom(const Explored& e, const char* what) {
+    ASSERT_TRUE(e.has_path) << what;
+    EXPECT_EQ(e.result.points.size(), 32u) << what;
+    for (const glm::vec3& p : e.result.points) {
+        EXPECT_TRUE(inside(p, kRoomMin, kRoomMax)) << what << ": (" << p.x << ", " << p.y << ", " << p.z << ")";
+        EXPECT_FALSE(inside(p, kCubeMin, kCubeMax)) << what << ": (" << p.x << ", " << p.y << ", " << p.z << ")";
+    }
+}
+
+TEST(ExploreFreeSpace, RoomWoundInwardsUsesTheWinding) {
+    test::TempDir dir;
+    const Explored e = explore(loadRoom(dir, {false, true, true, true}));
+    expectPointsFillTheRoom(e, "single-sided room wound inwards");
+    EXPECT_FALSE(e.result.winding_ignored);
+    // The winding alone rejects the cube's inside: fewer candidates are free than with it ignored.
+    EXPECT_LT(e.result.free, e.result.candidates);
+}
+
+TEST(ExploreFreeSpace, DoubleSidedRoomWoundOutwardsIsExplored) {
+    // Blender's default: backface culling off, so doubleSided; a room made from a scaled cube
+    // keeps its normals pointing out. Before, every point inside counted as inside a solid.
+    test::TempDir dir;
+    const Explored e = explore(loadRoom(dir, {true, false, true, true}));
+    expectPointsFillTheRoom(e, "double-sided room wound outwards");
+    EXPECT_FALSE(e.result.winding_ignored);  // double-sided faces do not vote
+}
+
+TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsTrustsTheCamera) {
+    test::TempDir dir;
+    const Explored e = explore(loadRoom(dir, {false, false, true, true}));
+    expectPointsFillTheRoom(e, "single-sided room wound outwards, with a camera");
+    EXPECT_TRUE(e.result.winding_ignored);
+}
+
+TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsWithoutACameraIsExplored) {
+    // No camera: the start is the room's centre, which the winding puts inside a solid, as it
+    // does every other point; the winding is then ignored and reachability decides.
+    test::TempDir dir;
+    const Explored e = explore(loadRoom(dir, {false, false, false, true}));
+    expectPointsFillTheRoom(e, "single-sided room wound outwards, no camera");
+    EXPECT_TRUE(e.result.winding_ignored);
+}
+
+TEST(ExploreFreeSpace, ExplorationIsAPureFunctionOfTheSeed) {
+    test::TempDir dir;
+    const Scene scene = loadRoom(dir, {true, false, true, true});
+    const Explored a = explore(scene), b = explore(scene);
+    ASSERT_EQ(a.result.points.size(), b.result.points.size());
+    for (size_t i = 0; i < a.result.points.size(); ++i) EXPECT_EQ(a.result.points[i], b.result.points[i]);
+}
+
+}  // namespace
+}  // namespace sharcbake
