@@ -497,6 +497,11 @@ std::string joined(const std::vector<uint32_t>& values) {
 /// "98.7% of 131072 lookups from 33 views (lowest: camera 'Main' 97.1%)"
 std::string describeHitRate(const HitRatePrediction& p) {
     char text[256];
+    if (p.eligible == 0) {  // every first bounce leaves the scene (a lone object): a rate of nothing
+        std::snprintf(text, sizeof text, "no lookups from %zu views (no first bounce from them hits a surface)",
+                      p.views.size());
+        return text;
+    }
     std::snprintf(text, sizeof text, "%.1f%% of %llu lookups from %zu views", 100.0 * p.rate(),
                   (unsigned long long)p.eligible, p.views.size());
     std::string result = text;
@@ -961,7 +966,9 @@ private:
                     100.0 * coverage_.unreached_area, coverage_.points);
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         for (const ViewHitRate& v : prediction_.views) {
-            if (v.view.declared) {
+            if (v.view.declared && v.eligible == 0) {
+                std::printf("    %s: no lookups (no first bounce from it hits a surface)\n", v.view.camera.name.c_str());
+            } else if (v.view.declared) {
                 std::printf("    %s: %.1f%% of %llu lookups\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
                             (unsigned long long)v.eligible);
             }

@@ -3,7 +3,7 @@
 # A default bake serves every view: SHaRC's exact lookups from cameras at 0.25x to 8x the glTF
 # camera's distance all hit; the same scene in millimetres or kilometres gets the same grid (in its
 # units), the same voxel count and hit rate, and no warning; a level bias that does not fit the
-# units is warned about; the automatic camera sees a lone floor.
+# units is warned about; the automatic camera sees a lone floor, which has nothing to look up.
 # Usage: coverage_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -134,7 +134,11 @@ PY
 expect 0 "render a lone floor from the automatic camera" "$sharcbake" render "$work/floor.gltf" -o "$work/floor.exr" \
     --resolution 32 --spp 1 --no-png
 says "$work/out.txt" "Camera: 'automatic' at (" "the automatic camera's pose is printed"
-expect 0 "bake the floor" "$sharcbake" bake "$work/floor.gltf" -o "$work/floor.sharc" --iterations 2 --resolution 64x64 -q
+expect 0 "bake the floor" "$sharcbake" bake "$work/floor.gltf" -o "$work/floor.sharc" --iterations 2 --resolution 64x64
+# Every first bounce off a lone floor leaves the scene: there is nothing for SHaRC to look up, and
+# the bake says that instead of a rate of nothing ("100.0% of 0 lookups").
+says "$work/out.txt" "predicted hit rate: no lookups from" "the bake says a lone floor has no lookups"
+grep -q "of 0 lookups" "$work/out.txt" && fail "the bake rates 0 lookups: $(grep 'of 0 lookups' "$work/out.txt")"
 expect 0 "the floor's primary hits" "$sharcbake" render "$work/floor.gltf" -o "$work/floor.exr" --resolution 32 \
     --spp 1 --no-png --cache "$work/floor.sharc" --debug-view cache
 hits=$(sed -n "s/.* of \([0-9]*\) primary hits.*/\1/p" "$work/out.txt")
