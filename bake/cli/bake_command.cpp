@@ -967,7 +967,8 @@ private:
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         for (const ViewHitRate& v : prediction_.views) {
             if (v.view.declared && v.eligible == 0) {
-                std::printf("    %s: no lookups (no first bounce from it hits a surface)\n", v.view.camera.name.c_str());
+                std::printf("    %s: no lookups (no first bounce from it hits a surface)\n",
+                            v.view.camera.name.c_str());
             } else if (v.view.declared) {
                 std::printf("    %s: %.1f%% of %llu lookups\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
                             (unsigned long long)v.eligible);
