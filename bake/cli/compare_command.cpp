@@ -51,15 +51,16 @@ void runCompare(const CompareOptions& o) {
 
 void registerCompareCommand(CLI::App& app) {
     auto o = std::make_shared<CompareOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "compare",
-        "Error of an image against a reference image.\n\n"
-        "Both are linear EXRs of the same camera and resolution; the reference may come from any\n"
-        "renderer. Prints relative MSE ((x-r)^2/(r^2+0.01)), mean relative error\n"
-        "(|x-r|/(|r|+0.01)) and the relative bias of the image mean, averaged over pixels and\n"
-        "channels.\n\n"
-        "Example:\n"
-        "  sharcbake compare out/cached.exr out/reference.exr");
+    CLI::App* cmd =
+        app.add_subcommand("compare",
+                           "Error of an image against a reference image.\n\n"
+                           "Both are linear EXRs of the same camera and resolution; either may come from any\n"
+                           "renderer. A multilayer EXR (Blender's) is read from its only RGB layer or its Combined\n"
+                           "pass. Prints relative MSE ((x-r)^2/(r^2+0.01)), mean relative error\n"
+                           "(|x-r|/(|r|+0.01)) and the relative bias of the image mean, averaged over pixels and\n"
+                           "channels.\n\n"
+                           "Example:\n"
+                           "  sharcbake compare out/cached.exr out/reference.exr");
     cmd->add_option("image", o->image_path, "Image to measure (.exr)")->required();
     cmd->add_option("reference", o->reference_path, "Reference image (.exr)")->required();
     cmd->add_flag("--json", o->json, "Print the measures as one JSON object");

@@ -270,6 +270,61 @@ TEST_F(ImageTest, ReadsLuminanceOnlyExrAsGrey) {
     }
 }
 
+/// Writes a w x h float EXR with the given channels; channel k holds value(k) + pixel index.
+void writeChannels(const std::string& path, int w, int h, const std::vector<std::string>& names) {
+    Imf::Header header(w, h);
+    std::vector<std::vector<float>> planes;
+    for (size_t k = 0; k < names.size(); ++k) {
+        header.channels().insert(names[k], Imf::Channel(Imf::FLOAT));
+        planes.emplace_back(size_t(w) * h);
+        for (size_t i = 0; i < planes.back().size(); ++i) planes.back()[i] = float(100 * (k + 1) + i);
+    }
+    Imf::FrameBuffer frame;
+    for (size_t k = 0; k < names.size(); ++k) {
+        frame.insert(names[k], Imf::Slice::Make(Imf::FLOAT, planes[k].data(), header.dataWindow()));
+    }
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(frame);
+    out.writePixels(h);
+}
+
+TEST_F(ImageTest, ReadsBlenderMultilayerExrFromItsCombinedPass) {
+    // Blender's "OpenEXR MultiLayer": no plain R, G, B; the picture is "<view layer>.Combined".
+    const std::string path = file("multilayer.exr");
+    const std::vector<std::string> names = {"ViewLayer.Combined.A", "ViewLayer.Combined.B", "ViewLayer.Combined.G",
+                                            "ViewLayer.Combined.R", "ViewLayer.Depth.Z",    "ViewLayer.Normal.X",
+                                            "ViewLayer.DiffCol.R",  "ViewLayer.DiffCol.G",  "ViewLayer.DiffCol.B"};
+    writeChannels(path, 3, 2, names);  // channel k holds 100 (k + 1) + pixel
+    const Image image = readExr(path);
+    ASSERT_EQ(image.width, 3);
+    for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(image.pixels[size_t(i)], glm::vec3(400.0f + i, 300.0f + i, 200.0f + i)) << i;  // R, G, B of Combined
+    }
+    // A single RGB layer of any name is the picture.
+    writeChannels(path, 2, 2, {"beauty.B", "beauty.G", "beauty.R", "depth.Z"});
+    EXPECT_EQ(readExr(path).pixels[1], glm::vec3(301.0f, 201.0f, 101.0f));
+}
+
+TEST_F(ImageTest, LayeredExrWithoutOnePictureIsRefusedNamingTheLayers) {
+    const std::string path = file("ambiguous.exr");
+    writeChannels(path, 2, 2, {"diffuse.R", "diffuse.G", "diffuse.B", "specular.R", "specular.G", "specular.B"});
+    try {
+        readExr(path);
+        ADD_FAILURE() << "two RGB layers were read as one picture";
+    } catch (const ImageError& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("diffuse, specular"), std::string::npos) << message;
+        EXPECT_NE(message.find(path), std::string::npos) << message;
+    }
+    writeChannels(path, 2, 2, {"Z", "alpha.A"});
+    try {
+        readExr(path);
+        ADD_FAILURE() << "a depth-only file was read as a picture";
+    } catch (const ImageError& e) {
+        EXPECT_NE(std::string(e.what()).find("channels: Z, alpha.A"), std::string::npos) << e.what();
+    }
+}
+
 TEST_F(ImageTest, ReadsLuminanceChromaExr) {
     // RgbaOutputFile with WRITE_YC stores Y, RY, BY (chroma sub-sampled); a grey image comes back grey.
     const std::string path = file("yc.exr");

@@ -74,6 +74,45 @@ Image readLuminanceChroma(const std::string& path, const Imath::Box2i& dw) {
     return image;
 }
 
+/// The prefix of the channels that hold the picture: "" for plain R, G, B (or Y), otherwise
+/// "LAYER." for a layered file without them (Blender's multilayer EXR: "ViewLayer.Combined.R",
+/// "ViewLayer.Depth.Z", ...): the only layer with R, G and B channels, or else the one ending in
+/// "Combined" (Blender's beauty pass) if exactly one does. Anything else is an error naming the
+/// layers, so that a comparison never reads a pass nobody asked for.
+std::string pictureLayer(const std::string& path, const Imf::ChannelList& channels) {
+    if (channels.findChannel("R") || channels.findChannel("G") || channels.findChannel("B") ||
+        channels.findChannel("Y")) {
+        return "";
+    }
+    std::vector<std::string> rgb_layers;
+    for (auto it = channels.begin(); it != channels.end(); ++it) {
+        const std::string name = it.name();
+        if (name.size() < 3 || name.compare(name.size() - 2, 2, ".R") != 0) continue;
+        const std::string prefix = name.substr(0, name.size() - 1);  // "LAYER."
+        if (channels.findChannel(prefix + "G") && channels.findChannel(prefix + "B")) rgb_layers.push_back(prefix);
+    }
+    if (rgb_layers.size() == 1) return rgb_layers.front();
+    std::vector<std::string> combined;
+    for (const std::string& prefix : rgb_layers) {
+        const std::string layer = prefix.substr(0, prefix.size() - 1);
+        if (layer == "Combined" || (layer.size() > 9 && layer.compare(layer.size() - 9, 9, ".Combined") == 0)) {
+            combined.push_back(prefix);
+        }
+    }
+    if (combined.size() == 1) return combined.front();
+    std::string names;
+    for (const std::string& prefix : rgb_layers)
+        names += (names.empty() ? "" : ", ") + prefix.substr(0, prefix.size() - 1);
+    if (rgb_layers.empty()) {
+        for (auto it = channels.begin(); it != channels.end(); ++it)
+            names += (names.empty() ? "" : ", ") + std::string(it.name());
+        throwReadError(path, "no R, G, B or Y channels and no layer with them (channels: " +
+                                 (names.empty() ? std::string("none") : names) + ")");
+    }
+    throwReadError(path, "several layers hold R, G and B (" + names +
+                             ") and none is the single 'Combined' pass; save the picture alone (a plain RGB EXR)");
+}
+
 }  // namespace
 
 void writeExr(const std::string& path, const Image& image, const ImageMetadata& metadata) {
@@ -142,8 +181,10 @@ Image readExr(const std::string& path, ImageMetadata* metadata) {
         }
 
         const Imf::ChannelList& channels = header.channels();
-        const Imf::Channel* rgb[3] = {channels.findChannel("R"), channels.findChannel("G"),
-                                      channels.findChannel("B")};
+        const std::string layer = pictureLayer(path, channels);
+        const std::string rgb_names[3] = {layer + "R", layer + "G", layer + "B"};
+        const Imf::Channel* rgb[3] = {channels.findChannel(rgb_names[0]), channels.findChannel(rgb_names[1]),
+                                      channels.findChannel(rgb_names[2])};
         const Imf::Channel* luminance = channels.findChannel("Y");
         const bool has_rgb = rgb[0] != nullptr || rgb[1] != nullptr || rgb[2] != nullptr;
         const bool has_chroma = channels.findChannel("RY") != nullptr || channels.findChannel("BY") != nullptr;
@@ -157,9 +198,9 @@ Image readExr(const std::string& path, ImageMetadata* metadata) {
             const size_t x_stride = sizeof(glm::vec3);
             const size_t y_stride = x_stride * size_t(width);
             Imf::FrameBuffer frame;
-            auto insert = [&](const char* name, const Imf::Channel* channel, int component) {
+            auto insert = [&](const std::string& name, const Imf::Channel* channel, int component) {
                 if (channel->xSampling != 1 || channel->ySampling != 1) {
-                    throwReadError(path, std::string("sub-sampled channel '") + name + "' is not supported");
+                    throwReadError(path, "sub-sampled channel '" + name + "' is not supported");
                 }
                 frame.insert(name, Imf::Slice::Make(Imf::FLOAT, first + size_t(component) * sizeof(float), dw,
                                                     x_stride, y_stride));
@@ -168,9 +209,8 @@ Image readExr(const std::string& path, ImageMetadata* metadata) {
             if (luminance_only) {
                 insert("Y", luminance, 0);
             } else {
-                static const char* const kNames[3] = {"R", "G", "B"};
                 for (int c = 0; c < 3; ++c) {
-                    if (rgb[c] != nullptr) insert(kNames[c], rgb[c], c);  // missing: stays 0
+                    if (rgb[c] != nullptr) insert(rgb_names[c], rgb[c], c);  // missing: stays 0
                 }
             }
             file.setFrameBuffer(frame);

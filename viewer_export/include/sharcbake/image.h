@@ -38,7 +38,10 @@ using ImageMetadata = std::map<std::string, std::string>;
 void writeExr(const std::string& path, const Image& image, const ImageMetadata& metadata = {});
 
 /// Reads the R, G, B channels of an OpenEXR file (any pixel type) as float. A missing channel
-/// reads as 0; a single Y (luminance) channel is replicated. Throws ImageError.
+/// reads as 0; a single Y (luminance) channel is replicated. A layered file without plain R, G, B
+/// (Blender's multilayer EXR) is read from its only layer with R, G and B, or its single
+/// "Combined" pass; with neither, or no picture channels at all, an error names the layers or
+/// channels. Throws ImageError.
 Image readExr(const std::string& path, ImageMetadata* metadata = nullptr);
 
 /// Tone-mapping for PNG previews: exposure (in stops), then the operator, then the sRGB curve.
