@@ -134,14 +134,32 @@ Camera sceneCamera(const Scene& scene, const std::string& selector, const std::s
 std::string describeCamera(const Camera& camera) {
     const glm::vec3 target = camera.position + camera.forward;
     char text[256];
-    std::snprintf(text, sizeof text, "'%s' at (%g, %g, %g) looking at (%g, %g, %g), up (%g, %g, %g), vertical fov %.3g deg",
+    std::snprintf(text, sizeof text, "'%s' at (%g, %g, %g) looking at (%g, %g, %g), up (%g, %g, %g), ",
                   camera.name.c_str(), camera.position.x, camera.position.y, camera.position.z, target.x, target.y,
-                  target.z, camera.up.x, camera.up.y, camera.up.z, double(glm::degrees(camera.yfov)));
-    return text;
+                  target.z, camera.up.x, camera.up.y, camera.up.z);
+    std::string result = text;
+    if (camera.orthographic_half_height) {
+        std::snprintf(text, sizeof text, "orthographic, %g high", 2.0 * double(*camera.orthographic_half_height));
+    } else {
+        std::snprintf(text, sizeof text, "vertical fov %.3g deg", double(glm::degrees(camera.yfov)));
+    }
+    return result + text;
 }
 
 void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, int height) {
-    if (fitted.yfov == camera.yfov || !camera.aspect_ratio) return;
+    if (!camera.aspect_ratio) return;
+    if (camera.orthographic_half_height) {
+        if (*fitted.orthographic_half_height == *camera.orthographic_half_height) return;
+        std::fprintf(stderr,
+                     "warning: orthographic camera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as "
+                     "Blender's sensor fit Auto frames it (the view's longer side spans the image's longer side; %g "
+                     "high instead of %g). Give only the width (--resolution %d) for the camera's own frame\n",
+                     camera.name.c_str(), double(*camera.aspect_ratio), width, height, double(width) / double(height),
+                     2.0 * double(*fitted.orthographic_half_height), 2.0 * double(*camera.orthographic_half_height),
+                     width);
+        return;
+    }
+    if (fitted.yfov == camera.yfov) return;
     std::fprintf(stderr,
                  "warning: camera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
                  "fit Auto frames it (the field of view of the camera's longer side spans the image's longer side; "
@@ -304,11 +322,14 @@ Json metadataJson(const std::vector<std::pair<std::string, std::string>>& metada
 }
 
 Json cameraJson(const Camera& camera) {
-    return {{"name", camera.name},
-            {"position", jsonVec3(camera.position)},
-            {"forward", jsonVec3(camera.forward)},
-            {"up", jsonVec3(camera.up)},
-            {"yfov", jsonNumber(camera.yfov)}};
+    Json json = {{"name", camera.name},
+                 {"position", jsonVec3(camera.position)},
+                 {"forward", jsonVec3(camera.forward)},
+                 {"up", jsonVec3(camera.up)},
+                 {"yfov", camera.orthographic_half_height ? Json(nullptr) : jsonNumber(camera.yfov)}};
+    if (camera.orthographic_half_height)
+        json["orthographic_half_height"] = jsonNumber(*camera.orthographic_half_height);
+    return json;
 }
 
 Json provenanceJson(const char* output_kind, const Scene& scene, const std::string& scene_hash) {

@@ -14,12 +14,18 @@ Camera fitCameraToImage(Camera camera, int width, int height) {
     if (!camera.aspect_ratio || !(*camera.aspect_ratio > 0.0f) || width <= 0 || height <= 0) return camera;
     const float camera_aspect = *camera.aspect_ratio, image_aspect = float(width) / float(height);
     if (std::abs(image_aspect / camera_aspect - 1.0f) < 1e-3f) return camera;
-    // tan of half the field of view along the camera's larger dimension ("the sensor").
-    const float tan_half_y = std::tan(0.5f * camera.yfov);
-    const float sensor = camera_aspect >= 1.0f ? tan_half_y * camera_aspect : tan_half_y;
+    // Half the view's height (tan of half the field of view, or an orthographic half height),
+    // then along the camera's larger dimension ("the sensor").
+    const float half_y = camera.orthographic_half_height ? *camera.orthographic_half_height
+                                                         : std::tan(0.5f * camera.yfov);
+    const float sensor = camera_aspect >= 1.0f ? half_y * camera_aspect : half_y;
     // Auto fit: the sensor spans the image's larger dimension.
     const float fitted = image_aspect >= 1.0f ? sensor / image_aspect : sensor;
-    camera.yfov = 2.0f * std::atan(fitted);
+    if (camera.orthographic_half_height) {
+        camera.orthographic_half_height = fitted;
+    } else {
+        camera.yfov = 2.0f * std::atan(fitted);
+    }
     camera.aspect_ratio = image_aspect;
     return camera;
 }
@@ -29,13 +35,15 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
     forward_ = glm::normalize(camera.forward);
     right_ = glm::normalize(glm::cross(forward_, camera.up));
     up_ = glm::cross(right_, forward_);
-    tan_half_y_ = std::tan(0.5f * camera.yfov);
+    orthographic_ = camera.orthographic_half_height.has_value();
+    half_y_ = orthographic_ ? *camera.orthographic_half_height : std::tan(0.5f * camera.yfov);
     aspect_ = float(width) / float(height);
 }
 
 Ray CameraRays::generate(int x, int y, glm::vec2 jitter) const {
-    const float sx = (2.0f * (float(x) + jitter.x) / float(width_) - 1.0f) * tan_half_y_ * aspect_;
-    const float sy = (1.0f - 2.0f * (float(y) + jitter.y) / float(height_)) * tan_half_y_;
+    const float sx = (2.0f * (float(x) + jitter.x) / float(width_) - 1.0f) * half_y_ * aspect_;
+    const float sy = (1.0f - 2.0f * (float(y) + jitter.y) / float(height_)) * half_y_;
+    if (orthographic_) return Ray{origin_ + sx * right_ + sy * up_, forward_};
     return Ray{origin_, glm::normalize(forward_ + sx * right_ + sy * up_)};
 }
 

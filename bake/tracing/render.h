@@ -19,7 +19,8 @@ class Progress;
 /// The camera itself when it has no aspect ratio or the image has the same one.
 Camera fitCameraToImage(Camera camera, int width, int height);
 
-/// Primary rays of a pinhole camera for an image of width x height (row 0 at the top).
+/// Primary rays of a pinhole camera, or of an orthographic one (parallel rays from the view
+/// rectangle around the camera's position), for an image of width x height (row 0 at the top).
 class CameraRays {
 public:
     CameraRays(const Camera& camera, int width, int height);
@@ -28,7 +29,9 @@ public:
 
 private:
     glm::vec3 origin_, forward_, right_, up_;
-    float tan_half_y_, aspect_;
+    bool orthographic_;
+    float half_y_;  ///< tan(yfov / 2), or the orthographic half height
+    float aspect_;
     int width_, height_;
 };
 

@@ -1654,7 +1654,8 @@ private:
             fail("node " + quoted(node.name) + ": camera " + std::to_string(node.camera) + " does not exist");
         const tinygltf::Camera& src = model_.cameras[node.camera];
         const std::string name = src.name.empty() ? node.name : src.name;
-        if (src.type != "perspective") {
+        const bool orthographic = src.type == "orthographic";
+        if (!orthographic && src.type != "perspective") {
             warn("camera " + quoted(name) + ": " + src.type + " cameras are not supported; skipped");
             return;
         }
@@ -1672,6 +1673,21 @@ private:
         }
         cam.forward = glm::vec3(forward);
         cam.up = glm::vec3(up);
+        if (orthographic) {
+            // glTF: xmag and ymag are half the view's width and height; zero is invalid, and a
+            // negative value (a mirrored view) is read by its size.
+            const double xmag = std::abs(src.orthographic.xmag), ymag = std::abs(src.orthographic.ymag);
+            if (!(xmag > 0.0 && ymag > 0.0 && std::isfinite(xmag) && std::isfinite(ymag) && float(xmag) > 0.0f &&
+                  float(ymag) > 0.0f)) {
+                warn("camera " + quoted(name) + ": orthographic xmag " + std::to_string(src.orthographic.xmag) +
+                     " and ymag " + std::to_string(src.orthographic.ymag) + " must be finite and non-zero; skipped");
+                return;
+            }
+            cam.orthographic_half_height = float(ymag);
+            cam.aspect_ratio = float(xmag / ymag);
+            scene_.cameras.push_back(cam);
+            return;
+        }
         if (src.perspective.yfov > 0.0 && src.perspective.yfov < 3.14159)
             cam.yfov = static_cast<float>(src.perspective.yfov);
         else

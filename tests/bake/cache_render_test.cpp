@@ -210,4 +210,31 @@ TEST(CameraFit, KeepsTheFieldOfViewOfTheCamerasLongerSideOnTheImagesLongerSide) 
     EXPECT_EQ(fitCameraToImage(free, 100, 300).yfov, 0.7f);
 }
 
+TEST(CameraFit, OrthographicKeepsTheExtentOfTheViewsLongerSide) {
+    Camera iso;
+    iso.orthographic_half_height = 2.0f;
+    iso.aspect_ratio = 2.0f;  // 8 x 4 units
+    EXPECT_EQ(*fitCameraToImage(iso, 200, 100).orthographic_half_height, 2.0f);
+    EXPECT_FLOAT_EQ(*fitCameraToImage(iso, 100, 100).orthographic_half_height, 4.0f);  // 8 wide: 8 high
+    EXPECT_FLOAT_EQ(*fitCameraToImage(iso, 100, 200).orthographic_half_height, 4.0f);  // 8 spans the height
+    EXPECT_EQ(fitCameraToImage(iso, 100, 100).yfov, iso.yfov);
+}
+
+TEST(CameraRays, OrthographicRaysAreParallelFromTheViewRectangle) {
+    Camera iso;
+    iso.position = {1.0f, 5.0f, 0.0f};
+    iso.forward = {0.0f, -1.0f, 0.0f};
+    iso.up = {0.0f, 0.0f, -1.0f};
+    iso.orthographic_half_height = 2.0f;
+    const CameraRays rays(iso, 200, 100);  // 8 x 4 units: right is forward x up = +X
+    const Ray corner = rays.generate(0, 0, glm::vec2(0.0f));
+    EXPECT_EQ(corner.direction, iso.forward);
+    EXPECT_NEAR(corner.origin.x, 1.0f - 4.0f, 1e-5f);
+    EXPECT_NEAR(corner.origin.y, 5.0f, 1e-5f);
+    EXPECT_NEAR(corner.origin.z, -2.0f, 1e-5f);  // the top row is along up
+    const Ray centre = rays.generate(100, 50, glm::vec2(0.0f));
+    EXPECT_NEAR(glm::length(centre.origin - iso.position), 0.0f, 1e-5f);
+    EXPECT_EQ(centre.direction, iso.forward);
+}
+
 }  // namespace sharcbake

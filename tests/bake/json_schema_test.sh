@@ -40,6 +40,18 @@ expect 0 "render --debug-view cache --stats-json" "$sharcbake" render "$cornell"
     --cache "$work/c.sharc" --debug-view cache --stats-json "$work/render-stats-debug-cache.json"
 expect 0 "render --debug-view bounces --stats-json" "$sharcbake" render "$cornell" -o "$work/bounces.exr" $image \
     --cache "$work/c.sharc" --debug-view bounces --stats-json "$work/render-stats-debug-bounces.json"
+# The Cornell box's camera made orthographic: its stats give the view's half height, no yfov.
+mkdir -p "$work/ortho"
+cp "$(dirname "$cornell")/cornell_box.bin" "$work/ortho/"
+"$python" - "$cornell" "$work/ortho/cornell_ortho.gltf" <<'PY' || fail "writing an orthographic Cornell box"
+import json, sys
+doc = json.load(open(sys.argv[1]))
+doc["cameras"][0] = {"name": "iso", "type": "orthographic",
+                     "orthographic": {"xmag": 0.6, "ymag": 0.6, "znear": 0.01, "zfar": 100}}
+json.dump(doc, open(sys.argv[2], "w"))
+PY
+expect 0 "render from an orthographic camera --stats-json" "$sharcbake" render "$work/ortho/cornell_ortho.gltf" \
+    -o "$work/ortho.exr" --resolution 64 --spp 4 -q --stats-json "$work/render-stats-ortho.json"
 
 # info, validate (a good file, one with a byte flipped in its voxels, a missing one), compare.
 expect 0 "info --json" sh -c "'$sharcbake' info '$work/c.sharc' --json > '$work/info.json'"
@@ -70,7 +82,7 @@ def check(condition, what):
 outputs = {
     "bake-stats": ["bake-stats.json"],
     "render-stats": ["render-stats.json", "render-stats-cache.json", "render-stats-debug-cache.json",
-                     "render-stats-debug-bounces.json"],
+                     "render-stats-debug-bounces.json", "render-stats-ortho.json"],
     "info": ["info.json"],
     "validate": ["validate-ok.json", "validate-corrupt.json", "validate-missing.json"],
     "compare": ["compare.json"],
@@ -101,6 +113,10 @@ for name, files in outputs.items():
 # The outputs reach the optional parts of the schemas, so those are tested too.
 check("cache_hits" in documents["render-stats-cache.json"] and "cache_hits" not in documents["render-stats.json"],
       "render stats: cache_* fields only with --cache")
+ortho = documents["render-stats-ortho.json"]["camera"]
+check(ortho["yfov"] is None and ortho["orthographic_half_height"] == 0.6
+      and "orthographic_half_height" not in documents["render-stats.json"]["camera"],
+      "render stats: an orthographic camera's half height, no yfov; none for a perspective camera")
 check("debug_missing" in documents["render-stats-debug-cache.json"]
       and "debug_missing" not in documents["render-stats-debug-bounces.json"], "render stats: debug_missing only with --debug-view cache")
 check(any("probes" in row for row in documents["report/convergence.json"]["checkpoints"]), "convergence.json rows with probes")

@@ -913,21 +913,28 @@ TEST(GltfLoaderLights, MissingLightIndexIsAnError) {
     EXPECT_NE(msg.find("'lamp'"), std::string::npos) << msg;
 }
 
-TEST(GltfLoaderCameras, PerspectiveParsedOrthographicSkipped) {
+TEST(GltfLoaderCameras, PerspectiveAndOrthographicParsed) {
     TempDir dir;
     GltfBuilder b;
-    b.doc["cameras"] = json::array(
-        {{{"name", "Main"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 0.1}, {"aspectRatio", 1.5}}}},
-         {{"type", "orthographic"}, {"orthographic", {{"xmag", 1}, {"ymag", 1}, {"znear", 0.1}, {"zfar", 10}}}},
-         {{"type", "perspective"}, {"perspective", {{"yfov", 0.9}, {"znear", 0.1}}}}});
+    b.doc["cameras"] = json::array({{{"name", "Main"},
+                                     {"type", "perspective"},
+                                     {"perspective", {{"yfov", 0.6}, {"znear", 0.1}, {"aspectRatio", 1.5}}}},
+                                    {{"name", "Iso"},
+                                     {"type", "orthographic"},
+                                     {"orthographic", {{"xmag", 4}, {"ymag", -2}, {"znear", 0.1}, {"zfar", 10}}}},
+                                    {{"type", "perspective"}, {"perspective", {{"yfov", 0.9}, {"znear", 0.1}}}},
+                                    {{"name", "Flat"},
+                                     {"type", "orthographic"},
+                                     {"orthographic", {{"xmag", 0}, {"ymag", 1}, {"znear", 0.1}, {"zfar", 10}}}}});
     const float s = std::sqrt(0.5f);  // 90 degrees about +Y: forward -Z becomes -X
     const int main = b.addNode({{"camera", 0}, {"translation", {1, 2, 3}}, {"rotation", {0, s, 0, s}}});
-    const int ortho = b.addNode({{"camera", 1}});
+    const int ortho = b.addNode({{"camera", 1}, {"translation", {0, 10, 0}}});
     const int plain = b.addNode({{"camera", 2}, {"name", "NodeName"}});
-    b.setScene({main, ortho, plain});
+    const int flat = b.addNode({{"camera", 3}});
+    b.setScene({main, ortho, plain, flat});
     const Scene scene = loadGltf(b.writeEmbedded(dir, "cameras.gltf"));
 
-    ASSERT_EQ(scene.cameras.size(), 2u);
+    ASSERT_EQ(scene.cameras.size(), 3u);
     const Camera& c = scene.cameras[0];
     EXPECT_EQ(c.name, "Main");
     expectVec3Near(c.position, {1, 2, 3});
@@ -936,11 +943,22 @@ TEST(GltfLoaderCameras, PerspectiveParsedOrthographicSkipped) {
     EXPECT_FLOAT_EQ(c.yfov, 0.6f);
     ASSERT_TRUE(c.aspect_ratio.has_value());
     EXPECT_FLOAT_EQ(*c.aspect_ratio, 1.5f);
+    EXPECT_FALSE(c.orthographic_half_height.has_value());
 
-    EXPECT_EQ(scene.cameras[1].name, "NodeName");
-    EXPECT_FALSE(scene.cameras[1].aspect_ratio.has_value());
+    // Orthographic: half height ymag (a negative one read by its size), aspect xmag / ymag.
+    const Camera& iso = scene.cameras[1];
+    EXPECT_EQ(iso.name, "Iso");
+    expectVec3Near(iso.position, {0, 10, 0});
+    ASSERT_TRUE(iso.orthographic_half_height.has_value());
+    EXPECT_FLOAT_EQ(*iso.orthographic_half_height, 2.0f);
+    ASSERT_TRUE(iso.aspect_ratio.has_value());
+    EXPECT_FLOAT_EQ(*iso.aspect_ratio, 2.0f);
+
+    EXPECT_EQ(scene.cameras[2].name, "NodeName");
+    EXPECT_FALSE(scene.cameras[2].aspect_ratio.has_value());
+    // xmag 0 is invalid in glTF: skipped, with a warning naming the camera.
     bool warned = false;
-    for (const std::string& w : scene.stats.warnings) warned |= w.find("orthographic") != std::string::npos;
+    for (const std::string& w : scene.stats.warnings) warned |= w.find("'Flat'") != std::string::npos;
     EXPECT_TRUE(warned);
 }
 

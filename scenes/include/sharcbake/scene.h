@@ -135,8 +135,11 @@ struct Camera {
     glm::vec3 position{0.0f};
     glm::vec3 forward{0.0f, 0.0f, -1.0f};  ///< unit, world space
     glm::vec3 up{0.0f, 1.0f, 0.0f};        ///< unit, orthogonal to forward
-    float yfov = 0.8f;                     ///< vertical field of view, radians
+    float yfov = 0.8f;                     ///< vertical field of view, radians (perspective cameras)
     std::optional<float> aspect_ratio;     ///< width / height if the glTF camera gives one
+    /// Orthographic cameras: half the view's height in scene units (glTF `ymag`; `aspect_ratio`
+    /// is xmag / ymag). Rays leave the view rectangle in parallel; `yfov` is not used for them.
+    std::optional<float> orthographic_half_height;
 };
 
 /// The environment seen by rays that leave the scene. Either a uniform radiance or an
