@@ -3,19 +3,23 @@
 # up, normals pointing out, backface culling off so the exporter writes doubleSided), with a table,
 # a 200 W point light and an emissive ceiling panel; exports it to glTF (lights and camera
 # included); renders it with Cycles as a linear EXR, both as a plain RGB file and as a multilayer one.
+# MODE "metal" makes the table a rough gold-coloured metal and adds a metal sphere.
 #
-# Cycles is set up to compute the same integral as sharcbake: a Lambertian surface (Diffuse BSDF;
-# the exported Principled BSDF has Specular 0 and Roughness 1, which sharcbake reads as
-# Lambertian), unlimited bounces (Cycles' defaults stop after 4 diffuse bounces), no clamping, no
-# denoising, a point light of zero radius, a black world, the Standard view transform.
+# Cycles is set up to compute the same integral as sharcbake: Lambertian walls (Diffuse BSDF; the
+# exported Principled BSDF has Specular 0 and Roughness 1, which sharcbake reads as Lambertian),
+# metals as Principled BSDF with Multiscatter GGX (energy-conserving, as sharcbake's GGX is),
+# unlimited bounces (Cycles' defaults stop after 4 diffuse bounces), no clamping, no glossy blur,
+# no denoising, a point light of zero radius, a black world, the Standard view transform.
 #
-# Usage: blender -b --factory-startup --python cycles_room.py -- OUT_DIR SAMPLES
+# Usage: blender -b --factory-startup --python cycles_room.py -- OUT_DIR SAMPLES [diffuse|metal]
 import math
 import sys
 
 import bpy
 
-out_dir, samples = sys.argv[sys.argv.index("--") + 1], int(sys.argv[sys.argv.index("--") + 2])
+arguments = sys.argv[sys.argv.index("--") + 1:]
+out_dir, samples = arguments[0], int(arguments[1])
+mode = arguments[2] if len(arguments) > 2 else "diffuse"
 
 bpy.ops.object.select_all(action="SELECT")
 bpy.ops.object.delete()
@@ -41,11 +45,26 @@ room.name = "Room"
 room.scale = (4, 5, 3)
 room.data.materials.append(wall)
 
+metal = bpy.data.materials.new("Metal")
+metal.use_nodes = True
+metal_principled = metal.node_tree.nodes["Principled BSDF"]
+metal_principled.inputs["Base Color"].default_value = (0.9, 0.6, 0.3, 1.0)
+metal_principled.inputs["Metallic"].default_value = 1.0
+metal_principled.inputs["Roughness"].default_value = 0.4
+metal_principled.distribution = "MULTI_GGX"
+
 bpy.ops.mesh.primitive_cube_add(size=1, location=(0.8, 1.0, 0.4))
 table = bpy.context.object
 table.name = "Table"
 table.scale = (1.2, 0.8, 0.8)
-table.data.materials.append(wall)
+table.data.materials.append(metal if mode == "metal" else wall)
+
+if mode == "metal":
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.5, location=(-0.6, 0.8, 0.5), segments=64, ring_count=32)
+    sphere = bpy.context.object
+    sphere.name = "Sphere"
+    bpy.ops.object.shade_smooth()
+    sphere.data.materials.append(metal)
 
 # A panel 2 cm below the ceiling, facing down (a plane's normal is +Z: flipped).
 bpy.ops.mesh.primitive_plane_add(size=1, location=(-1.0, -1.0, 2.98), rotation=(math.pi, 0, 0))
@@ -84,6 +103,7 @@ cycles.use_denoising = False
 cycles.max_bounces = cycles.diffuse_bounces = cycles.glossy_bounces = 128
 cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
 cycles.light_sampling_threshold = 0.0
+cycles.blur_glossy = 0.0
 scene.view_settings.view_transform = "Standard"
 scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
 for file_format, name in (("OPEN_EXR", "cycles.exr"), ("OPEN_EXR_MULTILAYER", "cycles_multilayer.exr")):
