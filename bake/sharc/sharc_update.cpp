@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/sharc_update.h"
 
+#include "tracing/sample_batch.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -75,8 +77,13 @@ struct UpdateWavefront::Path {
     // The current vertex.
     SurfaceHit hit;
     ShadingMaterial material;
+    // This bounce's four sample pairs (PathTracer::kDimensionsPerBounce), drawn for the whole
+    // batch before they are used: the sampler is a chain of dependent multiplies, and a loop over
+    // many paths' draws keeps the CPU busy where one path's draw would wait on each multiply.
     glm::vec2 u_select_resample{0.0f};
     glm::vec2 u_light_point{0.0f};
+    glm::vec2 u_lobe_rr{0.0f};
+    glm::vec2 u_direction{0.0f};
     uint64_t feedback_key = 0;            ///< the voxel cache resampling reads; 0 = not this vertex
     uint32_t feedback_base = 0;           ///< its bucket's first slot (from the prefetch pass)
     uint32_t feedback_slot = SharcCache::kNoSlot;
@@ -136,11 +143,19 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
     tracer_.intersectMany(rays_.data(), count, hits_.data(), found_.data(), embree_hits_);
     counters.segments += count;
 
+    // The samples of the vertices found: the dimensions sampler.next2D would give, drawn for the
+    // batch at once (sample_batch.h).
+    const uint32_t dimension = PathTracer::kFirstBounceDimension + bounce * PathTracer::kDimensionsPerBounce;
+    sample_paths_.clear();
+    for (size_t i = 0; i < count; ++i) {
+        if (found_[i]) sample_paths_.push_back(active_[i]);
+    }
+    drawSamples(dimension, &Path::u_select_resample, &Path::u_light_point);
+
     // Shade every hit; paths that end here (sky, cache) drop out of the batch.
     shaded_.clear();
     for (size_t i = 0; i < count; ++i) {
         Path& path = paths_[active_[i]];
-        path.sampler.startDimension(PathTracer::kFirstBounceDimension + bounce * PathTracer::kDimensionsPerBounce);
         if (!found_[i]) {
             depositSkyMiss(path, bounce, counters);
             continue;
@@ -168,9 +183,32 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
     for (size_t s = 0; s < shadow_paths_.size(); ++s) paths_[shadow_paths_[s]].shadow_blocked = blocked_[s] != 0;
 
     // Deposit, then continue the survivors; the batch keeps its order.
+    if (bounce + 1 < settings_.max_bounces) {
+        sample_paths_.assign(next_active_.begin(), next_active_.end());
+        drawSamples(dimension + 2, &Path::u_lobe_rr, &Path::u_direction);
+    }
     active_.clear();
     for (const uint32_t index : next_active_) {
         if (depositAndContinue(paths_[index], bounce, depth, counters)) active_.push_back(index);
+    }
+}
+
+void UpdateWavefront::drawSamples(uint32_t dimension, glm::vec2 Path::*first, glm::vec2 Path::*second) {
+    const size_t count = sample_paths_.size();
+    sample_hashes_.resize(count);
+    sample_indices_.resize(count);
+    sample_values_.resize(2 * count);
+    for (size_t i = 0; i < count; ++i) {
+        const PixelSampler& sampler = paths_[sample_paths_[i]].sampler;
+        sample_hashes_[i] = sampler.pixelHash();
+        sample_indices_[i] = sampler.reversedSample();
+    }
+    sample2DMany(sample_hashes_.data(), sample_indices_.data(), count, dimension, sample_values_.data());
+    sample2DMany(sample_hashes_.data(), sample_indices_.data(), count, dimension + 1, sample_values_.data() + count);
+    for (size_t i = 0; i < count; ++i) {
+        Path& path = paths_[sample_paths_[i]];
+        path.*first = sample_values_[i];
+        path.*second = sample_values_[count + i];
     }
 }
 
@@ -183,9 +221,6 @@ void UpdateWavefront::shadeSurface(Path& path, const RayHit& ray_hit, uint32_t b
     // SHaRC keys use the geometric normal turned towards the incoming ray, so the two sides
     // of a thin wall are different voxels.
     path.key = levels.key(hit.position, hit.geometric_normal, camera);
-
-    path.u_select_resample = path.sampler.next2D();
-    path.u_light_point = path.sampler.next2D();
 
     path.emitted = emittedRadiance(hit, path.material);
     path.emission_weight =
@@ -246,13 +281,13 @@ bool UpdateWavefront::depositAndContinue(Path& path, uint32_t bounce, uint32_t d
 
     // Russian roulette from the vertex's albedo, as PathTracer does, then the next direction.
     const GltfBsdf& bsdf = *path.bsdf;
-    const glm::vec2 u_lobe_rr = path.sampler.next2D();
+    const glm::vec2 u_lobe_rr = path.u_lobe_rr;
     float survive = 1.0f;
     if (bounce >= settings_.russian_roulette_start) {
         survive = russianRouletteSurvival(path.throughput, bsdf.albedo(path.wo));
         if (!(survive > 0.0f) || u_lobe_rr.y >= survive) return false;
     }
-    const GltfBsdf::Sample s = bsdf.sample(path.wo, u_lobe_rr.x, path.sampler.next2D());
+    const GltfBsdf::Sample s = bsdf.sample(path.wo, u_lobe_rr.x, path.u_direction);
     if (!s.valid) return false;
     const glm::vec3 segment = s.weight / survive;
     path.throughput *= segment;

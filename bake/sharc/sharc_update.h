@@ -81,6 +81,9 @@ private:
     /// read there (Path::feedback_key, 0 when this vertex does not resample).
     void shadeSurface(Path& path, const RayHit& ray_hit, uint32_t bounce, uint32_t depth,
                       const DepositLevels& levels, const Float3& camera) const;
+    /// Sets `first` and `second` of each path in sample_paths_ to its sampler's pairs of
+    /// `dimension` and `dimension + 1`, drawn for all of them at once (sample_batch.h).
+    void drawSamples(uint32_t dimension, glm::vec2 Path::*first, glm::vec2 Path::*second);
     /// Looks up the feedback voxels of the shaded paths, a batch at a time.
     void findFeedbackVoxels();
     /// The BSDF and the light sample (the shadow ray to trace with the batch's).
@@ -113,6 +116,10 @@ private:
     std::vector<uint8_t> blocked_;          ///< Embree's answer per shadow ray
     std::vector<RTCRayHit> embree_hits_;
     std::vector<RTCRay> embree_rays_;
+    std::vector<uint32_t> sample_paths_;    ///< drawSamples' paths, and its lanes:
+    std::vector<uint32_t> sample_hashes_;   ///< their samplers' pixelHash()
+    std::vector<uint32_t> sample_indices_;  ///< and reversedSample()
+    std::vector<glm::vec2> sample_values_;  ///< the first dimension's pairs, then the second's
 };
 
 }  // namespace sharcbake

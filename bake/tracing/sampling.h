@@ -106,14 +106,27 @@ public:
     /// @param pixel_id   a unique id of the pixel (or update path) within the pass
     /// @param sample     the sample (or iteration) index
     PixelSampler(uint32_t seed, uint32_t pixel_id, uint32_t sample)
-        : pixel_hash_(hashCombine(hashUint32(seed), pixel_id)), reversed_sample_(reverseBits(sample)) {}
+        : PixelSampler(hashCombine(hashUint32(seed), pixel_id), reverseBits(sample)) {}
+    /// The sampler whose pixelHash() and reversedSample() are these (sample_batch.h).
+    PixelSampler(uint32_t pixel_hash, uint32_t reversed_sample)
+        : pixel_hash_(pixel_hash), reversed_sample_(reversed_sample) {}
+
+    /// What a draw depends on besides its dimension (sample_batch.h draws for many at once).
+    uint32_t pixelHash() const { return pixel_hash_; }
+    uint32_t reversedSample() const { return reversed_sample_; }
 
     /// Starts the dimension stream at a fixed offset, e.g. one block of dimensions per bounce,
     /// so that a path's bounce k always uses the same dimensions whatever earlier bounces used.
     void startDimension(uint32_t dimension) { dimension_ = dimension; }
 
-    glm::vec2 next2D() {
-        const uint32_t pair_seed = hashCombine(pixel_hash_, dimension_++);
+    glm::vec2 next2D() { return sample2D(dimension_++); }
+
+    /// The pair of dimension `dimension` (and dimension + 1 of the 1D view), without moving the
+    /// stream: next2D() is sample2D(d) for d = the start dimension, d + 1, ... A pure function, so
+    /// code that knows which dimensions it will need can draw them for many samplers in one
+    /// loop, where the long chains of dependent multiplies of different samplers overlap.
+    glm::vec2 sample2D(uint32_t dimension) const {
+        const uint32_t pair_seed = hashCombine(pixel_hash_, dimension);
         // nestedUniformScramble(sample, pair_seed), with the sample's reversal done once.
         const uint32_t index = reverseBits(laineKarrasPermutation(reversed_sample_, pair_seed));
         // nestedUniformScramble(v) reverses v's bits first; sobolDimension0 is itself a reversal,
