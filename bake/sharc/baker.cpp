@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/baker.h"
 
-#include "tracing/render.h"
 #include "support/stopwatch.h"
+#include "tracing/render.h"
+#include "tracing/sample_batch.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -73,20 +74,37 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
     // Every chunk of paths is one wavefront batch, traced by one task into its own deposit list.
     tbb::enumerable_thread_specific<UpdateCounters> thread_counters;
     tbb::enumerable_thread_specific<std::vector<UpdatePathStart>> thread_starts;
+    struct PixelDraws {  // the chunk's pixel positions, drawn at once (sample_batch.h)
+        std::vector<uint32_t> hashes, indices;
+        std::vector<glm::vec2> values;
+    };
+    tbb::enumerable_thread_specific<PixelDraws> thread_draws;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk_deposits.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
         UpdateCounters& local = thread_counters.local();
         UpdateWavefront& wavefront = wavefronts_.local();
         std::vector<UpdatePathStart>& starts = thread_starts.local();
+        PixelDraws& draws = thread_draws.local();
         for (size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
             std::vector<Deposit>& deposits = chunk_deposits[chunk];
             deposits.clear();
             starts.clear();
             const uint32_t first = uint32_t(chunk) * kPathsPerChunk;
             const uint32_t last = std::min(paths, first + kPathsPerChunk);
+            draws.hashes.clear();
+            draws.indices.clear();
             for (uint32_t block = first; block < last; ++block) {
-                // One random pixel (and sub-pixel position) per block, new every iteration.
-                PixelSampler sampler(settings_.seed, block, work_iteration);
-                const glm::vec2 u = sampler.next2D() * float(stride);
+                const PixelSampler sampler(settings_.seed, block, work_iteration);
+                draws.hashes.push_back(sampler.pixelHash());
+                draws.indices.push_back(sampler.reversedSample());
+            }
+            draws.values.resize(draws.hashes.size());
+            sample2DMany(draws.hashes.data(), draws.indices.data(), draws.hashes.size(), 0, draws.values.data());
+            for (uint32_t block = first; block < last; ++block) {
+                // One random pixel (and sub-pixel position) per block, new every iteration: the
+                // sampler's dimension 0 (next2D from the start).
+                PixelSampler sampler(draws.hashes[block - first], draws.indices[block - first]);
+                sampler.startDimension(1);
+                const glm::vec2 u = draws.values[block - first] * float(stride);
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));
                 starts.push_back(UpdatePathStart{camera.generate(x, y, glm::fract(u)), sampler});
