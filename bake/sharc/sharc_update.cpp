@@ -104,9 +104,10 @@ UpdateWavefront::~UpdateWavefront() = default;
 
 size_t UpdateWavefront::bytesPerPathInFlight() {
     // The path's state, its entries in the batch's index lists, its ray and hit, its shadow ray,
-    // and Embree's copies of both. Its deposits come on top (sizeof(Deposit) each).
+    // Embree's copies of both, and its lanes in the batch's sample draws (index, two sampler
+    // words, two pairs). Its deposits come on top (sizeof(Deposit) each).
     return sizeof(Path) + sizeof(uint32_t) * 4 + sizeof(Ray) * 2 + sizeof(RayHit) + sizeof(uint8_t) * 2 +
-           sizeof(RTCRayHit) + sizeof(RTCRay);
+           sizeof(RTCRayHit) + sizeof(RTCRay) + sizeof(uint32_t) * 3 + sizeof(glm::vec2) * 2;
 }
 
 void UpdateWavefront::trace(const std::vector<UpdatePathStart>& starts, const DepositLevels& levels,
