@@ -14,6 +14,12 @@ Camera fitCameraToImage(Camera camera, int width, int height) {
     if (!camera.aspect_ratio || !(*camera.aspect_ratio > 0.0f) || width <= 0 || height <= 0) return camera;
     const float camera_aspect = *camera.aspect_ratio, image_aspect = float(width) / float(height);
     if (std::abs(image_aspect / camera_aspect - 1.0f) < 1e-3f) return camera;
+    // The camera's own frame in whole pixels (`--resolution W` rounds W / aspect to the nearest
+    // row): nothing to fit, the half-pixel difference is the rounding's.
+    if (std::abs(float(width) / camera_aspect - float(height)) <= 0.5f ||
+        std::abs(float(height) * camera_aspect - float(width)) <= 0.5f) {
+        return camera;
+    }
     // Half the view's height (tan of half the field of view, or an orthographic half height),
     // then along the camera's larger dimension ("the sensor").
     const float half_y = camera.orthographic_half_height ? *camera.orthographic_half_height

@@ -16,7 +16,8 @@ class Progress;
 /// The camera for an image of width x height when its glTF aspect ratio differs: fitted as
 /// Blender's sensor fit "Auto" does (Blender's exporter writes yfov for the camera's own aspect):
 /// the field of view of the camera's larger dimension is kept on the image's larger dimension.
-/// The camera itself when it has no aspect ratio or the image has the same one.
+/// The camera itself when it has no aspect ratio or the image has the same one, to the pixel
+/// (a height of W / aspect rounded, as `--resolution W` makes it).
 Camera fitCameraToImage(Camera camera, int width, int height);
 
 /// Primary rays of a pinhole camera, or of an orthographic one (parallel rays from the view

@@ -193,8 +193,11 @@ TEST(CameraFit, KeepsTheFieldOfViewOfTheCamerasLongerSideOnTheImagesLongerSide) 
     wide.yfov = 0.6f;
     wide.aspect_ratio = 16.0f / 9.0f;
     const float tan_x = std::tan(0.3f) * 16.0f / 9.0f;  // the camera's horizontal half-angle tangent
-    // Its own aspect: unchanged.
+    // Its own aspect: unchanged, also where the height is W / aspect rounded to whole pixels
+    // (--resolution 100 on a 16:9 camera is 100x56).
     EXPECT_EQ(fitCameraToImage(wide, 1600, 900).yfov, 0.6f);
+    EXPECT_EQ(fitCameraToImage(wide, 100, 56).yfov, 0.6f);
+    EXPECT_EQ(fitCameraToImage(wide, 64, 36).yfov, 0.6f);
     // Square image: the horizontal field of view stays, so the vertical one grows to it.
     EXPECT_NEAR(std::tan(0.5f * fitCameraToImage(wide, 256, 256).yfov), tan_x, 1e-5f);
     // Portrait 9:16: the camera's long side spans the image's long side (its height).
@@ -215,6 +218,7 @@ TEST(CameraFit, OrthographicKeepsTheExtentOfTheViewsLongerSide) {
     iso.orthographic_half_height = 2.0f;
     iso.aspect_ratio = 2.0f;  // 8 x 4 units
     EXPECT_EQ(*fitCameraToImage(iso, 200, 100).orthographic_half_height, 2.0f);
+    EXPECT_EQ(*fitCameraToImage(iso, 63, 32).orthographic_half_height, 2.0f);  // 63 / 2 rounded
     EXPECT_FLOAT_EQ(*fitCameraToImage(iso, 100, 100).orthographic_half_height, 4.0f);  // 8 wide: 8 high
     EXPECT_FLOAT_EQ(*fitCameraToImage(iso, 100, 200).orthographic_half_height, 4.0f);  // 8 spans the height
     EXPECT_EQ(fitCameraToImage(iso, 100, 100).yfov, iso.yfov);

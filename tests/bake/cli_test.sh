@@ -123,6 +123,9 @@ PY
 expect 0 "a 16:9 camera rendered at 32 wide" "$sharcbake" render "$work/wide.gltf" -o "$work/wide.exr" --resolution 32 \
     --spp 1 --no-png
 grep -q "warning" "$work/err.txt" && fail "a width alone follows the camera's aspect: no warning expected"
+expect 0 "a 16:9 camera rendered at 100 wide (100x56, the height rounded)" "$sharcbake" render "$work/wide.gltf" \
+    -o "$work/wide.exr" --resolution 100 --spp 1 --no-png
+grep -q "warning" "$work/err.txt" && fail "a width alone, its height rounded to whole pixels: no warning expected"
 expect 0 "a 16:9 camera rendered square" "$sharcbake" render "$work/wide.gltf" -o "$work/wide.exr" --resolution 32x32 \
     --spp 1 --no-png
 says "$work/err.txt" "sensor fit Auto" "a square image of a 16:9 camera is fitted as Blender does, and said so"
