@@ -218,7 +218,7 @@ TEST(CameraFit, OrthographicKeepsTheExtentOfTheViewsLongerSide) {
     iso.orthographic_half_height = 2.0f;
     iso.aspect_ratio = 2.0f;  // 8 x 4 units
     EXPECT_EQ(*fitCameraToImage(iso, 200, 100).orthographic_half_height, 2.0f);
-    EXPECT_EQ(*fitCameraToImage(iso, 63, 32).orthographic_half_height, 2.0f);  // 63 / 2 rounded
+    EXPECT_EQ(*fitCameraToImage(iso, 63, 32).orthographic_half_height, 2.0f);          // 63 / 2 rounded
     EXPECT_FLOAT_EQ(*fitCameraToImage(iso, 100, 100).orthographic_half_height, 4.0f);  // 8 wide: 8 high
     EXPECT_FLOAT_EQ(*fitCameraToImage(iso, 100, 200).orthographic_half_height, 4.0f);  // 8 spans the height
     EXPECT_EQ(fitCameraToImage(iso, 100, 100).yfov, iso.yfov);
