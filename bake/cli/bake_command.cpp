@@ -528,13 +528,16 @@ Json hitRateJson(const HitRatePrediction& p) {
 }
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
-void warnAboutHitRate(const HitRatePrediction& p, const CoverageReport& coverage) {
+/// `deposits_at_finest`: every deposit went to the finest level (any region but bake-camera), so
+/// a point without a voxel there was never reached, whatever coarser voxels cover it.
+void warnAboutHitRate(const HitRatePrediction& p, const CoverageReport& coverage, bool deposits_at_finest) {
     constexpr double kWanted = 0.95;
     const ViewHitRate* worst = p.worst();
     if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
     char lowest[192] = "";
     if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
-    const char* remedy = coverage.unreached_area > 0.05
+    const double unreached = deposits_at_finest ? coverage.unreached_finest_area : coverage.unreached_area;
+    const char* remedy = unreached > 0.05
                              ? "The roaming camera never reached part of the surface: give more --iterations, a "
                                "--camera-path through the places the views see, or --camera-source gltf."
                              : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
@@ -962,8 +965,11 @@ private:
         std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n",
                     (unsigned long long)live_voxels_, 100.0 * occupancy(), baker_->cache().capacity(),
                     joined(written_levels_).c_str());
-        std::printf("  coverage: %.2f%% of the surface area never reached (%u points tested)\n",
-                    100.0 * coverage_.unreached_area, coverage_.points);
+        std::printf(
+            "  coverage: %.2f%% of the surface area has no voxel at any level, %.2f%% none at the finest "
+            "(level %u) (%u points tested)\n",
+            100.0 * coverage_.unreached_area, 100.0 * coverage_.unreached_finest_area, coverage_.finest_level,
+            coverage_.points);
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         for (const ViewHitRate& v : prediction_.views) {
             if (v.view.declared && v.eligible == 0) {
@@ -1018,8 +1024,9 @@ private:
         json.update({
             {"output", o_.output_path},
             {"checkpoint", checkpoint_path_.empty() ? Json(nullptr) : Json(checkpoint_path_)},
-            {"camera", {{"mode", job_.camera.path_file.empty() ? toString(job_.camera.source) : "file"},
-                        {"description", camera_description_}}},
+            {"camera",
+             {{"mode", job_.camera.path_file.empty() ? toString(job_.camera.source) : "file"},
+              {"description", camera_description_}}},
             {"settings", metadataJson(metadata(BakeOutcome{baker_->iterationsDone(), baker_->cache().capacity()}))},
             {"iterations", baker_->iterationsDone()},
             {"stop_reason", stop_reason_},
@@ -1042,7 +1049,11 @@ private:
             {"capacity", baker_->cache().capacity()},
             {"occupancy", jsonNumber(occupancy())},
             {"levels", written_levels_},
-            {"coverage", {{"points", coverage_.points}, {"unreached_area_fraction", coverage_.unreached_area}}},
+            {"coverage",
+             {{"points", coverage_.points},
+              {"unreached_area_fraction", coverage_.unreached_area},
+              {"unreached_finest_level_area_fraction", coverage_.unreached_finest_area},
+              {"finest_level", coverage_.finest_level}}},
             {"grid",
              {{"scene_scale", jsonNumber(job_.settings.sharc.grid.scene_scale)},
               {"log_base", jsonNumber(job_.settings.sharc.grid.logarithm_base)},
@@ -1060,14 +1071,16 @@ private:
     /// Warnings about what the cache lacks, then the exit code of a bake a signal stopped.
     void warnAndStop() const {
         const SharcCache& cache = baker_->cache();
-        warnAboutHitRate(prediction_, coverage_);
-        if (coverage_.unreached_area > 0.3) {
+        const bool deposits_at_finest = job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera;
+        warnAboutHitRate(prediction_, coverage_, deposits_at_finest);
+        const double unreached = deposits_at_finest ? coverage_.unreached_finest_area : coverage_.unreached_area;
+        if (unreached > 0.3) {
             // Not a stability problem, so not in that section, but the cache is missing much of the scene.
             std::fprintf(stderr,
                          "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
                          "tested; hidden sides count too): cameras that see it will miss. Give more --iterations, "
                          "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
-                         100.0 * coverage_.unreached_area, coverage_.points);
+                         100.0 * unreached, coverage_.points);
         }
         if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
         if (autoCapacity() && cache.numerics().failed_inserts > 0) {

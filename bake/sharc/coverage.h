@@ -21,6 +21,12 @@ std::vector<uint32_t> levelsPresent(const CacheData& data);
 struct CoverageReport {
     uint32_t points = 0;          ///< surface points tested (area-weighted)
     double unreached_area = 0.0;  ///< share of surface area in [0, 1] with no voxel at any level
+    /// Share of surface area with no voxel at the finest level the cache holds. A coarser voxel
+    /// summed from reached surface nearby covers a point no path reached, so where every
+    /// deposit goes to the finest level (the default view region) this is the area no path
+    /// reached; with `bake-camera` deposits go to other levels too and it counts more.
+    double unreached_finest_area = 0.0;
+    uint32_t finest_level = 0;    ///< that level (0: no levels)
     double total_area = 0.0;      ///< world units squared
 };
 
