@@ -24,20 +24,20 @@ mode = arguments[2] if len(arguments) > 2 else "diffuse"
 bpy.ops.object.select_all(action="SELECT")
 bpy.ops.object.delete()
 
-wall = bpy.data.materials.new("Wall")
-wall.use_nodes = True
-principled = wall.node_tree.nodes["Principled BSDF"]
-principled.inputs["Base Color"].default_value = (0.7, 0.7, 0.7, 1.0)
-principled.inputs["Specular"].default_value = 0.0
-principled.inputs["Roughness"].default_value = 1.0
 
-panel_material = bpy.data.materials.new("Panel")
-panel_material.use_nodes = True
-panel_principled = panel_material.node_tree.nodes["Principled BSDF"]
-panel_principled.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-panel_principled.inputs["Specular"].default_value = 0.0
-panel_principled.inputs["Emission"].default_value = (1.0, 0.9, 0.7, 1.0)
-panel_principled.inputs["Emission Strength"].default_value = 4.0
+def principled_material(name, **inputs):
+    """A material whose Principled BSDF has these inputs (names with spaces as underscores)."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    principled = material.node_tree.nodes["Principled BSDF"]
+    for key, value in inputs.items():
+        principled.inputs[key.replace("_", " ")].default_value = value
+    return material, principled
+
+
+wall, _ = principled_material("Wall", Base_Color=(0.7, 0.7, 0.7, 1.0), Specular=0.0, Roughness=1.0)
+panel_material, _ = principled_material("Panel", Base_Color=(0.0, 0.0, 0.0, 1.0), Specular=0.0,
+                                        Emission=(1.0, 0.9, 0.7, 1.0), Emission_Strength=4.0)
 
 bpy.ops.mesh.primitive_cube_add(size=1, location=(0, 0, 1.5))
 room = bpy.context.object
@@ -45,12 +45,7 @@ room.name = "Room"
 room.scale = (4, 5, 3)
 room.data.materials.append(wall)
 
-metal = bpy.data.materials.new("Metal")
-metal.use_nodes = True
-metal_principled = metal.node_tree.nodes["Principled BSDF"]
-metal_principled.inputs["Base Color"].default_value = (0.9, 0.6, 0.3, 1.0)
-metal_principled.inputs["Metallic"].default_value = 1.0
-metal_principled.inputs["Roughness"].default_value = 0.4
+metal, metal_principled = principled_material("Metal", Base_Color=(0.9, 0.6, 0.3, 1.0), Metallic=1.0, Roughness=0.4)
 metal_principled.distribution = "MULTI_GGX"
 
 bpy.ops.mesh.primitive_cube_add(size=1, location=(0.8, 1.0, 0.4))
