@@ -1360,7 +1360,9 @@ void registerBakeCommand(CLI::App& app) {
         ->capture_default_str()->check(CLI::Range(1u, 4096u));
     cmd->add_option("--iterations-per-leg", o->iterations_per_leg,
                     "Iterations between consecutive waypoints (gltf / path file)")->capture_default_str()->check(CLI::Range(1u, 1u << 20));
-    cmd->add_option("--coverage-points", o->coverage_points, "Surface points tested for the coverage report")
+    cmd->add_option("--coverage-points", o->coverage_points,
+                    "Surface points tested for the coverage report (the share of the surface with no voxel at any "
+                    "level, and with none at the finest level: the surface no update path reached)")
         ->capture_default_str();
     addSkyOptions(*cmd, o->sky);
     addSceneLimitOptions(*cmd, o->limits);
