@@ -528,16 +528,14 @@ Json hitRateJson(const HitRatePrediction& p) {
 }
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
-/// `deposits_at_finest`: every deposit went to the finest level (any region but bake-camera), so
-/// a point without a voxel there was never reached, whatever coarser voxels cover it.
-void warnAboutHitRate(const HitRatePrediction& p, const CoverageReport& coverage, bool deposits_at_finest) {
+/// `unreached_area`: the share of the surface no update path reached (see warnAndStop).
+void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
     constexpr double kWanted = 0.95;
     const ViewHitRate* worst = p.worst();
     if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
     char lowest[192] = "";
     if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
-    const double unreached = deposits_at_finest ? coverage.unreached_finest_area : coverage.unreached_area;
-    const char* remedy = unreached > 0.05
+    const char* remedy = unreached_area > 0.05
                              ? "The roaming camera never reached part of the surface: give more --iterations, a "
                                "--camera-path through the places the views see, or --camera-source gltf."
                              : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
@@ -1071,9 +1069,12 @@ private:
     /// Warnings about what the cache lacks, then the exit code of a bake a signal stopped.
     void warnAndStop() const {
         const SharcCache& cache = baker_->cache();
-        const bool deposits_at_finest = job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera;
-        warnAboutHitRate(prediction_, coverage_, deposits_at_finest);
-        const double unreached = deposits_at_finest ? coverage_.unreached_finest_area : coverage_.unreached_area;
+        // Every deposit goes to the finest level (any region but bake-camera), so a point without a
+        // voxel there was never reached, whatever coarser voxels cover it.
+        const double unreached = job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
+                                     ? coverage_.unreached_finest_area
+                                     : coverage_.unreached_area;
+        warnAboutHitRate(prediction_, unreached);
         if (unreached > 0.3) {
             // Not a stability problem, so not in that section, but the cache is missing much of the scene.
             std::fprintf(stderr,

@@ -148,25 +148,26 @@ std::string describeCamera(const Camera& camera) {
 
 void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, int height) {
     if (!camera.aspect_ratio) return;
-    if (camera.orthographic_half_height) {
-        if (*fitted.orthographic_half_height == *camera.orthographic_half_height) return;
-        std::fprintf(stderr,
-                     "warning: orthographic camera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as "
-                     "Blender's sensor fit Auto frames it (the view's longer side spans the image's longer side; %g "
-                     "high instead of %g). Give only the width (--resolution %d) for the camera's own frame\n",
-                     camera.name.c_str(), double(*camera.aspect_ratio), width, height, double(width) / double(height),
-                     2.0 * double(*fitted.orthographic_half_height), 2.0 * double(*camera.orthographic_half_height),
-                     width);
-        return;
+    // What the fit changed: an orthographic view's height, or the vertical field of view.
+    const bool orthographic = camera.orthographic_half_height.has_value();
+    const float before = orthographic ? *camera.orthographic_half_height : camera.yfov;
+    const float after = orthographic ? *fitted.orthographic_half_height : fitted.yfov;
+    if (after == before) return;
+    char change[160];
+    if (orthographic) {
+        std::snprintf(change, sizeof change, "the view's longer side spans the image's longer side; %g high instead of %g",
+                      2.0 * double(after), 2.0 * double(before));
+    } else {
+        std::snprintf(change, sizeof change,
+                      "the field of view of the camera's longer side spans the image's longer side; vertical field "
+                      "of view %.3g deg instead of %.3g",
+                      double(glm::degrees(after)), double(glm::degrees(before)));
     }
-    if (fitted.yfov == camera.yfov) return;
     std::fprintf(stderr,
-                 "warning: camera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
-                 "fit Auto frames it (the field of view of the camera's longer side spans the image's longer side; "
-                 "vertical field of view %.3g deg instead of %.3g). Give only the width (--resolution %d) for the "
-                 "camera's own frame\n",
-                 camera.name.c_str(), double(*camera.aspect_ratio), width, height, double(width) / double(height),
-                 double(glm::degrees(fitted.yfov)), double(glm::degrees(camera.yfov)), width);
+                 "warning: %scamera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
+                 "fit Auto frames it (%s). Give only the width (--resolution %d) for the camera's own frame\n",
+                 orthographic ? "orthographic " : "", camera.name.c_str(), double(*camera.aspect_ratio), width, height,
+                 double(width) / double(height), change, width);
 }
 
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,

@@ -101,9 +101,8 @@ void Baker::traceUpdatePaths(uint32_t work_iteration, std::vector<std::vector<De
             sample2DMany(draws.hashes.data(), draws.indices.data(), draws.hashes.size(), 0, draws.values.data());
             for (uint32_t block = first; block < last; ++block) {
                 // One random pixel (and sub-pixel position) per block, new every iteration: the
-                // sampler's dimension 0 (next2D from the start).
-                PixelSampler sampler(draws.hashes[block - first], draws.indices[block - first]);
-                sampler.startDimension(1);
+                // sampler's dimension 0.
+                const PixelSampler sampler(draws.hashes[block - first], draws.indices[block - first]);
                 const glm::vec2 u = draws.values[block - first] * float(stride);
                 const int x = std::min(settings_.width - 1, int((block % blocks_x_) * stride + uint32_t(u.x)));
                 const int y = std::min(settings_.height - 1, int((block / blocks_x_) * stride + uint32_t(u.y)));

@@ -31,31 +31,31 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
     report.total_area = surfaceArea(scene);
     const HashGridParameters& grid = cache.settings().grid;
 
-    const auto reachedAt = [&](glm::vec3 p, glm::vec3 n, uint32_t level) {
-        const ResolvedEntry* e = cache.findResolved(
-            hashGridKeyAtLevel(Float3{p.x, p.y, p.z}, Float3{n.x, n.y, n.z}, level, grid));
-        return e && e->weight > 0.0;
-    };
-    const auto reached = [&](glm::vec3 p, glm::vec3 n) {
-        return std::any_of(levels.begin(), levels.end(), [&](uint32_t level) { return reachedAt(p, n, level); });
+    // A voxel with samples at `level` on a side a camera can see (the front; the back too where
+    // the material is double-sided).
+    const auto reachedAt = [&](const SurfacePoint& point, uint32_t level) {
+        const auto has_voxel = [&](glm::vec3 n) {
+            const glm::vec3& p = point.position;
+            const ResolvedEntry* e =
+                cache.findResolved(hashGridKeyAtLevel(Float3{p.x, p.y, p.z}, Float3{n.x, n.y, n.z}, level, grid));
+            return e && e->weight > 0.0;
+        };
+        return has_voxel(point.normal) || (point.double_sided && has_voxel(-point.normal));
     };
     const uint32_t finest = levels.empty() ? 0 : *std::min_element(levels.begin(), levels.end());
     uint32_t unreached = 0, unreached_finest = 0;
     const std::vector<SurfacePoint> surface = sampleSurfacePoints(scene, points);
     for (const SurfacePoint& point : surface) {
-        if (!reached(point.position, point.normal) && !(point.double_sided && reached(point.position, -point.normal))) {
+        if (finest != 0 && reachedAt(point, finest)) continue;  // then at some level too
+        ++unreached_finest;
+        if (std::none_of(levels.begin(), levels.end(), [&](uint32_t level) { return reachedAt(point, level); })) {
             ++unreached;
-        }
-        if (finest != 0 && !reachedAt(point.position, point.normal, finest) &&
-            !(point.double_sided && reachedAt(point.position, -point.normal, finest))) {
-            ++unreached_finest;
         }
     }
     report.points = uint32_t(surface.size());
     report.finest_level = finest;
     report.unreached_area = surface.empty() ? 0.0 : double(unreached) / double(surface.size());
-    report.unreached_finest_area = surface.empty() || finest == 0 ? report.unreached_area
-                                                                  : double(unreached_finest) / double(surface.size());
+    report.unreached_finest_area = surface.empty() ? 0.0 : double(unreached_finest) / double(surface.size());
     return report;
 }
 

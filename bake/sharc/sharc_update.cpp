@@ -145,7 +145,8 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
     counters.segments += count;
 
     // The samples of the vertices found: the dimensions sampler.next2D would give, drawn for the
-    // batch at once (sample_batch.h).
+    // batch at once (sample_batch.h). Two pairs for the shading, two for the next direction.
+    static_assert(PathTracer::kDimensionsPerBounce == 4, "dimension .. dimension + 3 are this bounce's");
     const uint32_t dimension = PathTracer::kFirstBounceDimension + bounce * PathTracer::kDimensionsPerBounce;
     sample_paths_.clear();
     for (size_t i = 0; i < count; ++i) {

@@ -42,8 +42,8 @@ struct UpdateCounters {
     UpdateCounters& operator+=(const UpdateCounters& other);
 };
 
-/// Where an update path starts: its camera ray and its sampler (already past the dimensions
-/// that picked the pixel).
+/// Where an update path starts: its camera ray and its sampler (dimension 0 picked the pixel;
+/// bounce b draws PathTracer::kDimensionsPerBounce pairs from kFirstBounceDimension + 4b).
 struct UpdatePathStart {
     Ray camera_ray;
     PixelSampler sampler;

@@ -9,6 +9,15 @@
 #include <cmath>
 
 namespace sharcbake {
+namespace {
+
+/// Half the view's height at unit distance: tan of half the field of view, or an orthographic
+/// camera's half height (its rays are parallel: no distance).
+float halfViewHeight(const Camera& camera) {
+    return camera.orthographic_half_height ? *camera.orthographic_half_height : std::tan(0.5f * camera.yfov);
+}
+
+}  // namespace
 
 Camera fitCameraToImage(Camera camera, int width, int height) {
     if (!camera.aspect_ratio || !(*camera.aspect_ratio > 0.0f) || width <= 0 || height <= 0) return camera;
@@ -20,10 +29,8 @@ Camera fitCameraToImage(Camera camera, int width, int height) {
         std::abs(float(height) * camera_aspect - float(width)) <= 0.5f) {
         return camera;
     }
-    // Half the view's height (tan of half the field of view, or an orthographic half height),
-    // then along the camera's larger dimension ("the sensor").
-    const float half_y = camera.orthographic_half_height ? *camera.orthographic_half_height
-                                                         : std::tan(0.5f * camera.yfov);
+    // Half the view along the camera's larger dimension ("the sensor").
+    const float half_y = halfViewHeight(camera);
     const float sensor = camera_aspect >= 1.0f ? half_y * camera_aspect : half_y;
     // Auto fit: the sensor spans the image's larger dimension.
     const float fitted = image_aspect >= 1.0f ? sensor / image_aspect : sensor;
@@ -42,7 +49,7 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
     right_ = glm::normalize(glm::cross(forward_, camera.up));
     up_ = glm::cross(right_, forward_);
     orthographic_ = camera.orthographic_half_height.has_value();
-    half_y_ = orthographic_ ? *camera.orthographic_half_height : std::tan(0.5f * camera.yfov);
+    half_y_ = halfViewHeight(camera);
     aspect_ = float(width) / float(height);
 }
 
