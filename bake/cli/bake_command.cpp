@@ -215,6 +215,12 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                        ? "; faces' winding ignored: it puts a glTF camera, or every point, inside a solid"
                        : "") +
                   ")";
+    if (explored.views_around > 0) {
+        description += ", and " + std::to_string(explored.views_around) +
+                       " views from around the scene (it has no camera, and " +
+                       std::to_string(int(std::lround(100.0f * explored.escaped_fraction))) +
+                       "% of the probe rays from those points leave it)";
+    }
     return std::move(*path);
 }
 
@@ -1347,8 +1353,9 @@ void registerBakeCommand(CLI::App& app) {
                     "window:A (SHaRC's exponential window of A iterations) or average")
         ->capture_default_str();
     cmd->add_option("--camera-source", o->camera_source_name,
-                    "Where the roaming camera goes: explore (free space reachable from the glTF cameras) "
-                    "or gltf (along the glTF cameras)")
+                    "Where the roaming camera goes: explore (free space reachable from the glTF cameras; a "
+                    "scene without cameras that is open around, such as a lone model, is also looked at from "
+                    "around it) or gltf (along the glTF cameras)")
         ->capture_default_str()
         ->check(CLI::IsMember({"explore", "gltf"}))
         ->each([o](const std::string& name) {
@@ -1357,8 +1364,11 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--camera-path", o->camera_path,
                     "Camera path file (overrides --camera-source): one waypoint per line, "
                     "\"px py pz tx ty tz [fov_degrees]\", '#' comments");
-    cmd->add_option("--explore-points", o->explore_points, "Free-space points the exploring camera visits")
-        ->capture_default_str()->check(CLI::Range(1u, 4096u));
+    cmd->add_option("--explore-points", o->explore_points,
+                    "Free-space points the exploring camera visits (and as many views from around an open scene "
+                    "without cameras)")
+        ->capture_default_str()
+        ->check(CLI::Range(1u, 4096u));
     cmd->add_option("--iterations-per-leg", o->iterations_per_leg,
                     "Iterations between consecutive waypoints (gltf / path file)")->capture_default_str()->check(CLI::Range(1u, 1u << 20));
     cmd->add_option("--coverage-points", o->coverage_points,

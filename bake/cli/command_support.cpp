@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "cli/command_support.h"
 
+#include "sharc/camera_path.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene_loader.h"
 
@@ -123,9 +124,8 @@ Camera sceneCamera(const Scene& scene, const std::string& selector, const std::s
     c.name = "automatic";
     c.yfov = glm::radians(fov_degrees);
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
-    const float radius = std::max(0.5f * glm::length(scene.bounds_max - scene.bounds_min), 1e-3f);
     const glm::vec3 toward_camera = glm::normalize(glm::vec3(0.45f, 0.55f, 1.0f));
-    c.position = center + toward_camera * (1.1f * radius / std::sin(0.5f * c.yfov));
+    c.position = center + toward_camera * framingDistance(scene, c.yfov);
     c.forward = -toward_camera;
     c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
     return c;

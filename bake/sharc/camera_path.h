@@ -62,7 +62,28 @@ struct ExplorationResult {
     uint32_t candidates = 0;        ///< points tried
     uint32_t free = 0;              ///< not inside geometry
     bool winding_ignored = false;   ///< faces' winding did not tell solids from free space: not used
+    /// The share of the probe rays from `points` that leave the scene without a hit: near 0 in a
+    /// closed room, most of them around an object under the sky.
+    float escaped_fraction = 0.0f;
+    uint32_t views_around = 0;  ///< views from around the scene added to the path (exploringCameraPath)
 };
+
+/// Above this share of escaping probe rays the space the exploration found is open, as around a
+/// lone object, and a scene without cameras is seen from outside (exploringCameraPath).
+inline constexpr float kOpenSceneEscapedFraction = 0.5f;
+
+/// The radius of the sphere around the scene's bounds (at least 1e-3).
+float boundingRadius(const Scene& scene);
+
+/// The distance from the centre of the scene's bounds at which a camera of vertical field of view
+/// `yfov` sees the whole bounding sphere with a 10% margin (where `render` puts its automatic
+/// camera).
+float framingDistance(const Scene& scene, float yfov);
+
+/// `count` views of the scene from around it, spread evenly over the sphere of 1.5 bounding radii
+/// (a spherical Fibonacci set), each looking at the centre of the bounds with a 45-degree field
+/// of view.
+std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count);
 
 /// Finds up to `count` positions inside the scene's bounds that are not inside geometry and are
 /// reachable, by unoccluded straight segments, from `starts` (when none of them is in free
@@ -78,11 +99,13 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
 /// The camera of each bake iteration.
 class CameraPath {
 public:
-    /// Waypoints visited as a loop. With `random_directions` the camera looks in a new random
-    /// direction every iteration (exploration); otherwise it looks where the waypoints look,
-    /// moving between consecutive waypoints over `iterations_per_leg` iterations.
+    /// Waypoints visited as a loop. With `random_directions` the camera visits one waypoint per
+    /// iteration and looks in a new random direction each time (exploration), except at the
+    /// waypoints `aimed` marks (empty: none), which keep their own direction; otherwise it looks
+    /// where the waypoints look, moving between consecutive waypoints over `iterations_per_leg`
+    /// iterations.
     CameraPath(std::vector<CameraPose> waypoints, bool random_directions, uint32_t iterations_per_leg,
-               float position_jitter, uint32_t seed);
+               float position_jitter, uint32_t seed, std::vector<bool> aimed = {});
 
     /// The pose of bake iteration `iteration`, including its jitter (a pure function of the
     /// iteration and the seed).
@@ -92,6 +115,7 @@ public:
 
 private:
     std::vector<CameraPose> waypoints_;
+    std::vector<bool> aimed_;
     bool random_directions_;
     uint32_t iterations_per_leg_;
     float position_jitter_;
@@ -100,7 +124,9 @@ private:
 
 /// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's
 /// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
-/// new random direction. std::nullopt when no free space was found; `explored` (if given)
+/// new random direction. A scene without cameras whose free space is open (escaped_fraction at
+/// least kOpenSceneEscapedFraction) is also looked at from outside: as many views from around it
+/// (viewsAroundScene), which keep their direction, alternate with the free-space positions. std::nullopt when no free space was found; `explored` (if given)
 /// receives the search's counts either way.
 std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
                                               uint32_t seed, ExplorationResult* explored = nullptr);
