@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/camera_path.h"
 
+#include "tracing/distribution.h"
 #include "tracing/sampling.h"
 
 #include <algorithm>
@@ -31,11 +32,11 @@ float hashToUnitFloat(uint32_t seed, uint32_t a, uint32_t b) {
 constexpr int kProbeCount = 14;
 
 /// Views from around an open scene look from this many radii of its bounding sphere, just outside
-/// it (so never inside geometry), with a 45-degree field of view: the middle of the scene fills
-/// the whole image, so every update path meets the surface, and the views' many directions see
-/// all of it. Measured on a lone model under a sky (Blender's Suzanne, 512 iterations; BENCHMARKS.md,
-/// "Level coverage"), against views that frame the whole bounding sphere as render's automatic
-/// camera does: 99.7% of the predicted lookups answered instead of 98.2%.
+/// it (so never inside geometry), with a 45-degree field of view, at points of the surface: the
+/// surface fills most of each image, so most update paths meet it, and the views' many
+/// directions see all of it. Measured on lone models under a sky (BENCHMARKS.md, "A lone model
+/// without a camera") against views that frame the whole bounding sphere as render's automatic
+/// camera does, and against views aimed at the centre.
 constexpr float kViewsAroundDistance = 1.5f;
 glm::vec3 probeDirection(int i) {
     static const glm::vec3 kDirections[kProbeCount] = {
@@ -246,20 +247,35 @@ float boundingRadius(const Scene& scene) {
 
 float framingDistance(const Scene& scene, float yfov) { return 1.1f * boundingRadius(scene) / std::sin(0.5f * yfov); }
 
-std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count) {
+std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uint32_t seed) {
+    std::vector<CameraPose> poses;
+    if (scene.triangles.empty()) return poses;
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
     const float distance = kViewsAroundDistance * boundingRadius(scene);
     constexpr float kYfov = 0.25f * kPi;
-    std::vector<CameraPose> poses;
+    // Each view looks at a point of the surface, drawn by area: a thin or sparse model leaves
+    // most of a view aimed at the centre empty.
+    std::vector<float> areas(scene.triangles.size());
+    for (size_t t = 0; t < areas.size(); ++t) {
+        const glm::uvec3 tri = scene.triangles[t];
+        areas[t] = 0.5f * glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
+                                                 scene.positions[tri.z] - scene.positions[tri.x]));
+    }
+    const Distribution1D by_area(areas);
     for (uint32_t i = 0; i < count; ++i) {
         // Spherical Fibonacci: even heights, golden-angle turns; no two views alike, none
-        // exactly along an axis (so no view is straight down, where +Y up would be ill-defined).
+        // exactly along an axis.
         const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(count);
         const float ring = std::sqrt(std::max(0.0f, 1.0f - y * y));
         const float turn = 2.39996323f * float(i);
         const glm::vec3 direction(ring * std::cos(turn), y, ring * std::sin(turn));
+        float u = hashToUnitFloat(seed, i, 30);
+        const glm::uvec3 tri = scene.triangles[by_area.sampleDiscrete(u, &u)];
+        const glm::vec2 b = sampleUniformTriangle({u, hashToUnitFloat(seed, i, 31)});
+        const glm::vec3 target = (1.0f - b.x - b.y) * scene.positions[tri.x] + b.x * scene.positions[tri.y] +
+                                 b.y * scene.positions[tri.z];
         CameraPose pose;
-        if (makeLookAtPose(center + distance * direction, center, kYfov, pose)) poses.push_back(pose);
+        if (makeLookAtPose(center + distance * direction, target, kYfov, pose)) poses.push_back(pose);
     }
     return poses;
 }
@@ -324,7 +340,7 @@ std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene&
     // there without a voxel at the finest level.
     std::vector<CameraPose> around;
     if (!starts_are_cameras && result.escaped_fraction >= kOpenSceneEscapedFraction) {
-        around = viewsAroundScene(scene, uint32_t(result.points.size()));
+        around = viewsAroundScene(scene, uint32_t(result.points.size()), seed);
     }
     result.views_around = uint32_t(around.size());
     if (explored) *explored = result;

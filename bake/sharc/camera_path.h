@@ -81,9 +81,9 @@ float boundingRadius(const Scene& scene);
 float framingDistance(const Scene& scene, float yfov);
 
 /// `count` views of the scene from around it, spread evenly over the sphere of 1.5 bounding radii
-/// (a spherical Fibonacci set), each looking at the centre of the bounds with a 45-degree field
-/// of view.
-std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count);
+/// around the centre of its bounds (a spherical Fibonacci set), each looking with a 45-degree
+/// field of view at a point of the surface drawn by area (deterministic for a seed).
+std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uint32_t seed);
 
 /// Finds up to `count` positions inside the scene's bounds that are not inside geometry and are
 /// reachable, by unoccluded straight segments, from `starts` (when none of them is in free
