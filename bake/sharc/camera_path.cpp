@@ -45,6 +45,15 @@ glm::vec3 probeDirection(int i) {
     return glm::normalize(kDirections[i]);
 }
 
+/// What the probe rays from a point say about it.
+struct FreeSpaceProbe {
+    bool free = false;
+    /// Free, and known to be rather than assumed: a probe left the scene (no closed surface holds
+    /// the point) or single-sided faces voted. Where every probe meets double-sided faces, a
+    /// point inside a closed object looks just like one inside a closed room.
+    bool known = false;
+};
+
 /// A point is in free space when most probe rays that hit a single-sided surface hit its front
 /// (the side its winding faces): inside a closed solid every ray sees back faces. A double-sided
 /// surface has no inside in glTF (both sides are seen and lit, as in a room modelled from a cube
@@ -52,14 +61,17 @@ glm::vec3 probeDirection(int i) {
 /// point is then free when no surface is nearer than `clearance`, and reachability from the
 /// starts (exploreFreeSpace) keeps the space inside closed objects out of the path. Points
 /// closer to any surface than `clearance` are rejected so the camera does not sit on a wall.
-bool isFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, bool use_winding) {
-    int votes = 0, back_votes = 0;
+FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, bool use_winding) {
+    int votes = 0, back_votes = 0, escaped = 0;
     const Scene& scene = tracer.scene();
     for (int i = 0; i < kProbeCount; ++i) {
         const glm::vec3 d = probeDirection(i);
         RayHit hit;
-        if (!tracer.intersect(Ray{p, d}, hit)) continue;
-        if (hit.t < clearance) return false;
+        if (!tracer.intersect(Ray{p, d}, hit)) {
+            ++escaped;
+            continue;
+        }
+        if (hit.t < clearance) return {};
         if (!use_winding || scene.materials[scene.triangle_materials[hit.triangle]].double_sided) continue;
         const glm::uvec3 tri = scene.triangles[hit.triangle];
         const glm::vec3 n = glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
@@ -67,7 +79,8 @@ bool isFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, bool use_wi
         ++votes;
         if (glm::dot(n, d) > 0.0f) ++back_votes;
     }
-    return votes == 0 || 2 * back_votes < votes;
+    const bool free = votes == 0 || 2 * back_votes < votes;
+    return {free, free && (escaped > 0 || votes > 0)};
 }
 
 /// How many of the probe rays from `p` leave the scene without a hit.
@@ -169,24 +182,29 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
 
     // Candidates: the starts first, then stratified random points (8x more than needed).
     std::vector<glm::vec3> free_points;
-    std::vector<bool> is_start;
+    std::vector<bool> is_start, is_known;
     const auto collect = [&](bool use_winding) {
         free_points.clear();
         is_start.clear();
+        is_known.clear();
         for (const glm::vec3& s : starts) {
             ++result.candidates;
-            if (starts_are_cameras || isFreeSpace(tracer, s, 0.0f, use_winding)) {
+            const FreeSpaceProbe probe = probeFreeSpace(tracer, s, 0.0f, use_winding);
+            if (starts_are_cameras || probe.free) {
                 free_points.push_back(s);
                 is_start.push_back(true);
+                is_known.push_back(starts_are_cameras || probe.known);
             }
         }
         for (uint32_t i = 0; i < 8 * count; ++i) {
             const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
             const glm::vec3 p = center + (2.0f * u - 1.0f) * half;
             ++result.candidates;
-            if (isFreeSpace(tracer, p, clearance, use_winding)) {
+            const FreeSpaceProbe probe = probeFreeSpace(tracer, p, clearance, use_winding);
+            if (probe.free) {
                 free_points.push_back(p);
                 is_start.push_back(false);
+                is_known.push_back(probe.known);
             }
         }
     };
@@ -196,7 +214,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     // them): it is ignored, and clearance and reachability decide alone.
     bool use_winding = true;
     if (starts_are_cameras) {
-        for (const glm::vec3& s : starts) use_winding = use_winding && isFreeSpace(tracer, s, 0.0f, true);
+        for (const glm::vec3& s : starts) use_winding = use_winding && probeFreeSpace(tracer, s, 0.0f, true).free;
     }
     collect(use_winding);
     if (use_winding && free_points.empty()) {
@@ -220,13 +238,19 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
             if (root(a) != root(b) && visible(tracer, free_points[a], free_points[b])) parent[root(b)] = root(a);
         }
     }
-    // Keep the sets that hold a start; with no start in free space, keep the largest set.
+    // Keep the sets that hold a camera. Without cameras, the start is only the centre of the
+    // bounds, which may lie inside a closed double-sided object (Blender's default material is
+    // double-sided), whose inside looks free: keep the sets where free space is known instead,
+    // else the centre's set. With neither, keep the largest set.
     std::vector<bool> keep_root(n, false);
-    bool any_start = false;
+    bool any_kept = false;
     for (size_t i = 0; i < n; ++i) {
-        if (is_start[i]) keep_root[root(i)] = any_start = true;
+        if (starts_are_cameras ? is_start[i] : is_known[i]) keep_root[root(i)] = any_kept = true;
     }
-    if (!any_start) {
+    for (size_t i = 0; i < n && !any_kept; ++i) {
+        if (is_start[i]) keep_root[root(i)] = any_kept = true;
+    }
+    if (!any_kept) {
         std::vector<size_t> size(n, 0);
         for (size_t i = 0; i < n; ++i) ++size[root(i)];
         keep_root[size_t(std::max_element(size.begin(), size.end()) - size.begin())] = true;

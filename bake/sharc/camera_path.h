@@ -86,13 +86,16 @@ float framingDistance(const Scene& scene, float yfov);
 std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uint32_t seed);
 
 /// Finds up to `count` positions inside the scene's bounds that are not inside geometry and are
-/// reachable, by unoccluded straight segments, from `starts` (when none of them is in free
-/// space, the largest connected set wins). Inside geometry means behind the single-sided faces
-/// most probe rays hit; double-sided faces have no inside. With `starts_are_cameras` (the
-/// scene's glTF cameras) the starts are free space by definition. If one of those cameras is
-/// behind single-sided faces, or no point is free at all, the winding cannot be trusted and is
-/// ignored for the whole scene (`winding_ignored`): then only the clearance from surfaces and
-/// reachability decide. Deterministic for a given seed.
+/// reachable, by unoccluded straight segments, from `starts`. Inside geometry means behind the
+/// single-sided faces most probe rays hit; double-sided faces have no inside. With
+/// `starts_are_cameras` (the scene's glTF cameras) the starts are free space by definition, and
+/// the connected sets holding them are kept. Otherwise the start (the centre of the bounds) may
+/// lie inside a closed double-sided object, whose inside looks free, so the sets kept are those
+/// where free space is known (a probe ray left the scene, or single-sided faces said so); where
+/// none is, the start's set, else the largest set. If a camera is behind single-sided faces, or
+/// no point is free at all, the winding cannot be trusted and is ignored for the whole scene
+/// (`winding_ignored`): then only the clearance from surfaces and reachability decide.
+/// Deterministic for a given seed.
 ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts, bool starts_are_cameras,
                                    uint32_t count, uint32_t seed);
 

@@ -52,7 +52,7 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
     case ViewRegion::Kind::FreeSpace:
     case ViewRegion::Kind::Distance:
     case ViewRegion::Kind::BakeCamera:
-        points = exploreFreeSpace(tracer, starts, true, samples, seed ^ 0x5EED0001u).points;
+        points = exploreFreeSpace(tracer, starts, !starts.empty(), samples, seed ^ 0x5EED0001u).points;
         break;
     case ViewRegion::Kind::Points:
         for (uint32_t i = 0; i < samples && !region.points.empty(); ++i) {

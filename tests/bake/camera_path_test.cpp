@@ -163,6 +163,35 @@ Scene loadTable(const test::TempDir& dir, bool camera) {
     return scene;
 }
 
+TEST(ExploreFreeSpace, TheInsideOfAClosedDoubleSidedObjectIsNotExplored) {
+    // Blender's default material is double-sided. A closed T of two boxes without a camera: the
+    // centre of its bounds lies inside the bar, and with no single-sided face to vote, its inside
+    // looked free; the path was the inside of the T, and nothing outside got a voxel.
+    constexpr glm::vec3 kBarMin{0.0f, 0.8f, 0.0f}, kBarMax{3.0f, 2.0f, 1.0f};
+    constexpr glm::vec3 kStemMin{1.0f, 0.0f, 0.0f}, kStemMax{2.0f, 0.8f, 1.0f};
+    test::TempDir dir;
+    test::GltfBuilder gltf;
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    addBox(positions, indices, kBarMin, kBarMax, false);
+    addBox(positions, indices, kStemMin, kStemMax, false);
+    const int material = gltf.addMaterial({{"doubleSided", true}});
+    const int mesh = gltf.addMesh(
+        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
+                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
+                                {"material", material}}}));
+    gltf.setScene({gltf.addNode({{"mesh", mesh}})});
+    const Scene scene = loadGltf(gltf.writeEmbedded(dir, "t.gltf"));
+    const Explored e = explore(scene);
+    ASSERT_TRUE(e.has_path);
+    EXPECT_GE(e.result.points.size(), 16u);
+    for (const glm::vec3& p : e.result.points) {
+        EXPECT_FALSE(inside(p, kBarMin, kBarMax) || inside(p, kStemMin, kStemMax))
+            << "(" << p.x << ", " << p.y << ", " << p.z << ")";
+    }
+    EXPECT_EQ(e.result.views_around, e.result.points.size());  // open around: seen from outside too
+}
+
 TEST(ViewsAroundScene, LookAtTheSurfaceFromJustOutsideTheBoundingSphere) {
     test::TempDir dir;
     const Scene scene = loadTable(dir, false);
