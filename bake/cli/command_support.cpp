@@ -117,18 +117,7 @@ Camera sceneCamera(const Scene& scene, const std::string& selector, const std::s
                                            (names.empty() ? "it has none" : "it has " + names) + ")");
     }
     if (!scene.cameras.empty()) return scene.cameras.front();
-    // Frame the bounding sphere with the given field of view from the front, to the right and
-    // above (26.5 degrees of elevation, 24 of azimuth): no axis-aligned plane of a glTF scene
-    // (+Y up) is seen edge-on, so a lone floor or wall is never a black line.
-    Camera c;
-    c.name = "automatic";
-    c.yfov = glm::radians(fov_degrees);
-    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
-    const glm::vec3 toward_camera = glm::normalize(glm::vec3(0.45f, 0.55f, 1.0f));
-    c.position = center + toward_camera * framingDistance(scene, c.yfov);
-    c.forward = -toward_camera;
-    c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
-    return c;
+    return automaticCamera(scene, glm::radians(fov_degrees));
 }
 
 std::string describeCamera(const Camera& camera) {

@@ -271,6 +271,18 @@ float boundingRadius(const Scene& scene) {
 
 float framingDistance(const Scene& scene, float yfov) { return 1.1f * boundingRadius(scene) / std::sin(0.5f * yfov); }
 
+Camera automaticCamera(const Scene& scene, float yfov) {
+    Camera c;
+    c.name = "automatic";
+    c.yfov = yfov;
+    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
+    const glm::vec3 toward_camera = glm::normalize(glm::vec3(0.45f, 0.55f, 1.0f));
+    c.position = center + toward_camera * framingDistance(scene, c.yfov);
+    c.forward = -toward_camera;
+    c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
+    return c;
+}
+
 std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uint32_t seed) {
     std::vector<CameraPose> poses;
     if (scene.triangles.empty()) return poses;

@@ -80,6 +80,12 @@ float boundingRadius(const Scene& scene);
 /// camera).
 float framingDistance(const Scene& scene, float yfov);
 
+/// The camera `render` uses for a scene without one: it frames the bounding sphere with vertical
+/// field of view `yfov` (radians) from the front, to the right and above (26.5 degrees of
+/// elevation, 24 of azimuth), so no axis-aligned plane of a glTF scene (+Y up) is seen edge-on.
+/// Named "automatic".
+Camera automaticCamera(const Scene& scene, float yfov);
+
 /// `count` views of the scene from around it, spread evenly over the sphere of 1.5 bounding radii
 /// around the centre of its bounds (a spherical Fibonacci set), each looking with a 45-degree
 /// field of view at a point of the surface drawn by area (deterministic for a seed).

@@ -19,7 +19,9 @@ namespace sharcbake {
 /// A camera to predict from; its name says which ("camera 'Main'", "region sample 3").
 struct PredictionView {
     Camera camera;
-    bool declared = false;  ///< a camera the scene or the user declared (not a region sample)
+    /// A camera the scene or the user declared, or render's automatic camera of a scene without
+    /// one (not a region sample): reported one by one.
+    bool declared = false;
 };
 
 struct ViewHitRate {
@@ -38,8 +40,9 @@ struct HitRatePrediction {
     const ViewHitRate* worst() const;
 };
 
-/// Views to predict from: the scene's glTF cameras (declared), and `samples` viewpoints of the
-/// region looking in hashed directions: free-space points reachable from the cameras for
+/// Views to predict from: the scene's glTF cameras (declared; without any, render's automatic
+/// camera, unless the region is points or a box), and `samples` viewpoints of the region looking
+/// in hashed directions: free-space points reachable from the cameras for
 /// FreeSpace and Distance, the region's points, random points of its box. Deterministic.
 std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
                                             uint32_t seed);

@@ -6,6 +6,7 @@
 #include "sharc/camera_path.h"
 #include "sharc/baker.h"
 #include "sharc/coverage.h"
+#include "sharc/hit_rate.h"
 #include "sharcbake/scene_loader.h"
 #include "tracing/lights.h"
 #include "tracing/tracer.h"
@@ -190,6 +191,29 @@ TEST(ExploreFreeSpace, TheInsideOfAClosedDoubleSidedObjectIsNotExplored) {
             << "(" << p.x << ", " << p.y << ", " << p.z << ")";
     }
     EXPECT_EQ(e.result.views_around, e.result.points.size());  // open around: seen from outside too
+}
+
+TEST(PredictionViews, ASceneWithoutCamerasIsAlsoPredictedFromRendersAutomaticCamera) {
+    test::TempDir dir;
+    const Scene lone = loadTable(dir, false);
+    const Tracer lone_tracer(lone);
+    const std::vector<PredictionView> views = predictionViews(lone_tracer, ViewRegion{}, 8, 1);
+    ASSERT_FALSE(views.empty());
+    const Camera automatic = automaticCamera(lone, glm::radians(45.0f));
+    EXPECT_TRUE(views.front().declared);
+    EXPECT_EQ(views.front().camera.position, automatic.position);
+    EXPECT_EQ(views.front().camera.forward, automatic.forward);
+    EXPECT_FLOAT_EQ(views.front().camera.yfov, automatic.yfov);
+    // It sees the whole table: the automatic camera frames the bounding sphere.
+    EXPECT_NEAR(glm::distance(automatic.position, 0.5f * (lone.bounds_min + lone.bounds_max)),
+                framingDistance(lone, automatic.yfov), 1e-4f);
+    // A scene with a camera is predicted from it instead.
+    const Scene with_camera = loadTable(dir, true);
+    const Tracer tracer(with_camera);
+    const std::vector<PredictionView> camera_views = predictionViews(tracer, ViewRegion{}, 8, 1);
+    ASSERT_FALSE(camera_views.empty());
+    EXPECT_EQ(camera_views.front().camera.position, with_camera.cameras.front().position);
+    for (const PredictionView& v : camera_views) EXPECT_EQ(v.camera.name.find("automatic"), std::string::npos);
 }
 
 TEST(ViewsAroundScene, LookAtTheSurfaceFromJustOutsideTheBoundingSphere) {
