@@ -30,14 +30,6 @@ float hashToUnitFloat(uint32_t seed, uint32_t a, uint32_t b) {
 
 /// Axis directions plus the eight diagonals: enough to tell a closed solid from open space.
 constexpr int kProbeCount = 14;
-
-/// Views from around an open scene look from this many radii of its bounding sphere, just outside
-/// it (so never inside geometry), with a 45-degree field of view, at points of the surface: the
-/// surface fills most of each image, so most update paths meet it, and the views' many
-/// directions see all of it. Measured on lone models under a sky (BENCHMARKS.md, "A lone model
-/// without a camera") against views that frame the whole bounding sphere as render's automatic
-/// camera does, and against views aimed at the centre.
-constexpr float kViewsAroundDistance = 1.5f;
 glm::vec3 probeDirection(int i) {
     static const glm::vec3 kDirections[kProbeCount] = {
         {1, 0, 0},  {-1, 0, 0}, {0, 1, 0},   {0, -1, 0},  {0, 0, 1},   {0, 0, -1},  {1, 1, 1},
@@ -52,6 +44,7 @@ struct FreeSpaceProbe {
     /// the point) or single-sided faces voted. Where every probe meets double-sided faces, a
     /// point inside a closed object looks just like one inside a closed room.
     bool known = false;
+    int escaped = 0;  ///< probe rays that left the scene
 };
 
 /// A point is in free space when most probe rays that hit a single-sided surface hit its front
@@ -80,17 +73,7 @@ FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance
         if (glm::dot(n, d) > 0.0f) ++back_votes;
     }
     const bool free = votes == 0 || 2 * back_votes < votes;
-    return {free, free && (escaped > 0 || votes > 0)};
-}
-
-/// How many of the probe rays from `p` leave the scene without a hit.
-int escapingProbes(const Tracer& tracer, glm::vec3 p) {
-    int escaped = 0;
-    for (int i = 0; i < kProbeCount; ++i) {
-        RayHit hit;
-        escaped += !tracer.intersect(Ray{p, probeDirection(i)}, hit);
-    }
-    return escaped;
+    return {free, free && (escaped > 0 || votes > 0), escaped};
 }
 
 bool visible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
@@ -183,10 +166,12 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     // Candidates: the starts first, then stratified random points (8x more than needed).
     std::vector<glm::vec3> free_points;
     std::vector<bool> is_start, is_known;
+    std::vector<int> escaped;  // per free point
     const auto collect = [&](bool use_winding) {
         free_points.clear();
         is_start.clear();
         is_known.clear();
+        escaped.clear();
         for (const glm::vec3& s : starts) {
             ++result.candidates;
             const FreeSpaceProbe probe = probeFreeSpace(tracer, s, 0.0f, use_winding);
@@ -194,6 +179,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
                 free_points.push_back(s);
                 is_start.push_back(true);
                 is_known.push_back(starts_are_cameras || probe.known);
+                escaped.push_back(probe.escaped);
             }
         }
         for (uint32_t i = 0; i < 8 * count; ++i) {
@@ -205,6 +191,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
                 free_points.push_back(p);
                 is_start.push_back(false);
                 is_known.push_back(probe.known);
+                escaped.push_back(probe.escaped);
             }
         }
     };
@@ -255,13 +242,14 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
         for (size_t i = 0; i < n; ++i) ++size[root(i)];
         keep_root[size_t(std::max_element(size.begin(), size.end()) - size.begin())] = true;
     }
+    uint64_t escaped_probes = 0;
     for (size_t i = 0; i < n && result.points.size() < count; ++i) {
-        if (keep_root[root(i)]) result.points.push_back(free_points[i]);
+        if (!keep_root[root(i)]) continue;
+        result.points.push_back(free_points[i]);
+        escaped_probes += uint64_t(escaped[i]);
     }
-    uint64_t escaped = 0;
-    for (const glm::vec3& p : result.points) escaped += uint64_t(escapingProbes(tracer, p));
     if (!result.points.empty())
-        result.escaped_fraction = float(double(escaped) / double(result.points.size() * kProbeCount));
+        result.escaped_fraction = float(double(escaped_probes) / double(result.points.size() * kProbeCount));
     return result;
 }
 
@@ -282,6 +270,16 @@ Camera automaticCamera(const Scene& scene, float yfov) {
     c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
     return c;
 }
+
+namespace {
+/// Views from around an open scene look from this many radii of its bounding sphere, just outside
+/// it (so never inside geometry), with a 45-degree field of view, at points of the surface: the
+/// surface fills most of each image, so most update paths meet it, and the views' many
+/// directions see all of it. Measured on lone models under a sky (BENCHMARKS.md, "A lone model
+/// without a camera") against views that frame the whole bounding sphere as render's automatic
+/// camera does, and against views aimed at the centre.
+constexpr float kViewsAroundDistance = 1.5f;
+}  // namespace
 
 std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uint32_t seed) {
     std::vector<CameraPose> poses;
