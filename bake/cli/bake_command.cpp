@@ -539,8 +539,30 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
     constexpr double kWanted = 0.95;
     const ViewHitRate* worst = p.worst();
     if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
-    char lowest[192] = "";
-    if (worst) std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
+    // The declared cameras' own share, apart: sampled free-space viewpoints (in corners, inside
+    // open models) can pull the whole down while the scene's cameras are served.
+    uint64_t declared_eligible = 0, declared_hits = 0;
+    const ViewHitRate* one_declared = nullptr;
+    size_t declared_views = 0;
+    for (const ViewHitRate& v : p.views) {
+        if (!v.view.declared) continue;
+        declared_eligible += v.eligible;
+        declared_hits += v.hits;
+        one_declared = &v;
+        ++declared_views;
+    }
+    char declared[160] = "";
+    if (declared_eligible > 0) {
+        const std::string which =
+            declared_views == 1 ? one_declared->view.camera.name : std::to_string(declared_views) + " cameras";
+        std::snprintf(declared, sizeof declared, "; from %s %.1f%%", which.c_str(),
+                      100.0 * double(declared_hits) / double(declared_eligible));
+    }
+    char lowest[320] = "";
+    if (worst) {
+        std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%%s)", worst->view.camera.name.c_str(),
+                      100.0 * worst->rate(), declared);
+    }
     const char* remedy = unreached_area > 0.05
                              ? "The roaming camera never reached part of the surface: give more --iterations, a "
                                "--camera-path through the places the views see, or --camera-source gltf."
