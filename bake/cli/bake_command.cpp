@@ -553,8 +553,8 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
     }
     char declared[160] = "";
     if (declared_eligible > 0) {
-        const std::string which =
-            declared_views == 1 ? one_declared->view.camera.name : std::to_string(declared_views) + " cameras";
+        const std::string which = declared_views == 1 ? one_declared->view.camera.name
+                                                      : std::to_string(declared_views) + " cameras";
         std::snprintf(declared, sizeof declared, "; from %s %.1f%%", which.c_str(),
                       100.0 * double(declared_hits) / double(declared_eligible));
     }
