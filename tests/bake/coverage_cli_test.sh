@@ -117,6 +117,12 @@ expect 0 "the same with the nearest-level fallback" "$sharcbake" render "$cornel
     --cache-lookup nearest
 says "$work/out.txt" "came from another level" "the fallback answers from another level"
 
+# Two iterations of a 64x64 update image fill almost nothing: the warning names the lowest view and
+# the scene's camera's own share beside it.
+expect 0 "a short bake" "$sharcbake" bake "$cornell" -o "$work/short.sharc" --iterations 2 --resolution 64x64
+says "$work/err.txt" "warning: the cache answers" "a short bake warns about its hit rate"
+says "$work/err.txt" "; from camera 'camera' " "the hit-rate warning gives the scene's camera's share"
+
 # A lone floor plane and no camera: the automatic camera sees it (not edge-on) and says where it is.
 python3 - "$work/floor.gltf" <<'PY'
 import base64, json, struct, sys
