@@ -104,10 +104,11 @@ UpdateWavefront::~UpdateWavefront() = default;
 
 size_t UpdateWavefront::bytesPerPathInFlight() {
     // The path's state, its entries in the batch's index lists, its ray and hit, its shadow ray,
-    // Embree's copies of both, and its lanes in the batch's sample draws (index, two sampler
-    // words, two pairs). Its deposits come on top (sizeof(Deposit) each).
+    // and its lanes in the batch's sample draws (index, two sampler words, two pairs). Embree's
+    // packets (16 rays on the stack) are the thread's, not the path's. Its deposits come on top
+    // (sizeof(Deposit) each).
     return sizeof(Path) + sizeof(uint32_t) * 4 + sizeof(Ray) * 2 + sizeof(RayHit) + sizeof(uint8_t) * 2 +
-           sizeof(RTCRayHit) + sizeof(RTCRay) + sizeof(uint32_t) * 3 + sizeof(glm::vec2) * 2;
+           sizeof(uint32_t) * 3 + sizeof(glm::vec2) * 2;
 }
 
 void UpdateWavefront::trace(const std::vector<UpdatePathStart>& starts, const DepositLevels& levels,
@@ -141,7 +142,7 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
     hits_.resize(count);
     found_.resize(count);
     for (size_t i = 0; i < count; ++i) rays_[i] = paths_[active_[i]].ray;
-    tracer_.intersectMany(rays_.data(), count, hits_.data(), found_.data(), embree_hits_);
+    tracer_.intersectMany(rays_.data(), count, hits_.data(), found_.data());
     counters.segments += count;
 
     // The samples of the vertices found: the dimensions sampler.next2D would give, drawn for the
@@ -180,7 +181,7 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
         next_active_.push_back(index);
     }
     blocked_.resize(shadow_rays_.size());
-    tracer_.occludedMany(shadow_rays_.data(), shadow_rays_.size(), blocked_.data(), embree_rays_);
+    tracer_.occludedMany(shadow_rays_.data(), shadow_rays_.size(), blocked_.data());
     counters.shadow_rays += shadow_rays_.size();
     for (size_t s = 0; s < shadow_paths_.size(); ++s) paths_[shadow_paths_[s]].shadow_blocked = blocked_[s] != 0;
 

@@ -114,8 +114,6 @@ private:
     std::vector<uint32_t> shadow_paths_;    ///< the paths of shadow_rays_, one each
     std::vector<Ray> shadow_rays_;
     std::vector<uint8_t> blocked_;          ///< Embree's answer per shadow ray
-    std::vector<RTCRayHit> embree_hits_;
-    std::vector<RTCRay> embree_rays_;
     std::vector<uint32_t> sample_paths_;    ///< drawSamples' paths, and its lanes:
     std::vector<uint32_t> sample_hashes_;   ///< their samplers' pixelHash()
     std::vector<uint32_t> sample_indices_;  ///< and reversedSample()

@@ -130,29 +130,64 @@ bool Tracer::occluded(const Ray& ray) const {
     return rayhit.ray.tfar < 0.0f;
 }
 
-void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found,
-                           std::vector<RTCRayHit>& scratch) const {
-    if (count == 0) return;
-    scratch.resize(count);
-    for (size_t i = 0; i < count; ++i) initRayHit(rays[i], scratch[i]);
+namespace {
+/// Embree's packets: 16 lanes, a lane beyond the rays' count inactive (it traces a copy of the
+/// first ray, which Embree skips).
+constexpr int kPacketWidth = 16;
+
+/// initEmbreeRay for lane `lane` of a packet.
+template <typename RayN>
+void setLane(RayN& r, int lane, const Ray& ray) {
+    r.org_x[lane] = ray.origin.x;
+    r.org_y[lane] = ray.origin.y;
+    r.org_z[lane] = ray.origin.z;
+    r.dir_x[lane] = ray.direction.x;
+    r.dir_y[lane] = ray.direction.y;
+    r.dir_z[lane] = ray.direction.z;
+    r.tnear[lane] = 0.0f;
+    r.tfar[lane] = ray.t_max;
+    r.time[lane] = 0.0f;
+    r.mask[lane] = 0xffffffffu;
+    r.id[lane] = 0;
+    r.flags[lane] = 0;
+}
+}  // namespace
+
+void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    rtcIntersect1M(rtc_scene_, &context, scratch.data(), unsigned(count), sizeof(RTCRayHit));
-    for (size_t i = 0; i < count; ++i) {
-        const RTCRayHit& r = scratch[i];
-        found[i] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-        hits[i] = RayHit{r.hit.primID, r.ray.tfar, r.hit.u, r.hit.v};
+    alignas(64) int valid[kPacketWidth];
+    alignas(64) RTCRayHit16 packet;
+    for (size_t start = 0; start < count; start += kPacketWidth) {
+        const int n = int(std::min<size_t>(kPacketWidth, count - start));
+        for (int i = 0; i < kPacketWidth; ++i) {
+            valid[i] = i < n ? -1 : 0;
+            setLane(packet.ray, i, rays[start + size_t(i < n ? i : 0)]);
+            packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, rtc_scene_, &context, &packet);
+        for (int i = 0; i < n; ++i) {
+            found[start + i] = packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+            hits[start + i] = RayHit{packet.hit.primID[i], packet.ray.tfar[i], packet.hit.u[i], packet.hit.v[i]};
+        }
     }
 }
 
-void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked, std::vector<RTCRay>& scratch) const {
-    if (count == 0) return;
-    scratch.resize(count);
-    for (size_t i = 0; i < count; ++i) initEmbreeRay(rays[i], scratch[i]);
+void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    rtcOccluded1M(rtc_scene_, &context, scratch.data(), unsigned(count), sizeof(RTCRay));
-    for (size_t i = 0; i < count; ++i) blocked[i] = scratch[i].tfar < 0.0f;  // Embree's mark
+    alignas(64) int valid[kPacketWidth];
+    alignas(64) RTCRay16 packet;
+    for (size_t start = 0; start < count; start += kPacketWidth) {
+        const int n = int(std::min<size_t>(kPacketWidth, count - start));
+        for (int i = 0; i < kPacketWidth; ++i) {
+            valid[i] = i < n ? -1 : 0;
+            setLane(packet, i, rays[start + size_t(i < n ? i : 0)]);
+        }
+        rtcOccluded16(valid, rtc_scene_, &context, &packet);
+        for (int i = 0; i < n; ++i) blocked[start + i] = packet.tfar[i] < 0.0f;  // Embree's mark
+    }
 }
 
 glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {

@@ -47,13 +47,14 @@ public:
     /// True if anything blocks the segment (0, t_max).
     bool occluded(const Ray& ray) const;
 
-    /// Closest hits of `count` rays at once (Embree's ray stream): hits[i] is valid where
-    /// found[i] is 1. The same hits as intersect() ray by ray, but Embree traverses the rays
-    /// together. `rays` and the outputs hold `count` entries; `scratch` is reused between calls.
-    void intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found,
-                       std::vector<RTCRayHit>& scratch) const;
-    /// Occlusion of `count` segments at once: blocked[i] is 1 where something blocks rays[i].
-    void occludedMany(const Ray* rays, size_t count, uint8_t* blocked, std::vector<RTCRay>& scratch) const;
+    /// Closest hits of `count` rays at once: hits[i] is valid where found[i] is 1. The same hits
+    /// as intersect() ray by ray, but Embree traverses them 16 at a time (its packet API, the
+    /// fastest of single rays, streams and packets on these rays: BENCHMARKS.md). `rays` and the
+    /// outputs hold `count` entries.
+    void intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found) const;
+    /// Occlusion of `count` segments at once, 16 at a time: blocked[i] is 1 where something
+    /// blocks rays[i].
+    void occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const;
 
     const Scene& scene() const { return scene_; }
     /// The committed Embree scene, for code that calls Embree's packet or stream APIs directly
