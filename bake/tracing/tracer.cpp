@@ -135,22 +135,6 @@ namespace {
 /// first ray, which Embree skips).
 constexpr int kPacketWidth = 16;
 
-/// initEmbreeRay for lane `lane` of a packet.
-template <typename RayN>
-void setLane(RayN& r, int lane, const Ray& ray) {
-    r.org_x[lane] = ray.origin.x;
-    r.org_y[lane] = ray.origin.y;
-    r.org_z[lane] = ray.origin.z;
-    r.dir_x[lane] = ray.direction.x;
-    r.dir_y[lane] = ray.direction.y;
-    r.dir_z[lane] = ray.direction.z;
-    r.tnear[lane] = 0.0f;
-    r.tfar[lane] = ray.t_max;
-    r.time[lane] = 0.0f;
-    r.mask[lane] = 0xffffffffu;
-    r.id[lane] = 0;
-    r.flags[lane] = 0;
-}
 }  // namespace
 
 void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found) const {
@@ -162,7 +146,7 @@ void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t*
         const int n = int(std::min<size_t>(kPacketWidth, count - start));
         for (int i = 0; i < kPacketWidth; ++i) {
             valid[i] = i < n ? -1 : 0;
-            setLane(packet.ray, i, rays[start + size_t(i < n ? i : 0)]);
+            initEmbreeLane(rays[start + size_t(i < n ? i : 0)], packet.ray, i);
             packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
             packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -183,7 +167,7 @@ void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const
         const int n = int(std::min<size_t>(kPacketWidth, count - start));
         for (int i = 0; i < kPacketWidth; ++i) {
             valid[i] = i < n ? -1 : 0;
-            setLane(packet, i, rays[start + size_t(i < n ? i : 0)]);
+            initEmbreeLane(rays[start + size_t(i < n ? i : 0)], packet, i);
         }
         rtcOccluded16(valid, rtc_scene_, &context, &packet);
         for (int i = 0; i < n; ++i) blocked[start + i] = packet.tfar[i] < 0.0f;  // Embree's mark

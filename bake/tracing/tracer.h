@@ -33,6 +33,23 @@ struct RayHit {
 /// Embree's packet or stream APIs itself.
 void initEmbreeRay(const Ray& ray, RTCRay& embree_ray);
 
+/// initEmbreeRay for lane `lane` of an Embree packet (RTCRay4/8/16: one array per field).
+template <typename RayN>
+void initEmbreeLane(const Ray& ray, RayN& packet, int lane) {
+    packet.org_x[lane] = ray.origin.x;
+    packet.org_y[lane] = ray.origin.y;
+    packet.org_z[lane] = ray.origin.z;
+    packet.dir_x[lane] = ray.direction.x;
+    packet.dir_y[lane] = ray.direction.y;
+    packet.dir_z[lane] = ray.direction.z;
+    packet.tnear[lane] = 0.0f;
+    packet.tfar[lane] = ray.t_max;
+    packet.time[lane] = 0.0f;
+    packet.mask[lane] = 0xffffffffu;
+    packet.id[lane] = 0;
+    packet.flags[lane] = 0;
+}
+
 /// Owns an Embree device and a committed scene built over Scene's triangles. Thread-safe for
 /// queries after construction. Holds a reference to the Scene, which must outlive it.
 class Tracer {

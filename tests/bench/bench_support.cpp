@@ -33,24 +33,6 @@ CameraPath exploredCameraPath(const Tracer& tracer, const Scene& scene, uint32_t
     return std::move(*path);
 }
 
-
-/// Fills lane `i` of an SOA packet (RTCRayN layout: one array per field).
-template <typename Packet>
-void setLane(Packet& p, int i, const Ray& ray) {
-    p.org_x[i] = ray.origin.x;
-    p.org_y[i] = ray.origin.y;
-    p.org_z[i] = ray.origin.z;
-    p.dir_x[i] = ray.direction.x;
-    p.dir_y[i] = ray.direction.y;
-    p.dir_z[i] = ray.direction.z;
-    p.tnear[i] = 0.0f;
-    p.tfar[i] = ray.t_max;
-    p.time[i] = 0.0f;
-    p.mask[i] = 0xffffffffu;
-    p.id[i] = 0;
-    p.flags[i] = 0;
-}
-
 template <int N, typename RayHitN, typename RayN, typename Intersect, typename Occluded>
 uint64_t tracePackets(RTCScene scene, const RayPair* pairs, size_t count, Intersect intersect, Occluded occluded) {
     uint64_t checksum = 0;
@@ -64,10 +46,10 @@ uint64_t tracePackets(RTCScene scene, const RayPair* pairs, size_t count, Inters
         for (int i = 0; i < N; ++i) {
             valid[i] = i < n ? -1 : 0;
             const RayPair& pair = pairs[start + size_t(i < n ? i : 0)];
-            setLane(rayhit.ray, i, pair.closest);
+            initEmbreeLane(pair.closest, rayhit.ray, i);
             rayhit.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
             rayhit.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-            setLane(shadow, i, pair.shadow);
+            initEmbreeLane(pair.shadow, shadow, i);
         }
         intersect(valid, scene, &context, &rayhit);
         occluded(valid, scene, &context, &shadow);
