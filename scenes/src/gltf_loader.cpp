@@ -819,7 +819,11 @@ private:
         if (model_.nodes[nodeIndex].skin >= 0)
             warn("node " + std::to_string(nodeIndex) + ": skinning ignored, mesh used in its bind pose");
         const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
-        for (size_t p = 0; p < mesh.primitives.size(); ++p) addPrimitive(meshIndex, p, world);
+        // A static scene shows the morph targets at their default weights: the node's, else the
+        // mesh's (glTF 2.0, "Morph Targets"), as viewers and Blender's own shape keys do.
+        const std::vector<double>& weights = !model_.nodes[nodeIndex].weights.empty() ? model_.nodes[nodeIndex].weights
+                                                                                      : mesh.weights;
+        for (size_t p = 0; p < mesh.primitives.size(); ++p) addPrimitive(meshIndex, p, world, weights);
     }
 
     static bool isTriangleMode(int mode) {
@@ -827,7 +831,7 @@ private:
                mode == TINYGLTF_MODE_TRIANGLE_FAN;
     }
 
-    void addPrimitive(int meshIndex, size_t primIndex, const glm::dmat4& world) {
+    void addPrimitive(int meshIndex, size_t primIndex, const glm::dmat4& world, const std::vector<double>& weights) {
         const tinygltf::Primitive& prim = model_.meshes[meshIndex].primitives[primIndex];
         const std::string label = meshLabel(meshIndex, primIndex);
         if (!isTriangleMode(prim.mode)) {
@@ -849,6 +853,7 @@ private:
                  std::to_string(indices.size() % 3) + " ignored");
         geo.triangles = assembleTriangles(mode, indices);
 
+        applyMorphTargets(prim, weights, label, geo);
         transformToWorld(geo, world, label);
         dropDegenerateTriangles(geo);
         if (geo.normals.empty()) makeFlatShaded(geo);
@@ -1000,6 +1005,44 @@ private:
             checkCount(geo.tangents.size(), "TANGENT");
         }
         return geo;
+    }
+
+    /// Adds each morph target's POSITION, NORMAL and TANGENT displacements, times its weight, to
+    /// the primitive's attributes (normals are renormalised with the node transform). Targets
+    /// without a weight count as 0; a weight without a target is ignored with a warning.
+    void applyMorphTargets(const tinygltf::Primitive& prim, const std::vector<double>& weights,
+                           const std::string& label, PrimitiveGeometry& geo) {
+        if (prim.targets.empty() || weights.empty()) return;
+        if (weights.size() > prim.targets.size())
+            warn(label + ": " + std::to_string(weights.size()) + " morph weights for " +
+                 std::to_string(prim.targets.size()) + " targets; the extra weights are ignored");
+        const size_t n = geo.positions.size();
+        for (size_t t = 0; t < prim.targets.size() && t < weights.size(); ++t) {
+            const double w = weights[t];
+            if (w == 0.0) continue;
+            if (!std::isfinite(w)) fail(label + ": morph weight " + std::to_string(t) + " is not finite");
+            const std::string what = label + " morph target " + std::to_string(t);
+            for (const auto& [name, accessor] : prim.targets[t]) {
+                std::vector<glm::vec3>* values = name == "POSITION" ? &geo.positions
+                                                 : name == "NORMAL" ? &geo.normals
+                                                                    : nullptr;
+                const bool tangent = name == "TANGENT" && !geo.tangents.empty();
+                if (!values && !tangent) continue;  // other attributes, or displacements of absent ones
+                if (values && values->empty()) continue;
+                const std::vector<glm::vec3> delta = readVec3(accessor, what + " " + name);
+                if (delta.size() != n)
+                    fail(what + " " + name + " has " + std::to_string(delta.size()) + " elements but POSITION has " +
+                         std::to_string(n));
+                for (size_t i = 0; i < n; ++i) {
+                    const glm::vec3 d = glm::vec3(w * glm::dvec3(delta[i]));
+                    if (values) (*values)[i] += d;
+                    else geo.tangents[i] += glm::vec4(d, 0.0f);
+                }
+            }
+        }
+        for (size_t i = 0; i < n; ++i)
+            if (!isFinite(geo.positions[i]))
+                fail(label + ": vertex " + std::to_string(i) + " is NaN or infinite after its morph targets");
     }
 
     std::vector<uint32_t> primitiveIndices(const tinygltf::Primitive& prim, size_t vertexCount,

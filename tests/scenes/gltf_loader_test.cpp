@@ -232,6 +232,48 @@ TEST(GltfLoader, SparseAccessorSubstitutesValues) {
     expectVec3Near(scene.bounds_max, {1, 5, 0});
 }
 
+TEST(GltfLoader, MorphTargetsApplyAtTheirDefaultWeights) {
+    // Blender exports shape keys as morph targets with their current values as the mesh's
+    // weights; viewers show the mesh at those weights (a node's own weights win).
+    TempDir dir;
+    GltfBuilder b;
+    const json base = unitTrianglePrimitive(b);
+    const int lift = b.addPositions({0, 0, 1, 0, 0, 1, 0, 0, 1});     // +Z for every vertex
+    const int shift = b.addPositions({2, 0, 0, 2, 0, 0, 2, 0, 0});    // +X for every vertex
+    const int tilt = b.addPositions({0, 1, -1, 0, 1, -1, 0, 1, -1});  // normal displacement
+    json prim = base;
+    prim["targets"] = json::array({{{"POSITION", lift}, {"NORMAL", tilt}}, {{"POSITION", shift}}});
+    const int mesh = b.addMesh(json::array({prim}));
+    b.doc["meshes"][mesh]["weights"] = {0.5, 0.0};
+    const int at_mesh_weights = b.addNode({{"mesh", mesh}});
+    const int at_node_weights = b.addNode({{"mesh", mesh}, {"weights", {0.0, 1.0}}, {"translation", {0, 0, 10}}});
+    b.setScene({at_mesh_weights, at_node_weights});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "morph.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 2u);
+    // The mesh's weights: half the lift, and the normal tilted by half its displacement.
+    const glm::uvec3 first = scene.triangles[0];
+    expectVec3Near(scene.positions[first.x], {0, 0, 0.5f});
+    expectVec3Near(scene.positions[first.y], {1, 0, 0.5f});
+    expectVec3Near(scene.normals[first.x], glm::normalize(glm::vec3(0, 0.5f, 0.5f)));
+    // The node's weights: the whole shift, no lift.
+    const glm::uvec3 second = scene.triangles[1];
+    expectVec3Near(scene.positions[second.x], {2, 0, 10});
+    expectVec3Near(scene.positions[second.y], {3, 0, 10});
+    expectVec3Near(scene.normals[second.x], {0, 0, 1});
+}
+
+TEST(GltfLoaderErrors, MorphTargetOfAnotherLengthIsRefused) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = unitTrianglePrimitive(b);
+    prim["targets"] = json::array({{{"POSITION", b.addPositions({0, 0, 1, 0, 0, 1})}}});
+    const int mesh = b.addMesh(json::array({prim}));
+    b.doc["meshes"][mesh]["weights"] = {1.0};
+    b.setScene({b.addNode({{"mesh", mesh}})});
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "short_target.gltf")); });
+    EXPECT_NE(msg.find("morph target 0 POSITION has 2 elements but POSITION has 3"), std::string::npos) << msg;
+}
+
 TEST(GltfLoader, NanNormalReplacedByGeometricNormalWithWarning) {
     TempDir dir;
     GltfBuilder b;
