@@ -231,6 +231,7 @@ private:
     std::map<std::pair<int, int>, uint64_t> draco_index_counts_;      ///< (mesh, primitive) -> indices' count
     std::map<std::pair<int, float>, int> roughness_from_glossiness_;  ///< (texture, glossiness) -> converted
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
+    std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
 
     // ---------------------------------------------------------------- errors and warnings
@@ -816,14 +817,81 @@ private:
     void addMesh(int meshIndex, const glm::dmat4& world, int nodeIndex) {
         if (static_cast<size_t>(meshIndex) >= model_.meshes.size())
             fail("node " + std::to_string(nodeIndex) + " names missing mesh " + std::to_string(meshIndex));
-        if (model_.nodes[nodeIndex].skin >= 0)
-            warn("node " + std::to_string(nodeIndex) + ": skinning ignored, mesh used in its bind pose");
+        const tinygltf::Node& node = model_.nodes[nodeIndex];
+        // A skinned mesh is posed by its joints as the file's node transforms place them, as
+        // viewers show it; its own node's transform is not used (glTF 2.0, "Skins").
+        std::vector<glm::dmat4> joints;
+        if (node.skin >= 0) {
+            if (node.extensions.count("EXT_mesh_gpu_instancing"))
+                warn("node " + std::to_string(nodeIndex) +
+                     ": skinning of an instanced mesh ignored, mesh used in its bind pose");
+            else joints = jointMatrices(node.skin, "node " + std::to_string(nodeIndex));
+        }
         const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
         // A static scene shows the morph targets at their default weights: the node's, else the
         // mesh's (glTF 2.0, "Morph Targets"), as viewers and Blender's own shape keys do.
         const std::vector<double>& weights = !model_.nodes[nodeIndex].weights.empty() ? model_.nodes[nodeIndex].weights
                                                                                       : mesh.weights;
-        for (size_t p = 0; p < mesh.primitives.size(); ++p) addPrimitive(meshIndex, p, world, weights);
+        for (size_t p = 0; p < mesh.primitives.size(); ++p) addPrimitive(meshIndex, p, world, weights, joints);
+    }
+
+    /// The world matrix of every node of the file (a joint need not be in the displayed scene),
+    /// from the roots down; made once.
+    const std::vector<glm::dmat4>& nodeWorlds() {
+        if (!node_worlds_.empty() || model_.nodes.empty()) return node_worlds_;
+        const size_t n = model_.nodes.size();
+        std::vector<int> parent(n, -1);
+        for (size_t i = 0; i < n; ++i)
+            for (int c : model_.nodes[i].children)
+                if (c >= 0 && static_cast<size_t>(c) < n) parent[size_t(c)] = int(i);
+        node_worlds_.assign(n, glm::dmat4(1.0));
+        std::vector<uint8_t> state(n, 0);  // 0: not yet, 1: on the chain being made, 2: made
+        std::vector<int> chain;
+        for (size_t i = 0; i < n; ++i) {
+            chain.clear();
+            int k = int(i);
+            while (k >= 0 && state[size_t(k)] != 2) {
+                if (state[size_t(k)] == 1)
+                    fail("node " + std::to_string(k) + " is its own ancestor (cycle in the node hierarchy)");
+                state[size_t(k)] = 1;
+                chain.push_back(k);
+                k = parent[size_t(k)];
+            }
+            glm::dmat4 world = k >= 0 ? node_worlds_[size_t(k)] : glm::dmat4(1.0);
+            for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+                world = world * localTransform(model_.nodes[size_t(*it)]);
+                node_worlds_[size_t(*it)] = world;
+                state[size_t(*it)] = 2;
+            }
+        }
+        return node_worlds_;
+    }
+
+    /// Each joint's skinning matrix: its node's world matrix times its inverse bind matrix
+    /// (identity where the skin gives none).
+    std::vector<glm::dmat4> jointMatrices(int skinIndex, const std::string& owner) {
+        if (skinIndex < 0 || static_cast<size_t>(skinIndex) >= model_.skins.size())
+            fail(owner + " names missing skin " + std::to_string(skinIndex));
+        const tinygltf::Skin& skin = model_.skins[size_t(skinIndex)];
+        const std::string label = owner + " skin " + std::to_string(skinIndex);
+        if (skin.joints.empty()) fail(label + ": no joints");
+        std::vector<double> inverse_bind;
+        if (skin.inverseBindMatrices >= 0) {
+            inverse_bind = readAccessor(skin.inverseBindMatrices, TINYGLTF_TYPE_MAT4, label + " inverseBindMatrices");
+            if (inverse_bind.size() < 16 * skin.joints.size())
+                fail(label + ": " + std::to_string(inverse_bind.size() / 16) + " inverse bind matrices for " +
+                     std::to_string(skin.joints.size()) + " joints");
+        }
+        const std::vector<glm::dmat4>& worlds = nodeWorlds();
+        std::vector<glm::dmat4> joints;
+        for (size_t j = 0; j < skin.joints.size(); ++j) {
+            const int node = skin.joints[j];
+            if (node < 0 || static_cast<size_t>(node) >= worlds.size())
+                fail(label + ": joint " + std::to_string(j) + " names missing node " + std::to_string(node));
+            const glm::dmat4 inverse = inverse_bind.empty() ? glm::dmat4(1.0) : glm::make_mat4(&inverse_bind[16 * j]);
+            joints.push_back(worlds[size_t(node)] * inverse);
+        }
+        return joints;
     }
 
     static bool isTriangleMode(int mode) {
@@ -831,7 +899,8 @@ private:
                mode == TINYGLTF_MODE_TRIANGLE_FAN;
     }
 
-    void addPrimitive(int meshIndex, size_t primIndex, const glm::dmat4& world, const std::vector<double>& weights) {
+    void addPrimitive(int meshIndex, size_t primIndex, const glm::dmat4& world, const std::vector<double>& weights,
+                      const std::vector<glm::dmat4>& joints) {
         const tinygltf::Primitive& prim = model_.meshes[meshIndex].primitives[primIndex];
         const std::string label = meshLabel(meshIndex, primIndex);
         if (!isTriangleMode(prim.mode)) {
@@ -854,7 +923,17 @@ private:
         geo.triangles = assembleTriangles(mode, indices);
 
         applyMorphTargets(prim, weights, label, geo);
-        transformToWorld(geo, world, label);
+        const bool skinned = !joints.empty() && prim.attributes.count("JOINTS_0") && prim.attributes.count("WEIGHTS_0");
+        if (skinned && extension(prim.extensions, "KHR_draco_mesh_compression")) {
+            warn(label + ": skinning of a Draco-compressed primitive ignored, mesh used in its bind pose");
+            transformToWorld(geo, world, label);
+        } else if (skinned) {
+            skinToWorld(prim, joints, world, label, geo);
+        } else {
+            if (!joints.empty())
+                warn(label + ": skinned node without JOINTS_0 and WEIGHTS_0; mesh used in its bind pose");
+            transformToWorld(geo, world, label);
+        }
         dropDegenerateTriangles(geo);
         if (geo.normals.empty()) makeFlatShaded(geo);
         else repairNormals(geo, label);
@@ -1083,6 +1162,74 @@ private:
         }
         if (det < 0.0)
             for (glm::uvec3& t : geo.triangles) std::swap(t.y, t.z);
+    }
+
+    /// Linear blend skinning: each vertex by the weighted sum of its joints' matrices (JOINTS_n
+    /// and WEIGHTS_n, every set the primitive has; weights that do not sum to 1 are normalised),
+    /// its normal by that sum's inverse transpose, its tangent by its linear part; a triangle
+    /// whose first vertex's sum mirrors is wound back, as transformToWorld does.
+    void skinToWorld(const tinygltf::Primitive& prim, const std::vector<glm::dmat4>& joints, const glm::dmat4& world,
+                     const std::string& label, PrimitiveGeometry& geo) {
+        const size_t n = geo.positions.size();
+        std::vector<glm::dmat4> blend(n, glm::dmat4(0.0));
+        std::vector<double> total(n, 0.0);
+        for (int set = 0;; ++set) {
+            const auto j = prim.attributes.find("JOINTS_" + std::to_string(set));
+            const auto w = prim.attributes.find("WEIGHTS_" + std::to_string(set));
+            if (j == prim.attributes.end() || w == prim.attributes.end()) break;
+            const std::string what = label + " JOINTS_" + std::to_string(set) + "/WEIGHTS_" + std::to_string(set);
+            const std::vector<glm::vec4> indices = readVec4(j->second, what);
+            const std::vector<glm::vec4> influence = readVec4(w->second, what);
+            if (indices.size() != n || influence.size() != n)
+                fail(what + ": " + std::to_string(indices.size()) + " and " + std::to_string(influence.size()) +
+                     " elements but POSITION has " + std::to_string(n));
+            for (size_t i = 0; i < n; ++i) {
+                for (int c = 0; c < 4; ++c) {
+                    const double weight = influence[i][c];
+                    if (weight == 0.0) continue;
+                    const double joint = indices[i][c];
+                    if (!(weight > 0.0) || !std::isfinite(weight) || !(joint >= 0.0) ||
+                        joint >= double(joints.size()) || joint != std::floor(joint))
+                        fail(what + ": vertex " + std::to_string(i) + " has joint " + std::to_string(joint) +
+                             " with weight " + std::to_string(weight) + " (the skin has " +
+                             std::to_string(joints.size()) + " joints)");
+                    blend[i] += weight * joints[size_t(joint)];
+                    total[i] += weight;
+                }
+            }
+        }
+        size_t unweighted = 0;
+        for (size_t i = 0; i < n; ++i) {
+            // A vertex no joint moves stays where its node puts it (viewers differ; none is right).
+            unweighted += !(total[i] > 0.0);
+            const glm::dmat4 m = total[i] > 0.0 ? blend[i] / total[i] : world;
+            const glm::dvec3 p = glm::dvec3(m * glm::dvec4(glm::dvec3(geo.positions[i]), 1.0));
+            if (!(std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
+                  std::abs(p.z) <= kMaxWorldCoordinate))
+                fail(label + ": vertex " + std::to_string(i) + " lies beyond +-1e9 m after skinning");
+            geo.positions[i] = glm::vec3(p);
+            const glm::dmat3 linear(m);
+            const double det = glm::determinant(linear);
+            if (!geo.normals.empty()) {
+                const glm::dvec3 normal = (det != 0.0 ? glm::inverseTranspose(linear) : linear) *
+                                          glm::dvec3(geo.normals[i]);
+                const double length = glm::length(normal);
+                geo.normals[i] = length > 0.0 ? glm::vec3(normal / length) : geo.normals[i];
+            }
+            if (!geo.tangents.empty()) {
+                const glm::dvec3 t = linear * glm::dvec3(geo.tangents[i]);
+                const double length = glm::length(t);
+                geo.tangents[i] = glm::vec4(length > 0.0 ? glm::vec3(t / length) : glm::vec3(0.0f),
+                                            det < 0.0 ? -geo.tangents[i].w : geo.tangents[i].w);
+            }
+            total[i] = det;  // kept for the winding below
+        }
+        for (glm::uvec3& t : geo.triangles)
+            if (total[t.x] < 0.0) std::swap(t.y, t.z);
+        if (unweighted > 0)
+            warn(label + ": " + std::to_string(unweighted) +
+                 " skinned vertices have no joint weight; they stay where "
+                 "the node puts them");
     }
 
     static glm::dvec3 triangleCross(const PrimitiveGeometry& geo, const glm::uvec3& t) {

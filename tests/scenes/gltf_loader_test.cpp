@@ -274,6 +274,84 @@ TEST(GltfLoaderErrors, MorphTargetOfAnotherLengthIsRefused) {
     EXPECT_NE(msg.find("morph target 0 POSITION has 2 elements but POSITION has 3"), std::string::npos) << msg;
 }
 
+/// A triangle skinned to two joints: vertices 0 and 1 follow joint 0, vertex 2 joint 1 (with
+/// weight `w2`). The joints' nodes are returned through `joint0` and `joint1`; the mesh's own
+/// node is far away, which skinning ignores.
+int addSkinnedTriangle(GltfBuilder& b, int& joint0, int& joint1, float w2 = 1.0f, int inverse_bind = -1) {
+    json prim = unitTrianglePrimitive(b);
+    const std::vector<uint8_t> joints = {0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0};
+    prim["attributes"]["JOINTS_0"] = b.addData(joints, test::kUnsignedByte, "VEC4");
+    prim["attributes"]["WEIGHTS_0"] = b.addData(std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, w2, 0, 0, 0}, test::kFloat,
+                                                "VEC4");
+    const int mesh = b.addMesh(json::array({prim}));
+    joint0 = b.addNode({{"name", "root"}});
+    joint1 = b.addNode({{"name", "tip"}, {"translation", {0, 0, 5}}});
+    b.doc["nodes"][joint0]["children"] = {joint1};
+    json skin = {{"joints", {joint0, joint1}}};
+    if (inverse_bind >= 0) skin["inverseBindMatrices"] = inverse_bind;
+    b.doc["skins"] = json::array({skin});
+    return b.addNode({{"mesh", mesh}, {"skin", 0}, {"translation", {100, 0, 0}}});
+}
+
+TEST(GltfLoader, SkinnedMeshIsPosedByItsJoints) {
+    // The tip joint sits 5 units up with no inverse bind matrices: its vertex moves with it, and
+    // the mesh node's own transform is not used (glTF 2.0, "Skins").
+    TempDir dir;
+    GltfBuilder b;
+    int root = 0, tip = 0;
+    const int skinned = addSkinnedTriangle(b, root, tip);
+    b.setScene({skinned, root});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "skin.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    const glm::uvec3 t = scene.triangles[0];
+    expectVec3Near(scene.positions[t.x], {0, 0, 0});
+    expectVec3Near(scene.positions[t.y], {1, 0, 0});
+    expectVec3Near(scene.positions[t.z], {0, 1, 5});
+    // Weights that do not sum to 1 are normalised.
+    GltfBuilder heavy;
+    const int heavy_skinned = addSkinnedTriangle(heavy, root, tip, 2.0f);
+    heavy.setScene({heavy_skinned, root});
+    const Scene normalised = loadGltf(heavy.writeEmbedded(dir, "heavy.gltf"));
+    expectVec3Near(normalised.positions[normalised.triangles[0].z], {0, 1, 5});
+    // A vertex without any weight stays where its node puts it, with a warning.
+    GltfBuilder loose;
+    const int loose_skinned = addSkinnedTriangle(loose, root, tip, 0.0f);
+    loose.setScene({loose_skinned, root});
+    const Scene unweighted = loadGltf(loose.writeEmbedded(dir, "loose.gltf"));
+    expectVec3Near(unweighted.positions[unweighted.triangles[0].z], {100, 1, 0});
+    EXPECT_TRUE(
+        std::any_of(unweighted.stats.warnings.begin(), unweighted.stats.warnings.end(), [](const std::string& w) {
+            return w.find("1 skinned vertices have no joint weight") != std::string::npos;
+        }));
+}
+
+TEST(GltfLoader, SkinAtItsBindPoseLeavesTheMeshWhereItIs) {
+    // Inverse bind matrices that undo the joints' transforms: the rest pose is the bind pose.
+    TempDir dir;
+    GltfBuilder b;
+    const std::vector<float> inverse = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0,  1,   // root
+                                        1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -5, 1};  // tip: -5 in z
+    const int ibm = b.addData(inverse, test::kFloat, "MAT4");
+    int root = 0, tip = 0;
+    const int skinned = addSkinnedTriangle(b, root, tip, 1.0f, ibm);
+    b.setScene({skinned, root});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "bind.gltf"));
+    const glm::uvec3 t = scene.triangles[0];
+    expectVec3Near(scene.positions[t.z], {0, 1, 0});
+    expectVec3Near(scene.normals[t.z], {0, 0, 1});
+}
+
+TEST(GltfLoaderErrors, SkinJointIndexOutOfRangeIsRefused) {
+    TempDir dir;
+    GltfBuilder b;
+    int root = 0, tip = 0;
+    const int skinned = addSkinnedTriangle(b, root, tip);
+    b.doc["skins"][0]["joints"] = {root};  // vertex 2 names joint 1 of a one-joint skin
+    b.setScene({skinned, root});
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "bad_joint.gltf")); });
+    EXPECT_NE(msg.find("vertex 2 has joint 1"), std::string::npos) << msg;
+}
+
 TEST(GltfLoader, NanNormalReplacedByGeometricNormalWithWarning) {
     TempDir dir;
     GltfBuilder b;
