@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/camera_path.h"
 
-#include "tracing/distribution.h"
 #include "tracing/sampling.h"
+#include "tracing/surface_points.h"
 
 #include <algorithm>
 #include <cmath>
@@ -283,19 +283,13 @@ constexpr float kViewsAroundDistance = 1.5f;
 
 std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uint32_t seed) {
     std::vector<CameraPose> poses;
-    if (scene.triangles.empty()) return poses;
+    // Each view looks at a point of the surface, drawn by area: a thin or sparse model leaves
+    // most of a view aimed at the centre empty.
+    const std::vector<SurfacePoint> targets = sampleSurfacePoints(scene, count, seed);
+    if (targets.empty()) return poses;
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
     const float distance = kViewsAroundDistance * boundingRadius(scene);
     constexpr float kYfov = 0.25f * kPi;
-    // Each view looks at a point of the surface, drawn by area: a thin or sparse model leaves
-    // most of a view aimed at the centre empty.
-    std::vector<float> areas(scene.triangles.size());
-    for (size_t t = 0; t < areas.size(); ++t) {
-        const glm::uvec3 tri = scene.triangles[t];
-        areas[t] = 0.5f * glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
-                                                 scene.positions[tri.z] - scene.positions[tri.x]));
-    }
-    const Distribution1D by_area(areas);
     for (uint32_t i = 0; i < count; ++i) {
         // Spherical Fibonacci: even heights, golden-angle turns; no two views alike, none
         // exactly along an axis.
@@ -303,11 +297,9 @@ std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uin
         const float ring = std::sqrt(std::max(0.0f, 1.0f - y * y));
         const float turn = 2.39996323f * float(i);
         const glm::vec3 direction(ring * std::cos(turn), y, ring * std::sin(turn));
-        float u = hashToUnitFloat(seed, i, 30);
-        const glm::uvec3 tri = scene.triangles[by_area.sampleDiscrete(u, &u)];
-        const glm::vec2 b = sampleUniformTriangle({u, hashToUnitFloat(seed, i, 31)});
-        const glm::vec3 target = (1.0f - b.x - b.y) * scene.positions[tri.x] + b.x * scene.positions[tri.y] +
-                                 b.y * scene.positions[tri.z];
+        // The points come in the order of the scene's triangles: a hashed pick keeps where a view
+        // stands from deciding which part of the scene it looks at.
+        const glm::vec3 target = targets[hashCombine(hashUint32(seed), i) % targets.size()].position;
         CameraPose pose;
         if (makeLookAtPose(center + distance * direction, target, kYfov, pose)) poses.push_back(pose);
     }
