@@ -164,35 +164,27 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     const float clearance = 0.01f * diagonal;
 
     // Candidates: the starts first, then stratified random points (8x more than needed).
-    std::vector<glm::vec3> free_points;
-    std::vector<bool> is_start, is_known;
-    std::vector<int> escaped;  // per free point
+    struct FreePoint {
+        glm::vec3 position;
+        bool start;
+        bool known;   ///< FreeSpaceProbe::known (a camera always is)
+        int escaped;  ///< FreeSpaceProbe::escaped
+    };
+    std::vector<FreePoint> free_points;
     const auto collect = [&](bool use_winding) {
         free_points.clear();
-        is_start.clear();
-        is_known.clear();
-        escaped.clear();
         for (const glm::vec3& s : starts) {
             ++result.candidates;
             const FreeSpaceProbe probe = probeFreeSpace(tracer, s, 0.0f, use_winding);
-            if (starts_are_cameras || probe.free) {
-                free_points.push_back(s);
-                is_start.push_back(true);
-                is_known.push_back(starts_are_cameras || probe.known);
-                escaped.push_back(probe.escaped);
-            }
+            if (starts_are_cameras || probe.free)
+                free_points.push_back({s, true, starts_are_cameras || probe.known, probe.escaped});
         }
         for (uint32_t i = 0; i < 8 * count; ++i) {
             const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
             const glm::vec3 p = center + (2.0f * u - 1.0f) * half;
             ++result.candidates;
             const FreeSpaceProbe probe = probeFreeSpace(tracer, p, clearance, use_winding);
-            if (probe.free) {
-                free_points.push_back(p);
-                is_start.push_back(false);
-                is_known.push_back(probe.known);
-                escaped.push_back(probe.escaped);
-            }
+            if (probe.free) free_points.push_back({p, false, probe.known, probe.escaped});
         }
     };
     // The scene's own cameras look from free space. Where the winding test puts one of them
@@ -222,7 +214,8 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     };
     for (size_t a = 0; a < n; ++a) {
         for (size_t b = a + 1; b < n; ++b) {
-            if (root(a) != root(b) && visible(tracer, free_points[a], free_points[b])) parent[root(b)] = root(a);
+            if (root(a) != root(b) && visible(tracer, free_points[a].position, free_points[b].position))
+                parent[root(b)] = root(a);
         }
     }
     // Keep the sets that hold a camera. Without cameras, the start is only the centre of the
@@ -232,10 +225,10 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     std::vector<bool> keep_root(n, false);
     bool any_kept = false;
     for (size_t i = 0; i < n; ++i) {
-        if (starts_are_cameras ? is_start[i] : is_known[i]) keep_root[root(i)] = any_kept = true;
+        if (starts_are_cameras ? free_points[i].start : free_points[i].known) keep_root[root(i)] = any_kept = true;
     }
     for (size_t i = 0; i < n && !any_kept; ++i) {
-        if (is_start[i]) keep_root[root(i)] = any_kept = true;
+        if (free_points[i].start) keep_root[root(i)] = any_kept = true;
     }
     if (!any_kept) {
         std::vector<size_t> size(n, 0);
@@ -245,8 +238,8 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     uint64_t escaped_probes = 0;
     for (size_t i = 0; i < n && result.points.size() < count; ++i) {
         if (!keep_root[root(i)]) continue;
-        result.points.push_back(free_points[i]);
-        escaped_probes += uint64_t(escaped[i]);
+        result.points.push_back(free_points[i].position);
+        escaped_probes += uint64_t(free_points[i].escaped);
     }
     if (!result.points.empty())
         result.escaped_fraction = float(double(escaped_probes) / double(result.points.size() * kProbeCount));
