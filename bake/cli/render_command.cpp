@@ -1,19 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
 // `sharcbake render`: the reference path tracer from a glTF or command-line camera, optionally
 // ending paths on a baked SHaRC cache (--cache), or drawing a debug view of that cache.
-#include "sharc/cache_query.h"
 #include "cli/command_support.h"
 #include "cli/commands.h"
-#include "tracing/lights.h"
-#include "tracing/path_tracer.h"
-#include "support/json.h"
-#include "support/progress.h"
-#include "tracing/render.h"
-#include "support/stopwatch.h"
-#include "tracing/surface.h"
+#include "sharc/cache_query.h"
+#include "sharc/camera_path.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/image.h"
+#include "support/json.h"
+#include "support/progress.h"
+#include "support/stopwatch.h"
+#include "tracing/lights.h"
+#include "tracing/path_tracer.h"
+#include "tracing/render.h"
+#include "tracing/surface.h"
 #include "tracing/tracer.h"
 
 #include <tbb/global_control.h>
@@ -40,7 +41,7 @@ struct RenderOptions {
     std::string camera;       // name or index
     std::string look_at;      // "ex,ey,ez,tx,ty,tz"
     std::string up = "0,1,0";
-    float fov_degrees = 45.0f;
+    float fov_degrees = kAutomaticCameraFovDegrees;
     std::string resolution;   // "W" or "WxH"
     uint32_t spp = 64;
     uint32_t max_bounces = 1024;

@@ -86,6 +86,10 @@ float framingDistance(const Scene& scene, float yfov);
 /// Named "automatic".
 Camera automaticCamera(const Scene& scene, float yfov);
 
+/// The automatic camera's vertical field of view unless the user gives one (render's --fov), in
+/// degrees: also what the bake's report and hit-rate prediction look through.
+inline constexpr float kAutomaticCameraFovDegrees = 45.0f;
+
 /// `count` views of the scene from around it, spread evenly over the sphere of 1.5 bounding radii
 /// around the centre of its bounds (a spherical Fibonacci set), each looking with a 45-degree
 /// field of view at a point of the surface drawn by area (deterministic for a seed).
