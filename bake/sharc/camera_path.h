@@ -139,8 +139,9 @@ private:
 /// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
 /// new random direction. A scene without cameras whose free space is open (escaped_fraction at
 /// least kOpenSceneEscapedFraction) is also looked at from outside: as many views from around it
-/// (viewsAroundScene), which keep their direction, alternate with the free-space positions. std::nullopt when no free space was found; `explored` (if given)
-/// receives the search's counts either way.
+/// (viewsAroundScene), which keep their direction, alternate with the free-space positions.
+/// std::nullopt when no free space was found; `explored` (if given) receives the search's counts
+/// either way.
 std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
                                               uint32_t seed, ExplorationResult* explored = nullptr);
 

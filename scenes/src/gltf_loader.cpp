@@ -1199,6 +1199,7 @@ private:
             }
         }
         size_t unweighted = 0;
+        std::vector<double> determinant(n);  // of each vertex's blended matrix, for the winding
         for (size_t i = 0; i < n; ++i) {
             // A vertex no joint moves stays where its node puts it (viewers differ; none is right).
             unweighted += !(total[i] > 0.0);
@@ -1222,10 +1223,10 @@ private:
                 geo.tangents[i] = glm::vec4(length > 0.0 ? glm::vec3(t / length) : glm::vec3(0.0f),
                                             det < 0.0 ? -geo.tangents[i].w : geo.tangents[i].w);
             }
-            total[i] = det;  // kept for the winding below
+            determinant[i] = det;
         }
         for (glm::uvec3& t : geo.triangles)
-            if (total[t.x] < 0.0) std::swap(t.y, t.z);
+            if (determinant[t.x] < 0.0) std::swap(t.y, t.z);
         if (unweighted > 0)
             warn(label + ": " + std::to_string(unweighted) +
                  " skinned vertices have no joint weight; they stay where "
