@@ -32,6 +32,7 @@ struct Options {
     uint32_t triangles = 20000;     ///< generated room's size when no scene is given
     std::string resolution = "1280x720";
     uint32_t iterations = 16;
+    uint32_t warmup = 2;  ///< untimed iterations before the timed ones
     uint32_t capacity = 1u << 22;
     uint32_t pairs = 1u << 19;
     int repetitions = 3;
@@ -82,26 +83,28 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
     // Exactly `threads` workers for the bake (a task arena), as `sharcbake bake --threads` does.
     BakeRun bake;
     tbb::task_arena arena{int(threads)};
-    arena.execute([&] { bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations); });
+    arena.execute([&] { bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations, o.warmup); });
     const double after = measurePairsPerSecond(s.tracer, pairs, best_api, o.repetitions);
     const double ray_limit = std::max(best, after);
     const double rate = bake.segmentsPerSecond();
-    std::printf("{\"series\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"threads\": %u, \"capacity\": %u, "
-                "\"ray_pairs_per_second\": {%s, \"%s_after_bake\": %.4g}, \"ray_limit\": %.4g, \"ray_limit_api\": \"%s\", "
-                "\"bake_segments_per_second\": %.4g, \"ratio\": %.3f, \"iterations\": %u, \"paths\": %llu, "
-                "\"segments\": %llu, \"shadow_rays\": %llu, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
-                "\"resolve\": %.4f, \"other\": %.4f, \"bake\": %.4f, \"setup\": %.4f}, \"live_voxels\": %llu, "
-                "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f, \"file_fnv1a\": \"%016llx\", "
-                "\"bytes_per_path_in_flight\": %zu, \"deposits_per_path\": %.2f, %s}\n",
-                series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, capacity, per_api.c_str(),
-                toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit, bake.iterations,
-                (unsigned long long)bake.paths, (unsigned long long)bake.segments,
-                (unsigned long long)bake.shadow_rays, bake.update_seconds, bake.commit_seconds, bake.resolve_seconds,
-                bake.wall_seconds - bake.bakeSeconds(), bake.wall_seconds, bake.setup_seconds,
-                (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
-                bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0,
-                (unsigned long long)bake.file_digest, UpdateWavefront::bytesPerPathInFlight(),
-                bake.paths ? double(bake.deposits) / double(bake.paths) : 0.0, cacheStagesJson(bake.cache_stages).c_str());
+    std::printf(
+        "{\"series\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"threads\": %u, \"capacity\": %u, "
+        "\"ray_pairs_per_second\": {%s, \"%s_after_bake\": %.4g}, \"ray_limit\": %.4g, \"ray_limit_api\": \"%s\", "
+        "\"bake_segments_per_second\": %.4g, \"ratio\": %.3f, \"iterations\": %u, \"warmup\": %u, \"paths\": %llu, "
+        "\"segments\": %llu, \"shadow_rays\": %llu, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
+        "\"resolve\": %.4f, \"other\": %.4f, \"bake\": %.4f, \"setup\": %.4f, \"kernel\": %.4f}, "
+        "\"page_faults\": %llu, \"live_voxels\": %llu, "
+        "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f, \"file_fnv1a\": \"%016llx\", "
+        "\"bytes_per_path_in_flight\": %zu, \"deposits_per_path\": %.2f, %s}\n",
+        series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, capacity, per_api.c_str(),
+        toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit, bake.iterations, o.warmup,
+        (unsigned long long)bake.paths, (unsigned long long)bake.segments, (unsigned long long)bake.shadow_rays,
+        bake.update_seconds, bake.commit_seconds, bake.resolve_seconds, bake.wall_seconds - bake.bakeSeconds(),
+        bake.wall_seconds, bake.setup_seconds, bake.kernel_seconds, (unsigned long long)bake.page_faults,
+        (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
+        bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0,
+        (unsigned long long)bake.file_digest, UpdateWavefront::bytesPerPathInFlight(),
+        bake.paths ? double(bake.deposits) / double(bake.paths) : 0.0, cacheStagesJson(bake.cache_stages).c_str());
     std::fflush(stdout);
 }
 
@@ -114,7 +117,7 @@ void measureOneBake(const Options& o) {
     parseResolution(o.resolution, width, height);
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                               o.threads ? o.threads : unsigned(tbb::info::default_concurrency()));
-    const BakeRun bake = runBake(*s, benchBakeSettings(width, height, o.capacity), o.iterations);
+    const BakeRun bake = runBake(*s, benchBakeSettings(width, height, o.capacity), o.iterations, o.warmup);
     const uint64_t peak = peakResidentBytes();
     std::printf("{\"series\": \"capacity\", \"scene\": \"%s\", \"capacity\": %u, \"iterations\": %u, "
                 "\"bake_segments_per_second\": %.4g, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
@@ -133,9 +136,9 @@ void measureOneBake(const Options& o) {
 /// Runs `one-bake` in a fresh process per capacity, so each peak-memory figure is its own.
 int runCapacitySeries(const Options& o, const std::string& self) {
     for (uint32_t capacity : o.capacity_list) {
-        std::string command = "'" + self + "' one-bake --capacity " + std::to_string(capacity) +
-                              " --iterations " + std::to_string(o.iterations) + " --resolution " + o.resolution +
-                              " --threads " + std::to_string(o.threads);
+        std::string command = "'" + self + "' one-bake --capacity " + std::to_string(capacity) + " --iterations " +
+                              std::to_string(o.iterations) + " --warmup " + std::to_string(o.warmup) +
+                              " --resolution " + o.resolution + " --threads " + std::to_string(o.threads);
         command += o.scene_path.empty() ? " --triangles " + std::to_string(o.triangles) : " --scene '" + o.scene_path + "'";
         std::fflush(stdout);
         if (std::system(command.c_str()) != 0) {
@@ -164,7 +167,13 @@ int main(int argc, char** argv) {
         cmd->add_option("--triangles", o.triangles, "Triangles of the generated room")->capture_default_str();
         cmd->add_option("--resolution", o.resolution, "Virtual camera size WxH (one path per 5x5 block)")
             ->capture_default_str();
-        cmd->add_option("--iterations", o.iterations, "Timed bake iterations (after 2 untimed)")->capture_default_str();
+        cmd->add_option("--iterations", o.iterations, "Timed bake iterations (after --warmup untimed ones)")
+            ->capture_default_str();
+        cmd->add_option("--warmup", o.warmup,
+                        "Untimed iterations first. New voxels keep arriving early in a bake, and their pages' "
+                        "first touches (page faults) fall into the timed ones; a long warm-up measures the steady "
+                        "state of a long bake instead")
+            ->capture_default_str();
         cmd->add_option("--capacity", o.capacity, "Cache capacity (slots)")->capture_default_str();
         cmd->add_option("--pairs", o.pairs, "Ray pairs in the ray-limit pool")->capture_default_str();
         cmd->add_option("--repetitions", o.repetitions, "Ray-limit passes; the best counts")->capture_default_str();

@@ -15,6 +15,8 @@
 #include <random>
 #include <stdexcept>
 
+#include <sys/resource.h>
+
 namespace sharcbake::bench {
 namespace {
 
@@ -254,9 +256,16 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     const uint64_t deposits_before = baker.cache().numerics().deposits;
     const StageSeconds seconds_before = baker.seconds();
     const CacheStageSeconds stages_before = baker.cache().stageSeconds();
+    rusage usage_before{};
+    getrusage(RUSAGE_SELF, &usage_before);
     const auto start = std::chrono::steady_clock::now();
     for (uint32_t i = 0; i < iterations; ++i) baker.runIteration();
     run.wall_seconds = secondsSince(start);
+    rusage usage_after{};
+    getrusage(RUSAGE_SELF, &usage_after);
+    run.kernel_seconds = double(usage_after.ru_stime.tv_sec - usage_before.ru_stime.tv_sec) +
+                         1e-6 * double(usage_after.ru_stime.tv_usec - usage_before.ru_stime.tv_usec);
+    run.page_faults = uint64_t(usage_after.ru_minflt - usage_before.ru_minflt);
     run.iterations = iterations;
     run.update_seconds = baker.seconds().update - seconds_before.update;
     run.commit_seconds = baker.seconds().commit - seconds_before.commit;

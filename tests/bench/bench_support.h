@@ -60,6 +60,8 @@ struct BakeRun {
     double update_seconds = 0.0, commit_seconds = 0.0, resolve_seconds = 0.0;
     double wall_seconds = 0.0;   ///< the timed iterations, end to end
     double setup_seconds = 0.0;  ///< cache allocation (Baker construction)
+    double kernel_seconds = 0.0;  ///< the timed iterations' system CPU time, all threads (page faults)
+    uint64_t page_faults = 0;     ///< minor page faults in the timed iterations (first touches)
     uint64_t paths = 0, segments = 0, shadow_rays = 0;
     uint64_t deposits = 0;  ///< deposits the update paths made (the commit's input)
     uint64_t live_voxels = 0;
