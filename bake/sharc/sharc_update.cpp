@@ -71,7 +71,6 @@ struct UpdateWavefront::Path {
     float previous_bsdf_pdf = 0.0f;
     glm::vec3 previous_position{0.0f};
     glm::vec3 previous_shading_normal{0.0f};
-    glm::vec3 throughput{1.0f};  ///< only for Russian roulette
     std::vector<Deposit> deposits;
 
     // The current vertex.
@@ -123,7 +122,6 @@ void UpdateWavefront::trace(const std::vector<UpdatePathStart>& starts, const De
         path.previous_bsdf_pdf = 0.0f;
         path.previous_position = path.ray.origin;
         path.previous_shading_normal = glm::vec3(0.0f);
-        path.throughput = glm::vec3(1.0f);
         path.deposits.clear();
         active_.push_back(uint32_t(i));
     }
@@ -282,18 +280,21 @@ bool UpdateWavefront::depositAndContinue(Path& path, uint32_t bounce, uint32_t d
     path.history.push(path.key, depth);
     if (bounce + 1 >= settings_.max_bounces) return false;
 
-    // Russian roulette from the vertex's albedo, as PathTracer does, then the next direction.
+    // Russian roulette from the vertex's own albedo, then the next direction. Unlike in PathTracer,
+    // the throughput from the camera has no say: every vertex's deposit estimates its own voxel,
+    // whose indirect light only this continuation brings back. (With it, a path that had crossed
+    // a surface reflecting nothing, such as an unlit sky dome, died at the next vertex and left
+    // that voxel its direct light alone: a floor under such a dome came out 20% dark.)
     const GltfBsdf& bsdf = *path.bsdf;
     const glm::vec2 u_lobe_rr = path.u_lobe_rr;
     float survive = 1.0f;
     if (bounce >= settings_.russian_roulette_start) {
-        survive = russianRouletteSurvival(path.throughput, bsdf.albedo(path.wo));
+        survive = std::min(1.0f, maxComponent(bsdf.albedo(path.wo)));
         if (!(survive > 0.0f) || u_lobe_rr.y >= survive) return false;
     }
     const GltfBsdf::Sample s = bsdf.sample(path.wo, u_lobe_rr.x, path.u_direction);
     if (!s.valid) return false;
     const glm::vec3 segment = s.weight / survive;
-    path.throughput *= segment;
     path.history.applyThroughput(segment);
     path.previous_bsdf_pdf = s.pdf;
     path.previous_position = path.hit.position;

@@ -116,6 +116,7 @@ EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, f
     e.double_sided = m.double_sided;
     if (!m.isEmissive()) return e;
     e.emission = m.emissive * m.emissive_strength * glm::vec3(texelAt(scene, m.emissive_texture, tri, b0, b1, b2));
+    if (m.unlit && !scene.colors.empty()) e.emission *= glm::vec3(barycentric(scene.colors, tri, b0, b1, b2));
     return e;
 }
 
@@ -172,6 +173,7 @@ ShadingMaterial evaluateMaterial(const Scene& scene, const SurfaceHit& hit) {
     }
     if (m.isEmissive()) {
         out.emission = m.emissive * m.emissive_strength * glm::vec3(fetch(scene, m.emissive_texture, hit));
+        if (m.unlit) out.emission *= glm::vec3(hit.color);  // the base colour's vertex colours
     }
     out.double_sided = m.double_sided;
     return out;

@@ -48,12 +48,20 @@ constexpr double kLumensPerWatt = 683.0;
 /// Extensions this loader understands well enough to honour when a file requires them.
 /// KHR_mesh_quantization only allows integer attribute types, which the accessor reader
 /// converts anyway.
-const std::array<const char*, 13> kSupportedRequiredExtensions = {
-    "KHR_lights_punctual",        "KHR_materials_emissive_strength", "KHR_materials_specular",
-    "KHR_materials_ior",          "KHR_mesh_quantization",           "KHR_texture_transform",
-    "KHR_materials_transmission", "EXT_mesh_gpu_instancing",         "KHR_materials_pbrSpecularGlossiness",
-    "KHR_draco_mesh_compression", "EXT_meshopt_compression",         "EXT_texture_webp",
-    "KHR_materials_clearcoat"};
+const std::array<const char*, 14> kSupportedRequiredExtensions = {"KHR_lights_punctual",
+                                                                  "KHR_materials_emissive_strength",
+                                                                  "KHR_materials_specular",
+                                                                  "KHR_materials_ior",
+                                                                  "KHR_mesh_quantization",
+                                                                  "KHR_texture_transform",
+                                                                  "KHR_materials_transmission",
+                                                                  "EXT_mesh_gpu_instancing",
+                                                                  "KHR_materials_pbrSpecularGlossiness",
+                                                                  "KHR_draco_mesh_compression",
+                                                                  "EXT_meshopt_compression",
+                                                                  "EXT_texture_webp",
+                                                                  "KHR_materials_clearcoat",
+                                                                  "KHR_materials_unlit"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -1461,7 +1469,30 @@ private:
         readMaterialExtensions(src, m, label);
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness"))
             readSpecularGlossiness(*ext, m, label);
+        if (extension(src.extensions, "KHR_materials_unlit")) makeUnlit(m);
         return m;
+    }
+
+    /// KHR_materials_unlit (scanned and pre-lit models, sky domes, stylised assets): viewers show
+    /// the base colour (factor x texture x vertex colour) as it is. Traced as a surface that emits
+    /// exactly that radiance and reflects nothing, so the cache holds what viewers show there, and
+    /// the light it gives the rest of the scene is the light it shows (a sky dome lights the scene
+    /// as a sky). The base colour texture stays for the alpha (MASK, BLEND); its colour is black.
+    static void makeUnlit(Material& m) {
+        m.unlit = true;
+        m.emissive = m.base_color;
+        m.emissive_strength = 1.0f;
+        m.emissive_texture = m.base_color_texture;
+        m.base_color = glm::vec3(0.0f);
+        m.metallic = 0.0f;
+        m.specular = 0.0f;
+        m.specular_texture = TextureRef{};
+        m.specular_color_texture = TextureRef{};
+        m.metallic_roughness_texture = TextureRef{};
+        m.clearcoat = 0.0f;
+        m.clearcoat_texture = TextureRef{};
+        m.clearcoat_roughness_texture = TextureRef{};
+        m.normal_texture = TextureRef{};
     }
 
     /// KHR_materials_pbrSpecularGlossiness (older exporters and sample models; it takes the

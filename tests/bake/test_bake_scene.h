@@ -12,6 +12,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace sharcbake {
 
@@ -28,7 +29,8 @@ struct TestBakeScene {
     std::unique_ptr<LightSampler> lights;
     std::unique_ptr<CameraPath> path;
 
-    explicit TestBakeScene(const std::string& name) : scene(loadGltf(scenePath(name))) {
+    explicit TestBakeScene(const std::string& name) : TestBakeScene(loadGltf(scenePath(name))) {}
+    explicit TestBakeScene(Scene loaded) : scene(std::move(loaded)) {
         tracer = std::make_unique<Tracer>(scene);
         lights = std::make_unique<LightSampler>(scene);
         path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());

@@ -97,6 +97,11 @@ struct Material {
     /// point lets rays through (unbent, untinted) with this probability (times the texture's R).
     float transmission = 0.0f;
     TextureRef transmission_texture;        ///< R channel (linear)
+    /// KHR_materials_unlit: the surface shows its base colour whatever the light. The loader
+    /// moves that colour into the emission (factor and texture; the base colour turns black, so
+    /// nothing is reflected); this flag makes the emission follow the vertex colours too, as the
+    /// base colour did.
+    bool unlit = false;
 
     /// True when rays may pass through some of this material's surface.
     bool cutsOut() const { return alpha_mode != AlphaMode::Opaque || transmission > 0.0f; }
