@@ -22,7 +22,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -314,15 +313,17 @@ private:
     /// A debug view evaluated at the primary hit (0 where the ray leaves the scene).
     glm::vec3 debugViewAt(const Ray& ray) {
         RayHit ray_hit;
-        counters_.closest_hit_rays.fetch_add(1, std::memory_order_relaxed);
+        TraceCounts ray_count;
+        ray_count.closest_hit_rays = 1;
+        counters_.add(ray_count);
         if (!tracer_->intersect(ray, ray_hit)) return glm::vec3(0.0f);
-        debug_hits_.fetch_add(1, std::memory_order_relaxed);
+        debug_counts_.add(kDebugHits);
         const SurfaceHit hit = makeSurfaceHit(scene_, ray_hit, ray.direction);
         const uint64_t key = cache_->key(hit.position, hit.geometric_normal);
         if (o_.debug_view == "cache") {
             const std::optional<CacheVoxel> v = cache_->find(key);
             if (!v) {
-                debug_missing_.fetch_add(1, std::memory_order_relaxed);
+                debug_counts_.add(kDebugMissing);
                 return glm::vec3(0.0f);
             }
             return glm::vec3(v->radiance[0], v->radiance[1], v->radiance[2]);
@@ -362,9 +363,10 @@ private:
                                  &progress);
         }
         render_seconds_ = secondsSince(render_start);
-        if (cache_) counters_.cache_misses = cache_->misses();
-        const uint64_t eligible = counters_.cache_hits + counters_.cache_misses;
-        hit_rate_ = eligible > 0 ? double(counters_.cache_hits) / double(eligible) : 0.0;
+        counts_ = counters_.total();
+        cache_misses_ = cache_ ? cache_->misses() : 0;
+        const uint64_t eligible = counts_.cache_hits + cache_misses_;
+        hit_rate_ = eligible > 0 ? double(counts_.cache_hits) / double(eligible) : 0.0;
         eligible_ = eligible;
     }
 
@@ -401,8 +403,8 @@ private:
         if (cache_) {
             metadata["sharcbake:cache"] = o_.cache_path;
             metadata["sharcbake:cache_voxels"] = std::to_string(cache_->view().voxelCount());
-            metadata["sharcbake:cache_hits"] = std::to_string(counters_.cache_hits.load());
-            metadata["sharcbake:cache_misses"] = std::to_string(counters_.cache_misses.load());
+            metadata["sharcbake:cache_hits"] = std::to_string(counts_.cache_hits);
+            metadata["sharcbake:cache_misses"] = std::to_string(cache_misses_);
             metadata["sharcbake:cache_refused"] = std::to_string(cache_->refused());
             metadata["sharcbake:cache_lookup"] = o_.cache_lookup;
             metadata["sharcbake:cache_nearest_level_hits"] = std::to_string(cache_->nearestLevelHits());
@@ -414,8 +416,9 @@ private:
             }
         }
         if (primaryView()) {
-            metadata["sharcbake:debug_primary_hits"] = std::to_string(debug_hits_.load());
-            if (o_.debug_view == "cache") metadata["sharcbake:debug_missing"] = std::to_string(debug_missing_.load());
+            metadata["sharcbake:debug_primary_hits"] = std::to_string(debug_counts_.total(kDebugHits));
+            if (o_.debug_view == "cache")
+                metadata["sharcbake:debug_missing"] = std::to_string(debug_counts_.total(kDebugMissing));
             if (occupancy_) metadata["sharcbake:debug_failed_inserts"] = std::to_string(occupancy_->failedInserts());
         }
         if (o_.debug_view == "bounces") metadata["sharcbake:debug_bounces_max"] = std::to_string(max_bounces_seen_);
@@ -432,21 +435,21 @@ private:
         total_seconds_ = secondsSince(start_);
     }
 
-    uint64_t rays() const { return counters_.closest_hit_rays + counters_.shadow_rays; }
+    uint64_t rays() const { return counts_.closest_hit_rays + counts_.shadow_rays; }
 
     void printSummary() const {
         std::printf("Rendered %dx%d, %u spp, camera '%s' in %.2f s (BVH build %.2f s, %d threads)\n", width_, height_,
                     o_.spp, camera_.name.c_str(), render_seconds_, build_seconds_, threads_);
         std::printf("  rays: %llu closest-hit + %llu shadow = %.3g rays/s\n",
-                    (unsigned long long)counters_.closest_hit_rays.load(),
-                    (unsigned long long)counters_.shadow_rays.load(), double(rays()) / render_seconds_);
+                    (unsigned long long)counts_.closest_hit_rays, (unsigned long long)counts_.shadow_rays,
+                    double(rays()) / render_seconds_);
         if (cache_ && !primaryView()) {
-            std::printf("  cache: %llu hits, %llu misses (hit rate %.1f%% of eligible lookups), %llu lookups "
-                        "refused by the segment/cone tests; %.3f cache hits per path\n",
-                        (unsigned long long)counters_.cache_hits.load(),
-                        (unsigned long long)counters_.cache_misses.load(), 100.0 * hit_rate_,
-                        (unsigned long long)cache_->refused(),
-                        double(counters_.cache_hits) / (double(width_) * double(height_) * double(o_.spp)));
+            std::printf(
+                "  cache: %llu hits, %llu misses (hit rate %.1f%% of eligible lookups), %llu lookups "
+                "refused by the segment/cone tests; %.3f cache hits per path\n",
+                (unsigned long long)counts_.cache_hits, (unsigned long long)cache_misses_, 100.0 * hit_rate_,
+                (unsigned long long)cache_->refused(),
+                double(counts_.cache_hits) / (double(width_) * double(height_) * double(o_.spp)));
             if (cache_->nearestLevelHits() > 0) {
                 std::printf("  of the hits, %llu came from another level than the camera's (--cache-lookup nearest)\n",
                             (unsigned long long)cache_->nearestLevelHits());
@@ -454,14 +457,14 @@ private:
         }
         if (o_.debug_view == "cache") {
             std::printf("  debug view 'cache': %llu of %llu primary hits have no cached voxel (written as 0)\n",
-                        (unsigned long long)debug_missing_.load(), (unsigned long long)debug_hits_.load());
+                        (unsigned long long)debug_counts_.total(kDebugMissing),
+                        (unsigned long long)debug_counts_.total(kDebugHits));
         } else if (o_.debug_view == "bounces") {
             std::printf("  debug view 'bounces': ramp blue (0) to red (%.2f bounces, the largest pixel mean)\n",
                         double(max_bounces_seen_));
         }
-        if (counters_.non_finite_samples > 0) {
-            std::printf("  dropped %llu non-finite path samples\n",
-                        (unsigned long long)counters_.non_finite_samples.load());
+        if (counts_.non_finite_samples > 0) {
+            std::printf("  dropped %llu non-finite path samples\n", (unsigned long long)counts_.non_finite_samples);
         }
         std::printf("Wrote %s%s\n", o_.output_path.c_str(),
                     output_is_png_ || png_path_.empty() ? "" : " and its .png preview");
@@ -469,26 +472,27 @@ private:
 
     void writeStatsJson() const {
         Json json = provenanceJson("render-stats", scene_, scene_hash_);
-        json.update({{"output", o_.output_path},
-                     {"cache", o_.cache_path.empty() ? Json(nullptr) : Json(o_.cache_path)},
-                     {"debug_view", o_.debug_view.empty() ? Json(nullptr) : Json(o_.debug_view)},
-                     {"camera", cameraJson(camera_)},
-                     {"width", width_},
-                     {"height", height_},
-                     {"samples_per_pixel", o_.spp},
-                     {"threads", threads_},
-                     {"seconds", {{"total", total_seconds_}, {"bvh_build", build_seconds_}, {"render", render_seconds_}}},
-                     {"closest_hit_rays", counters_.closest_hit_rays.load()},
-                     {"shadow_rays", counters_.shadow_rays.load()},
-                     {"rays_per_second", jsonNumber(double(rays()) / render_seconds_)},
-                     {"non_finite_samples", counters_.non_finite_samples.load()}});
+        json.update(
+            {{"output", o_.output_path},
+             {"cache", o_.cache_path.empty() ? Json(nullptr) : Json(o_.cache_path)},
+             {"debug_view", o_.debug_view.empty() ? Json(nullptr) : Json(o_.debug_view)},
+             {"camera", cameraJson(camera_)},
+             {"width", width_},
+             {"height", height_},
+             {"samples_per_pixel", o_.spp},
+             {"threads", threads_},
+             {"seconds", {{"total", total_seconds_}, {"bvh_build", build_seconds_}, {"render", render_seconds_}}},
+             {"closest_hit_rays", counts_.closest_hit_rays},
+             {"shadow_rays", counts_.shadow_rays},
+             {"rays_per_second", jsonNumber(double(rays()) / render_seconds_)},
+             {"non_finite_samples", counts_.non_finite_samples}});
         if (cache_) {
-            json["cache_hits"] = counters_.cache_hits.load();
-            json["cache_misses"] = counters_.cache_misses.load();
+            json["cache_hits"] = counts_.cache_hits;
+            json["cache_misses"] = cache_misses_;
             json["cache_refused"] = cache_->refused();
             json["cache_hit_rate"] = eligible_ > 0 ? jsonNumber(hit_rate_) : Json(nullptr);  // null: no lookups
         }
-        if (o_.debug_view == "cache") json["debug_missing"] = debug_missing_.load();
+        if (o_.debug_view == "cache") json["debug_missing"] = debug_counts_.total(kDebugMissing);
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
 
@@ -507,8 +511,11 @@ private:
     std::unique_ptr<BakedCache> cache_;
     std::unique_ptr<CountingCache> counting_cache_;
     std::unique_ptr<BucketOccupancy> occupancy_;
-    TraceCounters counters_;
-    std::atomic<uint64_t> debug_hits_{0}, debug_missing_{0};
+    TraceCounters counters_;     ///< added to while rendering
+    TraceCounts counts_;         ///< their totals, after render()
+    uint64_t cache_misses_ = 0;  ///< eligible cache lookups that found nothing (the cache counts them)
+    enum DebugCount : size_t { kDebugHits, kDebugMissing };
+    ShardedCounts<2> debug_counts_;  ///< debug views: primary hits, and of them voxels the cache lacks
     Image image_;
     double render_seconds_ = 0.0, total_seconds_ = 0.0;
     double hit_rate_ = 0.0;

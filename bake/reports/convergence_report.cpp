@@ -279,7 +279,8 @@ std::vector<PlainPathTracingRow> ConvergenceEvaluator::plainPathTracing(
         PlainPathTracingRow row;
         row.samples_per_pixel = total_samples;
         row.seconds = seconds;
-        row.rays = counters.closest_hit_rays + counters.shadow_rays;
+        const TraceCounts counts = counters.total();
+        row.rays = counts.closest_hit_rays + counts.shadow_rays;
         row.image = compareImages(mean, *reference_, &cache_mask_);
         rows.push_back(row);
         if (seconds >= until_seconds) break;

@@ -52,10 +52,7 @@ void BakedCache::setUp(glm::vec3 camera_position) {
 
 void BakedCache::setCamera(glm::vec3 camera_position) {
     params_.camera_position = Float3{camera_position.x, camera_position.y, camera_position.z};
-    refused_ = 0;
-    misses_ = 0;
-    hits_ = 0;
-    nearest_level_hits_ = 0;
+    counts_.reset();
 }
 
 uint64_t BakedCache::key(glm::vec3 position, glm::vec3 normal) const {
@@ -75,7 +72,7 @@ bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
     const uint64_t k = key(query.position, query.geometric_normal);
     const uint32_t wanted = decodeHashGridKey(k).level;
     if (!cacheQueryEligible(query.segment_length, query.cone_roughness, keyer_.voxelSizeAt(wanted))) {
-        refused_.fetch_add(1, std::memory_order_relaxed);
+        counts_.add(kRefused);
         return false;
     }
     std::optional<CacheVoxel> v = find(k);
@@ -92,13 +89,13 @@ bool BakedCache::lookup(const CacheQuery& query, glm::vec3& radiance) const {
                 best_distance = distance;
             }
         }
-        if (v) nearest_level_hits_.fetch_add(1, std::memory_order_relaxed);
+        if (v) counts_.add(kNearestLevelHits);
     }
     if (!v) {
-        misses_.fetch_add(1, std::memory_order_relaxed);
+        counts_.add(kMisses);
         return false;
     }
-    hits_.fetch_add(1, std::memory_order_relaxed);
+    counts_.add(kHits);
     radiance = glm::vec3(v->radiance[0], v->radiance[1], v->radiance[2]);
     return true;
 }

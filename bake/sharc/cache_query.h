@@ -4,14 +4,14 @@
 /// Query (docs/sharc_algorithm.md §6) with the application-side eligibility tests of the SDK sample.
 #pragma once
 
-#include "tracing/path_tracer.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/runtime.h"
+#include "support/sharded_counts.h"
+#include "tracing/path_tracer.h"
 
 #include <glm/glm.hpp>
 
-#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -36,7 +36,7 @@ enum class CacheLookup : uint8_t {
 /// the LOD centre. Every lookup goes through the runtime library (CacheView), the code engines
 /// ship: a file is opened by it, and a cache in memory (the bake's own, measured by its report)
 /// is first encoded exactly as the file would be. lookup() is thread-safe; its counters are
-/// relaxed atomics.
+/// sharded per thread (ShardedCounts), so counting costs the rendering threads no waiting.
 class BakedCache : public RadianceCache {
 public:
     /// A cache file opened by the runtime library (`render --cache`).
@@ -62,12 +62,12 @@ public:
     const HashGridParameters& parameters() const { return params_; }
 
     /// Lookups refused by the eligibility tests, and eligible lookups that found no voxel.
-    uint64_t refused() const { return refused_.load(std::memory_order_relaxed); }
-    uint64_t misses() const { return misses_.load(std::memory_order_relaxed); }
+    uint64_t refused() const { return counts_.total(kRefused); }
+    uint64_t misses() const { return counts_.total(kMisses); }
     /// Eligible lookups that returned a value (PathTracer counts the same as cache_hits).
-    uint64_t hits() const { return hits_.load(std::memory_order_relaxed); }
+    uint64_t hits() const { return counts_.total(kHits); }
     /// Of the hits, those answered from another level than the camera's (CacheLookup::NearestLevel).
-    uint64_t nearestLevelHits() const { return nearest_level_hits_.load(std::memory_order_relaxed); }
+    uint64_t nearestLevelHits() const { return counts_.total(kNearestLevelHits); }
     /// The levels the cache holds, ascending.
     const std::vector<uint32_t>& levels() const { return levels_; }
 
@@ -80,10 +80,8 @@ private:
     HashGridKeyer keyer_;  ///< the grid's voxel sizes and level keys, without a logarithm per query
     CacheLookup mode_;
     std::vector<uint32_t> levels_;
-    mutable std::atomic<uint64_t> refused_{0};
-    mutable std::atomic<uint64_t> nearest_level_hits_{0};
-    mutable std::atomic<uint64_t> misses_{0};
-    mutable std::atomic<uint64_t> hits_{0};
+    enum Count : size_t { kRefused, kNearestLevelHits, kMisses, kHits };
+    mutable ShardedCounts<4> counts_;  ///< added to by every rendering thread at once
 };
 
 }  // namespace sharcbake

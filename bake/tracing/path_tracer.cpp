@@ -37,10 +37,10 @@ ShadowQuery prepareDirectLight(const LightSampler& lights, const SurfaceHit& hit
 
 glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, const SurfaceHit& hit,
                               const GltfBsdf& bsdf, glm::vec3 wo, float u_select, glm::vec2 u_point,
-                              TraceCounters& counters) {
+                              TraceCounts& counts) {
     const ShadowQuery query = prepareDirectLight(lights, hit, bsdf, wo, u_select, u_point);
     if (!query.needed) return glm::vec3(0.0f);
-    counters.shadow_rays.fetch_add(1, std::memory_order_relaxed);
+    ++counts.shadow_rays;
     return tracer.occluded(query.ray) ? glm::vec3(0.0f) : query.unoccluded;
 }
 
@@ -60,11 +60,12 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
     glm::vec3 previous_position = ray.origin;
     glm::vec3 previous_shading_normal(0.0f);
     float cone_roughness = 0.0f;  // SHaRC's path spread: +1 per diffuse bounce, +roughness per glossy
+    TraceCounts counts;           // this path's, added to `counters` once at its end
 
     for (uint32_t bounce = 0;; ++bounce) {
         sampler.startDimension(kFirstBounceDimension + bounce * kDimensionsPerBounce);
         RayHit ray_hit;
-        counters.closest_hit_rays.fetch_add(1, std::memory_order_relaxed);
+        ++counts.closest_hit_rays;
         if (!tracer_.intersect(ray, ray_hit)) {
             if (lights_.hasSky()) {
                 const glm::vec3 sky = lights_.skyRadiance(ray.direction);
@@ -92,7 +93,7 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
             glm::vec3 cached;
             if (cache_->lookup(CacheQuery{hit.position, hit.geometric_normal, ray_hit.t, cone_roughness},
                                cached)) {
-                counters.cache_hits.fetch_add(1, std::memory_order_relaxed);
+                ++counts.cache_hits;
                 result += throughput * glm::max(cached - emitted, glm::vec3(0.0f));
                 break;
             }
@@ -103,8 +104,8 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
         const glm::vec2 u_light_select = sampler.next2D();
         const glm::vec2 u_light_point = sampler.next2D();
         if (lights_.hasLights()) {
-            result += throughput * estimateDirectLight(tracer_, lights_, hit, bsdf, wo, u_light_select.x,
-                                                       u_light_point, counters);
+            result += throughput *
+                      estimateDirectLight(tracer_, lights_, hit, bsdf, wo, u_light_select.x, u_light_point, counts);
         }
 
         const glm::vec2 u_lobe_rr = sampler.next2D();
@@ -125,11 +126,10 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
         previous_shading_normal = hit.shading_normal;
         ray = Ray{offsetRayOrigin(hit.position, hit.geometric_normal), s.wi};
     }
-    if (!isFiniteColor(result)) {
-        counters.non_finite_samples.fetch_add(1, std::memory_order_relaxed);
-        return glm::vec3(0.0f);
-    }
-    return result;
+    const bool finite = isFiniteColor(result);
+    counts.non_finite_samples += !finite;
+    counters.add(counts);
+    return finite ? result : glm::vec3(0.0f);
 }
 
 }  // namespace sharcbake

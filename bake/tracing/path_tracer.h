@@ -4,6 +4,7 @@
 /// importance sampling (power heuristic) for area, punctual and sky lights, Russian roulette.
 #pragma once
 
+#include "support/sharded_counts.h"
 #include "tracing/bsdf.h"
 #include "tracing/lights.h"
 #include "tracing/sampling.h"
@@ -11,7 +12,6 @@
 
 #include <glm/glm.hpp>
 
-#include <atomic>
 #include <cstdint>
 
 namespace sharcbake {
@@ -25,13 +25,30 @@ struct PathTracerSettings {
     uint32_t russian_roulette_start = 3;
 };
 
-/// Counters of one render; summed over threads with relaxed atomics.
-struct TraceCounters {
-    std::atomic<uint64_t> closest_hit_rays{0};
-    std::atomic<uint64_t> shadow_rays{0};
-    std::atomic<uint64_t> non_finite_samples{0};  ///< NaN/Inf path samples dropped
-    std::atomic<uint64_t> cache_hits{0};          ///< paths ended on a radiance-cache hit
-    std::atomic<uint64_t> cache_misses{0};        ///< eligible lookups that found nothing
+/// What paths counted: plain numbers, which a path keeps for itself and adds to its render's
+/// TraceCounters once, at its end.
+struct TraceCounts {
+    uint64_t closest_hit_rays = 0;
+    uint64_t shadow_rays = 0;
+    uint64_t non_finite_samples = 0;  ///< NaN/Inf path samples dropped
+    uint64_t cache_hits = 0;          ///< paths ended on a radiance-cache hit
+};
+
+/// The counts of one render, added to by all its threads at once (ShardedCounts: no thread waits
+/// on another's adds).
+class TraceCounters {
+public:
+    void add(const TraceCounts& counts) {
+        shares_.add(0, counts.closest_hit_rays);
+        shares_.add(1, counts.shadow_rays);
+        shares_.add(2, counts.non_finite_samples);
+        shares_.add(3, counts.cache_hits);
+    }
+    /// The sums so far (exact once the adding threads have finished).
+    TraceCounts total() const { return {shares_.total(0), shares_.total(1), shares_.total(2), shares_.total(3)}; }
+
+private:
+    ShardedCounts<4> shares_;
 };
 
 class GltfBsdf;
@@ -52,7 +69,7 @@ ShadowQuery prepareDirectLight(const LightSampler& lights, const SurfaceHit& hit
 /// (delta lights have weight 1). Shared by the reference path tracer and the SHaRC update.
 glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, const SurfaceHit& hit,
                               const GltfBsdf& bsdf, glm::vec3 wo, float u_select, glm::vec2 u_point,
-                              TraceCounters& counters);
+                              TraceCounts& counts);
 
 /// Russian roulette's survival probability at a vertex: the path's throughput so far (at most 1)
 /// times the vertex's directional albedo, largest channel. Decided before the direction is

@@ -7,6 +7,8 @@
 #include "bench_support.h"
 
 #include "sharcbake/scene_loader.h"
+#include "tracing/path_tracer.h"
+#include "tracing/render.h"
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
@@ -40,6 +42,7 @@ struct Options {
     std::vector<unsigned> thread_list{1, 2, 4, 8, 16};
     std::vector<uint32_t> triangle_list{1000, 10000, 100000, 1000000};
     std::vector<uint32_t> capacity_list{1u << 16, 1u << 18, 1u << 20, 1u << 22, 1u << 24};
+    uint32_t spp = 16;  ///< render: samples per pixel
 };
 
 void parseResolution(const std::string& text, int& width, int& height) {
@@ -108,6 +111,42 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
     std::fflush(stdout);
 }
 
+/// Plain path tracing (`sharcbake render` without a cache: reference images, the error reports'
+/// references) through the scene's first camera, else render's automatic one: closest-hit and
+/// shadow rays per second, and a digest of the image, equal for every thread count.
+void measureRender(const Options& o, const BakeScene& s, unsigned threads) {
+    int width = 0, height = 0;
+    parseResolution(o.resolution, width, height);
+    const Camera camera = s.scene.cameras.empty() ? automaticCamera(s.scene, glm::radians(kAutomaticCameraFovDegrees))
+                                                  : s.scene.cameras.front();
+    const PathTracer path_tracer(s.tracer, s.lights, PathTracerSettings{});
+    TraceCounters counters;
+    Image image;
+    tbb::task_arena arena{int(threads)};
+    const auto start = std::chrono::steady_clock::now();
+    arena.execute([&] {
+        image = renderImage(
+            CameraRays(camera, width, height), ImageRenderSettings{width, height, o.spp, 1},
+            [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
+            nullptr);
+    });
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const TraceCounts counts = counters.total();
+    uint64_t digest = 0xcbf29ce484222325ull;
+    for (const glm::vec3& pixel : image.pixels) {
+        const auto* bytes = reinterpret_cast<const uint8_t*>(&pixel);
+        for (size_t i = 0; i < sizeof(pixel); ++i) digest = (digest ^ bytes[i]) * 0x100000001b3ull;
+    }
+    std::printf(
+        "{\"series\": \"render\", \"scene\": \"%s\", \"threads\": %u, \"resolution\": \"%dx%d\", "
+        "\"spp\": %u, \"seconds\": %.4f, \"closest_hit_rays\": %llu, \"shadow_rays\": %llu, "
+        "\"rays_per_second\": %.4g, \"image_fnv1a\": \"%016llx\"}\n",
+        sceneName(o, s).c_str(), threads, width, height, o.spp, seconds, (unsigned long long)counts.closest_hit_rays,
+        (unsigned long long)counts.shadow_rays, double(counts.closest_hit_rays + counts.shadow_rays) / seconds,
+        (unsigned long long)digest);
+    std::fflush(stdout);
+}
+
 /// One bake in this process, for the capacity series: its peak memory is this process's.
 void measureOneBake(const Options& o) {
     const uint64_t before = peakResidentBytes();
@@ -159,7 +198,8 @@ int main(int argc, char** argv) {
         "  bake_bench limit --scene scenes/cornell_box/cornell_box.gltf\n"
         "  bake_bench scaling --threads-list 1,2,4,8,16\n"
         "  bake_bench scene-size --triangles-list 1000,10000,100000,1000000\n"
-        "  bake_bench capacity --capacity-list 65536,1048576,16777216"};
+        "  bake_bench capacity --capacity-list 65536,1048576,16777216\n"
+        "  bake_bench render --scene scenes/cornell_box/cornell_box.gltf --threads-list 1,16 --resolution 160x160"};
     app.require_subcommand(1);
     Options o;
     auto common = [&o](CLI::App* cmd) {
@@ -192,6 +232,10 @@ int main(int argc, char** argv) {
     capacity->add_option("--capacity-list", o.capacity_list, "Capacities (slots)")->delimiter(',');
     CLI::App* one_bake = app.add_subcommand("one-bake", "One bake with its peak memory (used by `capacity`)");
     common(one_bake);
+    CLI::App* render = app.add_subcommand("render", "Plain path tracing (a reference render) per thread count");
+    common(render);
+    render->add_option("--threads-list", o.thread_list, "Thread counts")->delimiter(',');
+    render->add_option("--spp", o.spp, "Samples per pixel")->capture_default_str();
     CLI11_PARSE(app, argc, argv);
 
     try {
@@ -218,6 +262,11 @@ int main(int argc, char** argv) {
             return runCapacitySeries(o, std::filesystem::read_symlink("/proc/self/exe").string());
         } else if (one_bake->parsed()) {
             measureOneBake(o);
+        } else if (render->parsed()) {
+            const std::unique_ptr<BakeScene> s = loadBakeScene(o, o.triangles);
+            for (unsigned t : o.thread_list) {
+                if (t <= all) measureRender(o, *s, t);
+            }
         }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "bake_bench: %s\n", e.what());
