@@ -16,7 +16,7 @@ namespace {
 /// Radiance propagated back to a vertex is added to that vertex's own deposit (same voxel, same
 /// iteration) instead of becoming a deposit of its own, as SharcUpdateHit's atomic adds would: the
 /// voxel's sums are the same, with one fixed-point rounding instead of several, and the commit
-/// looks up and adds a third fewer deposits.
+/// looks up and adds about half as many deposits.
 struct PathHistory {
     static constexpr uint32_t kMaxDepth = 16;
     std::array<uint32_t, kMaxDepth> deposits{};  ///< index into the path's deposits
@@ -28,11 +28,11 @@ struct PathHistory {
         for (uint32_t j = 0; j < length; ++j) {
             const glm::vec3 value = radiance * weights[j];
             if (!(maxComponent(value) > 0.0f)) continue;
-            Deposit& own = out[deposits[j]];
             if (isFiniteColor(value)) {
-                own.radiance += value;
+                out[deposits[j]].radiance += value;
             } else {
-                out.push_back(Deposit{own.key, value, 0});  // kept apart: the commit counts and drops it
+                const uint64_t key = out[deposits[j]].key;
+                out.push_back(Deposit{key, value, 0});  // kept apart: the commit counts and drops it
             }
         }
     }
