@@ -87,14 +87,15 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
     BakedCache baked(cache, glm::vec3(0.0f));
     const float min_distance2 =
         region.kind == ViewRegion::Kind::Distance ? region.min_distance * region.min_distance : 0.0f;
-    for (size_t v = 0; v < views.size(); ++v) {
+    // One view's lookups at w x h pixels; `pass` keys the samples, so a replay draws new ones.
+    const auto replay = [&](size_t v, int w, int h, uint32_t pass) {
         const Camera& camera = views[v].camera;
         baked.setCamera(camera.position);
-        const CameraRays rays(camera, width, height);
-        tbb::parallel_for(tbb::blocked_range<int>(0, width * height, 256), [&](const tbb::blocked_range<int>& r) {
+        const CameraRays rays(camera, w, h);
+        tbb::parallel_for(tbb::blocked_range<int>(0, w * h, 256), [&](const tbb::blocked_range<int>& r) {
             for (int pixel = r.begin(); pixel != r.end(); ++pixel) {
-                PixelSampler sampler(uint32_t(v) * 0x9E3779B1u, uint32_t(pixel), 0);
-                const Ray primary = rays.generate(pixel % width, pixel / width, sampler.next2D());
+                PixelSampler sampler(uint32_t(v) * 0x9E3779B1u, uint32_t(pixel), pass);
+                const Ray primary = rays.generate(pixel % w, pixel / w, sampler.next2D());
                 RayHit first;
                 if (!tracer.intersect(primary, first)) continue;
                 const SurfaceHit a = makeSurfaceHit(tracer.scene(), first, primary.direction);
@@ -114,6 +115,19 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
         rate.view = views[v];
         rate.hits = baked.hits();
         rate.eligible = baked.hits() + baked.misses();
+        return rate;
+    };
+    for (size_t v = 0; v < views.size(); ++v) {
+        ViewHitRate rate = replay(v, width, height, 0);
+        // A declared camera whose frame is mostly sky (a small model in it) gets few lookups at
+        // this size: its own rate, which the bake reports, is replayed at 4 times the size each
+        // way until it has enough lookups, up to kDeclaredViewMaxScale.
+        uint32_t pass = 0;
+        for (int scale = 4;
+             views[v].declared && rate.eligible < kDeclaredViewMinLookups && scale <= kDeclaredViewMaxScale;
+             scale *= 4) {
+            rate = replay(v, width * scale, height * scale, ++pass);
+        }
         prediction.hits += rate.hits;
         prediction.eligible += rate.eligible;
         prediction.views.push_back(rate);

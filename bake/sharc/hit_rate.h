@@ -47,7 +47,13 @@ struct HitRatePrediction {
 std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
                                             uint32_t seed);
 
-/// Replays the lookups of `width` x `height` pixels (one diffuse bounce each) from every view.
+/// A declared view with fewer lookups than this at the prediction's size (a small model in its
+/// frame) is replayed at 4 and then 16 times the size in each direction (kDeclaredViewMaxScale).
+inline constexpr uint64_t kDeclaredViewMinLookups = 1000;
+inline constexpr int kDeclaredViewMaxScale = 16;
+
+/// Replays the lookups of `width` x `height` pixels (one diffuse bounce each) from every view
+/// (a declared one with too few lookups again at a larger size, see kDeclaredViewMinLookups).
 /// For a Distance region, lookups nearer the camera than its minimum are not counted (they are
 /// outside what was declared). The counts do not depend on the thread count.
 HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, const ViewRegion& region,

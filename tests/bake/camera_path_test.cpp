@@ -306,5 +306,37 @@ TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {
     EXPECT_LT(after, 0.1 * before);   // measured 0.027
 }
 
+TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
+    // The table seen from 3 m: most of the camera's 64x64 pixels see sky and most bounces from
+    // the table leave it, so its own rate rested on a few dozen lookups. It is replayed at larger
+    // sizes until it has enough; region samples keep the prediction's size.
+    test::TempDir dir;
+    const Scene scene = loadTable(dir, true);
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);
+    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
+    BakeSettings settings;
+    settings.width = settings.height = 64;
+    settings.sharc.grid.capacity = 1u << 16;
+    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+    for (int i = 0; i < 4; ++i) baker.runIteration();
+    const CacheData data = toCacheData(baker.cache());
+    const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 4, 1);
+    ASSERT_TRUE(views.front().declared);
+    const HitRatePrediction small = predictHitRate(tracer, data, ViewRegion{}, {views.front()}, 16, 16);
+    const HitRatePrediction normal = predictHitRate(tracer, data, ViewRegion{}, views);
+    ASSERT_EQ(normal.views.size(), views.size());
+    // At the default 64x64 the camera saw 27 lookups, at 256x256 444: it is replayed up to
+    // 1024x1024, which gives it enough.
+    EXPECT_GE(normal.views.front().eligible, kDeclaredViewMinLookups);
+    // From 16x16 (256 pixels) the replays stop at 16 times the size each way, 256x256.
+    EXPECT_GT(small.views.front().eligible, 256u);
+    EXPECT_LT(small.views.front().eligible, kDeclaredViewMinLookups);
+    for (size_t v = 1; v < normal.views.size(); ++v) {
+        EXPECT_FALSE(normal.views[v].view.declared);
+        EXPECT_LE(normal.views[v].eligible, 64u * 64u);  // one lookup per pixel at most
+    }
+}
+
 }  // namespace
 }  // namespace sharcbake
