@@ -234,7 +234,7 @@ InsertRanges insertRanges(uint32_t capacity, uint32_t probes) {
 /// per 4096 keys. The result does not depend on them (the sort is stable).
 constexpr size_t kGroupBlocks = 64;
 constexpr size_t kKeysPerGroupBlock = 4096;
-/// Below this many keys the ranges are inserted one after another on the calling thread.
+/// Below this many keys they are inserted on the calling thread, in the ranges' order.
 constexpr size_t kParallelInsertFrom = 4096;
 /// Finer voxels per task when their coarser keys are looked up.
 constexpr size_t kLinkBlock = 1024;
@@ -348,7 +348,7 @@ void SharcCache::lookUpSlots(const std::vector<Deposit>& deposits, size_t chunk,
 //    Slot assignment therefore depends only on the paths, never on the threads (insertByRange).
 //    Only the deposits listed as new are visited.
 void SharcCache::insertNewKeys() {
-    occupied_ += insertByRange(groupByRange(chunk_missing_), [this](const NewKey& k, uint32_t slot) {
+    occupied_ += insertByRange(chunk_missing_, [this](const NewKey& k, uint32_t slot) {
         chunk_slots_[k.owner][k.index] = slot == kNoSlot ? kFailedInsert : slot;
     });
 }
@@ -421,45 +421,62 @@ SharcCache::KeysByRange SharcCache::groupByRange(const std::vector<std::vector<N
     return grouped;
 }
 
+template <typename Store>
+bool SharcCache::insertKey(const NewKey& k, Store& store) {
+    // A key listed several times (one per deposit, or per finer voxel) is inserted by its first
+    // occurrence; the later ones find it.
+    const Probe probe = probeBucket(k.key, k.base);
+    if (probe.found || probe.slot == kNoSlot) {
+        store(k, probe.slot);
+        return false;
+    }
+    // No other range writes this window now, so the insert takes probe.slot.
+    const std::optional<uint32_t> slot = table_.insert(k.key);
+    store(k, slot.value_or(kNoSlot));
+    return slot.has_value();
+}
+
 // Ranges run in two phases, the even ones in parallel and then the odd ones, each inserting its
 // keys serially in their order. A key whose bucket starts in range r probes only up to
 // bucket_size - 1 slots past r's end, i.e. into range r + 1, never further (ranges are longer
 // than that): two ranges of one phase therefore never read or write the same slot, and every
 // range sees the table exactly as the previous phase left it. Slots depend on the keys' order
 // and the ranges (the capacity) only.
+//
+// Few keys (a warm cache's new ones, a level's new coarser voxels) take the same order on this
+// thread without being grouped: every key of an even range in list order, then every key of an
+// odd range. Keys of different ranges of one phase never meet, so interleaving them changes
+// nothing, and grouping would cost O(ranges) (up to 1024) per call, nine levels per iteration.
 template <typename Store>
-uint64_t SharcCache::insertByRange(const KeysByRange& grouped, Store&& store) {
-    const size_t ranges = grouped.range_begin.size() - 1;
-    const size_t total = grouped.range_begin.back();
+uint64_t SharcCache::insertByRange(const std::vector<std::vector<NewKey>>& lists, Store&& store) {
+    size_t total = 0;
+    for (const std::vector<NewKey>& list : lists) total += list.size();
     if (total == 0) return 0;
+    if (total < kParallelInsertFrom) {
+        const InsertRanges ranges = insertRanges(table_.capacity(),
+                                                 bucketProbeCount(table_.capacity(), table_.bucketSize()));
+        uint64_t fresh = 0;
+        for (size_t parity = 0; parity < 2; ++parity) {
+            for (const std::vector<NewKey>& list : lists) {
+                for (const NewKey& k : list) {
+                    if ((ranges.of(k.base) & 1u) == parity) fresh += insertKey(k, store);
+                }
+            }
+        }
+        return fresh;
+    }
+    const KeysByRange grouped = groupByRange(lists);
+    const size_t range_count = grouped.range_begin.size() - 1;
     const auto insertRange = [&](size_t range) {
         uint64_t range_fresh = 0;
         for (size_t i = grouped.range_begin[range]; i < grouped.range_begin[range + 1]; ++i) {
-            const NewKey& k = grouped.keys[i];
-            // A key listed several times (one per deposit, or per finer voxel) is inserted by
-            // its first occurrence; the later ones find it.
-            const Probe probe = probeBucket(k.key, k.base);
-            if (probe.found || probe.slot == kNoSlot) {
-                store(k, probe.slot);
-            } else {
-                // No other range writes this window now, so the insert takes probe.slot.
-                const std::optional<uint32_t> slot = table_.insert(k.key);
-                range_fresh += slot.has_value();
-                store(k, slot.value_or(kNoSlot));
-            }
+            range_fresh += insertKey(grouped.keys[i], store);
         }
         return range_fresh;
     };
     std::atomic<uint64_t> fresh{0};
     for (size_t parity = 0; parity < 2; ++parity) {
-        const size_t count = (ranges + 1 - parity) / 2;
-        if (total < kParallelInsertFrom) {
-            // A warm cache's few new keys: the same ranges in the same order, on this thread
-            // (the result is the same, without a thousand near-empty tasks).
-            for (size_t half = 0; half < count; ++half) fresh += insertRange(2 * half + parity);
-            continue;
-        }
-        tbb::parallel_for(size_t(0), count, [&](size_t half) {
+        tbb::parallel_for(size_t(0), (range_count + 1 - parity) / 2, [&](size_t half) {
             fresh.fetch_add(insertRange(2 * half + parity), std::memory_order_relaxed);
         });
     }
@@ -710,7 +727,7 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
         }
     });
     std::atomic<uint64_t> failed{0};
-    occupied_ += insertByRange(groupByRange(missing), [&](const NewKey& k, uint32_t parent) {
+    occupied_ += insertByRange(missing, [&](const NewKey& k, uint32_t parent) {
         if (parent == kNoSlot) {
             failed.fetch_add(1, std::memory_order_relaxed);  // the finer voxel keeps its samples; this level lacks it
         } else {

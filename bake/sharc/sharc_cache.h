@@ -270,10 +270,14 @@ private:
     /// slot. All even ranges insert their keys in parallel, then all odd ranges, each range
     /// serially in its keys' order: ranges running together never share a slot, so a key's slot
     /// depends on the keys and their order only, never on the thread count or the scheduling.
-    /// Calls store(key, slot) per key (kHashGridInvalidIndex when its bucket is full) and returns
-    /// how many keys were new to the table.
+    /// The keys of `lists` are taken in order (grouped by range when there are many). Calls
+    /// store(key, slot) per key (kHashGridInvalidIndex when its bucket is full) and returns how
+    /// many keys were new to the table.
     template <typename Store>
-    uint64_t insertByRange(const KeysByRange& grouped, Store&& store);
+    uint64_t insertByRange(const std::vector<std::vector<NewKey>>& lists, Store&& store);
+    /// One key of insertByRange: found, inserted, or its bucket full; true when it was new.
+    template <typename Store>
+    bool insertKey(const NewKey& k, Store& store);
     /// The voxel's new short-window feedback value (r.frames already counts this iteration).
     glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
 
