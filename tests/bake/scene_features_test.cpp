@@ -553,8 +553,9 @@ TEST(Unlit, ADomeLightsTheSceneAsASkyWouldInPathTracing) {
 }
 
 /// The mean radiance of a bake's floor voxels (bottom layer of cells, away from the sides, where
-/// the cells hold floor and dome together: the key has no normal here), and the largest relative
-/// error of its dome voxels (every other cell) against the dome's colour.
+/// cells can hold floor and dome together: the key keeps only the normal's signs, which the floor,
+/// facing +Y, shares with the dome's faces facing +X and +Z), and the largest relative error of
+/// its dome voxels (every other cell) against the dome's colour.
 struct DomeBakeResult {
     glm::dvec3 floor_mean{0.0};
     uint32_t floor_voxels = 0, dome_voxels = 0;
