@@ -117,6 +117,7 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
         rate.eligible = baked.hits() + baked.misses();
         return rate;
     };
+    uint64_t replayed_pixels = 0;
     for (size_t v = 0; v < views.size(); ++v) {
         ViewHitRate rate = replay(v, width, height, 0);
         // A declared camera whose frame is mostly sky (a small model in it) gets few lookups at
@@ -126,6 +127,9 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
         for (int scale = 4;
              views[v].declared && rate.eligible < kDeclaredViewMinLookups && scale <= kDeclaredViewMaxScale;
              scale *= 4) {
+            const uint64_t pixels = uint64_t(width * scale) * uint64_t(height * scale);
+            if (replayed_pixels + pixels > kReplayPixelBudget) break;
+            replayed_pixels += pixels;
             rate = replay(v, width * scale, height * scale, ++pass);
         }
         prediction.hits += rate.hits;

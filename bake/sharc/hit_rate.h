@@ -51,6 +51,9 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
 /// frame) is replayed at 4 and then 16 times the size in each direction (kDeclaredViewMaxScale).
 inline constexpr uint64_t kDeclaredViewMinLookups = 1000;
 inline constexpr int kDeclaredViewMaxScale = 16;
+/// Replays stop, view by view in order, once they would take more pixels than this in all (a
+/// scene with hundreds of glTF cameras): sixteen views at 1024x1024.
+inline constexpr uint64_t kReplayPixelBudget = uint64_t(16) << 20;
 
 /// Replays the lookups of `width` x `height` pixels (one diffuse bounce each) from every view
 /// (a declared one with too few lookups again at a larger size, see kDeclaredViewMinLookups).

@@ -338,5 +338,31 @@ TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
     }
 }
 
+TEST(PredictHitRate, ReplaysStopAtTheirPixelBudget) {
+    // Forty glTF cameras that each see the small table: replays stop once they would exceed
+    // kReplayPixelBudget (each camera's take 256x256 + 1024x1024 pixels), so a scene with
+    // hundreds of cameras is not predicted at a million pixels each.
+    test::TempDir dir;
+    Scene scene = loadTable(dir, true);
+    const Camera camera = scene.cameras.front();
+    scene.cameras.assign(40, camera);
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);
+    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
+    BakeSettings settings;
+    settings.width = settings.height = 64;
+    settings.sharc.grid.capacity = 1u << 16;
+    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+    baker.runIteration();
+    const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
+    ASSERT_EQ(views.size(), 40u);
+    const HitRatePrediction prediction = predictHitRate(tracer, toCacheData(baker.cache()), ViewRegion{}, views);
+    size_t replayed_fully = 0;
+    for (const ViewHitRate& v : prediction.views) replayed_fully += v.eligible >= kDeclaredViewMinLookups;
+    const uint64_t per_view = 256u * 256u + 1024u * 1024u;
+    EXPECT_EQ(replayed_fully, size_t(kReplayPixelBudget / per_view));
+    EXPECT_LT(prediction.views.back().eligible, kDeclaredViewMinLookups);
+}
+
 }  // namespace
 }  // namespace sharcbake
