@@ -75,7 +75,8 @@ glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, 
 /// times the vertex's directional albedo, largest channel. Decided before the direction is
 /// sampled, it never depends on the sample's weight, and above a throughput of 1 paths still
 /// thin by the albedo, so the throughput divided by it has the expectation it had: it cannot run
-/// away geometrically in a high-albedo scene.
+/// away geometrically in a high-albedo scene. (The SHaRC update uses the albedo alone: each of its
+/// vertices is an estimate of its own voxel, whatever the camera's throughput; sharc_update.cpp.)
 inline float russianRouletteSurvival(glm::vec3 throughput, glm::vec3 albedo) {
     return std::min(1.0f, maxComponent(albedo) * std::min(1.0f, maxComponent(throughput)));
 }
