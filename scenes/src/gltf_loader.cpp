@@ -90,6 +90,16 @@ glm::vec3 vec3Or(const std::vector<double>& v, glm::vec3 fallback) {
     return glm::vec3(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
 }
 
+std::string numberText(float v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", double(v));
+    return text;
+}
+
+std::string vec3Text(glm::vec3 v) {
+    return "(" + numberText(v.x) + ", " + numberText(v.y) + ", " + numberText(v.z) + ")";
+}
+
 bool isFinite(const glm::vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -1469,8 +1479,39 @@ private:
         readMaterialExtensions(src, m, label);
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness"))
             readSpecularGlossiness(*ext, m, label);
+        clampToGltfRanges(m, label);
         if (extension(src.extensions, "KHR_materials_unlit")) makeUnlit(m);
         return m;
+    }
+
+    /// Factors outside the ranges glTF gives them are clamped into them, with one warning per
+    /// material naming each. A base colour above 1 reflects more light than reaches the surface,
+    /// so light would grow with every bounce; negative ones would subtract light. Emission above
+    /// 1 is kept (exporters from before KHR_materials_emissive_strength write bright lights so);
+    /// below 0 it is not.
+    void clampToGltfRanges(Material& m, const std::string& label) {
+        std::string fixed;
+        const auto note = [&fixed](const std::string& what) { fixed += (fixed.empty() ? "" : ", ") + what; };
+        const auto clampVec3 = [&](glm::vec3& v, float lo, float hi, float fallback, const char* name) {
+            const glm::vec3 before = v;
+            for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? std::clamp(v[c], lo, hi) : fallback;
+            if (v != before) note(std::string(name) + " " + vec3Text(before) + " -> " + vec3Text(v));
+        };
+        const auto clampFloat = [&](float& v, float lo, float hi, float fallback, const char* name) {
+            const float before = v;
+            v = std::isfinite(v) ? std::clamp(v, lo, hi) : fallback;
+            if (v != before) note(std::string(name) + " " + numberText(before) + " -> " + numberText(v));
+        };
+        const float kNoLimit = std::numeric_limits<float>::max();
+        clampVec3(m.base_color, 0.0f, 1.0f, 1.0f, "base colour");
+        clampFloat(m.metallic, 0.0f, 1.0f, 1.0f, "metallic");
+        clampFloat(m.roughness, 0.0f, 1.0f, 1.0f, "roughness");
+        clampVec3(m.emissive, 0.0f, kNoLimit, 0.0f, "emissive");
+        clampFloat(m.emissive_strength, 0.0f, kNoLimit, 1.0f, "emissive strength");
+        clampFloat(m.specular, 0.0f, 1.0f, 1.0f, "specular");
+        clampVec3(m.specular_color, 0.0f, kNoLimit, 1.0f, "specular colour");
+        clampFloat(m.ior, 0.0f, kNoLimit, 1.5f, "ior");
+        if (!fixed.empty()) warn(label + ": factors outside glTF's ranges clamped into them (" + fixed + ")");
     }
 
     /// KHR_materials_unlit (scanned and pre-lit models, sky domes, stylised assets): viewers show

@@ -697,6 +697,38 @@ TEST(GltfLoaderMaterials, FactorsAndExtensionsParsed) {
     EXPECT_EQ(scene.triangle_materials[1], 1u);
 }
 
+TEST(GltfLoaderMaterials, FactorsOutsideGltfsRangesAreClampedWithAWarning) {
+    // A base colour above 1 reflects more light than reaches the surface: light would grow with
+    // every bounce of the bake. Emission above 1 stays (older exporters write bright lights so).
+    TempDir dir;
+    GltfBuilder b;
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial(
+        {{"name", "Hot"},
+         {"pbrMetallicRoughness",
+          {{"baseColorFactor", {1.5, -0.2, 0.5, 1.0}}, {"metallicFactor", 1.3}, {"roughnessFactor", -0.1}}},
+         {"emissiveFactor", {-1.0, 2.0, 0.0}},
+         {"extensions", {{"KHR_materials_specular", {{"specularFactor", 4.0}}}}}});
+    const int plain = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({b.addMeshNode(prim), plain});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "ranges.gltf"));
+    const Material& m = scene.materials.at(0);
+    expectVec3Near(m.base_color, {1.0f, 0.0f, 0.5f});
+    EXPECT_FLOAT_EQ(m.metallic, 1.0f);
+    EXPECT_FLOAT_EQ(m.roughness, 0.0f);
+    expectVec3Near(m.emissive, {0.0f, 2.0f, 0.0f});
+    EXPECT_FLOAT_EQ(m.specular, 1.0f);
+    size_t warnings = 0;
+    for (const std::string& w : scene.stats.warnings) {
+        if (w.find("outside glTF's ranges clamped") == std::string::npos) continue;
+        ++warnings;
+        EXPECT_NE(w.find("'Hot'"), std::string::npos) << w;
+        EXPECT_NE(w.find("base colour (1.5, -0.2, 0.5) -> (1, 0, 0.5)"), std::string::npos) << w;
+        EXPECT_NE(w.find("emissive (-1, 2, 0) -> (0, 2, 0)"), std::string::npos) << w;
+    }
+    EXPECT_EQ(warnings, 1u);  // one for the material, none for the default one
+}
+
 TEST(GltfLoaderMaterials, SceneWithoutMaterialsGetsDefault) {
     TempDir dir;
     GltfBuilder b;
