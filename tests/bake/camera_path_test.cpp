@@ -306,6 +306,19 @@ TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {
     EXPECT_LT(after, 0.1 * before);   // measured 0.027
 }
 
+/// `iterations` iterations of a small bake of `scene` from its exploring camera path, as the
+/// file would hold them.
+CacheData smallBake(const Scene& scene, const Tracer& tracer, int iterations) {
+    const LightSampler lights(scene);
+    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
+    BakeSettings settings;
+    settings.width = settings.height = 64;
+    settings.sharc.grid.capacity = 1u << 16;
+    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+    for (int i = 0; i < iterations; ++i) baker.runIteration();
+    return toCacheData(baker.cache());
+}
+
 TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
     // The table seen from 3 m: most of the camera's 64x64 pixels see sky and most bounces from
     // the table leave it, so its own rate rested on a few dozen lookups. It is replayed at larger
@@ -313,14 +326,7 @@ TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
     test::TempDir dir;
     const Scene scene = loadTable(dir, true);
     const Tracer tracer(scene);
-    const LightSampler lights(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
-    BakeSettings settings;
-    settings.width = settings.height = 64;
-    settings.sharc.grid.capacity = 1u << 16;
-    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
-    for (int i = 0; i < 4; ++i) baker.runIteration();
-    const CacheData data = toCacheData(baker.cache());
+    const CacheData data = smallBake(scene, tracer, 4);
     const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 4, 1);
     ASSERT_TRUE(views.front().declared);
     const HitRatePrediction small = predictHitRate(tracer, data, ViewRegion{}, {views.front()}, 16, 16);
@@ -347,16 +353,10 @@ TEST(PredictHitRate, ReplaysStopAtTheirPixelBudget) {
     const Camera camera = scene.cameras.front();
     scene.cameras.assign(40, camera);
     const Tracer tracer(scene);
-    const LightSampler lights(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
-    BakeSettings settings;
-    settings.width = settings.height = 64;
-    settings.sharc.grid.capacity = 1u << 16;
-    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
-    baker.runIteration();
+    const CacheData data = smallBake(scene, tracer, 1);
     const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
     ASSERT_EQ(views.size(), 40u);
-    const HitRatePrediction prediction = predictHitRate(tracer, toCacheData(baker.cache()), ViewRegion{}, views);
+    const HitRatePrediction prediction = predictHitRate(tracer, data, ViewRegion{}, views);
     size_t replayed_fully = 0;
     for (const ViewHitRate& v : prediction.views) replayed_fully += v.eligible >= kDeclaredViewMinLookups;
     const uint64_t per_view = 256u * 256u + 1024u * 1024u;
