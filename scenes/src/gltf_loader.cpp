@@ -1890,8 +1890,18 @@ private:
         light.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
         const glm::dvec3 dir = glm::dmat3(world) * glm::dvec3(0.0, 0.0, -1.0);
         if (glm::length(dir) > 0.0) light.direction = glm::vec3(glm::normalize(dir));
-        const glm::vec3 colour = vec3Or(src.color, glm::vec3(1.0f));
-        light.intensity = colour * static_cast<float>(src.intensity / kLumensPerWatt);
+        // A negative colour or intensity would take light away; out of the extension's ranges, they
+        // are clamped into them (colour [0, 1], intensity at least 0) with a warning.
+        const glm::vec3 given_colour = vec3Or(src.color, glm::vec3(1.0f));
+        glm::vec3 colour = given_colour;
+        for (int c = 0; c < 3; ++c) colour[c] = std::isfinite(colour[c]) ? std::clamp(colour[c], 0.0f, 1.0f) : 1.0f;
+        const double intensity = std::isfinite(src.intensity) ? std::max(src.intensity, 0.0) : 1.0;
+        if (colour != given_colour || intensity != src.intensity) {
+            warn("light " + quoted(src.name) + ": colour " + vec3Text(given_colour) + " and intensity " +
+                 numberText(float(src.intensity)) + " clamped into KHR_lights_punctual's ranges (colour [0, 1], " +
+                 "intensity at least 0): " + vec3Text(colour) + ", " + numberText(float(intensity)));
+        }
+        light.intensity = colour * static_cast<float>(intensity / kLumensPerWatt);
         light.range = src.range > 0.0 ? static_cast<float>(src.range) : 0.0f;
         if (light.type == LightType::Spot) setSpotCone(src, light);
         return light;

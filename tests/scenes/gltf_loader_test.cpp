@@ -1055,6 +1055,26 @@ TEST(GltfLoaderLights, SpotConesClampedToValidRange) {
     EXPECT_FALSE(scene.stats.warnings.empty());
 }
 
+TEST(GltfLoaderLights, NegativeColourAndIntensityAreClampedWithAWarning) {
+    // A negative light would take light away from every surface it reaches.
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "Dark"}, {"type", "point"}, {"color", {1.5, -1.0, 0.5}}, {"intensity", 683.0}},
+         {{"name", "Minus"}, {"type", "point"}, {"intensity", -683.0}}});
+    const int a = b.addNode({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    const int c = b.addNode({{"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});
+    b.setScene({a, c});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "negative.gltf"));
+    ASSERT_EQ(scene.lights.size(), 2u);
+    expectVec3Near(scene.lights[0].intensity, {1.0f, 0.0f, 0.5f});
+    expectVec3Near(scene.lights[1].intensity, {0.0f, 0.0f, 0.0f});
+    size_t warnings = 0;
+    for (const std::string& w : scene.stats.warnings)
+        warnings += w.find("clamped into KHR_lights_punctual") != std::string::npos;
+    EXPECT_EQ(warnings, 2u);
+}
+
 TEST(GltfLoaderLights, MissingLightIndexIsAnError) {
     TempDir dir;
     GltfBuilder b;
