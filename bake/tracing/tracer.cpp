@@ -135,6 +135,18 @@ namespace {
 /// first ray, which Embree skips).
 constexpr int kPacketWidth = 16;
 
+/// Sets the valid mask and the rays of one packet from rays[start, start + 16) (fewer at the
+/// end: lanes past `count` trace a copy of rays[start], masked off). Returns the active lanes.
+template <typename RayN>
+int fillPacket(const Ray* rays, size_t start, size_t count, int (&valid)[kPacketWidth], RayN& packet) {
+    const int n = int(std::min<size_t>(kPacketWidth, count - start));
+    for (int i = 0; i < kPacketWidth; ++i) {
+        valid[i] = i < n ? -1 : 0;
+        initEmbreeLane(rays[start + size_t(i < n ? i : 0)], packet, i);
+    }
+    return n;
+}
+
 }  // namespace
 
 void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t* found) const {
@@ -143,10 +155,8 @@ void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t*
     alignas(64) int valid[kPacketWidth];
     alignas(64) RTCRayHit16 packet;
     for (size_t start = 0; start < count; start += kPacketWidth) {
-        const int n = int(std::min<size_t>(kPacketWidth, count - start));
+        const int n = fillPacket(rays, start, count, valid, packet.ray);
         for (int i = 0; i < kPacketWidth; ++i) {
-            valid[i] = i < n ? -1 : 0;
-            initEmbreeLane(rays[start + size_t(i < n ? i : 0)], packet.ray, i);
             packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
             packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -164,11 +174,7 @@ void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const
     alignas(64) int valid[kPacketWidth];
     alignas(64) RTCRay16 packet;
     for (size_t start = 0; start < count; start += kPacketWidth) {
-        const int n = int(std::min<size_t>(kPacketWidth, count - start));
-        for (int i = 0; i < kPacketWidth; ++i) {
-            valid[i] = i < n ? -1 : 0;
-            initEmbreeLane(rays[start + size_t(i < n ? i : 0)], packet, i);
-        }
+        const int n = fillPacket(rays, start, count, valid, packet);
         rtcOccluded16(valid, rtc_scene_, &context, &packet);
         for (int i = 0; i < n; ++i) blocked[start + i] = packet.tfar[i] < 0.0f;  // Embree's mark
     }
