@@ -12,10 +12,13 @@
 #include "tracing/tracer.h"
 
 #include "gltf_builder.h"
+#include "test_bake_scene.h"
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <optional>
+#include <utility>
 
 namespace sharcbake {
 namespace {
@@ -306,17 +309,14 @@ TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {
     EXPECT_LT(after, 0.1 * before);   // measured 0.027
 }
 
-/// `iterations` iterations of a small bake of `scene` from its exploring camera path, as the
-/// file would hold them.
-CacheData smallBake(const Scene& scene, const Tracer& tracer, int iterations) {
-    const LightSampler lights(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
+/// `iterations` iterations of a small bake (64x64 paths, 2^16 slots), as the file would hold them.
+CacheData smallBake(const TestBakeScene& scene, int iterations) {
     BakeSettings settings;
     settings.width = settings.height = 64;
     settings.sharc.grid.capacity = 1u << 16;
-    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
-    for (int i = 0; i < iterations; ++i) baker.runIteration();
-    return toCacheData(baker.cache());
+    const std::unique_ptr<Baker> baker = scene.makeBaker(settings);
+    for (int i = 0; i < iterations; ++i) baker->runIteration();
+    return toCacheData(baker->cache());
 }
 
 TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
@@ -324,9 +324,9 @@ TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
     // the table leave it, so its own rate rested on a few dozen lookups. It is replayed at larger
     // sizes until it has enough; region samples keep the prediction's size.
     test::TempDir dir;
-    const Scene scene = loadTable(dir, true);
-    const Tracer tracer(scene);
-    const CacheData data = smallBake(scene, tracer, 4);
+    const TestBakeScene bake(loadTable(dir, true));
+    const Tracer& tracer = *bake.tracer;
+    const CacheData data = smallBake(bake, 4);
     const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 4, 1);
     ASSERT_TRUE(views.front().declared);
     const HitRatePrediction small = predictHitRate(tracer, data, ViewRegion{}, {views.front()}, 16, 16);
@@ -352,8 +352,9 @@ TEST(PredictHitRate, ReplaysStopAtTheirPixelBudget) {
     Scene scene = loadTable(dir, true);
     const Camera camera = scene.cameras.front();
     scene.cameras.assign(40, camera);
-    const Tracer tracer(scene);
-    const CacheData data = smallBake(scene, tracer, 1);
+    const TestBakeScene bake(std::move(scene));
+    const Tracer& tracer = *bake.tracer;
+    const CacheData data = smallBake(bake, 1);
     const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
     ASSERT_EQ(views.size(), 40u);
     const HitRatePrediction prediction = predictHitRate(tracer, data, ViewRegion{}, views);

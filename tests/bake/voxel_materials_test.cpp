@@ -5,12 +5,13 @@
 // the voxel that is the plain baked radiance (fp16 rounding apart); over the scene's surface the
 // demodulated reads average to the plain radiance within 1%, and with the emission apart within
 // the few percent that coarse voxels mixing the lamp and the ceiling add.
+#include "sharc/voxel_materials.h"
 #include "sharc/baker.h"
 #include "sharc/camera_path.h"
-#include "sharc/voxel_materials.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
 #include "sharcbake/scene_loader.h"
+#include "test_bake_scene.h"
 #include "tracing/lights.h"
 #include "tracing/surface.h"
 #include "tracing/surface_points.h"
@@ -19,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 namespace sharcbake {
@@ -27,16 +29,14 @@ namespace {
 Float3 toFloat3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
 
 TEST(VoxelMaterials, ADemodulatingEngineReadsThePlainRadianceOfABakedCornellBox) {
-    const Scene scene = loadGltf(std::string(SHARCBAKE_SCENES_DIR) + "/cornell_box/cornell_box.gltf");
-    const Tracer tracer(scene);
-    const LightSampler lights(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 16, 3).value();
+    const TestBakeScene bake("cornell_box");
+    const Scene& scene = bake.scene;
     BakeSettings settings;
     settings.width = settings.height = 96;
     settings.sharc.grid.capacity = 1u << 18;
-    Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
-    for (uint32_t i = 0; i < 32; ++i) baker.runIteration();
-    CacheData data = toCacheData(baker.cache());
+    const std::unique_ptr<Baker> baker = bake.makeBaker(settings);
+    for (uint32_t i = 0; i < 32; ++i) baker->runIteration();
+    CacheData data = toCacheData(baker->cache());
     ASSERT_GT(data.voxels.size(), 1000u);
     VoxelMaterialStats stats;
     data.voxel_materials = computeVoxelMaterials(scene, data, &stats);
