@@ -100,6 +100,17 @@ std::string vec3Text(glm::vec3 v) {
     return "(" + numberText(v.x) + ", " + numberText(v.y) + ", " + numberText(v.z) + ")";
 }
 
+/// `v` clamped into [lo, hi], or `fallback` where it is not finite: a factor taken into the range
+/// glTF gives it.
+float clampedFactor(float v, float lo, float hi, float fallback) {
+    return std::isfinite(v) ? std::clamp(v, lo, hi) : fallback;
+}
+
+glm::vec3 clampedFactor(glm::vec3 v, float lo, float hi, float fallback) {
+    return {clampedFactor(v.x, lo, hi, fallback), clampedFactor(v.y, lo, hi, fallback),
+            clampedFactor(v.z, lo, hi, fallback)};
+}
+
 bool isFinite(const glm::vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -1494,12 +1505,12 @@ private:
         const auto note = [&fixed](const std::string& what) { fixed += (fixed.empty() ? "" : ", ") + what; };
         const auto clampVec3 = [&](glm::vec3& v, float lo, float hi, float fallback, const char* name) {
             const glm::vec3 before = v;
-            for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? std::clamp(v[c], lo, hi) : fallback;
+            v = clampedFactor(v, lo, hi, fallback);
             if (v != before) note(std::string(name) + " " + vec3Text(before) + " -> " + vec3Text(v));
         };
         const auto clampFloat = [&](float& v, float lo, float hi, float fallback, const char* name) {
             const float before = v;
-            v = std::isfinite(v) ? std::clamp(v, lo, hi) : fallback;
+            v = clampedFactor(v, lo, hi, fallback);
             if (v != before) note(std::string(name) + " " + numberText(before) + " -> " + numberText(v));
         };
         const float kNoLimit = std::numeric_limits<float>::max();
@@ -1893,8 +1904,7 @@ private:
         // A negative colour or intensity would take light away; out of the extension's ranges, they
         // are clamped into them (colour [0, 1], intensity at least 0) with a warning.
         const glm::vec3 given_colour = vec3Or(src.color, glm::vec3(1.0f));
-        glm::vec3 colour = given_colour;
-        for (int c = 0; c < 3; ++c) colour[c] = std::isfinite(colour[c]) ? std::clamp(colour[c], 0.0f, 1.0f) : 1.0f;
+        const glm::vec3 colour = clampedFactor(given_colour, 0.0f, 1.0f, 1.0f);
         const double intensity = std::isfinite(src.intensity) ? std::max(src.intensity, 0.0) : 1.0;
         if (colour != given_colour || intensity != src.intensity) {
             warn("light " + quoted(src.name) + ": colour " + vec3Text(given_colour) + " and intensity " +
