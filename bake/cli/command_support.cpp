@@ -4,6 +4,7 @@
 #include "sharc/camera_path.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene_loader.h"
+#include "support/fnv1a.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -200,13 +201,13 @@ void addSceneLimitOptions(CLI::App& command, GltfLoadLimits& limits) {
 /// its external buffers and images: Scene::source_files), so a cache records which scene it was
 /// baked from, geometry included.
 std::string sceneContentHash(const std::vector<std::string>& files) {
-    uint64_t hash = 0xcbf29ce484222325ull;
+    uint64_t hash = kFnv1a64Basis;
     std::vector<char> buffer(1 << 16);
     for (const std::string& file : files) {
         std::ifstream in(file, std::ios::binary);
         if (!in) throw CommandError(kExitIo, file + ": cannot read (a file of the scene)");
         while (in.read(buffer.data(), std::streamsize(buffer.size())) || in.gcount() > 0) {
-            for (std::streamsize i = 0; i < in.gcount(); ++i) hash = (hash ^ uint8_t(buffer[size_t(i)])) * 0x100000001b3ull;
+            hash = fnv1a64(buffer.data(), size_t(in.gcount()), hash);
         }
     }
     char text[32];

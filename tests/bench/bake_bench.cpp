@@ -7,6 +7,7 @@
 #include "bench_support.h"
 
 #include "sharcbake/scene_loader.h"
+#include "support/fnv1a.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
 
@@ -132,11 +133,8 @@ void measureRender(const Options& o, const BakeScene& s, unsigned threads) {
     });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const TraceCounts counts = counters.total();
-    uint64_t digest = 0xcbf29ce484222325ull;
-    for (const glm::vec3& pixel : image.pixels) {
-        const auto* bytes = reinterpret_cast<const uint8_t*>(&pixel);
-        for (size_t i = 0; i < sizeof(pixel); ++i) digest = (digest ^ bytes[i]) * 0x100000001b3ull;
-    }
+    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "the pixels are packed floats");
+    const uint64_t digest = fnv1a64(image.pixels.data(), image.pixels.size() * sizeof(glm::vec3));
     std::printf(
         "{\"series\": \"render\", \"scene\": \"%s\", \"threads\": %u, \"resolution\": \"%dx%d\", "
         "\"spp\": %u, \"seconds\": %.4f, \"closest_hit_rays\": %llu, \"shadow_rays\": %llu, "

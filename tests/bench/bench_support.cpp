@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "bench_support.h"
 
+#include "support/fnv1a.h"
+#include "support/stopwatch.h"
 #include "tracing/render.h"
 #include "tracing/sampling.h"
-#include "support/stopwatch.h"
 #include "tracing/surface.h"
 
 #include <tbb/parallel_for.h>
@@ -286,8 +287,7 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     if (encodeCacheFile(data, &bytes, &message) != CacheFileStatus::kOk) throw std::runtime_error(message);
     run.live_voxels = data.voxels.size();
     run.file_bytes = bytes.size();
-    run.file_digest = 0xcbf29ce484222325ull;
-    for (const uint8_t byte : bytes) run.file_digest = (run.file_digest ^ byte) * 0x100000001b3ull;
+    run.file_digest = fnv1a64(bytes.data(), bytes.size());
     return run;
 }
 
