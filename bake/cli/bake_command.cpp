@@ -552,7 +552,8 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
         ++declared_views;
     }
     char declared[160] = "";
-    if (declared_eligible > 0) {
+    // Not when the lowest view is the one camera itself: it would be named twice.
+    if (declared_eligible > 0 && !(declared_views == 1 && worst == one_declared)) {
         const std::string which = declared_views == 1 ? one_declared->view.camera.name
                                                       : std::to_string(declared_views) + " cameras";
         std::snprintf(declared, sizeof declared, "; from %s %.1f%%", which.c_str(),

@@ -122,6 +122,10 @@ says "$work/out.txt" "came from another level" "the fallback answers from anothe
 expect 0 "a short bake" "$sharcbake" bake "$cornell" -o "$work/short.sharc" --iterations 2 --resolution 64x64
 says "$work/err.txt" "warning: the cache answers" "a short bake warns about its hit rate"
 says "$work/err.txt" "; from camera 'camera' " "the hit-rate warning gives the scene's camera's share"
+# One iteration: the camera itself is the lowest view, named once.
+expect 0 "a one-iteration bake" "$sharcbake" bake "$cornell" -o "$work/one.sharc" --iterations 1 --resolution 64x64
+says "$work/err.txt" "lowest: camera 'camera', " "the camera is the lowest view"
+grep -q "; from camera 'camera'" "$work/err.txt" && fail "the warning names the camera twice: $(grep 'lowest:' "$work/err.txt")"
 
 # A lone floor plane and no camera: the automatic camera sees it (not edge-on) and says where it is.
 python3 - "$work/floor.gltf" <<'PY'
