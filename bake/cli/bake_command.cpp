@@ -40,6 +40,10 @@
 namespace sharcbake {
 namespace {
 
+/// Surface points tested for what the roaming camera's positions see (the grid fit): the share
+/// is known to about a percent, and a scene the positions see all of costs one ray per point.
+constexpr uint32_t kSeenSurfaceSamples = 4096;
+
 struct BakeOptions {
     std::vector<std::string> scene_paths;  ///< as given; one run per scene
     std::string scene_path;                ///< this run's scene
@@ -503,6 +507,13 @@ std::string joined(const std::vector<uint32_t>& values) {
 /// "98.7% of 131072 lookups from 33 views (lowest: camera 'Main' 97.1%)"
 std::string describeHitRate(const HitRatePrediction& p) {
     char text[256];
+    if (p.eligible == 0 && p.refused > 0) {  // voxels far larger than what the views see
+        std::snprintf(text, sizeof text,
+                      "no lookups from %zu views pass SHaRC's tests (all %llu refused: each bounce is shorter than "
+                      "its voxel)",
+                      p.views.size(), (unsigned long long)p.refused);
+        return text;
+    }
     if (p.eligible == 0) {  // every first bounce leaves the scene (a lone object): a rate of nothing
         std::snprintf(text, sizeof text, "no lookups from %zu views (no first bounce from them hits a surface)",
                       p.views.size());
@@ -525,17 +536,27 @@ Json hitRateJson(const HitRatePrediction& p) {
                          {"declared", v.view.declared},
                          {"position", jsonVec3(v.view.camera.position)},
                          {"rate", v.eligible ? jsonNumber(v.rate()) : Json(nullptr)},
-                         {"lookups", v.eligible}});
+                         {"lookups", v.eligible},
+                         {"refused", v.refused}});
     }
     return {{"rate", p.eligible ? jsonNumber(p.rate()) : Json(nullptr)},  // null: nothing to rate
             {"lookups", p.eligible},
             {"hits", p.hits},
+            {"refused", p.refused},
             {"views", views}};
 }
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
 /// `unreached_area`: the share of the surface no update path reached (see warnAndStop).
 void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
+    if (p.eligible == 0 && p.refused > 0) {
+        std::fprintf(stderr,
+                     "warning: SHaRC's eligibility tests refuse every one of the %llu lookups from the views (each "
+                     "bounce is shorter than its voxel): the voxels are far larger than what the cameras see, so "
+                     "a runtime traces every path in full. Give a larger --level-bias (each +1 halves the voxels)\n",
+                     (unsigned long long)p.refused);
+        return;
+    }
     constexpr double kWanted = 0.95;
     const ViewHitRate* worst = p.worst();
     if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
@@ -591,7 +612,7 @@ struct GridDecision {
 
 /// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
 /// or checks the given one against the scene.
-GridDecision decideGrid(BakeJob& job, const Scene& scene) {
+GridDecision decideGrid(BakeJob& job, const Scene& scene, const SeenSurface* seen) {
     BakeSettings& settings = job.settings;
     ViewRegion& region = settings.view_region;
     if (region.kind == ViewRegion::Kind::Points && region.source == "gltf") {
@@ -612,7 +633,7 @@ GridDecision decideGrid(BakeJob& job, const Scene& scene) {
     GridDecision decision;
     HashGridParameters& grid = settings.sharc.grid;
     if (job.level_bias_auto) {
-        const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget);
+        const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen);
         grid.level_bias = fit.level_bias;
         decision.choice = "auto, " + fit.reason;
     } else {
@@ -801,9 +822,17 @@ private:
             std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
                                  "the cache will be black\n");
         }
-        grid_decision_ = decideGrid(job_, scene_);
-        for (const std::string& warning : grid_decision_.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
+        // The automatic grid fits what the roaming camera's positions (and the scene's cameras) see.
+        if (job_.level_bias_auto) {
+            std::vector<glm::vec3> viewpoints;
+            for (const CameraPose& pose : camera_path_->waypoints()) viewpoints.push_back(pose.position);
+            for (const Camera& camera : scene_.cameras) viewpoints.push_back(camera.position);
+            seen_ = surfaceSeenFrom(*tracer_, viewpoints, kSeenSurfaceSamples, job_.settings.seed);
+        }
+        grid_decision_ = decideGrid(job_, scene_, seen_ ? &*seen_ : nullptr);
+        for (const std::string& warning : grid_decision_.warnings)
+            std::fprintf(stderr, "warning: %s\n", warning.c_str());
         if (autoCapacity()) chooseAutoCapacity();
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
                                          SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
@@ -999,7 +1028,12 @@ private:
             coverage_.points);
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         for (const ViewHitRate& v : prediction_.views) {
-            if (v.view.declared && v.eligible == 0) {
+            if (v.view.declared && v.eligible == 0 && v.refused > 0) {
+                std::printf(
+                    "    %s: no lookups pass SHaRC's tests (all %llu refused: each bounce is shorter than "
+                    "its voxel)\n",
+                    v.view.camera.name.c_str(), (unsigned long long)v.refused);
+            } else if (v.view.declared && v.eligible == 0) {
                 std::printf("    %s: no lookups (no first bounce from it hits a surface)\n",
                             v.view.camera.name.c_str());
             } else if (v.view.declared) {
@@ -1106,11 +1140,18 @@ private:
         warnAboutHitRate(prediction_, unreached);
         if (unreached > 0.3) {
             // Not a stability problem, so not in that section, but the cache is missing much of the scene.
+            char sight[200] = "";
+            if (seen_ && seen_->fraction < kFitToSeenBelow) {
+                std::snprintf(sight, sizeof sight,
+                              "; the free space around the scene's cameras sees only %.2g%% of it (the grid is "
+                              "fitted to that part), so the rest is out of their sight",
+                              100.0 * seen_->fraction);
+            }
             std::fprintf(stderr,
                          "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
-                         "tested; hidden sides count too): cameras that see it will miss. Give more --iterations, "
+                         "tested; hidden sides count too)%s: cameras that see it will miss. Give more --iterations, "
                          "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
-                         100.0 * unreached, coverage_.points);
+                         100.0 * unreached, coverage_.points, sight);
         }
         if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
         if (autoCapacity() && cache.numerics().failed_inserts > 0) {
@@ -1141,6 +1182,7 @@ private:
     std::optional<Tracer> tracer_;
     std::optional<LightSampler> lights_;
     GridDecision grid_decision_;
+    std::optional<SeenSurface> seen_;  ///< what the roaming camera's positions see (--level-bias auto)
     std::string camera_description_;
     std::optional<CameraPath> camera_path_;
     CapacityChoice capacity_choice_;
@@ -1339,9 +1381,11 @@ void registerBakeCommand(CLI::App& app) {
                     "too few or too many voxels)")
         ->capture_default_str();
     cmd->add_option("--voxel-budget", o->voxel_budget,
-                    "Voxels for the whole visible surface at the finest level (--level-bias auto); each coarser "
-                    "level adds about a quarter of the one below")
-        ->capture_default_str()->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
+                    "Voxels for the whole visible surface at the finest level (--level-bias auto), or for the "
+                    "part the cameras' free space sees when that is under a quarter of it (a room beside a large "
+                    "ground plane); each coarser level adds about a quarter of the one below")
+        ->capture_default_str()
+        ->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
     cmd->add_option("--view-region", o->view_region,
                     "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
                     "level such a camera can ask for there. free: anywhere (every level from the finest up); gltf: "

@@ -371,6 +371,15 @@ private:
     }
 
     void warnAboutHitRate() const {
+        if (cache_ && !primaryView() && eligible_ == 0 && cache_->refused() > 0) {
+            // Nothing was served and the hit-rate warning below has nothing to measure: say why.
+            std::fprintf(stderr,
+                         "warning: SHaRC's eligibility tests refused all %llu cache lookups from this camera (each "
+                         "bounce is shorter than its voxel): the cache's voxels are far larger than what this camera "
+                         "sees, so every path was traced in full. Bake with a larger --level-bias (finer voxels)\n",
+                         (unsigned long long)cache_->refused());
+            return;
+        }
         if (cache_ && !primaryView() && eligible_ >= 100 && hit_rate_ < 0.9) {
             // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
             std::fprintf(stderr,

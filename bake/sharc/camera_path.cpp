@@ -83,6 +83,14 @@ bool visible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
     return !tracer.occluded(Ray{a, d / length, length});
 }
 
+/// Visible both ways. Embree's triangle test is not watertight: a ray that meets a shared edge
+/// can slip between its two triangles, and among the thousands of pairs one such ray joined a
+/// closed room's camera to the ground plane outside. The ray back starts elsewhere and rounds
+/// differently, so it does not slip through the same edge.
+bool mutuallyVisible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
+    return visible(tracer, a, b) && visible(tracer, b, a);
+}
+
 }  // namespace
 
 Camera toCamera(const CameraPose& pose) {
@@ -151,6 +159,65 @@ std::vector<CameraPose> readCameraPathFile(const std::string& path) {
     return poses;
 }
 
+namespace {
+
+/// A candidate camera position that passed the free-space test.
+struct FreePoint {
+    glm::vec3 position;
+    bool start;
+    bool known;   ///< FreeSpaceProbe::known (a camera always is)
+    int escaped;  ///< FreeSpaceProbe::escaped
+};
+
+/// The candidates' sets connected under mutual visibility, and which of them to keep: the sets
+/// that hold a camera. Without cameras, the start is only the centre of the bounds, which may lie
+/// inside a closed double-sided object (Blender's default material is double-sided), whose inside
+/// looks free: the sets where free space is known are kept instead, else the centre's set, and
+/// with neither the largest set. Returns, per point, whether its set is kept.
+std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePoint>& points, bool starts_are_cameras) {
+    // Union-find over all pairs: a few thousand rays.
+    const size_t n = points.size();
+    std::vector<size_t> parent(n);
+    std::iota(parent.begin(), parent.end(), size_t(0));
+    auto root = [&](size_t a) {
+        while (parent[a] != a) a = parent[a] = parent[parent[a]];
+        return a;
+    };
+    for (size_t a = 0; a < n; ++a) {
+        for (size_t b = a + 1; b < n; ++b) {
+            if (root(a) != root(b) && mutuallyVisible(tracer, points[a].position, points[b].position)) {
+                parent[root(b)] = root(a);
+            }
+        }
+    }
+    std::vector<bool> keep_root(n, false);
+    bool any_kept = false;
+    for (size_t i = 0; i < n; ++i) {
+        if (starts_are_cameras ? points[i].start : points[i].known) keep_root[root(i)] = any_kept = true;
+    }
+    for (size_t i = 0; i < n && !any_kept; ++i) {
+        if (points[i].start) keep_root[root(i)] = any_kept = true;
+    }
+    if (!any_kept && n > 0) {
+        std::vector<size_t> size(n, 0);
+        for (size_t i = 0; i < n; ++i) ++size[root(i)];
+        keep_root[size_t(std::max_element(size.begin(), size.end()) - size.begin())] = true;
+    }
+    std::vector<bool> kept(n);
+    for (size_t i = 0; i < n; ++i) kept[i] = keep_root[root(i)];
+    return kept;
+}
+
+/// Scales of the candidates around the starts: from half the bounds' largest extent, halving,
+/// down to this fraction of the diagonal (a 4 m room beside a 10 km ground plane is reached at
+/// 2^-11 of the plane).
+constexpr float kSmallestAroundStarts = 1e-5f;
+/// Candidates near the surfaces keep this fraction of their scale clear, as the bounds-wide ones
+/// keep 1% of the diagonal: a wall's thickness, not a ground plane's extent.
+constexpr float kClearanceOfScale = 0.02f;
+
+}  // namespace
+
 ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts, bool starts_are_cameras,
                                    uint32_t count, uint32_t seed) {
     const Scene& scene = tracer.scene();
@@ -163,14 +230,14 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     const glm::vec3 half = glm::max(0.5f * (scene.bounds_max - scene.bounds_min), glm::vec3(0.05f * diagonal));
     const float clearance = 0.01f * diagonal;
 
-    // Candidates: the starts first, then stratified random points (8x more than needed).
-    struct FreePoint {
-        glm::vec3 position;
-        bool start;
-        bool known;   ///< FreeSpaceProbe::known (a camera always is)
-        int escaped;  ///< FreeSpaceProbe::escaped
-    };
     std::vector<FreePoint> free_points;
+    const auto tryPoint = [&](glm::vec3 p, float point_clearance, bool use_winding) {
+        ++result.candidates;
+        const FreeSpaceProbe probe = probeFreeSpace(tracer, p, point_clearance, use_winding);
+        if (probe.free) free_points.push_back({p, false, probe.known, probe.escaped});
+    };
+    // Candidates: the starts first, then stratified random points in the bounds (8x more than
+    // needed).
     const auto collect = [&](bool use_winding) {
         free_points.clear();
         for (const glm::vec3& s : starts) {
@@ -181,10 +248,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
         }
         for (uint32_t i = 0; i < 8 * count; ++i) {
             const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
-            const glm::vec3 p = center + (2.0f * u - 1.0f) * half;
-            ++result.candidates;
-            const FreeSpaceProbe probe = probeFreeSpace(tracer, p, clearance, use_winding);
-            if (probe.free) free_points.push_back({p, false, probe.known, probe.escaped});
+            tryPoint(center + (2.0f * u - 1.0f) * half, clearance, use_winding);
         }
     };
     // The scene's own cameras look from free space. Where the winding test puts one of them
@@ -201,43 +265,39 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
         collect(false);
     }
     result.winding_ignored = !use_winding;
+    std::vector<bool> kept = reachablePoints(tracer, free_points, starts_are_cameras);
+
+    // Where the starts' free space is a small part of the bounds (a room beside a large ground
+    // plane or terrain), the bounds-wide candidates almost never fall in it and the camera would
+    // stay at the starts: candidates around each start, at scales halving from the bounds' down
+    // to a wall's thickness, fill it. Scenes whose bounds-wide candidates reach enough points
+    // keep them alone.
+    if (size_t(std::count(kept.begin(), kept.end(), true)) < count && !starts.empty()) {
+        const float largest_half = std::max({half.x, half.y, half.z});
+        uint32_t scales = 0;
+        for (float r = 0.5f * largest_half; r >= kSmallestAroundStarts * diagonal && scales < 64; r *= 0.5f) ++scales;
+        const uint32_t per_scale = std::max<uint32_t>(2, 8 * count /
+                                                             std::max<uint32_t>(1, uint32_t(starts.size()) * scales));
+        for (size_t s = 0; s < starts.size(); ++s) {
+            float r = 0.5f * largest_half;
+            for (uint32_t k = 0; k < scales; ++k, r *= 0.5f) {
+                for (uint32_t i = 0; i < per_scale; ++i) {
+                    const uint32_t n = 8 * count + (uint32_t(s) * scales + k) * per_scale + i;
+                    const glm::vec3 u(hashToUnitFloat(seed, n, 0), hashToUnitFloat(seed, n, 1),
+                                      hashToUnitFloat(seed, n, 2));
+                    tryPoint(starts[s] + (2.0f * u - 1.0f) * r, std::min(clearance, kClearanceOfScale * r),
+                             use_winding);
+                }
+            }
+        }
+        kept = reachablePoints(tracer, free_points, starts_are_cameras);
+    }
     result.free = uint32_t(free_points.size());
     if (free_points.empty()) return result;
 
-    // Connected sets under mutual visibility (union-find over all pairs; a few thousand rays).
-    const size_t n = free_points.size();
-    std::vector<size_t> parent(n);
-    std::iota(parent.begin(), parent.end(), size_t(0));
-    auto root = [&](size_t a) {
-        while (parent[a] != a) a = parent[a] = parent[parent[a]];
-        return a;
-    };
-    for (size_t a = 0; a < n; ++a) {
-        for (size_t b = a + 1; b < n; ++b) {
-            if (root(a) != root(b) && visible(tracer, free_points[a].position, free_points[b].position))
-                parent[root(b)] = root(a);
-        }
-    }
-    // Keep the sets that hold a camera. Without cameras, the start is only the centre of the
-    // bounds, which may lie inside a closed double-sided object (Blender's default material is
-    // double-sided), whose inside looks free: keep the sets where free space is known instead,
-    // else the centre's set. With neither, keep the largest set.
-    std::vector<bool> keep_root(n, false);
-    bool any_kept = false;
-    for (size_t i = 0; i < n; ++i) {
-        if (starts_are_cameras ? free_points[i].start : free_points[i].known) keep_root[root(i)] = any_kept = true;
-    }
-    for (size_t i = 0; i < n && !any_kept; ++i) {
-        if (free_points[i].start) keep_root[root(i)] = any_kept = true;
-    }
-    if (!any_kept) {
-        std::vector<size_t> size(n, 0);
-        for (size_t i = 0; i < n; ++i) ++size[root(i)];
-        keep_root[size_t(std::max_element(size.begin(), size.end()) - size.begin())] = true;
-    }
     uint64_t escaped_probes = 0;
-    for (size_t i = 0; i < n && result.points.size() < count; ++i) {
-        if (!keep_root[root(i)]) continue;
+    for (size_t i = 0; i < free_points.size() && result.points.size() < count; ++i) {
+        if (!kept[i]) continue;
         result.points.push_back(free_points[i].position);
         escaped_probes += uint64_t(free_points[i].escaped);
     }

@@ -1,7 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/grid_fit.h"
 
+#include "tracing/surface_points.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
@@ -38,9 +45,120 @@ double visibleSurfaceArea(const Scene& scene) {
     return area;
 }
 
-GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget) {
+namespace {
+
+/// Directions from each viewpoint for the surface it sees (seenTriangleArea).
+constexpr uint32_t kDirectionsPerViewpoint = 256;
+
+/// The share of the visible surface whose sides are seen from a viewpoint, from `points` spread by
+/// area. Unbiased, but a part of the surface too small to receive a point (a room beside a 10 km
+/// ground plane) reads as 0.
+double seenShareOfPoints(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints,
+                         const std::vector<SurfacePoint>& points) {
+    // Unoccluded both ways: Embree's triangle test is not watertight, and a ray that slips through
+    // a shared edge would count a point of a 10 km ground plane as seen from inside a closed room
+    // (1/4096 of the plane's area); the ray back rounds differently.
+    const auto seenFromAny = [&](glm::vec3 position, glm::vec3 side) {
+        const glm::vec3 origin = offsetRayOrigin(position, side);
+        for (const glm::vec3& v : viewpoints) {
+            const glm::vec3 d = v - origin;
+            if (!(glm::dot(d, side) > 0.0f)) continue;
+            const float length = glm::length(d);
+            if (length > 0.0f && !tracer.occluded(Ray{origin, d / length, length}) &&
+                !tracer.occluded(Ray{v, -d / length, length})) {
+                return true;
+            }
+        }
+        return false;
+    };
+    // Sides seen and sides there, summed over the points: integers, so the sums do not depend on
+    // how the points are split between threads.
+    using Counts = std::pair<uint64_t, uint64_t>;
+    const Counts counts = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, points.size()), Counts{0, 0},
+        [&](const tbb::blocked_range<size_t>& range, Counts sum) {
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                const SurfacePoint& p = points[i];
+                sum.first += seenFromAny(p.position, p.normal);
+                sum.second += 1;
+                if (p.double_sided) {
+                    sum.first += seenFromAny(p.position, -p.normal);
+                    sum.second += 1;
+                }
+            }
+            return sum;
+        },
+        [](Counts a, Counts b) {
+            return Counts{a.first + b.first, a.second + b.second};
+        });
+    return counts.second > 0 ? double(counts.first) / double(counts.second) : 0.0;
+}
+
+/// The visible area of the triangles that rays from the viewpoints hit (each side once): exact for
+/// a few large triangles, however small their share, where spread points miss them; short of the
+/// truth on a fine mesh whose triangles outnumber the rays, and over it where a large triangle is
+/// only partly in sight.
+double seenTriangleArea(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints) {
+    const Scene& scene = tracer.scene();
+    std::vector<std::atomic<uint8_t>> sides(scene.triangles.size());  // bit 0 front, bit 1 back
+    tbb::parallel_for(size_t(0), viewpoints.size(), [&](size_t v) {
+        for (uint32_t i = 0; i < kDirectionsPerViewpoint; ++i) {
+            // Spherical Fibonacci: even heights, golden-angle turns.
+            const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(kDirectionsPerViewpoint);
+            const float ring = std::sqrt(std::max(0.0f, 1.0f - y * y));
+            const float turn = 2.39996323f * float(i);
+            const glm::vec3 direction(ring * std::cos(turn), y, ring * std::sin(turn));
+            RayHit hit;
+            if (!tracer.intersect(Ray{viewpoints[v], direction}, hit)) continue;
+            const glm::uvec3 tri = scene.triangles[hit.triangle];
+            const glm::vec3 n = glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
+                                           scene.positions[tri.z] - scene.positions[tri.x]);
+            sides[hit.triangle].fetch_or(glm::dot(n, direction) < 0.0f ? 1 : 2, std::memory_order_relaxed);
+        }
+    });
+    double area = 0.0;
+    for (size_t t = 0; t < scene.triangles.size(); ++t) {
+        const uint8_t seen = sides[t].load(std::memory_order_relaxed);
+        if (!seen) continue;
+        const glm::uvec3 tri = scene.triangles[t];
+        const glm::dvec3 p0(scene.positions[tri.x]), p1(scene.positions[tri.y]), p2(scene.positions[tri.z]);
+        const double a = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+        if (!std::isfinite(a)) continue;
+        // A single-sided surface is visible from its front only (visibleSurfaceArea counts it once).
+        const bool double_sided = scene.materials[scene.triangle_materials[t]].double_sided;
+        area += double_sided ? a * double((seen & 1) + (seen >> 1)) : a;
+    }
+    return area;
+}
+
+}  // namespace
+
+SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints, uint32_t samples,
+                            uint32_t seed) {
+    SeenSurface seen;
+    const Scene& scene = tracer.scene();
+    const std::vector<SurfacePoint> points = sampleSurfacePoints(scene, samples, seed);
+    seen.samples = uint32_t(points.size());
+    if (points.empty() || viewpoints.empty()) return seen;
+    // The larger of two estimates, each short of the truth where the other is not: points spread
+    // by area (a fine mesh) and triangles hit by rays from the viewpoints (a small part of a
+    // scene made of a few large triangles).
+    const double total = visibleSurfaceArea(scene);
+    seen.area = std::min(total, std::max(seenShareOfPoints(tracer, viewpoints, points) * total,
+                                         seenTriangleArea(tracer, viewpoints)));
+    seen.fraction = total > 0.0 ? seen.area / total : 1.0;
+    return seen;
+}
+
+GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
+                     const SeenSurface* seen) {
     GridFit fit;
-    fit.surface_area = visibleSurfaceArea(scene);
+    fit.scene_surface_area = visibleSurfaceArea(scene);
+    fit.surface_area = fit.scene_surface_area;
+    if (seen && seen->samples > 0 && seen->area > 0.0 && seen->fraction < kFitToSeenBelow) {
+        fit.surface_area = seen->area;
+        fit.fitted_to_seen = true;
+    }
     const double budget = double(std::max<uint64_t>(voxel_budget, 1));
     double size = std::sqrt(fit.surface_area / budget);
     const double range_limit = farthestCoordinate(scene) / kGridRange;
@@ -58,19 +176,27 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     fit.finest_voxel_size = voxelSize(kHashGridLevelMin, fitted);
     fit.estimated_voxels = fit.surface_area / (double(fit.finest_voxel_size) * double(fit.finest_voxel_size));
 
-    char text[320];
+    char surface[160];
+    if (fit.fitted_to_seen) {
+        std::snprintf(surface, sizeof surface,
+                      "%.3g units^2 of surface the cameras' free space sees (%.2g%% of the scene's %.3g; the rest is "
+                      "out of its sight)",
+                      fit.surface_area, 100.0 * fit.surface_area / fit.scene_surface_area, fit.scene_surface_area);
+    } else {
+        std::snprintf(surface, sizeof surface, "%.3g units^2 of visible surface", fit.surface_area);
+    }
+    char text[480];
     if (fit.limited_by_range) {
         std::snprintf(text, sizeof text,
                       "level bias %g: finest voxels %.4g wide, the smallest the 17-bit grid allows %.4g units from "
-                      "the origin (%.3g units^2 of visible surface, about %.3g voxels at level 1; the budget would "
-                      "allow finer)",
-                      double(fit.level_bias), double(fit.finest_voxel_size), farthestCoordinate(scene), fit.surface_area,
+                      "the origin (%s, about %.3g voxels at level 1; the budget would allow finer)",
+                      double(fit.level_bias), double(fit.finest_voxel_size), farthestCoordinate(scene), surface,
                       fit.estimated_voxels);
     } else {
         std::snprintf(text, sizeof text,
-                      "level bias %g: finest voxels %.4g wide, so the %.3g units^2 of visible surface take about "
-                      "%.3g voxels at level 1 (budget %llu); cameras closer than %.4g use level 1",
-                      double(fit.level_bias), double(fit.finest_voxel_size), fit.surface_area, fit.estimated_voxels,
+                      "level bias %g: finest voxels %.4g wide, so the %s take about %.3g voxels at level 1 (budget "
+                      "%llu); cameras closer than %.4g use level 1",
+                      double(fit.level_bias), double(fit.finest_voxel_size), surface, fit.estimated_voxels,
                       (unsigned long long)voxel_budget, double(fit.finest_voxel_size) * b * double(grid.scene_scale));
     }
     fit.reason = text;

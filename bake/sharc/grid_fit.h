@@ -15,6 +15,9 @@
 
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/scene.h"
+#include "tracing/tracer.h"
+
+#include <glm/glm.hpp>
 
 #include <cstdint>
 #include <string>
@@ -30,19 +33,45 @@ inline constexpr uint64_t kDefaultVoxelBudget = 1u << 17;
 /// the two sides apart). World units squared.
 double visibleSurfaceArea(const Scene& scene);
 
+/// The part of the visible surface that cameras at some viewpoints see directly: what a bake whose
+/// roaming camera stays there can reach, and what runtime cameras there ask for.
+struct SeenSurface {
+    double area = 0.0;      ///< world units squared, both sides of double-sided surfaces counted
+    double fraction = 1.0;  ///< of visibleSurfaceArea
+    uint32_t samples = 0;   ///< surface points tested
+};
+
+/// Estimates SeenSurface from `samples` points spread over the surface by area: a point's side
+/// (each side of a double-sided surface) counts as seen when an unoccluded segment joins it to any
+/// viewpoint in front of it. Deterministic for a seed; parallel over the points.
+SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints, uint32_t samples,
+                            uint32_t seed);
+
+/// The fit uses the seen surface instead of the whole visible surface when the viewpoints see
+/// less than this share of it (a room beside a large ground plane: 1% or less). Above it the whole
+/// surface is the fit, as it always was: a closed room of double-sided walls (Blender's default
+/// material) shows its cameras about half of its surface, the inner sides, and a threshold near
+/// that share would flip the fit between bakes of similar rooms.
+inline constexpr double kFitToSeenBelow = 0.25;
+
 struct GridFit {
     float level_bias = 0.0f;
     float finest_voxel_size = 0.0f;      ///< voxelSize(1) with that bias
     double surface_area = 0.0;           ///< visibleSurfaceArea
     double estimated_voxels = 0.0;       ///< surface_area / finest_voxel_size^2 (flat surfaces)
     bool limited_by_range = false;       ///< the 17-bit grid range forced larger voxels
+    bool fitted_to_seen = false;         ///< surface_area is the part the viewpoints see (SeenSurface)
+    double scene_surface_area = 0.0;     ///< visibleSurfaceArea, seen or not
     std::string reason;                  ///< one line for the bake's output
 };
 
 /// Fits `grid.level_bias` (rounded down to 1/64, so voxels are never finer than the budget asks)
 /// so that level 1 holds the scene's visible surface in about `voxel_budget` voxels, and never
-/// finer than the 17-bit grid allows around the scene's farthest coordinate.
-GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget);
+/// finer than the 17-bit grid allows around the scene's farthest coordinate. With `seen` below
+/// kFitToSeenBelow of that surface, level 1 holds the seen part instead: the roaming camera never
+/// reaches the rest, and a 4 m room beside a 10 km ground plane keeps voxels for the room.
+GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
+                     const SeenSurface* seen = nullptr);
 
 /// For grid parameters given by hand: warnings (each with the fix) when the scene spans too few
 /// voxels at `finest_level` (a coarse, blurry cache) or far more than `voxel_budget`.

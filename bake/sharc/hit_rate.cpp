@@ -115,6 +115,7 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
         rate.view = views[v];
         rate.hits = baked.hits();
         rate.eligible = baked.hits() + baked.misses();
+        rate.refused = baked.refused();
         return rate;
     };
     uint64_t replayed_pixels = 0;
@@ -134,6 +135,7 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
         }
         prediction.hits += rate.hits;
         prediction.eligible += rate.eligible;
+        prediction.refused += rate.refused;
         prediction.views.push_back(rate);
     }
     return prediction;

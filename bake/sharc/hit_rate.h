@@ -28,6 +28,9 @@ struct ViewHitRate {
     PredictionView view;
     uint64_t eligible = 0;  ///< lookups that pass SHaRC's eligibility tests
     uint64_t hits = 0;
+    /// Lookups the eligibility tests refused (a bounce shorter than its voxel, or a cone wider):
+    /// all of them when the voxels are far larger than what the view sees.
+    uint64_t refused = 0;
     double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
 };
 
@@ -35,6 +38,7 @@ struct HitRatePrediction {
     std::vector<ViewHitRate> views;
     uint64_t eligible = 0;
     uint64_t hits = 0;
+    uint64_t refused = 0;
     double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
     /// The lowest rate of a view with at least 100 eligible lookups (nullptr when none).
     const ViewHitRate* worst() const;

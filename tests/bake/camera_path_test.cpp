@@ -6,6 +6,7 @@
 #include "sharc/camera_path.h"
 #include "sharc/baker.h"
 #include "sharc/coverage.h"
+#include "sharc/grid_fit.h"
 #include "sharc/hit_rate.h"
 #include "sharcbake/scene_loader.h"
 #include "tracing/lights.h"
@@ -45,6 +46,7 @@ struct RoomOptions {
     bool walls_inwards = false;
     bool camera = true;
     bool closed_cube = false;  ///< a closed 1 m cube (wound outwards) on the floor
+    float ground_half = 0.0f;  ///< > 0: a ground plane this far out each way, facing up, under the room
 };
 
 constexpr glm::vec3 kRoomMin{-2.0f, 0.0f, -2.5f}, kRoomMax{2.0f, 3.0f, 2.5f};
@@ -56,6 +58,14 @@ Scene loadRoom(const test::TempDir& dir, const RoomOptions& options) {
     std::vector<uint32_t> indices;
     addBox(positions, indices, kRoomMin, kRoomMax, options.walls_inwards);
     if (options.closed_cube) addBox(positions, indices, kCubeMin, kCubeMax, false);
+    if (options.ground_half > 0.0f) {
+        const float h = options.ground_half, y = kRoomMin.y - 0.01f;
+        const uint32_t base = uint32_t(positions.size() / 3);
+        for (const glm::vec2 corner : {glm::vec2(-h, -h), glm::vec2(-h, h), glm::vec2(h, h), glm::vec2(h, -h)}) {
+            positions.insert(positions.end(), {corner.x, y, corner.y});
+        }
+        for (const uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) indices.push_back(base + k);  // facing +Y
+    }
     const int material = gltf.addMaterial(
         {{"pbrMetallicRoughness", {{"metallicFactor", 0.0}}}, {"doubleSided", options.double_sided}});
     const int mesh = gltf.addMesh(
@@ -130,6 +140,67 @@ TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsWithoutACameraIsExplored) {
     const Explored e = explore(loadRoom(dir, {false, false, false, true}));
     expectPointsFillTheRoom(e, "single-sided room wound outwards, no camera");
     EXPECT_TRUE(e.result.winding_ignored);
+}
+
+TEST(ExploreFreeSpace, AClosedRoomBesideALargeGroundPlaneIsExploredFromItsCamera) {
+    // A 4 m room and its camera beside a 10 km site: random points in the bounds almost never
+    // fall inside the room, and the camera stayed at its one position (1 of 513 points), leaving
+    // the room's far side unreached. Points around the camera at shrinking scales fill the room.
+    test::TempDir dir;
+    RoomOptions options{false, true, true, true};
+    options.ground_half = 5000.0f;
+    const Explored e = explore(loadRoom(dir, options));
+    expectPointsFillTheRoom(e, "closed room beside a 10 km ground plane");
+}
+
+TEST(GridFit, ARoomBesideALargeGroundPlaneIsFittedToWhatItsCamerasSee) {
+    // The whole visible surface (1e8 m^2 of ground) in the voxel budget gave 27 m voxels, so every
+    // lookup from the room's camera was refused (each bounce shorter than its voxel).
+    test::TempDir dir;
+    RoomOptions options{false, true, true, false};
+    options.ground_half = 5000.0f;
+    const Scene scene = loadRoom(dir, options);
+    const Tracer tracer(scene);
+    const CameraPath path = exploringCameraPath(tracer, scene, 32, 7).value();
+    std::vector<glm::vec3> viewpoints;
+    for (const CameraPose& pose : path.waypoints()) viewpoints.push_back(pose.position);
+    const SeenSurface seen = surfaceSeenFrom(tracer, viewpoints, 4096, 0);
+    const glm::vec3 size = kRoomMax - kRoomMin;
+    const double room_area = 2.0 * (size.x * size.y + size.x * size.z + size.y * size.z);  // 94 m^2, inside
+    EXPECT_NEAR(seen.area, room_area, 1e-3 * room_area);  // every wall's triangles are hit; the ground never
+    EXPECT_LT(seen.fraction, 1e-5);
+
+    const HashGridParameters grid{};
+    const GridFit whole = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+    const GridFit fitted = fitLevelBias(scene, grid, kDefaultVoxelBudget, &seen);
+    EXPECT_FALSE(whole.fitted_to_seen);
+    EXPECT_GT(whole.finest_voxel_size, 20.0f);
+    EXPECT_TRUE(fitted.fitted_to_seen);
+    EXPECT_DOUBLE_EQ(fitted.scene_surface_area, whole.surface_area);
+    // The room's 94 m^2 in the budget would be 2.7 cm voxels; the 17-bit grid range around the
+    // ground's 5 km corner allows 8.5 cm, which still serves the room.
+    EXPECT_LT(fitted.finest_voxel_size, 0.1f);
+    EXPECT_TRUE(fitted.limited_by_range);
+    EXPECT_NE(fitted.reason.find("out of its sight"), std::string::npos) << fitted.reason;
+}
+
+TEST(GridFit, ARoomItsCamerasSeeWholeKeepsTheWholeSurfaceFit) {
+    // The seen surface replaces the whole only when it is a small part: a room explored from its
+    // camera sees all of it, and its fit is the one without the estimate, bit for bit.
+    test::TempDir dir;
+    const Scene scene = loadRoom(dir, {false, true, true, true});
+    const Tracer tracer(scene);
+    const CameraPath path = exploringCameraPath(tracer, scene, 32, 7).value();
+    std::vector<glm::vec3> viewpoints;
+    for (const CameraPose& pose : path.waypoints()) viewpoints.push_back(pose.position);
+    const SeenSurface seen = surfaceSeenFrom(tracer, viewpoints, 4096, 0);
+    EXPECT_GT(seen.fraction, 0.9);  // the cube's floor-facing side is hidden
+    const HashGridParameters grid{};
+    const GridFit whole = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+    const GridFit fitted = fitLevelBias(scene, grid, kDefaultVoxelBudget, &seen);
+    EXPECT_FALSE(fitted.fitted_to_seen);
+    EXPECT_EQ(fitted.level_bias, whole.level_bias);
+    EXPECT_EQ(fitted.reason, whole.reason);
 }
 
 TEST(ExploreFreeSpace, ExplorationIsAPureFunctionOfTheSeed) {
@@ -342,6 +413,35 @@ TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
         EXPECT_FALSE(normal.views[v].view.declared);
         EXPECT_LE(normal.views[v].eligible, 64u * 64u);  // one lookup per pixel at most
     }
+}
+
+TEST(PredictHitRate, LookupsRefusedByVoxelsLargerThanTheViewAreCounted) {
+    // Voxels 41 m wide in a 4 m room: every bounce is shorter than its voxel, so SHaRC's tests
+    // refuse every lookup. The prediction counted only eligible lookups and reported "no first
+    // bounce hits a surface"; it now counts the refused ones, which the bake names as the cause.
+    test::TempDir dir;
+    const TestBakeScene bake(loadRoom(dir, {false, true, true, false}));
+    const Tracer& tracer = *bake.tracer;
+    BakeSettings settings;
+    settings.width = settings.height = 64;
+    settings.sharc.grid.capacity = 1u << 16;
+    settings.sharc.grid.level_bias = -10.0f;  // level 1: 2^11 / 50 = 41 m
+    const std::unique_ptr<Baker> baker = bake.makeBaker(settings);
+    for (int i = 0; i < 2; ++i) baker->runIteration();
+    const CacheData data = toCacheData(baker->cache());
+    const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
+    ASSERT_EQ(views.size(), 1u);
+    ASSERT_TRUE(views.front().declared);
+    const HitRatePrediction refused = predictHitRate(tracer, data, ViewRegion{}, views);
+    EXPECT_EQ(refused.eligible, 0u);
+    EXPECT_GT(refused.refused, 1000u);  // replayed up to 1024x1024 for want of eligible lookups
+    EXPECT_EQ(refused.views.front().refused, refused.refused);
+    // With the room's own fit (about 3 cm voxels) nearly every lookup is eligible.
+    settings.sharc.grid.level_bias = fitLevelBias(bake.scene, settings.sharc.grid, kDefaultVoxelBudget).level_bias;
+    const std::unique_ptr<Baker> fitted = bake.makeBaker(settings);
+    for (int i = 0; i < 2; ++i) fitted->runIteration();
+    const HitRatePrediction eligible = predictHitRate(tracer, toCacheData(fitted->cache()), ViewRegion{}, views);
+    EXPECT_GT(eligible.eligible, 20u * eligible.refused);
 }
 
 TEST(PredictHitRate, ReplaysStopAtTheirPixelBudget) {

@@ -3,7 +3,8 @@
 # A default bake serves every view: SHaRC's exact lookups from cameras at 0.25x to 8x the glTF
 # camera's distance all hit; the same scene in millimetres or kilometres gets the same grid (in its
 # units), the same voxel count and hit rate, and no warning; a level bias that does not fit the
-# units is warned about; the automatic camera sees a lone floor, which has nothing to look up.
+# units is warned about; the automatic camera sees a lone floor, which has nothing to look up; a
+# room beside a 10 km ground plane is served from its own camera.
 # Usage: coverage_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -153,4 +154,74 @@ expect 0 "the floor's primary hits" "$sharcbake" render "$work/floor.gltf" -o "$
     --spp 1 --no-png --cache "$work/floor.sharc" --debug-view cache
 hits=$(sed -n "s/.* of \([0-9]*\) primary hits.*/\1/p" "$work/out.txt")
 [ "${hits:-0}" -ge 100 ] || fail "the automatic camera sees the floor in ${hits:-0} of 1024 pixels (edge-on?)"
+# A closed 4 m room with its camera beside a 10 km ground plane under a sky (a building on its
+# site). Fitted to the whole surface, the grid had 28 m voxels: SHaRC's tests refused every lookup
+# from the room's camera, and the bake said "no first bounce hits a surface". The grid now fits
+# what the cameras' free space sees, and the camera is served.
+python3 - "$work/site.gltf" <<'PY'
+import base64, json, struct, sys
+def box_inward(lo, hi):
+    c = [(x, y, z) for z in (lo[2], hi[2]) for y in (lo[1], hi[1]) for x in (lo[0], hi[0])]
+    faces = [(0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3), (0, 2, 3, 1), (4, 5, 7, 6)]
+    return c, [i for f in faces for i in (f[0], f[2], f[1], f[0], f[3], f[2])]
+room, room_idx = box_inward((-2, 0, -2.5), (2, 3, 2.5))
+h = 5000.0
+ground = [(-h, -0.01, -h), (-h, -0.01, h), (h, -0.01, h), (h, -0.01, -h)]
+light = [(-0.5, 2.95, -0.5), (0.5, 2.95, -0.5), (0.5, 2.95, 0.5), (-0.5, 2.95, 0.5)]  # facing down
+positions = room + ground + light
+indices = room_idx + [8, 9, 10, 8, 10, 11] + [12, 13, 14, 12, 14, 15]
+pos = b"".join(struct.pack("<3f", *p) for p in positions)
+idx = struct.pack("<%dH" % len(indices), *indices)
+data = pos + idx
+lo = [min(p[k] for p in positions) for k in range(3)]
+hi = [max(p[k] for p in positions) for k in range(3)]
+g = {"asset": {"version": "2.0"}, "scenes": [{"nodes": [0, 1]}],
+     "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0, 1.5, 2.0]}],
+     "cameras": [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.01}}],
+     "meshes": [{"primitives": [
+         {"attributes": {"POSITION": 0}, "indices": 1, "material": 0},
+         {"attributes": {"POSITION": 0}, "indices": 2, "material": 0},
+         {"attributes": {"POSITION": 0}, "indices": 3, "material": 1}]}],
+     "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0}},
+                   {"emissiveFactor": [1, 1, 1], "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1]}}],
+     "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+     "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(pos)},
+                     {"buffer": 0, "byteOffset": len(pos), "byteLength": len(idx)}],
+     "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(positions), "type": "VEC3", "min": lo, "max": hi},
+                   {"bufferView": 1, "componentType": 5123, "count": 36, "type": "SCALAR", "byteOffset": 0},
+                   {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR", "byteOffset": 72},
+                   {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR", "byteOffset": 84}],
+     "extras": {"sharcbake": {"sky_radiance": [0.3, 0.4, 0.6]}}}
+json.dump(g, open(sys.argv[1], "w"))
+PY
+expect 0 "bake a room beside a 10 km ground plane" "$sharcbake" bake "$work/site.gltf" -o "$work/site.sharc" \
+    --iterations 16 --resolution 320x180 --stats-json "$work/site.json"
+says "$work/out.txt" "the rest is out of its sight" "the grid is fitted to what the room's camera sees"
+python3 - "$work/site.json" <<'PY' || failures=$((failures + 1))
+import json, sys
+p = json.load(open(sys.argv[1]))["predicted_hit_rate"]
+camera = [v for v in p["views"] if v["declared"]][0]
+ok = camera["lookups"] >= 1000 and camera["rate"] >= 0.9
+print(("ok" if ok else "FAIL") + ": the room's camera: %d lookups, rate %s, %d refused" % (camera["lookups"], camera["rate"], camera["refused"]))
+sys.exit(0 if ok else 1)
+PY
+expect 0 "render the room through its cache" "$sharcbake" render "$work/site.gltf" -o "$work/site.exr" \
+    --resolution 64 --spp 4 --cache "$work/site.sharc" --no-png --stats-json "$work/site_render.json"
+python3 - "$work/site_render.json" <<'PY' || failures=$((failures + 1))
+import json, sys
+s = json.load(open(sys.argv[1]))
+lookups = s["cache_hits"] + s["cache_misses"]
+ok = lookups >= 1000 and s["cache_hits"] >= 0.9 * lookups
+print(("ok" if ok else "FAIL") + ": render through the site's cache: %d of %d lookups hit" % (s["cache_hits"], lookups))
+sys.exit(0 if ok else 1)
+PY
+# The same bake with the SDK's level bias: 1 m voxels is still fine; 41 m (bias -10) refuses
+# every lookup, and the bake and the render say why instead of "no first bounce hits a surface".
+expect 0 "bake the site with 41 m voxels" "$sharcbake" bake "$work/site.gltf" -o "$work/coarse.sharc" \
+    --iterations 2 --resolution 64x64 --level-bias -10
+says "$work/out.txt" "all [0-9]* refused: each bounce is shorter than its voxel" "the prediction counts refused lookups"
+says "$work/err.txt" "refuse every one of the" "the bake warns that every lookup is refused"
+expect 0 "render through 41 m voxels" "$sharcbake" render "$work/site.gltf" -o "$work/coarse.exr" \
+    --resolution 32 --spp 1 --cache "$work/coarse.sharc" --no-png
+says "$work/err.txt" "refused all [0-9]* cache lookups from this camera" "render says every lookup was refused"
 finish "coverage"
