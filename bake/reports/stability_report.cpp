@@ -126,8 +126,7 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
     const glm::vec3 sides = glm::max(bounds_max - bounds_min, glm::vec3(0.0f));
     r.largest_side = double(std::max({sides.x, sides.y, sides.z}));
     r.float_spacing = floatSpacing(r.far_corner_distance);
-    const glm::vec3 corner(float(r.far_corner_distance));
-    r.ray_offset = double(glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner));
+    r.ray_offset = double(largestRayOffset(float(r.far_corner_distance)));
     const HashGridParameters& grid = cache.settings().grid;
     for (uint32_t level : levels) {
         const double size = double(voxelSize(level, grid));

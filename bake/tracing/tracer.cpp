@@ -194,4 +194,9 @@ glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
     return result;
 }
 
+float largestRayOffset(float far_coordinate) {
+    const glm::vec3 corner(far_coordinate);
+    return glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner);
+}
+
 }  // namespace sharcbake

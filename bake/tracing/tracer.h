@@ -96,4 +96,8 @@ glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal);
 inline constexpr float kRayOffsetOriginRegion = 1.0f / 32.0f;
 inline constexpr float kRayOffsetNearOrigin = 1.0f / 65536.0f;
 
+/// The largest distance offsetRayOrigin moves an origin anywhere in the bounds: at the coordinate
+/// farthest from 0 on any axis (`far_coordinate`, as max |bounds|).
+float largestRayOffset(float far_coordinate);
+
 }  // namespace sharcbake

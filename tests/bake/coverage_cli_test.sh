@@ -224,4 +224,18 @@ says "$work/err.txt" "refuse every one of the" "the bake warns that every lookup
 expect 0 "render through 41 m voxels" "$sharcbake" render "$work/site.gltf" -o "$work/coarse.exr" \
     --resolution 32 --spp 1 --cache "$work/coarse.sharc" --no-png
 says "$work/err.txt" "refused all [0-9]* cache lookups from this camera" "render says every lookup was refused"
+# The lone floor 1e6 units from the origin: the tracer's ray offset there (16 units) is eight times
+# the floor; render said nothing while its image came out wrong.
+python3 - "$work/floor.gltf" "$work/floor_far.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+g["nodes"][0]["translation"] = [1e6, 0, 0]
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "render a floor 1e6 from the origin" "$sharcbake" render "$work/floor_far.gltf" -o "$work/far.exr" \
+    --resolution 16 --spp 1 --no-png
+says "$work/err.txt" "ray origins up to 16 off surfaces.*move the scene towards the origin" "render warns about the ray offset"
+expect 0 "render the floor at the origin" "$sharcbake" render "$work/floor.gltf" -o "$work/near.exr" \
+    --resolution 16 --spp 1 --no-png
+grep -q "ray origins" "$work/err.txt" && fail "render warns about the ray offset at the origin: $(cat "$work/err.txt")"
 finish "coverage"
