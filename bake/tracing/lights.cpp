@@ -13,8 +13,9 @@ constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 glm::vec3 textureMean(const Texture& texture) {
     glm::dvec3 sum(0.0);
-    for (const glm::vec4& t : texture.texels) sum += glm::dvec3(t);
-    return texture.texels.empty() ? glm::vec3(1.0f) : glm::vec3(sum / double(texture.texels.size()));
+    const size_t count = texture.texelCount();
+    for (size_t i = 0; i < count; ++i) sum += glm::dvec3(texture.texel(i));
+    return count == 0 ? glm::vec3(1.0f) : glm::vec3(sum / double(count));
 }
 
 /// glTF's recommended smooth range cut-off: (clamp(1 - (d/range)^4, 0, 1))^2.

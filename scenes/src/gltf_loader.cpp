@@ -32,6 +32,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -78,11 +79,6 @@ std::string parserMessage(std::string err) {
     }
     if (err.size() > 2000) err = err.substr(0, 2000) + "...";
     return printable(err);
-}
-
-/// sRGB transfer function to linear (IEC 61966-2-1).
-float srgbToLinear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
 glm::vec3 vec3Or(const std::vector<double>& v, glm::vec3 fallback) {
@@ -255,8 +251,10 @@ private:
     Scene scene_;
     int default_material_ = -1;
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
-    /// colour and as data needs two decoded copies.
+    /// colour and as data is two Scene textures over one copy of its 8-bit texels.
     std::map<std::pair<int, bool>, int> texture_cache_;
+    /// glTF image index -> its 8-bit texels as RGBA8, shared by every texture that reads it.
+    std::map<int, std::shared_ptr<const std::vector<glm::u8vec4>>> rgba8_images_;
     std::map<std::pair<int, int>, uint64_t> draco_index_counts_;      ///< (mesh, primitive) -> indices' count
     std::map<std::pair<int, float>, int> roughness_from_glossiness_;  ///< (texture, glossiness) -> converted
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
@@ -1587,9 +1585,18 @@ private:
         const auto key = std::make_pair(texture, glossiness);
         if (const auto it = roughness_from_glossiness_.find(key); it != roughness_from_glossiness_.end())
             return it->second;
-        Texture converted = scene_.textures[static_cast<size_t>(texture)];
-        converted.name += " (roughness from glossiness)";
-        for (glm::vec4& t : converted.texels) t = glm::vec4(0.0f, 1.0f - glossiness * t.a, 0.0f, 1.0f);
+        const Texture& source = scene_.textures[static_cast<size_t>(texture)];
+        Texture converted;
+        converted.name = source.name + " (roughness from glossiness)";
+        converted.width = source.width;
+        converted.height = source.height;
+        converted.wrap_s = source.wrap_s;
+        converted.wrap_t = source.wrap_t;
+        converted.nearest = source.nearest;
+        // Floats: 1 - glossiness x A is no longer on the 8-bit grid.
+        converted.texels.resize(source.texelCount());
+        for (size_t i = 0; i < converted.texels.size(); ++i)
+            converted.texels[i] = glm::vec4(0.0f, 1.0f - glossiness * source.texel(i).a, 0.0f, 1.0f);
         scene_.textures.push_back(std::move(converted));
         const int index = static_cast<int>(scene_.textures.size()) - 1;
         roughness_from_glossiness_.emplace(key, index);
@@ -1625,11 +1632,8 @@ private:
         for (size_t i = 0; i < scene_.materials.size(); ++i) {
             Material& m = scene_.materials[i];
             if (m.alpha_mode == AlphaMode::Opaque) continue;
-            bool texture_alpha = false;
-            if (m.base_color_texture.isSet()) {
-                for (const glm::vec4& texel : scene_.textures[size_t(m.base_color_texture.texture)].texels)
-                    texture_alpha = texture_alpha || texel.a < 1.0f;
-            }
+            const bool texture_alpha = m.base_color_texture.isSet() &&
+                                       hasAlphaBelowOne(scene_.textures[size_t(m.base_color_texture.texture)]);
             const bool partial = m.base_alpha < 1.0f || texture_alpha || vertex_alpha[i];
             const float lowest_alpha = partial ? 0.0f : 1.0f;
             if (m.alpha_mode == AlphaMode::Mask ? !(lowest_alpha < m.alpha_cutoff) : !partial) {
@@ -1641,6 +1645,12 @@ private:
                      "point, like Blender's alpha hashed); refraction and tinted transmission are not modelled");
             }
         }
+    }
+
+    static bool hasAlphaBelowOne(const Texture& texture) {
+        for (size_t i = 0; i < texture.texelCount(); ++i)
+            if (texture.texel(i).a < 1.0f) return true;
+        return false;
     }
 
     static const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const char* name) {
@@ -1792,7 +1802,7 @@ private:
         }
     }
 
-    /// Decodes a glTF texture's image into linear RGBA floats and returns its Scene index, or
+    /// Decodes a glTF texture's image and returns its Scene index, or
     /// -1 (with a warning) when the image is unavailable, so the material falls back to its
     /// factors instead of failing the whole scene.
     int decodeTexture(int textureIndex, bool srgb, const std::string& label) {
@@ -1812,7 +1822,7 @@ private:
         const tinygltf::Image& image = model_.images[static_cast<size_t>(source)];
         Texture tex;
         tex.name = imageName(image, source);
-        if (!convertPixels(image, srgb, tex)) {
+        if (!setTexels(source, srgb, tex)) {
             warn(what + ": image " + std::to_string(source) + " could not be decoded; texture ignored");
             return -1;
         }
@@ -1832,34 +1842,69 @@ private:
         return "image " + std::to_string(index);  // embedded: the URI is the pixels themselves
     }
 
-    /// Image bytes (8 or 16 bits, 1-4 channels, as tinygltf decoded them) to linear RGBA.
-    /// Colour channels of sRGB images are decoded; alpha is always linear.
-    static bool convertPixels(const tinygltf::Image& image, bool srgb, Texture& tex) {
+    /// True when tinygltf decoded the image into `bits`-bit samples, 1-4 channels, all present.
+    static bool hasPixels(const tinygltf::Image& image, int bits) {
         const int channels = image.component;
-        const int bytesPerChannel = image.bits / 8;
-        if (image.width <= 0 || image.height <= 0 || channels < 1 || channels > 4 ||
-            (image.bits != 8 && image.bits != 16))
-            return false;
+        if (image.width <= 0 || image.height <= 0 || channels < 1 || channels > 4 || image.bits != bits) return false;
         const size_t pixels = static_cast<size_t>(image.width) * image.height;
-        if (image.image.size() < pixels * channels * bytesPerChannel) return false;
+        return image.image.size() >= pixels * channels * (bits / 8);
+    }
 
-        std::array<float, 256> colour8{};  // 8-bit colour: one pow() per code, not per texel
-        for (int i = 0; i < 256; ++i) colour8[i] = srgb ? srgbToLinear(i / 255.0f) : i / 255.0f;
+    /// The image's texels into `tex`: an 8-bit image as RGBA8 shared by every texture that reads
+    /// it, in either colour space (decoded per lookup); a 16-bit image as linear floats, decoded
+    /// here for `srgb` (8 bits would lose its precision). False when the image has no pixels.
+    bool setTexels(int source, bool srgb, Texture& tex) {
+        const tinygltf::Image& image = model_.images[static_cast<size_t>(source)];
+        if (std::shared_ptr<const std::vector<glm::u8vec4>> rgba8 = rgba8Texels(source)) {
+            tex.width = image.width;
+            tex.height = image.height;
+            tex.encoding = srgb ? TexelEncoding::Srgb8 : TexelEncoding::Linear8;
+            tex.texels8 = std::move(rgba8);
+            return true;
+        }
+        return convertPixels16(image, srgb, tex);
+    }
+
+    /// An 8-bit image's texels as RGBA8 (grey becomes g, g, g; a missing alpha 255), made once per
+    /// image. tinygltf's own copy of the pixels is freed: the image is then held once while the
+    /// rest of the scene loads. Null for an image that is not 8-bit or has no pixels.
+    std::shared_ptr<const std::vector<glm::u8vec4>> rgba8Texels(int source) {
+        if (const auto it = rgba8_images_.find(source); it != rgba8_images_.end()) return it->second;
+        tinygltf::Image& image = model_.images[static_cast<size_t>(source)];
+        if (!hasPixels(image, 8)) return nullptr;
+        const int channels = image.component;
+        const size_t pixels = static_cast<size_t>(image.width) * image.height;
+        auto texels = std::make_shared<std::vector<glm::u8vec4>>(pixels);
+        const unsigned char* in = image.image.data();
+        for (size_t p = 0; p < pixels; ++p, in += channels) {
+            const uint8_t alpha = channels == 2 || channels == 4 ? in[channels - 1] : 255;
+            (*texels)[p] = channels <= 2 ? glm::u8vec4(in[0], in[0], in[0], alpha)  // grey or grey + alpha
+                                         : glm::u8vec4(in[0], in[1], in[2], alpha);
+        }
+        std::vector<unsigned char>().swap(image.image);
+        rgba8_images_.emplace(source, texels);
+        return texels;
+    }
+
+    /// A 16-bit image (1-4 channels, as tinygltf decoded it) to linear RGBA floats. Colour
+    /// channels of sRGB images are decoded; alpha is always linear.
+    static bool convertPixels16(const tinygltf::Image& image, bool srgb, Texture& tex) {
+        if (!hasPixels(image, 16)) return false;
+        const int channels = image.component;
+        const size_t pixels = static_cast<size_t>(image.width) * image.height;
         auto linear = [&](size_t pixel, int c) -> float {
-            const size_t at = (pixel * channels + c) * bytesPerChannel;
-            if (image.bits == 8) return image.image[at] / 255.0f;
             uint16_t v;
-            std::memcpy(&v, &image.image[at], 2);  // stb returns 16-bit samples in host order
+            std::memcpy(&v, &image.image[(pixel * channels + c) * 2], 2);  // stb returns 16-bit samples in host order
             return v / 65535.0f;
         };
         auto colour = [&](size_t pixel, int c) -> float {
-            if (image.bits == 8) return colour8[image.image[pixel * channels + c]];
             const float v = linear(pixel, c);
             return srgb ? srgbToLinear(v) : v;
         };
 
         tex.width = image.width;
         tex.height = image.height;
+        tex.encoding = TexelEncoding::Float;
         tex.texels.resize(pixels);
         const bool hasAlpha = channels == 2 || channels == 4;
         for (size_t p = 0; p < pixels; ++p) {

@@ -782,7 +782,7 @@ TEST(Clearcoat, FactorsAndTexturesAreReadAsBlenderWritesThem) {
     ASSERT_TRUE(m.clearcoat_texture.isSet());
     ASSERT_TRUE(m.clearcoat_roughness_texture.isSet());
     // Both are data (linear): texel 0's green 128 stays 128/255.
-    EXPECT_NEAR(scene.textures[size_t(m.clearcoat_roughness_texture.texture)].texels[0].g, 128 / 255.0f, 1e-6f);
+    EXPECT_NEAR(scene.textures[size_t(m.clearcoat_roughness_texture.texture)].texel(0).g, 128 / 255.0f, 1e-6f);
     bool normal_warned = false, unsupported = false;
     for (const std::string& w : scene.stats.warnings) {
         normal_warned |= w.find("clearcoatNormalTexture ignored") != std::string::npos;
@@ -855,12 +855,12 @@ TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha)
     EXPECT_EQ(m.base_color_texture.texture, m.specular_color_texture.texture);  // both the sRGB decode
     EXPECT_EQ(m.roughness, 1.0f);                                               // the texture holds 1 - 0.5 A
     const Texture& colour = scene.textures[m.specular_color_texture.texture];
-    EXPECT_NEAR(colour.texels[0].y, srgb(128 / 255.0f), 1e-6f);
+    EXPECT_NEAR(colour.texel(0).y, srgb(128 / 255.0f), 1e-6f);
     const Texture& rough = scene.textures[m.metallic_roughness_texture.texture];
-    ASSERT_EQ(rough.texels.size(), 4u);
-    EXPECT_NEAR(rough.texels[0].g, 0.5f, 1e-6f);                        // A 255: glossiness 0.5
-    EXPECT_NEAR(rough.texels[1].g, 1.0f - 0.5f * 128 / 255.0f, 1e-6f);  // A 128, linear
-    EXPECT_EQ(rough.texels[1].b, 0.0f);                                 // metallic 0
+    ASSERT_EQ(rough.texelCount(), 4u);
+    EXPECT_NEAR(rough.texel(0).g, 0.5f, 1e-6f);                        // A 255: glossiness 0.5
+    EXPECT_NEAR(rough.texel(1).g, 1.0f - 0.5f * 128 / 255.0f, 1e-6f);  // A 128, linear
+    EXPECT_EQ(rough.texel(1).b, 0.0f);                                 // metallic 0
     EXPECT_EQ(m.metallic, 0.0f);
 }
 
@@ -882,15 +882,15 @@ TEST(GltfLoaderMaterials, BaseColourTextureDecodedFromSrgbAndDataTextureLinear) 
     ASSERT_TRUE(m.metallic_roughness_texture.isSet());
     EXPECT_EQ(m.base_color_texture.texcoord, 0u);
     EXPECT_EQ(m.metallic_roughness_texture.texcoord, 1u);
-    ASSERT_EQ(scene.textures.size(), 2u);  // one sRGB-decoded copy, one linear copy
+    ASSERT_EQ(scene.textures.size(), 2u);  // read as sRGB and as linear, over one copy of the texels
 
     const Texture& colour = scene.textures[m.base_color_texture.texture];
     ASSERT_EQ(colour.width, 2);
     ASSERT_EQ(colour.height, 2);
-    EXPECT_NEAR(colour.texels[0].y, srgb(128 / 255.0f), 1e-6f);
-    EXPECT_NEAR(colour.texels[0].z, 1.0f, 1e-6f);
-    EXPECT_NEAR(colour.texels[1].w, 128 / 255.0f, 1e-6f);  // alpha stays linear
-    EXPECT_NEAR(colour.texels[2].x, srgb(64 / 255.0f), 1e-6f);
+    EXPECT_NEAR(colour.texel(0).y, srgb(128 / 255.0f), 1e-6f);
+    EXPECT_NEAR(colour.texel(0).z, 1.0f, 1e-6f);
+    EXPECT_NEAR(colour.texel(1).w, 128 / 255.0f, 1e-6f);  // alpha stays linear
+    EXPECT_NEAR(colour.texel(2).x, srgb(64 / 255.0f), 1e-6f);
     EXPECT_EQ(colour.wrap_s, WrapMode::ClampToEdge);
     EXPECT_EQ(colour.wrap_t, WrapMode::MirroredRepeat);
     EXPECT_TRUE(colour.nearest);
@@ -899,8 +899,11 @@ TEST(GltfLoaderMaterials, BaseColourTextureDecodedFromSrgbAndDataTextureLinear) 
     EXPECT_NEAR(colour.sample({0.25f, 0.75f}).x, srgb(64 / 255.0f), 1e-6f);
 
     const Texture& data = scene.textures[m.metallic_roughness_texture.texture];
-    EXPECT_NEAR(data.texels[0].y, 128 / 255.0f, 1e-6f);
-    EXPECT_NEAR(data.texels[2].x, 64 / 255.0f, 1e-6f);
+    EXPECT_EQ(colour.encoding, TexelEncoding::Srgb8);
+    EXPECT_EQ(data.encoding, TexelEncoding::Linear8);
+    EXPECT_EQ(colour.texels8, data.texels8);  // shared
+    EXPECT_NEAR(data.texel(0).y, 128 / 255.0f, 1e-6f);
+    EXPECT_NEAR(data.texel(2).x, 64 / 255.0f, 1e-6f);
     ASSERT_EQ(scene.texcoords0.size(), scene.positions.size());
     EXPECT_TRUE(scene.texcoords1.empty());
 }
@@ -962,8 +965,8 @@ TEST(GltfLoaderMaterials, SixteenBitTextureKeepsPrecision) {
     b.setScene({node});
     const Scene scene = loadGltf(b.writeEmbedded(dir, "png16.gltf"));
     const Material& m = scene.materials.at(0);
-    const glm::vec4 colour = scene.textures.at(m.base_color_texture.texture).texels.at(0);
-    const glm::vec4 data = scene.textures.at(m.metallic_roughness_texture.texture).texels.at(0);
+    const glm::vec4 colour = scene.textures.at(m.base_color_texture.texture).texel(0);
+    const glm::vec4 data = scene.textures.at(m.metallic_roughness_texture.texture).texel(0);
     EXPECT_NEAR(data.x, 1000 / 65535.0f, 1e-7f);  // finer than any 8-bit code
     EXPECT_NEAR(data.y, 32768 / 65535.0f, 1e-7f);
     EXPECT_NEAR(colour.x, srgb(1000 / 65535.0f), 1e-7f);

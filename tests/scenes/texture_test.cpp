@@ -1,11 +1,16 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file texture_test.cpp
-/// @brief Texture::sample: filtering, wrap modes and the v = 0 top-row convention.
+/// @brief Texture::sample: filtering, wrap modes, the v = 0 top-row convention, and 8-bit texels
+/// sampling to the same bits as the float texels they replaced.
 #include "sharcbake/scene.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <memory>
+#include <utility>
+#include <vector>
 
 namespace sharcbake {
 namespace {
@@ -97,6 +102,69 @@ TEST(TextureSample, NanUvDoesNotCrash) {
     const Texture t = ramp(WrapMode::Repeat, false);
     const glm::vec4 v = t.sample({std::nanf(""), std::nanf("")});
     EXPECT_TRUE(std::isfinite(v.x));
+}
+
+/// sRGB to linear as the loader converted every texel when textures were stored as floats.
+float referenceSrgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+
+TEST(TextureSample, EightBitTablesAreTheFloatConversion) {
+    for (int i = 0; i < 256; ++i) {
+        EXPECT_EQ(srgb8ToLinear()[size_t(i)], referenceSrgb(i / 255.0f)) << i;
+        EXPECT_EQ(unorm8ToFloat()[size_t(i)], i / 255.0f) << i;
+    }
+}
+
+/// A 16x16 RGBA8 image holding every code in each channel, in different places per channel, as
+/// an 8-bit texture read as `encoding` and as the float texture the loader used to make of it.
+std::pair<Texture, Texture> eightBitAndFloat(TexelEncoding encoding, WrapMode wrap, bool nearest) {
+    auto texels8 = std::make_shared<std::vector<glm::u8vec4>>();
+    Texture reference;
+    const bool srgb = encoding == TexelEncoding::Srgb8;
+    auto colour = [&](uint8_t c) { return srgb ? referenceSrgb(c / 255.0f) : c / 255.0f; };
+    for (int i = 0; i < 256; ++i) {
+        const glm::u8vec4 t(uint8_t(i), uint8_t(255 - i), uint8_t(i * 7), uint8_t(i * 13));
+        texels8->push_back(t);
+        reference.texels.emplace_back(colour(t.x), colour(t.y), colour(t.z), t.w / 255.0f);  // alpha linear
+    }
+    Texture eight;
+    eight.encoding = encoding;
+    eight.texels8 = texels8;
+    for (Texture* t : {&eight, &reference}) {
+        t->width = t->height = 16;
+        t->wrap_s = t->wrap_t = wrap;
+        t->nearest = nearest;
+    }
+    return {eight, reference};
+}
+
+TEST(TextureSample, EightBitTexelsSampleBitForBitAsFloatTexels) {
+    for (const TexelEncoding encoding : {TexelEncoding::Srgb8, TexelEncoding::Linear8}) {
+        for (const WrapMode wrap : {WrapMode::Repeat, WrapMode::ClampToEdge, WrapMode::MirroredRepeat}) {
+            for (const bool nearest : {false, true}) {
+                const auto [eight, reference] = eightBitAndFloat(encoding, wrap, nearest);
+                ASSERT_EQ(eight.texelCount(), 256u);
+                for (size_t i = 0; i < 256; ++i) ASSERT_EQ(eight.texel(i), reference.texels[i]) << i;
+                // Bilinear weights of every kind: texel centres, edges, seams, outside [0, 1].
+                for (int y = -20; y <= 52; ++y) {
+                    for (int x = -20; x <= 52; ++x) {
+                        const glm::vec2 uv(x * 0.0371f, y * 0.0293f);
+                        const glm::vec4 a = eight.sample(uv), b = reference.sample(uv);
+                        ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0)
+                            << "encoding " << int(encoding) << " wrap " << int(wrap) << " nearest " << nearest << " uv "
+                            << uv.x << ", " << uv.y;
+                    }
+                }
+            }
+        }
+    }
+}
+
+TEST(TextureSample, EightBitTextureWithoutTexelsIsNeutralWhite) {
+    Texture t;
+    t.width = t.height = 2;
+    t.encoding = TexelEncoding::Srgb8;
+    EXPECT_EQ(t.texelCount(), 0u);
+    EXPECT_EQ(t.sample({0.3f, 0.7f}), glm::vec4(1.0f));
 }
 
 }  // namespace

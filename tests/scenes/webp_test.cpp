@@ -76,9 +76,9 @@ TEST(Webp, TheWebpImageIsReadAndTheFallbackIgnored) {
         const Texture& t = scene.textures.at(size_t(m.base_color_texture.texture));
         ASSERT_EQ(t.width, 2);
         ASSERT_EQ(t.height, 1);
-        EXPECT_EQ(t.texels[0], glm::vec4(1, 0, 0, 1));
-        EXPECT_EQ(glm::vec3(t.texels[1]), glm::vec3(0, 0, 1));
-        EXPECT_NEAR(t.texels[1].a, 128 / 255.0f, 1e-6f);  // alpha stays linear
+        EXPECT_EQ(t.texel(0), glm::vec4(1, 0, 0, 1));
+        EXPECT_EQ(glm::vec3(t.texel(1)), glm::vec3(0, 0, 1));
+        EXPECT_NEAR(t.texel(1).a, 128 / 255.0f, 1e-6f);  // alpha stays linear
         for (const std::string& w : scene.stats.warnings) EXPECT_EQ(w.find("image"), std::string::npos) << w;
     }
 }

@@ -11,7 +11,9 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,20 +23,54 @@ namespace sharcbake {
 /// How texture coordinates outside [0,1] are mapped (glTF sampler wrap modes).
 enum class WrapMode : uint8_t { Repeat, ClampToEdge, MirroredRepeat };
 
-/// A decoded texture: linear-light RGBA float texels, row 0 at the top (glTF/image convention,
-/// v = 0 is the first row). sRGB-encoded images (base colour, emissive, specular colour) are
-/// decoded to linear at load time so the tracer does one bilinear fetch and no conversion.
+/// How a texture's texels are stored, and so how a lookup turns them into linear values.
+enum class TexelEncoding : uint8_t {
+    Float,   ///< `texels`: linear RGBA floats (16-bit images, EXR skies, converted textures)
+    Srgb8,   ///< `texels8`: RGBA8 whose colour channels are sRGB-encoded; alpha is linear
+    Linear8  ///< `texels8`: RGBA8 read as linear values (data textures: roughness, normals, ...)
+};
+
+/// The linear value of an sRGB-encoded 8-bit code, and of a linear (unorm) one: the 256-entry
+/// tables 8-bit texels are decoded through. Both are computed once, with the same arithmetic the
+/// loader used when it stored every texel as a float, so a lookup gives the same bits.
+const std::array<float, 256>& srgb8ToLinear();
+const std::array<float, 256>& unorm8ToFloat();
+
+/// sRGB transfer function to linear (IEC 61966-2-1), for one value in [0, 1].
+float srgbToLinear(float c);
+
+/// A decoded texture, row 0 at the top (glTF/image convention, v = 0 is the first row). Lookups
+/// return linear-light RGBA: sRGB-encoded images (base colour, emissive, specular colour) are
+/// decoded per lookup through a 256-entry table. 8-bit images are kept as 8-bit RGBA (4 bytes a
+/// texel instead of 16 as floats), shared between the sRGB and the linear texture when one
+/// image is used both as colour and as data; 16-bit images are kept as linear floats.
 struct Texture {
     std::string name;
     int width = 0;
     int height = 0;
-    std::vector<glm::vec4> texels;  ///< width * height, row-major
+    TexelEncoding encoding = TexelEncoding::Float;
+    std::vector<glm::vec4> texels;  ///< Float: width * height, row-major
+    /// Srgb8 and Linear8: width * height RGBA texels, row-major; shared (read-only) by the
+    /// textures that read one image in different colour spaces.
+    std::shared_ptr<const std::vector<glm::u8vec4>> texels8;
     WrapMode wrap_s = WrapMode::Repeat;
     WrapMode wrap_t = WrapMode::Repeat;
     bool nearest = false;  ///< magnification filter NEAREST; otherwise bilinear
 
     /// Bilinear (or nearest) lookup with the texture's wrap modes. uv in glTF convention.
     glm::vec4 sample(glm::vec2 uv) const;
+
+    /// The number of texels stored: width * height, or 0 for an empty texture.
+    size_t texelCount() const;
+
+    /// Texel `index` (row-major) as linear RGBA, decoded as `sample` decodes it.
+    glm::vec4 texel(size_t index) const {
+        if (encoding == TexelEncoding::Float) return texels[index];
+        const glm::u8vec4 t = (*texels8)[index];
+        const std::array<float, 256>& colour = encoding == TexelEncoding::Srgb8 ? srgb8ToLinear() : unorm8ToFloat();
+        const std::array<float, 256>& linear = unorm8ToFloat();
+        return {colour[t.x], colour[t.y], colour[t.z], linear[t.w]};
+    }
 };
 
 /// KHR_texture_transform: an affine map from a mesh's UVs to the texture's,

@@ -27,7 +27,7 @@ public:
 /// elements; JSON nesting deeper than 256 and world coordinates beyond +-1e9 m are refused.
 struct GltfLoadLimits {
     /// Images wider or taller than this are refused before they are decoded (a 249 KB PNG of
-    /// 16000x16000 texels would cost 4.9 GB).
+    /// 16000x16000 texels decodes to 1 GB of 8-bit texels).
     uint32_t max_texture_size = 8192;
 };
 Scene loadGltf(const std::string& path, const GltfLoadLimits& limits = {});
