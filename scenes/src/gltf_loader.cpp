@@ -64,6 +64,11 @@ const std::array<const char*, 14> kSupportedRequiredExtensions = {"KHR_lights_pu
                                                                   "KHR_materials_clearcoat",
                                                                   "KHR_materials_unlit"};
 
+/// Extensions understood only through the fallback a file must give when it does not require
+/// them: KHR_texture_basisu's KTX2 images are not decoded, its textures' PNG or JPEG `source` is
+/// read. Required, they are refused (the scene has no image sharcbake can read).
+const std::array<const char*, 1> kFallbackOnlyExtensions = {"KHR_texture_basisu"};
+
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
 /// from one instanced node the file is refused instead of exhausting memory.
@@ -116,6 +121,17 @@ struct TextureSlot {
     int index = -1;
     int texcoord = 0;
     const tinygltf::Value* transform = nullptr;  ///< its KHR_texture_transform object, if any
+};
+
+/// What the image loader callback needs, and what it found: why each image it did not decode
+/// (glTF image index -> reason) was not.
+struct ImageDecoding {
+    struct NotDecoded {
+        std::string why;
+        bool ktx2 = false;  ///< skipped on purpose (KHR_texture_basisu), not broken
+    };
+    uint32_t max_side = 0;  ///< --max-texture-size
+    std::map<int, NotDecoded> not_decoded;
 };
 
 /// Where an accessor's elements live in memory, after range checks.
@@ -250,6 +266,7 @@ private:
     tinygltf::Model model_;
     Scene scene_;
     int default_material_ = -1;
+    ImageDecoding image_decoding_;
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
     /// colour and as data is two Scene textures over one copy of its 8-bit texels.
     std::map<std::pair<int, bool>, int> texture_cache_;
@@ -377,20 +394,28 @@ private:
         return size >= 12 && std::memcmp(bytes, "RIFF", 4) == 0 && std::memcmp(bytes + 8, "WEBP", 4) == 0;
     }
 
+    /// KTX2's 12-byte identifier, which KHR_texture_basisu's images start with.
+    static bool isKtx2(const unsigned char* bytes, int size) {
+        static constexpr unsigned char kIdentifier[12] = {0xAB, 'K',  'T',  'X',  ' ',  '2',
+                                                          '0',  0xBB, '\r', '\n', 0x1A, '\n'};
+        return size >= 12 && std::memcmp(bytes, kIdentifier, 12) == 0;
+    }
+
     /// EXT_texture_webp's images, which tinygltf's stb decoder cannot read, with libwebp: 8-bit
-    /// RGBA, behind the same size check as the other images.
+    /// RGBA, behind the same size check as the other images. Bytes libwebp cannot decode are
+    /// recorded in `decoding` (the scene still loads); only an image over the size limit fails.
     static bool loadWebp(tinygltf::Image* image, int index, std::string* err, const unsigned char* bytes, int size,
-                         uint32_t max_side) {
+                         ImageDecoding& decoding) {
         int width = 0, height = 0;
         if (!WebPGetInfo(bytes, size_t(size), &width, &height)) {
-            if (err) *err += "image " + std::to_string(index) + ": not a WebP image libwebp can read\n";
-            return false;
+            decoding.not_decoded.emplace(index, ImageDecoding::NotDecoded{"not a WebP image libwebp can read", false});
+            return true;
         }
-        if (!withinTextureLimit(index, width, height, max_side, err)) return false;
+        if (!withinTextureLimit(index, width, height, decoding.max_side, err)) return false;
         uint8_t* rgba = WebPDecodeRGBA(bytes, size_t(size), &width, &height);
         if (!rgba) {
-            if (err) *err += "image " + std::to_string(index) + ": libwebp could not decode it\n";
-            return false;
+            decoding.not_decoded.emplace(index, ImageDecoding::NotDecoded{"libwebp could not decode it", false});
+            return true;
         }
         image->width = width;
         image->height = height;
@@ -402,17 +427,43 @@ private:
         return true;
     }
 
+    /// Why tinygltf's decoder gave up on an image, from its error text and stb_image's reason.
+    static std::string decodeFailure(std::string tinygltf_err) {
+        if (tinygltf_err.find("STB cannot decode") != std::string::npos) {
+            const char* reason = stbi_failure_reason();
+            return std::string("stb_image cannot decode it (") + (reason ? reason : "unknown image format") + ")";
+        }
+        while (!tinygltf_err.empty() && (tinygltf_err.back() == '\n' || tinygltf_err.back() == '\r'))
+            tinygltf_err.pop_back();
+        return printable(tinygltf_err.empty() ? std::string("unknown error") : tinygltf_err);
+    }
+
     /// tinygltf's image decoder behind a size check on the image header, so a small file that
-    /// declares a huge image is refused before its texels are allocated.
+    /// declares a huge image is refused before its texels are allocated. An image that cannot be
+    /// decoded (corrupt, or a format stb does not read) does not fail the parse: tinygltf would
+    /// refuse the whole scene for it, where a missing image only drops its textures. It is
+    /// recorded in the ImageDecoding `user` and left without texels. KTX2 images are not decoded
+    /// at all: KHR_texture_basisu's textures read their PNG or JPEG fallback.
     static bool loadImageBounded(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
                                  int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
-        const uint32_t max_side = static_cast<const GltfLoadLimits*>(user)->max_texture_size;
-        if (isWebp(bytes, size)) return loadWebp(image, index, err, bytes, size, max_side);
+        ImageDecoding& decoding = *static_cast<ImageDecoding*>(user);
+        if (isKtx2(bytes, size)) {
+            decoding.not_decoded.emplace(
+                index,
+                ImageDecoding::NotDecoded{"a KTX2 (Basis Universal) image, which sharcbake does not decode", true});
+            return true;
+        }
+        if (isWebp(bytes, size)) return loadWebp(image, index, err, bytes, size, decoding);
         int width = 0, height = 0, channels = 0;
         if (stbi_info_from_memory(bytes, size, &width, &height, &channels) &&
-            !withinTextureLimit(index, width, height, max_side, err))
+            !withinTextureLimit(index, width, height, decoding.max_side, err))
             return false;
-        return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, nullptr);
+        std::string decode_err;
+        if (tinygltf::LoadImageData(image, index, &decode_err, warn, req_width, req_height, bytes, size, nullptr))
+            return true;
+        // emplace: a data: URI set aside before parsing (gltf_rewrite.h) keeps its own reason.
+        decoding.not_decoded.emplace(index, ImageDecoding::NotDecoded{decodeFailure(decode_err), false});
+        return true;
     }
 
     void parseFile() {
@@ -425,7 +476,8 @@ private:
         // tinygltf's own file access, recording each file it reads (the glTF or GLB, external
         // buffers, images): Scene::source_files is then exactly what the scene was loaded from,
         // with tinygltf's URI decoding and its handling of missing images.
-        parser.SetImageLoader(&loadImageBounded, &limits_);
+        image_decoding_.max_side = limits_.max_texture_size;
+        parser.SetImageLoader(&loadImageBounded, &image_decoding_);
         parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
                                                     &readAndRecordFile, &tinygltf::WriteWholeFile,
                                                     &access});
@@ -451,6 +503,8 @@ private:
         bool ok = false;
         if (rewritten) {
             draco_index_counts_ = rewritten->draco_index_counts;
+            for (const auto& [index, why] : rewritten->refused_image_uris)
+                image_decoding_.not_decoded.emplace(index, ImageDecoding::NotDecoded{why, false});
             const std::string base_dir = std::filesystem::path(path_).parent_path().string();
             if (rewritten->bytes.size() > std::numeric_limits<unsigned int>::max())
                 fail("more than 4 GiB once decompressed; tinygltf cannot parse it");
@@ -471,6 +525,16 @@ private:
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }
+        warnAboutUndecodedImages();
+    }
+
+    /// One warning per image that could not be decoded, used by a texture or not, saying why.
+    /// KTX2 images are skipped on purpose (KHR_texture_basisu): their textures say so.
+    void warnAboutUndecodedImages() {
+        for (const auto& [index, undecoded] : image_decoding_.not_decoded) {
+            if (!undecoded.ktx2)
+                warn(imageLabel(index) + " cannot be decoded: " + undecoded.why + "; textures using it are ignored");
+        }
     }
 
     /// An external buffer of a compressed file, read before tinygltf parses it (gltf_rewrite.h),
@@ -490,6 +554,11 @@ private:
 
     void checkRequiredExtensions() const {
         for (const std::string& ext : model_.extensionsRequired) {
+            if (ext == "KHR_texture_basisu")
+                fail(
+                    "required extension \"KHR_texture_basisu\": KTX2 / Basis Universal textures are not supported by "
+                    "sharcbake; export PNG or JPEG textures (or give each texture a PNG or JPEG `source` and list "
+                    "the extension only in extensionsUsed)");
             const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
                                            [&](const char* s) { return ext == s; });
             if (!known) fail("required extension " + quoted(ext) + " is not supported by sharcbake");
@@ -500,8 +569,10 @@ private:
     /// scene looks like (instancing, transmission), so say so.
     void warnAboutIgnoredExtensions() {
         for (const std::string& ext : model_.extensionsUsed) {
+            const auto is = [&](const char* s) { return ext == s; };
             const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
-                                           [&](const char* s) { return ext == s; });
+                                           is) ||
+                               std::any_of(kFallbackOnlyExtensions.begin(), kFallbackOnlyExtensions.end(), is);
             if (!known) warn("extension " + quoted(ext) + " is not supported and is ignored");
         }
     }
@@ -1802,27 +1873,53 @@ private:
         }
     }
 
-    /// Decodes a glTF texture's image and returns its Scene index, or
-    /// -1 (with a warning) when the image is unavailable, so the material falls back to its
-    /// factors instead of failing the whole scene.
+    /// The image a texture reads, or -1 (with a warning) when it has none sharcbake can read.
+    /// EXT_texture_webp names the WebP image, and `source` (if any) a fallback for viewers
+    /// without WebP: the WebP one is read. KHR_texture_basisu names a KTX2 image, which is not
+    /// decoded: `source`, its PNG or JPEG fallback, is read.
+    int textureImage(int textureIndex, const std::string& what) {
+        const tinygltf::Texture& src = model_.textures[size_t(textureIndex)];
+        if (const tinygltf::Value* webp = extension(src.extensions, "EXT_texture_webp")) {
+            if (const std::optional<double> webp_source = number(*webp, "source"))
+                return static_cast<int>(*webp_source);
+        }
+        if (const tinygltf::Value* basisu = extension(src.extensions, "KHR_texture_basisu")) {
+            const std::optional<double> ktx2 = number(*basisu, "source");
+            const std::string ktx2_label = "KHR_texture_basisu image" +
+                                           (ktx2 ? " " + std::to_string(static_cast<long long>(*ktx2)) : std::string());
+            if (src.source < 0) {
+                warn(what + " has only a " + ktx2_label +
+                     " (KTX2 / Basis Universal, which sharcbake does not decode) and no PNG or JPEG fallback; "
+                     "texture ignored");
+                return -1;
+            }
+            // Without the material's label: one note per texture, however many materials use it.
+            warn("texture " + std::to_string(textureIndex) + ": " + ktx2_label +
+                 " (KTX2 / Basis Universal) is not decoded; its fallback " + imageLabel(src.source) + " is read");
+        }
+        return src.source;
+    }
+
+    /// Decodes a glTF texture's image and returns its Scene index, or -1 (with a warning) when
+    /// the image is missing or undecodable, so the material falls back to its factors instead of
+    /// failing the whole scene.
     int decodeTexture(int textureIndex, bool srgb, const std::string& label) {
         const tinygltf::Texture& src = model_.textures[textureIndex];
         const std::string what = label + ": texture " + std::to_string(textureIndex);
-        // EXT_texture_webp names the WebP image, and `source` (if any) a fallback for viewers
-        // without WebP: the WebP one is read.
-        int source = src.source;
-        if (const tinygltf::Value* webp = extension(src.extensions, "EXT_texture_webp")) {
-            if (const std::optional<double> webp_source = number(*webp, "source"))
-                source = static_cast<int>(*webp_source);
-        }
-        if (source < 0 || static_cast<size_t>(source) >= model_.images.size()) {
+        const int source = textureImage(textureIndex, what);
+        if (source < 0) return -1;
+        if (static_cast<size_t>(source) >= model_.images.size()) {
             warn(what + " has no image sharcbake can decode; texture ignored");
             return -1;
         }
-        const tinygltf::Image& image = model_.images[static_cast<size_t>(source)];
+        if (const auto it = image_decoding_.not_decoded.find(source); it != image_decoding_.not_decoded.end()) {
+            warn(what + ": " + imageLabel(source) +
+                 (it->second.ktx2 ? " is " + it->second.why : " could not be decoded") + "; texture ignored");
+            return -1;
+        }
         Texture tex;
-        tex.name = imageName(image, source);
-        if (!setTexels(source, srgb, tex)) {
+        tex.name = imageName(model_.images[static_cast<size_t>(source)], source);
+        if (!setTexels(source, srgb, tex)) {  // a missing file: tinygltf has warned, the image has no pixels
             warn(what + ": image " + std::to_string(source) + " could not be decoded; texture ignored");
             return -1;
         }
@@ -1840,6 +1937,16 @@ private:
         if (!image.name.empty()) return image.name;
         if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) return image.uri;
         return "image " + std::to_string(index);  // embedded: the URI is the pixels themselves
+    }
+
+    /// "image N" and its name or file, for warnings.
+    std::string imageLabel(int index) const {
+        std::string label = "image " + std::to_string(index);
+        if (index < 0 || static_cast<size_t>(index) >= model_.images.size()) return label;
+        const tinygltf::Image& image = model_.images[static_cast<size_t>(index)];
+        if (!image.name.empty()) return label + " " + quoted(image.name);
+        if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) return label + " " + quoted(image.uri);
+        return label;
     }
 
     /// True when tinygltf decoded the image into `bits`-bit samples, 1-4 channels, all present.

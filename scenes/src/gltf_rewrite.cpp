@@ -6,9 +6,12 @@
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace sharcbake {
 namespace {
@@ -198,17 +201,92 @@ std::optional<std::string> decodeMeshoptBufferViews(nlohmann::json& doc, bool gl
     return bin;
 }
 
+/// The `data:` URI prefixes tinygltf 2.7 decodes (DecodeDataURI); it refuses any other.
+constexpr const char* kTinygltfDataUriHeaders[] = {"data:application/octet-stream;base64,",
+                                                   "data:image/jpeg;base64,",
+                                                   "data:image/png;base64,",
+                                                   "data:image/bmp;base64,",
+                                                   "data:image/gif;base64,",
+                                                   "data:text/plain;base64,",
+                                                   "data:application/gltf-buffer;base64,"};
+
+/// Neutral type for an image's bytes: the loader's image decoders go by the bytes' content.
+constexpr const char* kOctetStreamHeader = "data:application/octet-stream;base64,";
+
+bool isBase64Char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '/'; }
+
+/// What tinygltf makes of a `data:` URI: it decodes base64 payloads under the headers above; it
+/// refuses any other type (image/webp, image/ktx2, ...) and a payload with fewer than the two
+/// base64 characters that make a byte (it stops at the first character that is not base64).
+enum class DataUri { Decoded, OtherType, NoData };
+
+/// The URI's header up to and including ";base64,", or nothing when it is not base64.
+std::optional<size_t> base64HeaderLength(const char* uri, size_t size) {
+    static constexpr char kMarker[] = ";base64,";
+    const std::string_view text(uri, std::min<size_t>(size, 256));  // headers are short
+    const size_t at = text.find(kMarker);
+    if (at == std::string_view::npos) return std::nullopt;
+    return at + sizeof kMarker - 1;
+}
+
+DataUri classifyDataUri(const char* uri, size_t size) {
+    const std::optional<size_t> header = base64HeaderLength(uri, size);
+    if (!header || size < *header + 2 || !isBase64Char(uri[*header]) || !isBase64Char(uri[*header + 1]))
+        return DataUri::NoData;
+    for (const char* known : kTinygltfDataUriHeaders) {
+        if (std::strlen(known) == *header && std::memcmp(uri, known, *header) == 0) return DataUri::Decoded;
+    }
+    return DataUri::OtherType;
+}
+
+/// True when some `"data:` string in the file's bytes is one tinygltf would refuse.
+bool hasRefusedDataUri(const std::string& bytes) {
+    for (size_t at = bytes.find("\"data:"); at != std::string::npos; at = bytes.find("\"data:", at + 1)) {
+        const size_t end = bytes.find('"', at + 1);
+        const size_t size = (end == std::string::npos ? bytes.size() : end) - (at + 1);
+        if (classifyDataUri(bytes.data() + at + 1, size) != DataUri::Decoded) return true;
+    }
+    return false;
+}
+
+/// Image `data:` URIs tinygltf would refuse, made parseable: one of another type (WebP, KTX2)
+/// gets the neutral type, so its bytes reach the loader's decoders, which go by content; one
+/// without base64 data becomes one byte no decoder reads, and why is recorded (see the header).
+bool fixImageDataUris(nlohmann::json& doc, std::map<int, std::string>& refused) {
+    if (!doc.contains("images") || !doc["images"].is_array()) return false;
+    bool changed = false;
+    for (size_t i = 0; i < doc["images"].size(); ++i) {
+        nlohmann::json& image = doc["images"][i];
+        if (!image.is_object() || !image.contains("uri") || !image["uri"].is_string()) continue;
+        const std::string& uri = image["uri"].get_ref<const std::string&>();
+        if (uri.rfind("data:", 0) != 0) continue;
+        switch (classifyDataUri(uri.data(), uri.size())) {
+            case DataUri::Decoded: continue;
+            case DataUri::OtherType:
+                image["uri"] = kOctetStreamHeader + uri.substr(*base64HeaderLength(uri.data(), uri.size()));
+                break;
+            case DataUri::NoData:
+                refused[int(i)] = "its data: URI holds no base64 data";
+                image["uri"] = std::string(kOctetStreamHeader) + "AA==";
+                break;
+        }
+        changed = true;
+    }
+    return changed;
+}
+
 }  // namespace
 
 bool mayNeedRewrite(const std::string& bytes) {
     return bytes.find("KHR_draco_mesh_compression") != std::string::npos ||
-           bytes.find("EXT_meshopt_compression") != std::string::npos;
+           bytes.find("EXT_meshopt_compression") != std::string::npos || hasRefusedDataUri(bytes);
 }
 
 std::optional<TinygltfInput> rewriteForTinygltf(const std::string& bytes, bool glb, const ReadBufferFile& read_file) {
     const bool draco = bytes.find("KHR_draco_mesh_compression") != std::string::npos;
     const bool meshopt = bytes.find("EXT_meshopt_compression") != std::string::npos;
-    if (!draco && !meshopt) return std::nullopt;
+    const bool data_uris = hasRefusedDataUri(bytes);
+    if (!draco && !meshopt && !data_uris) return std::nullopt;
     size_t json_begin = 0, json_size = bytes.size();
     std::string glb_bin;  // the GLB's binary chunk: buffer 0 when that has no uri
     if (glb) {
@@ -234,7 +312,8 @@ std::optional<TinygltfInput> rewriteForTinygltf(const std::string& bytes, bool g
     std::optional<std::string> decoded_bin;
     if (meshopt) decoded_bin = decodeMeshoptBufferViews(doc, glb, glb_bin, read_file);
     const bool draco_changed = draco && removeDracoIndices(doc, result.draco_index_counts);
-    if (!decoded_bin && !draco_changed) return std::nullopt;  // tinygltf reads the file itself
+    const bool images_changed = data_uris && fixImageDataUris(doc, result.refused_image_uris);
+    if (!decoded_bin && !draco_changed && !images_changed) return std::nullopt;  // tinygltf reads the file itself
 
     std::string json = doc.dump();
     if (!glb && !decoded_bin) {

@@ -999,6 +999,124 @@ TEST(GltfLoaderMaterials, SpecularTexturesAndEmissiveTextureReferenced) {
     EXPECT_EQ(scene.textures.size(), 2u);
 }
 
+// ------------------------------------------------------------------ images that cannot be decoded
+
+/// KTX2's identifier and a few bytes: what KHR_texture_basisu's images start with (never decoded).
+std::vector<uint8_t> ktx2Bytes() {
+    return {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n', 0, 0, 0, 0, 1, 0, 0, 0};
+}
+
+/// Warnings that contain every one of `parts`.
+size_t warningsWith(const Scene& scene, const std::vector<std::string>& parts) {
+    size_t n = 0;
+    for (const std::string& w : scene.stats.warnings) {
+        bool all = true;
+        for (const std::string& part : parts) all = all && w.find(part) != std::string::npos;
+        n += all ? 1 : 0;
+    }
+    return n;
+}
+
+TEST(GltfLoaderImages, UndecodableImageWarnsAndDropsOnlyItsTextures) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);  // image 0, texture 0: a good PNG
+    std::vector<uint8_t> truncated = tinyPng();
+    truncated.resize(truncated.size() / 2);
+    test::writeFile(dir.file("truncated.png"), truncated.data(), truncated.size());
+    const std::vector<uint8_t> text = {'n', 'o', 't', ' ', 'a', 'n', ' ', 'i', 'm', 'a', 'g', 'e'};
+    b.doc["images"].push_back({{"uri", "truncated.png"}});                                // image 1
+    b.doc["images"].push_back({{"uri", "data:image/png;base64," + test::base64(text)}});  // image 2
+    b.doc["images"].push_back({{"bufferView", b.addView(text.data(), text.size())}, {"mimeType", "image/png"}});  // 3
+    // data: URIs tinygltf itself refuses, which failed the whole parse: a type it does not
+    // know, and no payload.
+    b.doc["images"].push_back({{"uri", "data:image/ktx2;base64," + test::base64(ktx2Bytes())}});  // image 4
+    b.doc["images"].push_back({{"uri", "data:image/png;base64,"}});                               // image 5
+    b.doc["textures"].push_back({{"source", 1}});                                                 // texture 1
+    b.doc["textures"].push_back({{"source", 2}});  // texture 2; image 3 is used by no texture
+    b.doc["textures"].push_back({{"source", 4}});  // texture 3
+    b.doc["textures"].push_back({{"source", 5}});  // texture 4
+    prim["material"] = b.addMaterial(
+        {{"pbrMetallicRoughness",
+          {{"baseColorFactor", {0.5, 0.25, 1, 1}},
+           {"baseColorTexture", {{"index", 1}}},
+           {"metallicRoughnessTexture", {{"index", 0}}}}},
+         {"emissiveFactor", {1, 1, 1}},
+         {"emissiveTexture", {{"index", 2}}},
+         {"normalTexture", {{"index", 3}}},
+         {"extensions", {{"KHR_materials_specular", {{"specularTexture", {{"index", 4}}}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    const Scene scene = loadGltf(b.writeExternal(dir, "undecodable.gltf", "undecodable.bin"));
+
+    const Material& m = scene.materials.at(0);
+    EXPECT_FALSE(m.base_color_texture.isSet());  // the factor alone, as for a missing image
+    EXPECT_FALSE(m.emissive_texture.isSet());
+    EXPECT_FALSE(m.normal_texture.isSet());
+    EXPECT_FALSE(m.specular_texture.isSet());
+    expectVec3Near(m.base_color, {0.5f, 0.25f, 1.0f});
+    ASSERT_TRUE(m.metallic_roughness_texture.isSet());  // the good image is still read
+    EXPECT_EQ(scene.textures.at(size_t(m.metallic_roughness_texture.texture)).width, 2);
+    // One warning per broken image, naming it and saying why, used or not.
+    EXPECT_EQ(warningsWith(scene, {"image 1 'truncated.png' cannot be decoded: stb_image", "ignored"}), 1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"image 2 cannot be decoded: stb_image"}), 1u);
+    EXPECT_EQ(warningsWith(scene, {"image 3 cannot be decoded: stb_image"}), 1u);
+    EXPECT_EQ(warningsWith(scene, {"image 5 cannot be decoded: its data: URI holds no base64 data"}), 1u);
+    // And each texture dropped says where.
+    EXPECT_EQ(warningsWith(scene, {"texture 1: image 1 'truncated.png' could not be decoded; texture ignored"}), 1u);
+    EXPECT_EQ(warningsWith(scene, {"texture 2: image 2 could not be decoded; texture ignored"}), 1u);
+    // A KTX2 image (here behind a data: URI type tinygltf does not know) is not decoded at all.
+    EXPECT_EQ(warningsWith(scene, {"texture 3: image 4 is a KTX2 (Basis Universal) image", "texture ignored"}), 1u);
+    EXPECT_EQ(warningsWith(scene, {"image 4 cannot be decoded"}), 0u);
+    EXPECT_EQ(warningsWith(scene, {"texture 4: image 5 could not be decoded; texture ignored"}), 1u);
+}
+
+/// A triangle whose base colour texture is texture 0 = `texture`, over a PNG (image 0) and a
+/// KTX2 image (image 1, in a bufferView as a GLB holds it), with KHR_texture_basisu used or
+/// required.
+std::string basisuScene(const TempDir& dir, const json& texture, bool required) {
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);
+    const std::vector<uint8_t> ktx2 = ktx2Bytes();
+    b.doc["images"].push_back({{"bufferView", b.addView(ktx2.data(), ktx2.size())}, {"mimeType", "image/ktx2"}});
+    b.doc["textures"] = json::array({texture});
+    prim["material"] = b.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    b.doc["extensionsUsed"] = {"KHR_texture_basisu"};
+    if (required) b.doc["extensionsRequired"] = {"KHR_texture_basisu"};
+    return b.writeGlb(dir, "basisu.glb");
+}
+
+TEST(GltfLoaderImages, BasisuTextureReadsItsPngFallback) {
+    TempDir dir;
+    const Scene scene = loadGltf(
+        basisuScene(dir, {{"source", 0}, {"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}}, false));
+    const Material& m = scene.materials.at(0);
+    ASSERT_TRUE(m.base_color_texture.isSet());
+    const Texture& t = scene.textures.at(size_t(m.base_color_texture.texture));
+    ASSERT_EQ(t.width, 2);  // tinyPng
+    EXPECT_NEAR(t.texel(0).y, srgb(128 / 255.0f), 1e-6f);
+    // One note that the KTX2 image is skipped; nothing about undecodable images or the extension.
+    ASSERT_EQ(scene.stats.warnings.size(), 1u) << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"texture 0: KHR_texture_basisu image 1", "not decoded", "fallback image 0"}), 1u)
+        << scene.stats.warnings[0];
+
+    // Without a fallback the texture is dropped, with a warning, and the scene still loads.
+    const Scene only = loadGltf(basisuScene(dir, {{"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}}, false));
+    EXPECT_FALSE(only.materials.at(0).base_color_texture.isSet());
+    EXPECT_EQ(warningsWith(only, {"texture 0 has only a KHR_texture_basisu image 1", "no PNG or JPEG fallback"}), 1u)
+        << ::testing::PrintToString(only.stats.warnings);
+}
+
+TEST(GltfLoaderImages, RequiredBasisuIsRefusedSayingKtx2IsNotSupported) {
+    TempDir dir;
+    const std::string msg = loadErrorOf([&] {
+        loadGltf(basisuScene(dir, {{"source", 0}, {"extensions", {{"KHR_texture_basisu", {{"source", 1}}}}}}, true));
+    });
+    EXPECT_NE(msg.find("KHR_texture_basisu"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("KTX2 / Basis Universal textures are not supported"), std::string::npos) << msg;
+}
+
 // ------------------------------------------------------------------------------------ lights etc.
 
 TEST(GltfLoaderLights, PhotometricToRadiometric) {

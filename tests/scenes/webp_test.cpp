@@ -83,6 +83,27 @@ TEST(Webp, TheWebpImageIsReadAndTheFallbackIgnored) {
     }
 }
 
+TEST(Webp, DataUriOfTypeWebpIsRead) {
+    // tinygltf refuses the type image/webp in a data: URI; the loader reads the bytes by content.
+    TempDir dir;
+    const std::vector<uint8_t> texels = {255, 0, 0, 255, 0, 0, 255, 128};
+    GltfBuilder b;
+    b.doc["images"] = json::array({{{"uri", "data:image/webp;base64," + test::base64(webp(texels, 2, 1))}}});
+    b.doc["textures"] = json::array({{{"extensions", {{"EXT_texture_webp", {{"source", 0}}}}}}});
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int material = b.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}});
+    b.setScene({b.addMeshNode({{"attributes", {{"POSITION", pos}}}, {"material", material}})});
+    b.doc["extensionsUsed"] = {"EXT_texture_webp"};
+    b.doc["extensionsRequired"] = {"EXT_texture_webp"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "webp_data_uri.gltf"));
+    const Material& m = scene.materials.at(0);
+    ASSERT_TRUE(m.base_color_texture.isSet());
+    const Texture& t = scene.textures.at(size_t(m.base_color_texture.texture));
+    ASSERT_EQ(t.width, 2);
+    EXPECT_EQ(t.texel(0), glm::vec4(1, 0, 0, 1));
+    EXPECT_NEAR(t.texel(1).a, 128 / 255.0f, 1e-6f);
+}
+
 TEST(Webp, WebpOnlyRequiredLoadsAndOversizeIsRefusedBeforeDecoding) {
     TempDir dir;
     const std::vector<uint8_t> texels(4 * 4 * 4, 255);
