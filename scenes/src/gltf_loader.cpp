@@ -15,6 +15,7 @@
 #include <stb_image.h>
 #include <tiny_gltf.h>
 #include <webp/decode.h>
+#include <nlohmann/json.hpp>
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -37,6 +38,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <utility>
 
 namespace sharcbake {
@@ -74,16 +76,138 @@ const std::array<const char*, 1> kFallbackOnlyExtensions = {"KHR_texture_basisu"
 /// from one instanced node the file is refused instead of exhausting memory.
 constexpr uint64_t kMaxInstancedTriangles = uint64_t(1) << 26;
 
+/// The longest data: URI a message quotes: enough to show its media type and where the data
+/// starts, never the kilobytes of base64 behind it.
+constexpr size_t kMaxQuotedUri = 60;
+
+/// `uri` cut to kMaxQuotedUri characters with "..." when longer, made printable.
+std::string shortUri(const std::string& uri) {
+    return printable(uri.size() > kMaxQuotedUri ? uri.substr(0, kMaxQuotedUri) + "..." : uri);
+}
+
+/// Every data: URI in `text` shortened (shortUri): tinygltf quotes them whole.
+std::string shortenDataUris(std::string text) {
+    for (size_t at = text.find("data:"); at != std::string::npos; at = text.find("data:", at + 1)) {
+        const size_t end = std::min(text.find_first_of(" \t\r\n'\"", at), text.size());
+        if (end - at > kMaxQuotedUri) text.replace(at, end - at, text.substr(at, kMaxQuotedUri) + "...");
+    }
+    return text;
+}
+
 /// tinygltf's error text without bytes of the files it read: the JSON parser quotes what it
-/// read last ("last read: '...'"), which for a file that is not glTF is its raw content.
+/// read last ("last read: '...'"), which for a file that is not glTF is its raw content, and
+/// a buffer it cannot decode by its whole data: URI.
 std::string parserMessage(std::string err) {
     for (size_t at = err.find("last read: '"); at != std::string::npos; at = err.find("last read: '", at + 1)) {
         const size_t start = at + 12;
         const size_t end = err.find('\'', start);
         err.replace(start - 1, end == std::string::npos ? std::string::npos : end - start + 2, "(bytes not shown)");
     }
+    err = shortenDataUris(std::move(err));
     if (err.size() > 2000) err = err.substr(0, 2000) + "...";
     return printable(err);
+}
+
+/// The glTF version this loader reads (glTF 2.0, "Asset": a 2.x loader reads any 2.y file
+/// unless its minVersion asks for more).
+constexpr unsigned kGltfMajorVersion = 2;
+constexpr unsigned kGltfMinorVersion = 0;
+
+/// A glTF version string, "<major>.<minor>" (the schema's pattern ^[0-9]+\.[0-9]+$); nothing
+/// when `text` is not one.
+std::optional<std::pair<unsigned, unsigned>> parseGltfVersion(const std::string& text) {
+    const size_t dot = text.find('.');
+    const auto digits = [](const std::string& part) {
+        return !part.empty() && part.size() <= 9 &&
+               std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; });
+    };
+    if (dot == std::string::npos || !digits(text.substr(0, dot)) || !digits(text.substr(dot + 1))) return std::nullopt;
+    return std::make_pair(unsigned(std::stoul(text.substr(0, dot))), unsigned(std::stoul(text.substr(dot + 1))));
+}
+
+/// Why a file with this asset.version (nothing: absent) and asset.minVersion ("" when absent)
+/// cannot be read as glTF 2.0, or "" when it can. Refused rather than read: a glTF 1.0 file's
+/// meshes and buffers are objects, not arrays, and would load as an empty scene.
+std::string gltfVersionProblem(const std::optional<std::string>& version, const std::string& min_version) {
+    if (!version) return "asset.version is missing; glTF 2.0 requires it (is this a glTF 2.0 file?)";
+    const auto parsed = parseGltfVersion(*version);
+    if (!parsed) return "asset.version " + quoted(*version) + " is not a glTF version (<major>.<minor>)";
+    if (parsed->first != kGltfMajorVersion) {
+        const std::string which = "glTF " + std::to_string(parsed->first) + "." + std::to_string(parsed->second);
+        return which + " files are not supported (asset.version " + quoted(*version) +
+               "): sharcbake reads glTF 2.0; re-export or convert the scene to glTF 2.0";
+    }
+    if (min_version.empty()) return {};
+    const auto needed = parseGltfVersion(min_version);
+    if (!needed) return "asset.minVersion " + quoted(min_version) + " is not a glTF version (<major>.<minor>)";
+    if (*needed > std::make_pair(kGltfMajorVersion, kGltfMinorVersion)) {
+        return "the file needs glTF " + printable(min_version) + " or later (asset.minVersion); sharcbake reads glTF " +
+               std::to_string(kGltfMajorVersion) + "." + std::to_string(kGltfMinorVersion) +
+               "; re-export it for glTF 2.0";
+    }
+    return {};
+}
+
+/// The JSON text of a .gltf file or of a GLB's JSON chunk (whatever fits in the file).
+std::string_view jsonText(const std::string& bytes, bool glb) {
+    if (!glb) return bytes;
+    if (bytes.size() < 20) return {};
+    uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    return std::string_view(bytes).substr(20, length);
+}
+
+/// tinygltf reports a buffer's data: URI it could not decode as "Failed to decode 'uri' : <the
+/// URI> in Buffer", without the buffer or the reason. Both are found here from the JSON: the
+/// buffer with that URI, and either the size the URI decodes to against its byteLength (an
+/// edited or truncated file) or a URI tinygltf does not decode at all. Nothing when the error is
+/// another or the JSON does not say more.
+std::optional<std::string> dataUriProblem(std::string_view json, const std::string& err) {
+    static const std::string kMarker = "Failed to decode 'uri' : ";
+    const size_t at = err.find(kMarker);
+    if (at == std::string::npos) return std::nullopt;
+    const size_t start = at + kMarker.size();
+    const std::string uri = err.substr(start, err.find(" in Buffer", start) - start);
+    const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+    if (doc.is_discarded() || !doc.is_object() || !doc.contains("buffers") || !doc["buffers"].is_array()) {
+        return std::nullopt;
+    }
+    const nlohmann::json& buffers = doc["buffers"];
+    for (size_t i = 0; i < buffers.size(); ++i) {
+        const nlohmann::json& buffer = buffers[i];
+        if (!buffer.is_object() || buffer.value("uri", std::string()) != uri) continue;
+        const std::string label = "buffer " + std::to_string(i) + ": data: URI " + shortUri(uri);
+        std::vector<unsigned char> data;
+        std::string mime_type;
+        if (!tinygltf::DecodeDataURI(&data, mime_type, uri, 0, false)) {
+            return label +
+                   " is not base64 data of a type tinygltf decodes (application/octet-stream or "
+                   "application/gltf-buffer), or holds no bytes";
+        }
+        const nlohmann::json& length = buffer.contains("byteLength") ? buffer["byteLength"] : nlohmann::json();
+        return label + " holds " + std::to_string(data.size()) + " bytes, but the buffer's byteLength is " +
+               (length.is_null() ? std::string("missing") : printable(length.dump())) +
+               " (the two must agree: was the file edited or cut short?)";
+    }
+    return std::nullopt;
+}
+
+/// asset.version and asset.minVersion read from the JSON itself, for a file tinygltf could not
+/// parse (its error would hide a version it does not read). Nothing when the JSON does not parse
+/// or has no asset object: tinygltf's error says what is wrong then.
+std::optional<std::string> versionProblemInJson(std::string_view json) {
+    const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+    if (doc.is_discarded() || !doc.is_object() || !doc.contains("asset") || !doc["asset"].is_object()) {
+        return std::nullopt;
+    }
+    const nlohmann::json& asset = doc["asset"];
+    const auto text = [&](const char* key) -> std::optional<std::string> {
+        if (!asset.contains(key)) return std::nullopt;
+        return asset[key].is_string() ? asset[key].get<std::string>() : asset[key].dump();
+    };
+    std::string problem = gltfVersionProblem(text("version"), text("minVersion").value_or(""));
+    if (problem.empty()) return std::nullopt;
+    return problem;
 }
 
 glm::vec3 vec3Or(const std::vector<double>& v, glm::vec3 fallback) {
@@ -488,6 +612,7 @@ private:
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.
         const bool glb = hasGlbMagic(path_);
+        if (glb) checkGlbContainerVersion(bytes);
         std::optional<TinygltfInput> rewritten;
         if (mayNeedRewrite(bytes)) {
             // Recorded first, as tinygltf's reader would (the buffers and images read later must
@@ -522,9 +647,13 @@ private:
         for (std::string line; std::getline(lines, line);)
             if (!line.empty()) warn("tinygltf: " + line);
         if (!ok) {
+            if (const std::optional<std::string> problem = versionProblemInJson(jsonText(bytes, glb))) fail(*problem);
+            if (const std::optional<std::string> problem = dataUriProblem(jsonText(bytes, glb), err)) fail(*problem);
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }
+        const std::string problem = gltfVersionProblem(model_.asset.version, model_.asset.minVersion);
+        if (!problem.empty()) fail(problem);
         warnAboutUndecodedImages();
     }
 
@@ -535,6 +664,20 @@ private:
             if (!undecoded.ktx2)
                 warn(imageLabel(index) + " cannot be decoded: " + undecoded.why + "; textures using it are ignored");
         }
+    }
+
+    /// A GLB header's version is the container's: 1 is glTF 1.0's KHR_binary_glTF, whose JSON
+    /// chunk tinygltf would only call "Invalid glTF binary".
+    void checkGlbContainerVersion(const std::string& bytes) const {
+        if (bytes.size() < 8) return;
+        uint32_t version = 0;
+        std::memcpy(&version, bytes.data() + 4, 4);
+        if (version == 1) {
+            fail(
+                "binary glTF version 1 (glTF 1.0's KHR_binary_glTF) is not supported: sharcbake reads glTF 2.0; "
+                "re-export or convert the scene to glTF 2.0");
+        }
+        if (version != 2) fail("binary glTF version " + std::to_string(version) + " is not supported (GLB 2 expected)");
     }
 
     /// An external buffer of a compressed file, read before tinygltf parses it (gltf_rewrite.h),

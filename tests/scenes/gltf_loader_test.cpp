@@ -13,7 +13,9 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 
 namespace sharcbake {
@@ -441,6 +443,46 @@ TEST(GltfLoaderErrors, ShortBinFile) {
     EXPECT_NE(msg.find("short.bin"), std::string::npos) << msg;
 }
 
+// tinygltf quotes a data: URI it cannot decode whole (kilobytes of base64) and says nothing of
+// why; the message names the buffer, shortens the URI and gives the sizes that disagree.
+TEST(GltfLoaderErrors, DataUriOfAnotherLengthIsNamedShortly) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    const std::vector<uint8_t> padding(1500, 7);
+    b.addView(padding.data(), padding.size());
+    const std::string path = b.writeEmbedded(dir, "long.gltf");
+    json doc = json::parse(std::ifstream(path));
+    const std::string uri = doc["buffers"][0]["uri"];
+    const size_t bytes = doc["buffers"][0]["byteLength"];
+    doc["buffers"][0]["byteLength"] = bytes + 16;
+    test::writeFile(path, doc.dump());
+    const std::string msg = loadErrorOf([&] { loadGltf(path); });
+    EXPECT_LT(msg.size(), 400u) << msg;
+    EXPECT_EQ(msg.find(uri), std::string::npos) << msg;
+    EXPECT_NE(msg.find("buffer 0: data: URI " + uri.substr(0, 60) + "..."), std::string::npos) << msg;
+    EXPECT_NE(msg.find("holds " + std::to_string(bytes) + " bytes, but the buffer's byteLength is " +
+                       std::to_string(bytes + 16)),
+              std::string::npos)
+        << msg;
+
+    // Data that is not base64: said so, just as shortly.
+    doc["buffers"][0]["byteLength"] = bytes;
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64,%%" + uri.substr(uri.find(',') + 1);
+    test::writeFile(path, doc.dump());
+    const std::string garbled = loadErrorOf([&] { loadGltf(path); });
+    EXPECT_LT(garbled.size(), 400u) << garbled;
+    EXPECT_NE(garbled.find("is not base64 data of a type tinygltf decodes"), std::string::npos) << garbled;
+
+    // A media type tinygltf does not know is read as a file name: the message quotes it short too.
+    doc["buffers"][0]["uri"] = "data:application/x-unknown;base64," + uri.substr(uri.find(',') + 1);
+    test::writeFile(path, doc.dump());
+    const std::string unknown = loadErrorOf([&] { loadGltf(path); });
+    EXPECT_LT(unknown.size(), 400u) << unknown;
+    EXPECT_NE(unknown.find("data:application/x-unknown;base64,"), std::string::npos) << unknown;
+}
+
 TEST(GltfLoaderErrors, MissingSceneFile) {
     TempDir dir;
     const std::string msg = loadErrorOf([&] { loadGltf(dir.file("nothing_here.gltf")); });
@@ -492,6 +534,62 @@ TEST(GltfLoaderErrors, UnknownRequiredExtension) {
     const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "basisu.gltf")); });
     EXPECT_NE(msg.find("basisu.gltf"), std::string::npos) << msg;
     EXPECT_NE(msg.find("KHR_texture_basisu"), std::string::npos) << msg;
+}
+
+// glTF 2.0 requires asset.version; a 2.x loader reads 2.y files unless minVersion asks for more.
+TEST(GltfLoaderErrors, VersionsOtherThanGltf2AreRefusedNamingTheVersion) {
+    TempDir dir;
+    GltfBuilder b;
+    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    b.setScene({node});
+    const auto errorFor = [&](const json& asset, const std::string& name) {
+        b.doc["asset"] = asset;
+        return loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, name)); });
+    };
+    std::string msg = errorFor({{"version", "1.0"}}, "v1.gltf");
+    EXPECT_NE(msg.find("v1.gltf: glTF 1.0 files are not supported"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("re-export"), std::string::npos) << msg;
+    msg = errorFor({{"version", "3.0"}}, "v3.gltf");
+    EXPECT_NE(msg.find("glTF 3.0 files are not supported (asset.version '3.0')"), std::string::npos) << msg;
+    msg = errorFor({{"version", "2.0"}, {"minVersion", "2.1"}}, "min21.gltf");
+    EXPECT_NE(msg.find("needs glTF 2.1 or later"), std::string::npos) << msg;
+    msg = errorFor({{"version", "two"}}, "word.gltf");
+    EXPECT_NE(msg.find("asset.version 'two' is not a glTF version"), std::string::npos) << msg;
+    msg = errorFor({{"generator", "by hand"}}, "none.gltf");
+    EXPECT_NE(msg.find("asset.version is missing"), std::string::npos) << msg;
+
+    // A later 2.x file without minVersion is readable by a 2.0 loader; so is minVersion 2.0.
+    b.doc["asset"] = {{"version", "2.1"}, {"minVersion", "2.0"}};
+    EXPECT_EQ(loadGltf(b.writeEmbedded(dir, "v21.gltf")).triangles.size(), 1u);
+}
+
+// A glTF 1.0 file as 1.0 exporters wrote it (objects by id, a scene named by a string): tinygltf
+// cannot read it, and the error says why instead of what tinygltf tripped over.
+TEST(GltfLoaderErrors, Gltf1FileIsRefusedAsGltf1) {
+    TempDir dir;
+    const json doc = {{"asset", {{"version", "1.0"}}},
+                      {"scene", "defaultScene"},
+                      {"scenes", {{"defaultScene", {{"nodes", {"node_1"}}}}}},
+                      {"nodes", {{"node_1", {{"meshes", {"mesh_1"}}}}}},
+                      {"meshes", {{"mesh_1", {{"primitives", json::array()}}}}}};
+    const std::string path = dir.file("old.gltf");
+    test::writeFile(path, doc.dump());
+    const std::string msg = loadErrorOf([&] { loadGltf(path); });
+    EXPECT_NE(msg.find("glTF 1.0 files are not supported"), std::string::npos) << msg;
+
+    // Binary glTF 1.0 (KHR_binary_glTF): a GLB header of version 1.
+    GltfBuilder b;
+    b.setScene({});
+    const std::string glb = b.writeGlb(dir, "old.glb");
+    std::string bytes;
+    {
+        std::ifstream in(glb, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    bytes[4] = 1;
+    test::writeFile(glb, bytes);
+    const std::string glb_msg = loadErrorOf([&] { loadGltf(glb); });
+    EXPECT_NE(glb_msg.find("binary glTF version 1"), std::string::npos) << glb_msg;
 }
 
 TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
