@@ -818,10 +818,7 @@ private:
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);
         lights_.emplace(scene_);
-        if (!lights_->hasLights()) {
-            std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
-                                 "the cache will be black\n");
-        }
+        warnWhenUnlit(scene_, *lights_, "cache");
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
         // The automatic grid fits what the roaming camera's positions (and the scene's cameras) see.
         if (job_.level_bias_auto) {

@@ -5,6 +5,7 @@
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene_loader.h"
 #include "support/fnv1a.h"
+#include "tracing/lights.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -158,6 +159,33 @@ void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, i
                  "fit Auto frames it (%s). Give only the width (--resolution %d) for the camera's own frame\n",
                  orthographic ? "orthographic " : "", camera.name.c_str(), double(*camera.aspect_ratio), width, height,
                  double(width) / double(height), change, width);
+}
+
+namespace {
+
+/// Why a punctual light the light sampler left out gives no light.
+std::string whyDark(const PunctualLight& light) {
+    if (light.type == LightType::Spot && !(light.outer_cone_angle > 0.0f)) return "a spot cone of angle 0";
+    return "intensity 0 or a black colour";
+}
+
+}  // namespace
+
+void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* result) {
+    if (lights.hasLights()) return;
+    // "No lights" would be false for a scene whose lights all give none: name them and why.
+    std::string what = "no lights";
+    if (!scene.lights.empty()) {
+        std::string dark;
+        for (const uint32_t i : lights.darkLights()) {
+            const PunctualLight& light = scene.lights[i];
+            dark += std::string(dark.empty() ? "" : ", ") + "light " +
+                    (light.name.empty() ? "#" + std::to_string(i) : "'" + light.name + "'") + ": " + whyDark(light);
+        }
+        what = "no light from its punctual lights (" + dark + ")";
+    }
+    std::fprintf(stderr, "warning: the scene has %s, no emissive surfaces and a black sky: the %s will be black\n",
+                 what.c_str(), result);
 }
 
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,

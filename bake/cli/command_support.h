@@ -21,6 +21,8 @@
 
 namespace sharcbake {
 
+class LightSampler;
+
 /// Exit codes, documented in `sharcbake --help` and the README.
 enum ExitCode : int {
     kExitOk = 0,
@@ -87,6 +89,10 @@ void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, i
 /// unknown). Throws CommandError(kExitUsage) naming the option.
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
                     int& width, int& height);
+
+/// Warns (stderr, also under -q) when nothing in the scene gives light, so the `result` ("image",
+/// "cache") will be black; punctual lights that give none are named with the reason.
+void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* result);
 
 /// Options that choose the sky, shared by render and bake.
 struct SkyOptions {

@@ -268,10 +268,7 @@ private:
         tracer_.emplace(scene_);
         lights_.emplace(scene_);
         build_seconds_ = secondsSince(build_start);
-        if (!lights_->hasLights()) {
-            std::fprintf(stderr, "warning: the scene has no lights, no emissive surfaces and a black sky: "
-                                 "the image will be black\n");
-        }
+        warnWhenUnlit(scene_, *lights_, "image");
         warnAboutRayOffset();
         scene_hash_ = sceneContentHash(scene_.source_files);
         if (!o_.cache_path.empty()) {

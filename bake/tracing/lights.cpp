@@ -26,12 +26,27 @@ float rangeWindow(float distance, float range) {
     return w * w;
 }
 
-/// KHR_lights_punctual's spot attenuation: squared linear ramp between the cone cosines.
+/// 1 - cos(angle), exact for small angles too: in float, the cosine of any angle below about
+/// 3e-4 rad rounds to 1, and a narrow spot cone (glTF allows any outer angle above 0) would
+/// have no width at all.
+float oneMinusCos(float angle) {
+    const float s = std::sin(0.5f * angle);
+    return 2.0f * s * s;
+}
+
+/// KHR_lights_punctual's spot attenuation: squared linear ramp between the cone cosines. Kept in
+/// 1 - cos terms (oneMinusCos; for unit vectors 1 - a.b = |a - b|^2 / 2), so a cone of a
+/// microradian lights its disc instead of nothing. The extension's sample code floors the
+/// ramp's width at 0.001 in cosine, which also darkens any cone narrower than 2.6 degrees;
+/// here only a ramp of no width (inner = outer) becomes a hard edge.
 float spotAttenuation(const PunctualLight& light, glm::vec3 light_to_point) {
-    const float cos_outer = std::cos(light.outer_cone_angle);
-    const float cos_inner = std::cos(light.inner_cone_angle);
-    const float scale = 1.0f / std::max(1e-3f, cos_inner - cos_outer);
-    const float t = glm::clamp((glm::dot(light.direction, light_to_point) - cos_outer) * scale, 0.0f, 1.0f);
+    const float outer = oneMinusCos(light.outer_cone_angle);
+    const float inner = oneMinusCos(light.inner_cone_angle);
+    const glm::vec3 apart = light.direction - light_to_point;
+    const float off_axis = 0.5f * glm::dot(apart, apart);
+    if (!(off_axis < outer)) return 0.0f;
+    if (!(outer - inner > 0.0f)) return 1.0f;
+    const float t = glm::clamp((outer - off_axis) / (outer - inner), 0.0f, 1.0f);
     return t * t;
 }
 
@@ -103,13 +118,19 @@ void LightSampler::addPunctualLights(float disk_area, std::vector<float>& powers
         switch (light.type) {
             case LightType::Point: power = 4.0f * kPi * lum; break;
             case LightType::Spot: {
-                const float cos_mid = 0.5f * (std::cos(light.inner_cone_angle) + std::cos(light.outer_cone_angle));
-                power = 2.0f * kPi * (1.0f - cos_mid) * lum;
+                // The solid angle of a cone halfway between the two (1 - cos stays exact for
+                // narrow cones, whose power would otherwise round to zero and drop the light).
+                const float one_minus_cos_mid = 0.5f * (oneMinusCos(light.inner_cone_angle) +
+                                                        oneMinusCos(light.outer_cone_angle));
+                power = 2.0f * kPi * one_minus_cos_mid * lum;
                 break;
             }
             case LightType::Directional: power = lum * disk_area; break;
         }
-        if (!(power > 0.0f)) continue;
+        if (!(power > 0.0f)) {
+            dark_lights_.push_back(i);
+            continue;
+        }
         entries_.push_back({Kind::Punctual, i});
         powers.push_back(power);
     }

@@ -34,6 +34,9 @@ public:
     bool hasLights() const { return !selection_.empty(); }
     bool hasEmissiveTriangles() const { return emissive_triangle_count_ > 0; }
     bool hasSky() const { return has_sky_; }
+    /// Scene::lights indices of punctual lights that give no light (a zero intensity, a black
+    /// colour or a spot cone of zero angle) and are never sampled: a "no lights" warning names them.
+    const std::vector<uint32_t>& darkLights() const { return dark_lights_; }
 
     /// Samples one light for the shading point. Returns false if there is nothing to sample or
     /// the chosen sample carries no energy. Occlusion is not tested here.
@@ -75,6 +78,7 @@ private:
     std::vector<float> triangle_pmf_;   ///< per scene triangle: its selection probability (0 = not a light)
     std::vector<float> triangle_area_;  ///< per scene triangle, only filled for emitters
     uint32_t emissive_triangle_count_ = 0;
+    std::vector<uint32_t> dark_lights_;
     bool has_sky_ = false;
     float sky_pmf_ = 0.0f;
     Distribution2D sky_map_distribution_;

@@ -454,6 +454,61 @@ TEST(Transmission, AbsentOrZeroKeepsTheSurfaceOpaque) {
 /// The sRGB transfer function to linear light (IEC 61966-2-1), as colour textures are decoded.
 float srgbToLinear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
+/// A scene of nothing but one spot light at (0, 0, 1) shining down -Z.
+Scene spotOnly(float inner, float outer, float intensity = 1.0f) {
+    Scene scene;
+    PunctualLight spot;
+    spot.name = "Spot";
+    spot.type = LightType::Spot;
+    spot.position = {0.0f, 0.0f, 1.0f};
+    spot.direction = {0.0f, 0.0f, -1.0f};
+    spot.intensity = glm::vec3(intensity);
+    spot.inner_cone_angle = inner;
+    spot.outer_cone_angle = outer;
+    scene.lights.push_back(spot);
+    return scene;
+}
+
+/// The radiance a spotOnly light sends to a point of the z = 0 plane facing it.
+glm::vec3 spotRadianceAt(const LightSampler& lights, glm::vec3 point) {
+    SurfaceHit at;
+    at.position = point;
+    LightSample sample;
+    return lights.sample(at, 0.5f, {0.5f, 0.5f}, sample) ? sample.radiance : glm::vec3(0.0f);
+}
+
+// glTF allows any spot cone above 0 rad. In float, the cosine of an angle below about 3e-4 rad is
+// 1: the light had no power (left out: "no lights") and its cone no width.
+TEST(SpotLights, NarrowConesLightTheirDisc) {
+    const Scene needle = spotOnly(0.0f, 1e-6f);
+    const LightSampler needle_lights(needle);
+    ASSERT_TRUE(needle_lights.hasLights());
+    EXPECT_TRUE(needle_lights.darkLights().empty());
+    expectNear(spotRadianceAt(needle_lights, {0.0f, 0.0f, 0.0f}), glm::vec3(1.0f), 1e-5f);  // on the axis, 1 m
+    EXPECT_EQ(spotRadianceAt(needle_lights, {1e-5f, 0.0f, 0.0f}), glm::vec3(0.0f));         // 10x outside
+
+    // A milliradian cone, 0.5 mrad off its axis: halfway in angle, 3/4 of the way in 1 - cos,
+    // squared (the extension's ramp); the sample code's 0.001 floor would give 1.4e-7.
+    const Scene narrow = spotOnly(0.0f, 1e-3f);
+    const LightSampler narrow_lights(narrow);
+    expectNear(spotRadianceAt(narrow_lights, {5e-4f, 0.0f, 0.0f}), glm::vec3(0.5625f), 2e-3f);
+
+    // Cones whose cosines are far apart are unchanged: the ramp between 30 and 45 degrees.
+    const Scene wide = spotOnly(0.5235988f, 0.7853982f);
+    const LightSampler wide_lights(wide);
+    const float off = std::tan(0.6544985f);  // 37.5 degrees off the axis, 1 m below
+    const float cos_d = std::cos(0.6544985f), cos_i = std::cos(0.5235988f), cos_o = std::cos(0.7853982f);
+    const float t = (cos_d - cos_o) / (cos_i - cos_o);
+    expectNear(spotRadianceAt(wide_lights, {off, 0.0f, 0.0f}), glm::vec3(t * t * cos_d * cos_d), 1e-4f);
+}
+
+TEST(SpotLights, LightsThatGiveNoLightAreListed) {
+    const Scene dark = spotOnly(0.0f, 0.5f, 0.0f);
+    const LightSampler lights(dark);
+    EXPECT_FALSE(lights.hasLights());
+    EXPECT_EQ(lights.darkLights(), std::vector<uint32_t>{0});
+}
+
 TEST(Unlit, ShowsItsBaseColourAsEmissionAndReflectsNothing) {
     QuadScene quad;
     // Base colour factor x texture (sRGB) x vertex colour, as a viewer shows it; the alpha stays.
