@@ -1468,7 +1468,9 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--reference", o->reference_path,
                     "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
                     "the image error is a render through the cache against it; its size is the evaluation size");
-    cmd->add_option("--report-camera", o->report_camera, "Evaluation camera: glTF camera name or index (default: the first)");
+    cmd->add_option("--report-camera", o->report_camera,
+                    "Evaluation camera (default: the first): a glTF camera by its node's name, its own name or its "
+                    "index #N, as render --camera");
     cmd->add_option("--report-resolution", o->report_resolution,
                     "Evaluation image size \"W\" or \"WxH\" when there is no --reference (default 128 wide)");
     cmd->add_option("--report-spp", o->report_spp, "Samples per pixel of the evaluation render through the cache, rendered as two independent "

@@ -8,10 +8,11 @@
 #include "tracing/lights.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <sstream>
 
 #include <sys/stat.h>
@@ -102,32 +103,72 @@ void writeTextOutput(const std::string& path, const std::string& what, const std
     }
 }
 
+namespace {
+
+/// The indices of the scene's cameras for which `matches` is true.
+template <class Matches>
+std::vector<size_t> camerasWhere(const Scene& scene, Matches matches) {
+    std::vector<size_t> found;
+    for (size_t i = 0; i < scene.cameras.size(); ++i) {
+        if (matches(scene.cameras[i])) found.push_back(i);
+    }
+    return found;
+}
+
+/// "#0 node 'Persp', glTF camera 'Camera', #1 ..." for the given cameras.
+std::string cameraList(const Scene& scene, const std::vector<size_t>& indices) {
+    std::string list;
+    for (const size_t i : indices) list += (list.empty() ? "" : ", ") + cameraListEntry(scene.cameras[i]);
+    return list;
+}
+
+/// "#N" or "N" as an index into the scene's cameras; nothing when `selector` is neither.
+std::optional<size_t> cameraIndex(const std::string& selector) {
+    const std::string digits = !selector.empty() && selector[0] == '#' ? selector.substr(1) : selector;
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) {
+        return std::nullopt;
+    }
+    return size_t(std::stoul(digits));
+}
+
+}  // namespace
+
 Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
                    float fov_degrees) {
-    if (!selector.empty()) {
-        for (const Camera& c : scene.cameras) {
-            if (c.name == selector) return c;
-        }
-        char* end = nullptr;
-        const unsigned long index = std::strtoul(selector.c_str(), &end, 10);
-        if (end && *end == '\0' && index < scene.cameras.size()) return scene.cameras[index];
-        std::string names;
-        for (size_t i = 0; i < scene.cameras.size(); ++i) {
-            names += (i ? ", " : "") + std::to_string(i) + " '" + scene.cameras[i].name + "'";
-        }
-        throw CommandError(kExitUsage, option_name + " " + selector + ": no such camera in the scene (" +
-                                           (names.empty() ? "it has none" : "it has " + names) + ")");
+    if (selector.empty()) {
+        if (!scene.cameras.empty()) return scene.cameras.front();
+        return automaticCamera(scene, glm::radians(fov_degrees));
     }
-    if (!scene.cameras.empty()) return scene.cameras.front();
-    return automaticCamera(scene, glm::radians(fov_degrees));
+    // Node names first: they are the names users see (Blender's object names), and several nodes
+    // may place one glTF camera, which its own name cannot tell apart.
+    const std::vector<size_t> by_node = camerasWhere(scene, [&](const Camera& c) { return c.node_name == selector; });
+    const std::vector<size_t> by_name = camerasWhere(scene, [&](const Camera& c) { return c.name == selector; });
+    for (const auto& [found, what] : {std::pair(&by_node, "node name"), std::pair(&by_name, "glTF camera name")}) {
+        if (found->size() == 1) return scene.cameras[found->front()];
+        if (found->size() > 1) {
+            throw CommandError(kExitUsage, option_name + " " + selector + ": " + std::to_string(found->size()) +
+                                               " cameras have that " + what + " (" + cameraList(scene, *found) +
+                                               "); choose one by its index, e.g. " + option_name + " '#" +
+                                               std::to_string(found->front()) + "'");
+        }
+    }
+    if (const std::optional<size_t> index = cameraIndex(selector); index && *index < scene.cameras.size()) {
+        return scene.cameras[*index];
+    }
+    std::vector<size_t> all(scene.cameras.size());
+    std::iota(all.begin(), all.end(), size_t(0));
+    throw CommandError(kExitUsage, option_name + " " + selector + ": no such camera in the scene (" +
+                                       (all.empty() ? "it has none" : "it has " + cameraList(scene, all)) +
+                                       "; give a node name, a glTF camera name or an index #N)");
 }
 
 std::string describeCamera(const Camera& camera) {
     const glm::vec3 target = camera.position + camera.forward;
     char text[256];
-    std::snprintf(text, sizeof text, "'%s' at (%g, %g, %g) looking at (%g, %g, %g), up (%g, %g, %g), ",
-                  camera.name.c_str(), camera.position.x, camera.position.y, camera.position.z, target.x, target.y,
-                  target.z, camera.up.x, camera.up.y, camera.up.z);
+    std::snprintf(text, sizeof text, "%s at (%g, %g, %g) looking at (%g, %g, %g), up (%g, %g, %g), ",
+                  (camera.index >= 0 ? cameraLabel(camera) : "'" + camera.name + "'").c_str(), camera.position.x,
+                  camera.position.y, camera.position.z, target.x, target.y, target.z, camera.up.x, camera.up.y,
+                  camera.up.z);
     std::string result = text;
     if (camera.orthographic_half_height) {
         std::snprintf(text, sizeof text, "orthographic, %g high", 2.0 * double(*camera.orthographic_half_height));
@@ -155,10 +196,10 @@ void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, i
                       double(glm::degrees(after)), double(glm::degrees(before)));
     }
     std::fprintf(stderr,
-                 "warning: %scamera '%s' has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
+                 "warning: %s%s has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
                  "fit Auto frames it (%s). Give only the width (--resolution %d) for the camera's own frame\n",
-                 orthographic ? "orthographic " : "", camera.name.c_str(), double(*camera.aspect_ratio), width, height,
-                 double(width) / double(height), change, width);
+                 orthographic ? "orthographic " : "", cameraLabel(camera).c_str(), double(*camera.aspect_ratio), width,
+                 height, double(width) / double(height), change, width);
 }
 
 namespace {
@@ -342,6 +383,7 @@ Json metadataJson(const std::vector<std::pair<std::string, std::string>>& metada
 
 Json cameraJson(const Camera& camera) {
     Json json = {{"name", camera.name},
+                 {"node_name", camera.node_name},
                  {"position", jsonVec3(camera.position)},
                  {"forward", jsonVec3(camera.forward)},
                  {"up", jsonVec3(camera.up)},

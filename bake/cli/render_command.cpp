@@ -256,7 +256,7 @@ private:
         scene_ = loadSceneForCommand(o_.scene_path, o_.sky, o_.quiet, o_.limits);
         checkOutputs(scene_.source_files);  // the buffers and textures the scene read
         const Camera chosen = chooseCamera(scene_, o_);
-        if (!o_.quiet && chosen.name == "automatic") {
+        if (!o_.quiet && chosen.index < 0 && chosen.name == "automatic") {
             std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
                         describeCamera(chosen).c_str());
         }
@@ -432,12 +432,12 @@ private:
         ImageMetadata metadata{
             {"sharcbake:software", "sharcbake " SHARCBAKE_VERSION},
             {"sharcbake:scene", o_.scene_path},
-            {"sharcbake:camera", camera_.name},
+            {"sharcbake:camera", camera_.index >= 0 ? cameraLabel(camera_) : camera_.name},
             {"sharcbake:spp", std::to_string(o_.spp)},
             {"sharcbake:seed", std::to_string(o_.seed)},
             {"sharcbake:max_bounces", std::to_string(o_.max_bounces)},
-            {"sharcbake:integrator", cache_ ? "path tracer, NEE + MIS, paths end on SHaRC cache hits"
-                                            : "path tracer, NEE + MIS"},
+            {"sharcbake:integrator",
+             cache_ ? "path tracer, NEE + MIS, paths end on SHaRC cache hits" : "path tracer, NEE + MIS"},
         };
         if (cache_) {
             metadata["sharcbake:cache"] = o_.cache_path;
@@ -477,8 +477,8 @@ private:
     uint64_t rays() const { return counts_.closest_hit_rays + counts_.shadow_rays; }
 
     void printSummary() const {
-        std::printf("Rendered %dx%d, %u spp, camera '%s' in %.2f s (BVH build %.2f s, %d threads)\n", width_, height_,
-                    o_.spp, camera_.name.c_str(), render_seconds_, build_seconds_, threads_);
+        std::printf("Rendered %dx%d, %u spp, %s in %.2f s (BVH build %.2f s, %d threads)\n", width_, height_, o_.spp,
+                    cameraLabel(camera_).c_str(), render_seconds_, build_seconds_, threads_);
         std::printf("  rays: %llu closest-hit + %llu shadow = %.3g rays/s\n",
                     (unsigned long long)counts_.closest_hit_rays, (unsigned long long)counts_.shadow_rays,
                     double(rays()) / render_seconds_);
@@ -600,7 +600,10 @@ void registerRenderCommand(CLI::App& app) {
                     "Output image: .exr (linear radiance, and a tone-mapped .png preview beside it) or .png (the "
                     "preview alone)")
         ->required();
-    cmd->add_option("--camera", options->camera, "glTF camera by name or index (default: the first)");
+    cmd->add_option("--camera", options->camera,
+                    "glTF camera (default: the first): by its node's name (Blender's object name), else by the glTF "
+                    "camera's own name, else by its index, #N or N. A name two cameras share is refused with "
+                    "both listed");
     cmd->add_option("--look-at", options->look_at,
                     "Camera from eye and target: \"ex,ey,ez,tx,ty,tz\" (overrides --camera)");
     cmd->add_option("--up", options->up, "Up vector for --look-at")->capture_default_str();

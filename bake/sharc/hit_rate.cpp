@@ -43,7 +43,7 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
     std::vector<glm::vec3> starts;
     for (const Camera& c : scene.cameras) {
         PredictionView view{c, true};
-        view.camera.name = "camera '" + c.name + "'";
+        view.camera.name = cameraLabel(c);  // "camera 'Persp'", or "camera #3" without names
         views.push_back(view);
         starts.push_back(c.position);
     }

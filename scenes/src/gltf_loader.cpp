@@ -2231,14 +2231,18 @@ private:
         if (static_cast<size_t>(node.camera) >= model_.cameras.size())
             fail("node " + quoted(node.name) + ": camera " + std::to_string(node.camera) + " does not exist");
         const tinygltf::Camera& src = model_.cameras[node.camera];
-        const std::string name = src.name.empty() ? node.name : src.name;
+        Camera cam;
+        cam.name = src.name;
+        cam.node_name = node.name;
+        // Skipped cameras get no index: a nameless one is named by its node.
+        const std::string label = cam.name.empty() && cam.node_name.empty()
+                                      ? "camera of node " + std::to_string(&node - model_.nodes.data())
+                                      : cameraLabel(cam);
         const bool orthographic = src.type == "orthographic";
         if (!orthographic && src.type != "perspective") {
-            warn("camera " + quoted(name) + ": " + src.type + " cameras are not supported; skipped");
+            warn(label + ": " + printable(src.type) + " cameras are not supported; skipped");
             return;
         }
-        Camera cam;
-        cam.name = name;
         cam.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
         const glm::dmat3 linear(world);
         const glm::dvec3 forward = glm::normalize(linear * glm::dvec3(0.0, 0.0, -1.0));
@@ -2246,7 +2250,7 @@ private:
         glm::dvec3 up = linear * glm::dvec3(0.0, 1.0, 0.0);
         up = glm::normalize(up - glm::dot(up, forward) * forward);
         if (!isFinite(glm::vec3(forward)) || !isFinite(glm::vec3(up))) {
-            warn("camera " + quoted(name) + ": degenerate node transform; skipped");
+            warn(label + ": degenerate node transform; skipped");
             return;
         }
         cam.forward = glm::vec3(forward);
@@ -2257,22 +2261,27 @@ private:
             const double xmag = std::abs(src.orthographic.xmag), ymag = std::abs(src.orthographic.ymag);
             if (!(xmag > 0.0 && ymag > 0.0 && std::isfinite(xmag) && std::isfinite(ymag) && float(xmag) > 0.0f &&
                   float(ymag) > 0.0f)) {
-                warn("camera " + quoted(name) + ": orthographic xmag " + std::to_string(src.orthographic.xmag) +
-                     " and ymag " + std::to_string(src.orthographic.ymag) + " must be finite and non-zero; skipped");
+                warn(label + ": orthographic xmag " + std::to_string(src.orthographic.xmag) + " and ymag " +
+                     std::to_string(src.orthographic.ymag) + " must be finite and non-zero; skipped");
                 return;
             }
             cam.orthographic_half_height = float(ymag);
             cam.aspect_ratio = float(xmag / ymag);
-            scene_.cameras.push_back(cam);
+            addSceneCamera(std::move(cam));
             return;
         }
         if (src.perspective.yfov > 0.0 && src.perspective.yfov < 3.14159)
             cam.yfov = static_cast<float>(src.perspective.yfov);
         else
-            warn("camera " + quoted(name) + ": invalid yfov " + std::to_string(src.perspective.yfov) +
-                 "; using " + std::to_string(cam.yfov));
+            warn(label + ": invalid yfov " + std::to_string(src.perspective.yfov) + "; using " +
+                 std::to_string(cam.yfov));
         if (src.perspective.aspectRatio > 0.0) cam.aspect_ratio = static_cast<float>(src.perspective.aspectRatio);
-        scene_.cameras.push_back(cam);
+        addSceneCamera(std::move(cam));
+    }
+
+    void addSceneCamera(Camera cam) {
+        cam.index = int32_t(scene_.cameras.size());
+        scene_.cameras.push_back(std::move(cam));
     }
 
     // ---------------------------------------------------------------- sky

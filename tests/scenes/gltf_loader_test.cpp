@@ -1345,12 +1345,39 @@ TEST(GltfLoaderCameras, PerspectiveAndOrthographicParsed) {
     ASSERT_TRUE(iso.aspect_ratio.has_value());
     EXPECT_FLOAT_EQ(*iso.aspect_ratio, 2.0f);
 
-    EXPECT_EQ(scene.cameras[2].name, "NodeName");
+    EXPECT_EQ(scene.cameras[2].name, "");
+    EXPECT_EQ(scene.cameras[2].node_name, "NodeName");
     EXPECT_FALSE(scene.cameras[2].aspect_ratio.has_value());
     // xmag 0 is invalid in glTF: skipped, with a warning naming the camera.
     bool warned = false;
     for (const std::string& w : scene.stats.warnings) warned |= w.find("'Flat'") != std::string::npos;
     EXPECT_TRUE(warned);
+}
+
+// Blender names the node after the object and the glTF camera after its camera data; users know
+// the first. Both are kept, with the camera's index, and messages name a camera by them.
+TEST(GltfLoaderCameras, NodeAndCameraNamesAndIndexKept) {
+    TempDir dir;
+    GltfBuilder b;
+    const json perspective = {{"yfov", 0.6}, {"znear", 0.1}};
+    b.doc["cameras"] = json::array({{{"name", "Camera"}, {"type", "perspective"}, {"perspective", perspective}},
+                                    {{"name", "Camera.001"}, {"type", "perspective"}, {"perspective", perspective}},
+                                    {{"type", "perspective"}, {"perspective", perspective}}});
+    const int persp = b.addNode({{"camera", 0}, {"name", "Persp"}});
+    const int ortho = b.addNode({{"camera", 1}, {"name", "Ortho"}});
+    const int same = b.addNode({{"camera", 0}, {"name", "Camera"}});
+    const int nameless = b.addNode({{"camera", 2}});
+    b.setScene({persp, ortho, same, nameless});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "blender_names.gltf"));
+    ASSERT_EQ(scene.cameras.size(), 4u);
+    for (size_t i = 0; i < scene.cameras.size(); ++i) EXPECT_EQ(scene.cameras[i].index, int32_t(i));
+    EXPECT_EQ(scene.cameras[0].node_name, "Persp");
+    EXPECT_EQ(scene.cameras[0].name, "Camera");
+    EXPECT_EQ(cameraLabel(scene.cameras[0]), "camera 'Persp' (glTF camera 'Camera')");
+    EXPECT_EQ(cameraListEntry(scene.cameras[1]), "#1 node 'Ortho', glTF camera 'Camera.001'");
+    EXPECT_EQ(cameraLabel(scene.cameras[2]), "camera 'Camera'");
+    EXPECT_EQ(cameraLabel(scene.cameras[3]), "camera #3");
+    EXPECT_EQ(cameraListEntry(scene.cameras[3]), "#3 (no names)");
 }
 
 TEST(GltfLoaderSky, UniformRadianceFromRootExtras) {

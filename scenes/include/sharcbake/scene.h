@@ -172,7 +172,15 @@ struct PunctualLight {
 
 /// A pinhole camera, from a glTF node with a perspective camera or from the command line.
 struct Camera {
+    /// The glTF camera's own name (`cameras[i].name`; empty when it has none), or what the tool
+    /// calls a camera it makes ("--look-at", "automatic").
     std::string name;
+    /// The name of the glTF node that places the camera; empty when it has none. Blender's
+    /// exporter names the node after the object ("Persp") and the camera after the object's
+    /// camera data ("Camera.001"), so users know a camera by this name.
+    std::string node_name;
+    /// Its index in Scene::cameras, for a camera of the scene; -1 for one the tool makes.
+    int32_t index = -1;
     glm::vec3 position{0.0f};
     glm::vec3 forward{0.0f, 0.0f, -1.0f};  ///< unit, world space
     glm::vec3 up{0.0f, 1.0f, 0.0f};        ///< unit, orthogonal to forward
@@ -182,6 +190,15 @@ struct Camera {
     /// is xmag / ymag). Rays leave the view rectangle in parallel; `yfov` is not used for them.
     std::optional<float> orthographic_half_height;
 };
+
+/// How messages name a camera, so that the user can pick it with `render --camera`: by its node's
+/// name, with the glTF camera's when that differs ("camera 'Persp' (glTF camera 'Camera.001')"),
+/// else by the glTF camera's name, else by its index ("camera #3"). Names are made printable.
+std::string cameraLabel(const Camera& camera);
+
+/// One camera in a list of the scene's cameras, every name given: "#0 node 'Persp', glTF camera
+/// 'Camera'", "#3 (no names)".
+std::string cameraListEntry(const Camera& camera);
 
 /// The environment seen by rays that leave the scene. Either a uniform radiance or an
 /// equirectangular (lat-long) map; the map is multiplied by `scale`.
