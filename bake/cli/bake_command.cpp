@@ -270,7 +270,8 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
         view.height = reference->height;
         if (!o.report_resolution.empty()) {
             int width = 0, height = 0;
-            parseImageSize(o.report_resolution, "--report-resolution", view.camera.aspect_ratio, width, height);
+            parseImageSize(o.report_resolution, "--report-resolution", view.camera.aspect_ratio, width, height,
+                           cameraLabel(view.camera));
             if (width != view.width || height != view.height) {
                 throw CommandError(kExitUsage, "--report-resolution " + o.report_resolution + " differs from the " +
                                                    std::to_string(view.width) + "x" + std::to_string(view.height) +
@@ -280,7 +281,7 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
         reference_description = o.reference_path;
     } else {
         parseImageSize(o.report_resolution.empty() ? "128" : o.report_resolution, "--report-resolution",
-                       view.camera.aspect_ratio, view.width, view.height);
+                       view.camera.aspect_ratio, view.width, view.height, cameraLabel(view.camera));
         reference_description = scene.known_radiance ? "known radiance" : "probe reference";
     }
     const Camera unfitted = view.camera;

@@ -229,8 +229,8 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
                  what.c_str(), result);
 }
 
-void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
-                    int& width, int& height) {
+void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect, int& width,
+                    int& height, const std::string& aspect_source) {
     width = 0;
     height = 0;
     char x = 0;
@@ -239,9 +239,24 @@ void parseImageSize(const std::string& text, const std::string& option_name, std
         !(in >> std::ws).eof()) {
         throw CommandError(kExitUsage, option_name + ": expected W or WxH with positive integers, got \"" + text + "\"");
     }
-    if (height == 0) height = std::max(1, int(std::lround(float(width) / aspect.value_or(1.0f))));
-    if (int64_t(width) * int64_t(height) > (int64_t(1) << 28)) {
-        throw CommandError(kExitUsage, option_name + ": image too large");
+    constexpr int64_t kMaxPixels = int64_t(1) << 28;
+    const bool height_from_aspect = height == 0;
+    if (height_from_aspect) {
+        // In double: a tiny aspect ratio would overflow an int.
+        const double tall = std::max(1.0, std::round(double(width) / double(aspect.value_or(1.0f))));
+        if (aspect && double(width) * tall > double(kMaxPixels)) {
+            char message[512];
+            std::snprintf(message, sizeof message,
+                          "%s %s: %s has aspect ratio %g, which would make the image %d x %.0f pixels, too large; "
+                          "give both sides (%s %dx%d)",
+                          option_name.c_str(), text.c_str(), aspect_source.c_str(), double(*aspect), width, tall,
+                          option_name.c_str(), width, width);
+            throw CommandError(kExitUsage, message);
+        }
+        height = int(tall);
+    }
+    if (int64_t(width) * int64_t(height) > kMaxPixels) {
+        throw CommandError(kExitUsage, option_name + " " + text + ": image too large (at most 2^28 pixels)");
     }
 }
 

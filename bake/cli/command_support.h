@@ -86,9 +86,10 @@ std::string describeCamera(const Camera& camera);
 void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, int height);
 
 /// Parses an image size "W" or "WxH"; "W" takes the height from `aspect` (width / height, 1 if
-/// unknown). Throws CommandError(kExitUsage) naming the option.
-void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect,
-                    int& width, int& height);
+/// unknown), which `aspect_source` names ("camera 'Main'"). Throws CommandError(kExitUsage) naming
+/// the option, and the aspect ratio when it is what makes the image too large.
+void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect, int& width,
+                    int& height, const std::string& aspect_source = "the camera");
 
 /// Warns (stderr, also under -q) when nothing in the scene gives light, so the `result` ("image",
 /// "cache") will be black; punctual lights that give none are named with the reason.

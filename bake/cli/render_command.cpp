@@ -200,7 +200,8 @@ Camera chooseCamera(const Scene& scene, const RenderOptions& o) {
 }
 
 void parseResolution(const RenderOptions& o, const Camera& camera, int& width, int& height) {
-    parseImageSize(o.resolution.empty() ? "512" : o.resolution, "--resolution", camera.aspect_ratio, width, height);
+    parseImageSize(o.resolution.empty() ? "512" : o.resolution, "--resolution", camera.aspect_ratio, width, height,
+                   cameraLabel(camera));
 }
 
 ToneMap parseToneMap(const std::string& name) {

@@ -2266,7 +2266,7 @@ private:
                 return;
             }
             cam.orthographic_half_height = float(ymag);
-            cam.aspect_ratio = float(xmag / ymag);
+            cam.aspect_ratio = sensibleAspectRatio(xmag / ymag, "xmag / ymag", label);
             addSceneCamera(std::move(cam));
             return;
         }
@@ -2275,8 +2275,27 @@ private:
         else
             warn(label + ": invalid yfov " + std::to_string(src.perspective.yfov) + "; using " +
                  std::to_string(cam.yfov));
-        if (src.perspective.aspectRatio > 0.0) cam.aspect_ratio = static_cast<float>(src.perspective.aspectRatio);
+        if (src.perspective.aspectRatio > 0.0)
+            cam.aspect_ratio = sensibleAspectRatio(src.perspective.aspectRatio, "aspectRatio", label);
         addSceneCamera(std::move(cam));
+    }
+
+    /// Aspect ratios of real frames, from tall phone screens to wide panoramas, are well inside
+    /// these bounds; beyond them a renders's height from its width (`--resolution W`) would be a
+    /// single row, or too many pixels to allocate.
+    static constexpr double kMinAspectRatio = 0.01;
+    static constexpr double kMaxAspectRatio = 100.0;
+
+    /// `aspect` (width / height), or nothing with a warning when it is no real frame's: the
+    /// image's own size then gives the aspect.
+    std::optional<float> sensibleAspectRatio(double aspect, const char* what, const std::string& label) {
+        if (aspect >= kMinAspectRatio && aspect <= kMaxAspectRatio) return float(aspect);
+        char text[64];
+        std::snprintf(text, sizeof text, "%g", aspect);
+        warn(label + ": " + what + " " + text +
+             " is outside [0.01, 100], no real frame's; ignored (an image's "
+             "width and height give its aspect ratio, a width alone a square)");
+        return std::nullopt;
     }
 
     void addSceneCamera(Camera cam) {

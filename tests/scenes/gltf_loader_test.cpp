@@ -1380,6 +1380,35 @@ TEST(GltfLoaderCameras, NodeAndCameraNamesAndIndexKept) {
     EXPECT_EQ(cameraListEntry(scene.cameras[3]), "#3 (no names)");
 }
 
+// An aspect ratio no real frame has (1e-6 would make a 64-wide image 64 million rows tall) is
+// ignored with a warning naming the camera; the image's size gives the aspect then.
+TEST(GltfLoaderCameras, AbsurdAspectRatioIgnoredWithAWarning) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["cameras"] = json::array({{{"name", "Thin"},
+                                     {"type", "perspective"},
+                                     {"perspective", {{"yfov", 0.6}, {"znear", 0.1}, {"aspectRatio", 1e-6}}}},
+                                    {{"name", "Wide"},
+                                     {"type", "perspective"},
+                                     {"perspective", {{"yfov", 0.6}, {"znear", 0.1}, {"aspectRatio", 4.0}}}},
+                                    {{"name", "Strip"},
+                                     {"type", "orthographic"},
+                                     {"orthographic", {{"xmag", 1e4}, {"ymag", 1}, {"znear", 0.1}, {"zfar", 9}}}}});
+    b.setScene({b.addNode({{"camera", 0}}), b.addNode({{"camera", 1}}), b.addNode({{"camera", 2}})});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "aspect.gltf"));
+    ASSERT_EQ(scene.cameras.size(), 3u);
+    EXPECT_FALSE(scene.cameras[0].aspect_ratio.has_value());
+    ASSERT_TRUE(scene.cameras[1].aspect_ratio.has_value());
+    EXPECT_FLOAT_EQ(*scene.cameras[1].aspect_ratio, 4.0f);
+    EXPECT_FALSE(scene.cameras[2].aspect_ratio.has_value());
+    EXPECT_FLOAT_EQ(*scene.cameras[2].orthographic_half_height, 1.0f);
+    std::string warnings;
+    for (const std::string& w : scene.stats.warnings) warnings += w + "\n";
+    EXPECT_NE(warnings.find("camera 'Thin': aspectRatio 1e-06 is outside [0.01, 100]"), std::string::npos) << warnings;
+    EXPECT_NE(warnings.find("camera 'Strip': xmag / ymag 10000 is outside"), std::string::npos) << warnings;
+    EXPECT_EQ(warnings.find("'Wide'"), std::string::npos) << warnings;
+}
+
 TEST(GltfLoaderSky, UniformRadianceFromRootExtras) {
     TempDir dir;
     GltfBuilder b;
