@@ -14,12 +14,13 @@ std::string cameraLabel(const Camera& camera) {
         return label;
     }
     if (!camera.name.empty()) return "camera " + quoted(camera.name);
-    if (camera.index >= 0) return "camera #" + std::to_string(camera.index);
+    // Appended, not "camera #" + to_string(): GCC 12 warns falsely (-Wrestrict) about that form.
+    if (camera.index >= 0) return std::string("camera #").append(std::to_string(camera.index));
     return "camera (no name)";
 }
 
 std::string cameraListEntry(const Camera& camera) {
-    std::string entry = "#" + std::to_string(camera.index);
+    std::string entry = std::string("#").append(std::to_string(camera.index));
     if (!camera.node_name.empty()) entry += " node " + quoted(camera.node_name);
     if (!camera.name.empty())
         entry += std::string(camera.node_name.empty() ? "" : ",") + " glTF camera " + quoted(camera.name);
