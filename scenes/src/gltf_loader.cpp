@@ -222,7 +222,15 @@ std::string numberText(float v) {
 }
 
 std::string vec3Text(glm::vec3 v) {
-    return "(" + numberText(v.x) + ", " + numberText(v.y) + ", " + numberText(v.z) + ")";
+    // Appended, not "(" + ...: GCC 12 warns about that form (-Wrestrict, a false positive).
+    std::string text = "(";
+    text += numberText(v.x);
+    text += ", ";
+    text += numberText(v.y);
+    text += ", ";
+    text += numberText(v.z);
+    text += ")";
+    return text;
 }
 
 /// `v` clamped into [lo, hi], or `fallback` where it is not finite: a factor taken into the range
