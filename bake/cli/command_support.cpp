@@ -7,14 +7,17 @@
 #include "support/fnv1a.h"
 #include "tracing/lights.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <sstream>
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -88,6 +91,18 @@ void checkOutputPath(const std::string& path, const std::string& what, const std
         throw CommandError(kExitIo, path + ": cannot write the " + what + ": folder " + folder.string() +
                                         " is not writable");
     }
+    // access() answers from the permission bits, and root passes them everywhere: a folder of
+    // /sys or /proc, or one the file system refuses for another reason, passed this check and the
+    // bake failed at its very end. Creating (and removing) a file there is the real test.
+    const std::string probe = target + ".probe-" + std::to_string(::getpid());
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+    if (fd < 0) {
+        const int why = errno;
+        throw CommandError(kExitIo, path + ": cannot write the " + what + ": cannot create a file in folder " +
+                                        folder.string() + ": " + std::strerror(why));
+    }
+    ::close(fd);
+    ::unlink(probe.c_str());
     for (const std::string& other : others) {
         if (!other.empty() && sameFile(path, other)) {
             throw CommandError(kExitUsage, path + ": the " + what + " would overwrite " + other +

@@ -19,6 +19,13 @@ cp "$work/a.sharc" "$work/a.orig"
 expect 2 "bake -o /dev/null is refused" "$sharcbake" bake "$furnace" -o /dev/null $quick
 says "$work/err.txt" "a device" "the message says the output is a device"
 [ -c /dev/null ] || fail "/dev/null is no longer a character device"
+# A folder that refuses new files although its permission bits (or root) allow them: sysfs. The
+# bake used to run to its end and fail at the write; it is refused before any work now.
+if [ -d /sys ] && ! touch /sys/sharcbake-probe 2>/dev/null; then
+    expect 2 "bake into /sys is refused before baking" "$sharcbake" bake "$furnace" -o /sys/x.sharc --iterations 100000
+    grep -q "^Baked" "$work/out.txt" && fail "the bake ran before its output was refused"
+    says "$work/err.txt" "/sys" "the message names the folder"
+fi
 expect 2 "export-vdb -o /dev/full is refused" "$sharcbake" export-vdb "$work/a.sharc" -o /dev/full
 mkfifo "$work/fifo_out.exr"
 expect 2 "render -o FIFO is refused" "$sharcbake" render "$furnace" -o "$work/fifo_out.exr" --resolution 8 --spp 1 -q
