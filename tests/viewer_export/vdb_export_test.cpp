@@ -273,5 +273,30 @@ TEST(VdbExportUnrepresentable, EmptyCache) {
     EXPECT_NE(::access(out.c_str(), F_OK), 0) << "a file was written";
 }
 
+// A model a millimetre across has micrometre voxels at its finest levels, which OpenVDB's
+// transforms refuse; its coarser levels fit. The refusal names them, and exporting them works.
+TEST(VdbExportUnrepresentable, MicrometreVoxelsNameTheLevelsThatFit) {
+    CacheData data;
+    data.bake_capacity = 1024;
+    data.level_bias = 14.0f;  // voxel size b^L / (S b^bias): level 1 2.4e-6, level 5 3.9e-5
+    data.voxels.push_back(makeVoxel({1, 2, 3}, 1, 0, 1.0f, 1.0f, 1.0f, 1.0f));
+    data.voxels.push_back(makeVoxel({0, 0, 0}, 5, 0, 1.0f, 1.0f, 1.0f, 1.0f));
+    sortVoxels(data.voxels);
+    std::vector<uint8_t> bytes;
+    std::string message;
+    ASSERT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kOk) << message;
+    CacheView view;
+    CacheError error;
+    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, &error), CacheFileStatus::kOk) << error.message;
+    const std::string out = ::testing::TempDir() + "sharcbake_tiny_" + std::to_string(::getpid()) + ".vdb";
+    EXPECT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kUnrepresentable);
+    EXPECT_NE(message.find("level 1: voxel size 2.44e-06"), std::string::npos) << message;
+    EXPECT_NE(message.find("--levels 5"), std::string::npos) << message;
+    VdbExportOptions coarse;
+    coarse.levels = {5};
+    EXPECT_EQ(exportCacheToVdb(view, out, coarse, nullptr, &message), VdbExportStatus::kOk) << message;
+    std::remove(out.c_str());
+}
+
 }  // namespace
 }  // namespace sharcbake

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
 #include <unordered_map>
@@ -292,8 +293,23 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
         try {
             transforms[l] = levelTransform(s, options.up);
         } catch (const std::exception& e) {
-            return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + ": voxel size " +
-                                                               std::to_string(s) + " is out of OpenVDB's range: " + e.what());
+            // Name the levels that do fit (a model of a millimetre has micrometre voxels at its
+            // finest levels, which OpenVDB's transforms refuse, and coarser ones it holds).
+            std::string fitting;
+            for (const CacheLevel& present : cache.levels()) {
+                try {
+                    levelTransform(voxelSize(present.level, cache.gridParameters()), options.up);
+                    fitting += (fitting.empty() ? "" : ",") + std::to_string(present.level);
+                } catch (const std::exception&) {}
+            }
+            char size[32];
+            std::snprintf(size, sizeof size, "%.3g", double(s));
+            return fail(VdbExportStatus::kUnrepresentable,
+                        "level " + std::to_string(l) + ": voxel size " + size + " is out of OpenVDB's range (" +
+                            e.what() + "); " +
+                            (fitting.empty()
+                                 ? std::string("no level of this cache fits (scale the scene up before baking)")
+                                 : "export the levels that fit with --levels " + fitting));
         }
     }
     GridList list(grids_out);
