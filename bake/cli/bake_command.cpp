@@ -974,7 +974,9 @@ private:
         const auto finish_start = std::chrono::steady_clock::now();
         const SharcCache& cache = baker_->cache();
         levels_ = levelsPresent(cache);
-        coverage_ = measureCoverage(scene_, cache, levels_, o_.coverage_points);
+        const bool bake_camera_levels = job_.settings.view_region.kind == ViewRegion::Kind::BakeCamera;
+        coverage_ = measureCoverage(scene_, cache, levels_, o_.coverage_points,
+                                    bake_camera_levels ? nullptr : &baker_->depositLevels());
         CacheData data = toCacheData(cache);
         // What the cache will answer: SHaRC's exact lookups from the scene's cameras and the region.
         prediction_ = predictHitRate(*tracer_, data, job_.settings.view_region,
@@ -1019,11 +1021,19 @@ private:
         std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n",
                     (unsigned long long)live_voxels_, 100.0 * occupancy(), baker_->cache().capacity(),
                     joined(written_levels_).c_str());
+        // Where deposits go to other levels than the finest (gltf, path and box regions), the area
+        // no path reached is its own figure.
+        const ViewRegion::Kind region = job_.settings.view_region.kind;
+        char deposit_levels[96] = "";
+        if (region == ViewRegion::Kind::Points || region == ViewRegion::Kind::Box) {
+            std::snprintf(deposit_levels, sizeof deposit_levels, ", %.2f%% none at the level its deposits go to",
+                          100.0 * coverage_.unreached_deposit_area);
+        }
         std::printf(
             "  coverage: %.2f%% of the surface area has no voxel at any level, %.2f%% none at the finest "
-            "(level %u) (%u points tested)\n",
+            "(level %u)%s (%u points tested)\n",
             100.0 * coverage_.unreached_area, 100.0 * coverage_.unreached_finest_area, coverage_.finest_level,
-            coverage_.points);
+            deposit_levels, coverage_.points);
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         for (const ViewHitRate& v : prediction_.views) {
             if (v.view.declared && v.eligible == 0 && v.refused > 0) {
@@ -1112,6 +1122,7 @@ private:
              {{"points", coverage_.points},
               {"unreached_area_fraction", coverage_.unreached_area},
               {"unreached_finest_level_area_fraction", coverage_.unreached_finest_area},
+              {"unreached_deposit_level_area_fraction", coverage_.unreached_deposit_area},
               {"finest_level", coverage_.finest_level}}},
             {"grid",
              {{"scene_scale", jsonNumber(job_.settings.sharc.grid.scene_scale)},
@@ -1130,10 +1141,11 @@ private:
     /// Warnings about what the cache lacks, then the exit code of a bake a signal stopped.
     void warnAndStop() const {
         const SharcCache& cache = baker_->cache();
-        // Every deposit goes to the finest level (any region but bake-camera), so a point without a
-        // voxel there was never reached, whatever coarser voxels cover it.
+        // Every deposit goes to the level DepositLevels gives its point (the finest for the default
+        // region, the level of the distance to the region's cameras for gltf, path and box), so a
+        // point without a voxel there was never reached, whatever coarser voxels cover it.
         const double unreached = job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
-                                     ? coverage_.unreached_finest_area
+                                     ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
         warnAboutHitRate(prediction_, unreached);
         if (unreached > 0.3) {
@@ -1145,11 +1157,19 @@ private:
                               "fitted to that part), so the rest is out of their sight",
                               100.0 * seen_->fraction);
             }
+            // The remedies that change where the camera goes, less the one already in use.
+            const char* remedies = !job_.camera.path_file.empty()
+                                       ? "a --camera-path through the places it misses, or --camera-source explore "
+                                         "without a path"
+                                   : job_.camera.source == CameraPathSource::GltfCameras
+                                       ? "--camera-source explore (the free space around the glTF cameras), or a "
+                                         "--camera-path through the scene"
+                                       : "--explore-points, a --camera-path through the scene, or --camera-source gltf";
             std::fprintf(stderr,
                          "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
                          "tested; hidden sides count too)%s: cameras that see it will miss. Give more --iterations, "
-                         "--explore-points, a --camera-path through the scene, or --camera-source gltf\n",
-                         100.0 * unreached, coverage_.points, sight);
+                         "%s\n",
+                         100.0 * unreached, coverage_.points, sight, remedies);
         }
         if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
         if (autoCapacity() && cache.numerics().failed_inserts > 0) {

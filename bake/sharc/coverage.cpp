@@ -25,7 +25,7 @@ std::vector<uint32_t> levelsPresent(const CacheData& data) {
 }
 
 CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, const std::vector<uint32_t>& levels,
-                               uint32_t points) {
+                               uint32_t points, const DepositLevels* deposit_levels) {
     CoverageReport report;
     if (scene.empty() || points == 0) return report;
     report.total_area = surfaceArea(scene);
@@ -42,10 +42,21 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
         };
         return has_voxel(point.normal) || (point.double_sided && has_voxel(-point.normal));
     };
+    // A voxel with samples at the level the bake deposits into on a side a camera can see. The
+    // bake camera's position only matters for the `bake-camera` region, which callers leave out.
+    const auto reachedByDeposits = [&](const SurfacePoint& point) {
+        const auto has_voxel = [&](glm::vec3 n) {
+            const ResolvedEntry* e = cache.findResolved(
+                deposit_levels->key(point.position, n, Float3{0.0f, 0.0f, 0.0f}));
+            return e && e->weight > 0.0;
+        };
+        return has_voxel(point.normal) || (point.double_sided && has_voxel(-point.normal));
+    };
     const uint32_t finest = levels.empty() ? 0 : *std::min_element(levels.begin(), levels.end());
-    uint32_t unreached = 0, unreached_finest = 0;
+    uint32_t unreached = 0, unreached_finest = 0, unreached_deposit = 0;
     const std::vector<SurfacePoint> surface = sampleSurfacePoints(scene, points);
     for (const SurfacePoint& point : surface) {
+        if (deposit_levels && !reachedByDeposits(point)) ++unreached_deposit;
         if (finest != 0 && reachedAt(point, finest)) continue;  // then at some level too
         ++unreached_finest;
         if (std::none_of(levels.begin(), levels.end(), [&](uint32_t level) { return reachedAt(point, level); })) {
@@ -56,6 +67,7 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
     report.finest_level = finest;
     report.unreached_area = surface.empty() ? 0.0 : double(unreached) / double(surface.size());
     report.unreached_finest_area = surface.empty() ? 0.0 : double(unreached_finest) / double(surface.size());
+    report.unreached_deposit_area = surface.empty() ? 0.0 : double(unreached_deposit) / double(surface.size());
     return report;
 }
 

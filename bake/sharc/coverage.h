@@ -5,6 +5,7 @@
 #pragma once
 
 #include "sharc/sharc_cache.h"
+#include "sharc/view_region.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene.h"
 
@@ -27,13 +28,19 @@ struct CoverageReport {
     /// reached; with `bake-camera` deposits go to other levels too and it counts more.
     double unreached_finest_area = 0.0;
     uint32_t finest_level = 0;    ///< that level (0: no levels)
+    /// Share of surface area with no voxel at the level the bake deposits there (DepositLevels):
+    /// the area no update path reached, for every view region but `bake-camera`. The same as
+    /// unreached_finest_area for the default region; for `gltf`, `path` and `box` a point's
+    /// deposits go to the level of its distance to the region, so a surface far from the
+    /// cameras has no finest voxel however well it was reached. 0 without `deposit_levels`.
+    double unreached_deposit_area = 0.0;
     double total_area = 0.0;      ///< world units squared
 };
 
 /// Tests `points` surface points, distributed by area (deterministic), on the sides a camera
 /// can see (the front; both sides for double-sided materials), at each of `levels` (the cache's,
-/// from levelsPresent()).
+/// from levelsPresent()), and with `deposit_levels` at the level the bake deposits there.
 CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, const std::vector<uint32_t>& levels,
-                               uint32_t points);
+                               uint32_t points, const DepositLevels* deposit_levels = nullptr);
 
 }  // namespace sharcbake
