@@ -639,7 +639,7 @@ GridDecision decideGrid(BakeJob& job, const Scene& scene, const SeenSurface* see
         decision.choice = "auto, " + fit.reason;
     } else {
         char text[96];
-        std::snprintf(text, sizeof text, "given: level bias %g, finest voxels %.4g wide", double(grid.level_bias),
+        std::snprintf(text, sizeof text, "given: level bias %.9g, finest voxels %.4g wide", double(grid.level_bias),
                       double(voxelSize(kHashGridLevelMin, grid)));
         decision.choice = text;
     }
@@ -875,7 +875,7 @@ private:
             std::printf("Resumed from %s after %u iterations\n", o_.resume_path.c_str(), first_iteration_);
         }
         std::printf("Camera: %s\n", camera_description_.c_str());
-        std::printf("Grid: scene scale %g, log base %g, %s\n", double(job_.settings.sharc.grid.scene_scale),
+        std::printf("Grid: scene scale %.9g, log base %.9g, %s\n", double(job_.settings.sharc.grid.scene_scale),
                     double(job_.settings.sharc.grid.logarithm_base), grid_decision_.choice.c_str());
         std::printf("Views: %s; levels %s%s\n", job_.settings.view_region.describe().c_str(),
                     grid_decision_.levelsCovered().c_str(), grid_decision_.misses.c_str());

@@ -76,7 +76,9 @@ void printText(const std::string& path, const CacheView& v) {
     }
     std::printf("Grid: keys 17/9/3 bits (SHaRC 1.7+), Jenkins32 xor hash, bucket %u, LOD by camera distance\n",
                 p.bucket_size);
-    std::printf("  log base %g, scene scale %g, level bias %g, bake capacity %u\n", double(p.logarithm_base),
+    // %.9g: every binary32 value reads back to the same bits, and engines copy these three into SHaRC
+    // parameters bit for bit (a level bias of 2.515625 printed as 2.51562 moved keys).
+    std::printf("  log base %.9g, scene scale %.9g, level bias %.9g, bake capacity %u\n", double(p.logarithm_base),
                 double(p.scene_scale), double(p.level_bias), v.bakeCapacity());
     std::printf("Voxels: %" PRIu64 " live (%.2f%% of the bake capacity; empty slots are not stored), %.1f bytes/voxel\n",
                 s.voxels, v.bakeCapacity() ? 100.0 * double(s.voxels) / double(v.bakeCapacity()) : 0.0,

@@ -188,13 +188,13 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     char text[480];
     if (fit.limited_by_range) {
         std::snprintf(text, sizeof text,
-                      "level bias %g: finest voxels %.4g wide, the smallest the 17-bit grid allows %.4g units from "
+                      "level bias %.9g: finest voxels %.4g wide, the smallest the 17-bit grid allows %.4g units from "
                       "the origin (%s, about %.3g voxels at level 1; the budget would allow finer)",
                       double(fit.level_bias), double(fit.finest_voxel_size), farthestCoordinate(scene), surface,
                       fit.estimated_voxels);
     } else {
         std::snprintf(text, sizeof text,
-                      "level bias %g: finest voxels %.4g wide, so the %s take about %.3g voxels at level 1 (budget "
+                      "level bias %.9g: finest voxels %.4g wide, so the %s take about %.3g voxels at level 1 (budget "
                       "%llu); cameras closer than %.4g use level 1",
                       double(fit.level_bias), double(fit.finest_voxel_size), surface, fit.estimated_voxels,
                       (unsigned long long)voxel_budget, double(fit.finest_voxel_size) * b * double(grid.scene_scale));

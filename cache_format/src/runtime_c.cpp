@@ -91,8 +91,14 @@ extern "C" {
 
 sharcbake_status sharcbake_cache_open_file(const char* path, int map, sharcbake_cache** out, uint32_t* rule,
                                            char* message, size_t message_size) {
-    if (!out || !path) return SHARCBAKE_INVALID_ARGUMENT;
-    *out = nullptr;
+    // Every failure sets what the header promises (*out NULL, rule 0, a message), the argument
+    // checks too: a caller printing its uninitialised buffer would print garbage.
+    if (out) *out = nullptr;
+    if (rule) *rule = 0;
+    if (!out || !path) {
+        copyMessage(!out ? "out is NULL" : "path is NULL", message, message_size);
+        return SHARCBAKE_INVALID_ARGUMENT;
+    }
     try {
         CacheView view;
         CacheError error;
@@ -107,7 +113,11 @@ sharcbake_status sharcbake_cache_open_file(const char* path, int map, sharcbake_
 
 sharcbake_status sharcbake_cache_open_memory(const void* data, size_t size, sharcbake_cache** out, uint32_t* rule,
                                              char* message, size_t message_size) {
-    if (!out) return SHARCBAKE_INVALID_ARGUMENT;
+    if (rule) *rule = 0;
+    if (!out) {
+        copyMessage("out is NULL", message, message_size);
+        return SHARCBAKE_INVALID_ARGUMENT;
+    }
     *out = nullptr;
     try {
         CacheView view;

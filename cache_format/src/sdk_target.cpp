@@ -253,10 +253,14 @@ CacheFileStatus identifySharcSdkTarget(const HashGridParameters& grid, const Sha
     }
     if (matches.empty()) {
         setMessage(message, "no known SDK layout reproduces the observations (" + why +
-                                "); compact 32-bit keys, other grid parameters than the engine's, or a release with "
-                                "another bucket rule?");
+                                "); compact 32-bit keys, other grid parameters than the engine's (the capacity "
+                                "must be the scratch table's), or a release with another bucket rule?");
     } else {
-        setMessage(message, "the observations fit more than one release; add observations at other points");
+        // 1.6 and 1.7 keys differ only where a normal bit is set: probes whose normals have no
+        // negative component (a floor, walls facing +x) cannot tell them apart.
+        setMessage(message,
+                   "the observations fit more than one release; add observations whose normals have a negative "
+                   "component (a ceiling, walls facing -x or -z): the releases' keys differ only in the normal bits");
     }
     return CacheFileStatus::kUnsupportedFeature;
 }

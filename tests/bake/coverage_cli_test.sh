@@ -22,6 +22,23 @@ says "$work/out.txt" "predicted hit rate: " "the bake prints its predicted hit r
 expect 0 "info" "$sharcbake" info "$work/cornell.sharc"
 says "$work/out.txt" "levels_covered: 1-" "info shows the levels the file covers"
 says "$work/out.txt" "view_region: free space" "info shows the region"
+# Engines copy the grid values from info bit for bit: the text must give back the file's binary32
+# values (a fitted level bias of 2.515625 was printed as 2.51562).
+cp "$work/out.txt" "$work/info.txt"
+expect 0 "info --json" "$sharcbake" info "$work/cornell.sharc" --json
+python3 - "$work/info.txt" "$work/out.txt" <<'PY' || failures=$((failures + 1))
+import json, re, struct, sys
+text = open(sys.argv[1]).read()
+grid = json.load(open(sys.argv[2]))["grid"]
+f32 = lambda x: struct.unpack("<f", struct.pack("<f", float(x)))[0]
+ok = True
+for name, key in (("log base", "logarithm_base"), ("scene scale", "scene_scale"), ("level bias", "level_bias")):
+    printed = re.search(name + r" ([-+0-9.e]+)", text).group(1)
+    same = f32(printed) == f32(grid[key])
+    ok = ok and same
+    print(("ok" if same else "FAIL") + ": info prints %s %s, the file holds %r" % (name, printed, grid[key]))
+sys.exit(0 if ok else 1)
+PY
 
 # The glTF camera is 2 units from the box's centre, looking at it: cameras from 0.5 to 16 units
 # away on the same line ask for levels 1 to 6. SHaRC's exact lookup must hit 99% of the time.

@@ -1000,6 +1000,20 @@ TEST(RuntimeC, OpenLookupGpuBuffers) {
     EXPECT_EQ(std::string(message).substr(0, 3), "V6:");
     EXPECT_EQ(sharcbake_cache_open_file("/nonexistent.sharc", 0, &cache, &rule, message, sizeof message),
               SHARCBAKE_IO_ERROR);
+    // Invalid arguments set what the header promises too: *out NULL, rule 0, a message.
+    cache = reinterpret_cast<sharcbake_cache*>(1);
+    rule = 99;
+    std::snprintf(message, sizeof message, "SENTINEL");
+    EXPECT_EQ(sharcbake_cache_open_file(nullptr, 0, &cache, &rule, message, sizeof message),
+              SHARCBAKE_INVALID_ARGUMENT);
+    EXPECT_EQ(cache, nullptr);
+    EXPECT_EQ(rule, 0u);
+    EXPECT_STREQ(message, "path is NULL");
+    rule = 99;
+    EXPECT_EQ(sharcbake_cache_open_memory(bytes.data(), bytes.size(), nullptr, &rule, message, sizeof message),
+              SHARCBAKE_INVALID_ARGUMENT);
+    EXPECT_EQ(rule, 0u);
+    EXPECT_STREQ(message, "out is NULL");
 }
 
 }  // namespace

@@ -430,7 +430,8 @@ TEST(SdkTarget, CapacityBelowTheRulesMinimumIsRefused) {
 
 /// What an engine running `r` would report for 16 points (its key, and its insert's slot in an
 /// empty table). `compact` emulates a 32-bit-key build (x, y, z 8 bits, level 5, normals 3).
-std::vector<SharcSdkObservation> observe(const Release& r, const HashGridParameters& grid, bool compact = false) {
+std::vector<SharcSdkObservation> observe(const Release& r, const HashGridParameters& grid, bool compact = false,
+                                         bool on_a_floor = false) {
     std::mt19937 random(11);
     std::uniform_real_distribution<float> coordinate(-30.0f, 30.0f);
     std::vector<uint64_t> table(grid.capacity, 0);
@@ -439,6 +440,7 @@ std::vector<SharcSdkObservation> observe(const Release& r, const HashGridParamet
         SharcSdkObservation o;
         o.position = Float3{coordinate(random), coordinate(random), coordinate(random)};
         o.normal = Float3{coordinate(random), coordinate(random), coordinate(random)};
+        if (on_a_floor) o.normal = Float3{0.0f, 1.0f, 0.0f};
         o.camera = Float3{coordinate(random) * 0.1f, 1.0f, 0.0f};
         o.key = releaseKey(r, o.position, o.normal, o.camera, grid);
         if (compact) {
@@ -478,6 +480,12 @@ TEST(SdkTarget, IdentifiesTheReleaseFromTheEnginesObservations) {
               CacheFileStatus::kUnsupportedFeature);
     EXPECT_NE(message.find("outside the bucket"), std::string::npos) << message;
     EXPECT_EQ(identifySharcSdkTarget(grid, unknown.data(), 3, &target, &message), CacheFileStatus::kInvalidArgument);
+    // Probes on a floor (no normal with a negative component) set no normal bit, where the 1.6 and
+    // 1.7 layouts differ: both fit, and the message says which probes tell them apart.
+    const std::vector<SharcSdkObservation> floor = observe(kReleases[1], grid, false, true);
+    EXPECT_EQ(identifySharcSdkTarget(grid, floor.data(), floor.size(), &target, &message),
+              CacheFileStatus::kUnsupportedFeature);
+    EXPECT_NE(message.find("normals have a negative component"), std::string::npos) << message;
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -75,7 +75,9 @@ struct GpuBufferOptions {
     float max_sample_count = 65504.0f;
     /// The SDK release the engine runs: its key layout and bucket rule (SPEC §G.1).
     SharcSdkTarget sdk_target = kSharcSdkTargetDefault;
-    /// The engine's SDK build options; any of them on is refused (kUnsupportedFeature, SPEC §G.3).
+    /// The engine's SDK build options (SPEC §G.3): SH encoding and compact keys are refused
+    /// (kUnsupportedFeature); material demodulation and separate emissive are served from a cache
+    /// with voxel materials (VMAT, SPEC §F.8b) and refused without one.
     SharcBuildOptions build;
     /// Factor applied to the radiance before it goes to fp16 (SPEC §G.6): > 0 uses this value, 0
     /// uses the cache's own (SPEC §F.8a RSCL; 1 when the file has none). Negative or NaN:

@@ -107,7 +107,9 @@ typedef enum sharcbake_sdk_target {
     SHARCBAKE_SDK_1_8_3 = 3 /**< 1.8.3 and later 1.8: base = hash % (N - 15) (unverified) */
 } sharcbake_sdk_target;
 
-/** SDK build options (bit flags); any of them is refused with SHARCBAKE_UNSUPPORTED_FEATURE. */
+/** SDK build options (bit flags). SH encoding and compact keys are refused with
+ * SHARCBAKE_UNSUPPORTED_FEATURE; material demodulation and separate emissive are served from a
+ * cache baked with voxel materials (VMAT, SPEC §F.8b) and refused without one. */
 enum {
     SHARCBAKE_BUILD_SH_ENCODING = 1,           /**< SHARC_ENABLE_SH_ENCODING=1 */
     SHARCBAKE_BUILD_COMPACT_KEYS = 2,          /**< HASH_GRID_COMPACT=1 */
