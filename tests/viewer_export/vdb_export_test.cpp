@@ -256,17 +256,23 @@ TEST_F(VdbExportTest, Errors) {
               VdbExportStatus::kIoError);
 }
 
+/// Encodes `data` as a cache file in `bytes` and opens `view` on them (it reads them in place).
+void openInMemory(const CacheData& data, std::vector<uint8_t>& bytes, CacheView& view) {
+    std::string message;
+    ASSERT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kOk) << message;
+    CacheError error;
+    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, &error), CacheFileStatus::kOk) << error.message;
+}
+
 // Issue 19: a valid cache that VDB cannot hold is kUnrepresentable (export-vdb exit 3), not a
 // usage error; nothing is written.
 TEST(VdbExportUnrepresentable, EmptyCache) {
     CacheData data;
     data.bake_capacity = 16;
     std::vector<uint8_t> bytes;
-    std::string message;
-    ASSERT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kOk) << message;
     CacheView view;
-    CacheError error;
-    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, &error), CacheFileStatus::kOk) << error.message;
+    ASSERT_NO_FATAL_FAILURE(openInMemory(data, bytes, view));
+    std::string message;
     const std::string out = ::testing::TempDir() + "sharcbake_empty_" + std::to_string(::getpid()) + ".vdb";
     EXPECT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kUnrepresentable);
     EXPECT_NE(message.find("no voxels"), std::string::npos) << message;
@@ -283,11 +289,9 @@ TEST(VdbExportUnrepresentable, MicrometreVoxelsNameTheLevelsThatFit) {
     data.voxels.push_back(makeVoxel({0, 0, 0}, 5, 0, 1.0f, 1.0f, 1.0f, 1.0f));
     sortVoxels(data.voxels);
     std::vector<uint8_t> bytes;
-    std::string message;
-    ASSERT_EQ(encodeCacheFile(data, &bytes, &message), CacheFileStatus::kOk) << message;
     CacheView view;
-    CacheError error;
-    ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, &error), CacheFileStatus::kOk) << error.message;
+    ASSERT_NO_FATAL_FAILURE(openInMemory(data, bytes, view));
+    std::string message;
     const std::string out = ::testing::TempDir() + "sharcbake_tiny_" + std::to_string(::getpid()) + ".vdb";
     EXPECT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kUnrepresentable);
     EXPECT_NE(message.find("level 1: voxel size 2.44e-06"), std::string::npos) << message;
