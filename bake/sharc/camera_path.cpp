@@ -276,19 +276,16 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
         const float largest_half = std::max({half.x, half.y, half.z});
         uint32_t scales = 0;
         for (float r = 0.5f * largest_half; r >= kSmallestAroundStarts * diagonal && scales < 64; r *= 0.5f) ++scales;
-        const uint32_t per_scale = std::max<uint32_t>(2, 8 * count /
-                                                             std::max<uint32_t>(1, uint32_t(starts.size()) * scales));
-        for (size_t s = 0; s < starts.size(); ++s) {
-            float r = 0.5f * largest_half;
-            for (uint32_t k = 0; k < scales; ++k, r *= 0.5f) {
-                for (uint32_t i = 0; i < per_scale; ++i) {
-                    const uint32_t n = 8 * count + (uint32_t(s) * scales + k) * per_scale + i;
-                    const glm::vec3 u(hashToUnitFloat(seed, n, 0), hashToUnitFloat(seed, n, 1),
-                                      hashToUnitFloat(seed, n, 2));
-                    tryPoint(starts[s] + (2.0f * u - 1.0f) * r, std::min(clearance, kClearanceOfScale * r),
-                             use_winding);
-                }
-            }
+        // As many candidates as the bounds-wide ones (8x the points needed): every scale around
+        // one start, then around the next, round-robin. A scene with hundreds of cameras costs no
+        // more, and the pairwise reachability test stays a few hundred thousand rays.
+        const uint32_t candidates = 8 * count;
+        for (uint32_t i = 0; i < candidates && scales > 0; ++i) {
+            const glm::vec3& start = starts[(i / scales) % starts.size()];
+            const float r = 0.5f * largest_half * std::ldexp(1.0f, -int(i % scales));
+            const uint32_t n = candidates + i;
+            const glm::vec3 u(hashToUnitFloat(seed, n, 0), hashToUnitFloat(seed, n, 1), hashToUnitFloat(seed, n, 2));
+            tryPoint(start + (2.0f * u - 1.0f) * r, std::min(clearance, kClearanceOfScale * r), use_winding);
         }
         kept = reachablePoints(tracer, free_points, starts_are_cameras);
     }
