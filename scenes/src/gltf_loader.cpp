@@ -654,6 +654,13 @@ private:
         std::istringstream lines(warnings);
         for (std::string line; std::getline(lines, line);)
             if (!line.empty()) warn("tinygltf: " + line);
+        if (ok) {
+            // A parse that succeeds can still report errors it recovered from (a baseColorFactor of
+            // 2 numbers: the default is kept); they were dropped unsaid.
+            std::istringstream errors(err);
+            for (std::string line; std::getline(errors, line);)
+                if (!line.empty()) warn("tinygltf: " + printable(line) + " (the default is used)");
+        }
         if (!ok) {
             if (const std::optional<std::string> problem = versionProblemInJson(jsonText(bytes, glb))) fail(*problem);
             if (const std::optional<std::string> problem = dataUriProblem(jsonText(bytes, glb), err)) fail(*problem);
@@ -942,6 +949,24 @@ private:
 
     /// Depth-first over the hierarchy under `root` with an explicit stack, not recursion, so a
     /// crafted chain of 20,000 nested nodes cannot overflow the call stack.
+    /// glTF's rotations are unit quaternions; exporters write them so to a few digits. Another
+    /// length is normalised (a zero one is no rotation) and said, as is an array of another size.
+    void warnAboutRotation(int index, const tinygltf::Node& node) {
+        if (node.matrix.size() == 16 || node.rotation.empty()) return;
+        const std::string label = "node " + std::to_string(index) + (node.name.empty() ? "" : " " + quoted(node.name));
+        if (node.rotation.size() != 4) {
+            warn(label + ": rotation has " + std::to_string(node.rotation.size()) + " numbers, glTF wants 4; ignored");
+            return;
+        }
+        const double length = std::sqrt(node.rotation[0] * node.rotation[0] + node.rotation[1] * node.rotation[1] +
+                                        node.rotation[2] * node.rotation[2] + node.rotation[3] * node.rotation[3]);
+        if (length == 0.0) {
+            warn(label + ": rotation (0, 0, 0, 0) is no unit quaternion; no rotation used");
+        } else if (std::isfinite(length) && std::abs(length - 1.0) > 1e-3) {  // NaN: the transform's check refuses it
+            warn(label + ": rotation of length " + numberText(float(length)) + " is no unit quaternion; normalised");
+        }
+    }
+
     void visitNode(int root, const glm::dmat4& parent) {
         struct Frame {
             int index;
@@ -957,6 +982,7 @@ private:
                 fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
             on_path_[index] = true;
             const tinygltf::Node& node = model_.nodes[index];
+            warnAboutRotation(index, node);
             const glm::dmat4 world = parent_world * localTransform(node);
             if (node.mesh >= 0) {
                 const auto instancing = node.extensions.find("EXT_mesh_gpu_instancing");
@@ -1832,6 +1858,10 @@ private:
                            ? std::clamp(static_cast<float>(src.pbrMetallicRoughness.baseColorFactor[3]), 0.0f, 1.0f)
                            : 1.0f;
         m.alpha_cutoff = static_cast<float>(src.alphaCutoff);
+        if (!(m.alpha_cutoff >= 0.0f)) {  // glTF's minimum is 0; below it MASK would hide nothing
+            warn(label + ": alphaCutoff " + numberText(m.alpha_cutoff) + " is below glTF's minimum 0; 0 used");
+            m.alpha_cutoff = 0.0f;
+        }
         if (src.alphaMode == "MASK") {
             m.alpha_mode = AlphaMode::Mask;
         } else if (src.alphaMode == "BLEND") {
@@ -1878,6 +1908,15 @@ private:
     static const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const char* name) {
         const auto it = extensions.find(name);
         return it == extensions.end() || !it->second.IsObject() ? nullptr : &it->second;
+    }
+
+    /// An extension's number: `fallback` when absent, and also when present as something else
+    /// (a string, an array), with a warning naming it: {"emissiveStrength": "bright"} was 1 silently.
+    double numberOr(const tinygltf::Value& object, const char* key, double fallback, const std::string& label) {
+        if (!object.Has(key)) return fallback;
+        if (const std::optional<double> value = number(object, key)) return *value;
+        warn(label + ": " + key + " is not a number; " + numberText(float(fallback)) + " used");
+        return fallback;
     }
 
     static std::optional<double> number(const tinygltf::Value& object, const char* key) {
@@ -1949,11 +1988,12 @@ private:
 
     void readMaterialExtensions(const tinygltf::Material& src, Material& m, const std::string& label) {
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_emissive_strength"))
-            m.emissive_strength = static_cast<float>(number(*ext, "emissiveStrength").value_or(1.0));
+            m.emissive_strength = static_cast<float>(numberOr(*ext, "emissiveStrength", 1.0, label));
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_ior"))
-            m.ior = static_cast<float>(number(*ext, "ior").value_or(1.5));
+            m.ior = static_cast<float>(numberOr(*ext, "ior", 1.5, label));
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_transmission")) {
-            m.transmission = std::clamp(static_cast<float>(number(*ext, "transmissionFactor").value_or(0.0)), 0.0f, 1.0f);
+            m.transmission = std::clamp(static_cast<float>(numberOr(*ext, "transmissionFactor", 0.0, label)), 0.0f,
+                                        1.0f);
             m.transmission_texture = textureRef(textureSlot(*ext, "transmissionTexture"), false, label);
             if (m.transmission > 0.0f) {
                 // Blender's glass (Principled Transmission) exports as this. Opaque, it would

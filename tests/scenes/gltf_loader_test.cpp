@@ -827,6 +827,45 @@ TEST(GltfLoaderMaterials, FactorsOutsideGltfsRangesAreClampedWithAWarning) {
     EXPECT_EQ(warnings, 1u);  // one for the material, none for the default one
 }
 
+TEST(GltfLoaderMaterials, MalformedValuesAreSaidAndReplaced) {
+    // Values of the wrong type or length, and an alphaCutoff below glTF's minimum, were read
+    // silently as defaults (or, for the cutoff, as a MASK that hides nothing).
+    TempDir dir;
+    GltfBuilder b;
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial(
+        {{"name", "Odd"},
+         {"pbrMetallicRoughness", {{"baseColorFactor", {0.2, 0.3}}}},
+         {"alphaMode", "MASK"},
+         {"alphaCutoff", -1.0},
+         {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", "bright"}}}}}});
+    const int node = b.addMeshNode(prim);
+    b.doc["nodes"][node]["rotation"] = {0.0, 0.0, 0.0, 0.0};
+    const int tilted = b.addMeshNode(unitTrianglePrimitive(b));
+    b.doc["nodes"][tilted]["rotation"] = {0.0, 0.0, 0.0, 2.0};
+    b.setScene({node, tilted});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "malformed.gltf"));
+    const Material& m = scene.materials.at(0);
+    expectVec3Near(m.base_color, {1.0f, 1.0f, 1.0f});
+    EXPECT_FLOAT_EQ(m.alpha_cutoff, 0.0f);
+    EXPECT_FLOAT_EQ(m.emissive_strength, 1.0f);
+    const auto warned = [&](const std::string& text) {
+        for (const std::string& w : scene.stats.warnings)
+            if (w.find(text) != std::string::npos) return true;
+        return false;
+    };
+    EXPECT_TRUE(
+        warned("tinygltf: Array length of `baseColorFactor` parameter in pbrMetallicRoughness must be 4, "
+               "but got 2 (the default is used)"));
+    EXPECT_TRUE(warned("'Odd': alphaCutoff -1 is below glTF's minimum 0; 0 used"));
+    EXPECT_TRUE(warned("'Odd': emissiveStrength is not a number; 1 used"));
+    EXPECT_TRUE(warned("rotation (0, 0, 0, 0) is no unit quaternion; no rotation used"));
+    EXPECT_TRUE(warned("rotation of length 2 is no unit quaternion; normalised"));
+    // Both triangles stay where an identity rotation puts them (a normalised (0, 0, 0, 2) is one).
+    expectVec3Near(scene.bounds_min, {0, 0, 0});
+    expectVec3Near(scene.bounds_max, {1, 1, 0});
+}
+
 TEST(GltfLoaderMaterials, SceneWithoutMaterialsGetsDefault) {
     TempDir dir;
     GltfBuilder b;
