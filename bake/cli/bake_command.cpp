@@ -257,7 +257,7 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
                                            "(extras.sharcbake.expected_radiance, like the furnace rooms)");
     }
     EvaluationView view;
-    view.camera = sceneCamera(scene, o.report_camera, "--report-camera", kAutomaticCameraFovDegrees);
+    view.camera = sceneCamera(scene, o.report_camera, "--report-camera", kAutomaticCameraFovDegrees, &tracer);
     view.samples_per_pixel = o.report_spp;
     std::optional<Image> reference;
     if (!o.reference_path.empty()) {

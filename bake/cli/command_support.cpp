@@ -148,11 +148,12 @@ std::optional<size_t> cameraIndex(const std::string& selector) {
 
 }  // namespace
 
-Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
-                   float fov_degrees) {
+Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name, float fov_degrees,
+                   const Tracer* tracer) {
     if (selector.empty()) {
         if (!scene.cameras.empty()) return scene.cameras.front();
-        return automaticCamera(scene, glm::radians(fov_degrees));
+        return tracer ? automaticCamera(*tracer, glm::radians(fov_degrees))
+                      : automaticCamera(scene, glm::radians(fov_degrees));
     }
     // Node names first: they are the names users see (Blender's object names), and several nodes
     // may place one glTF camera, which its own name cannot tell apart.

@@ -8,6 +8,7 @@
 #include "sharcbake/scene.h"
 #include "sharcbake/scene_loader.h"
 #include "support/json.h"
+#include "tracing/tracer.h"
 
 #include <CLI/CLI.hpp>
 #include <glm/glm.hpp>
@@ -72,10 +73,11 @@ void checkOutputPath(const std::string& path, const std::string& what, const std
 void writeTextOutput(const std::string& path, const std::string& what, const std::string& text);
 
 /// A glTF camera of the scene by name or index, or the first when `selector` is empty; when the
-/// scene has none, one that frames its bounds from +Z with `fov_degrees`. Throws
+/// scene has none, the automatic camera with `fov_degrees` (automaticCamera: from outside, or from
+/// inside a scene closed around its centre when `tracer` is given). Throws
 /// CommandError(kExitUsage) naming `option_name` and the cameras there are.
-Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name,
-                   float fov_degrees);
+Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name, float fov_degrees,
+                   const Tracer* tracer = nullptr);
 
 /// "'name' at (x, y, z) looking at (x, y, z), up (...), vertical fov N deg": a camera's pose, so
 /// an automatic one can be reproduced with --look-at.

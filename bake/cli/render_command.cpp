@@ -170,7 +170,7 @@ private:
 
 /// The camera the user asked for: --look-at, else --camera, else the scene's first camera,
 /// else one that frames the scene's bounds from +Z.
-Camera chooseCamera(const Scene& scene, const RenderOptions& o) {
+Camera chooseCamera(const Scene& scene, const RenderOptions& o, const Tracer* tracer) {
     if (!o.look_at.empty()) {
         std::istringstream in(o.look_at);
         float v[6];
@@ -196,7 +196,7 @@ Camera chooseCamera(const Scene& scene, const RenderOptions& o) {
         c.yfov = glm::radians(o.fov_degrees);
         return c;
     }
-    return sceneCamera(scene, o.camera, "--camera", o.fov_degrees);
+    return sceneCamera(scene, o.camera, "--camera", o.fov_degrees, tracer);
 }
 
 void parseResolution(const RenderOptions& o, const Camera& camera, int& width, int& height) {
@@ -256,7 +256,12 @@ private:
     void setUp() {
         scene_ = loadSceneForCommand(o_.scene_path, o_.sky, o_.quiet, o_.limits);
         checkOutputs(scene_.source_files);  // the buffers and textures the scene read
-        const Camera chosen = chooseCamera(scene_, o_);
+        // The automatic camera looks into a scene closed around its centre from inside, which
+        // takes the tracer; with any other camera the options are checked before the build.
+        const bool automatic = o_.look_at.empty() && o_.camera.empty() && scene_.cameras.empty();
+        const auto build_start = std::chrono::steady_clock::now();
+        if (automatic) tracer_.emplace(scene_);
+        const Camera chosen = chooseCamera(scene_, o_, tracer_ ? &*tracer_ : nullptr);
         if (!o_.quiet && chosen.index < 0 && chosen.name == "automatic") {
             std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
                         describeCamera(chosen).c_str());
@@ -265,8 +270,7 @@ private:
         camera_ = fitCameraToImage(chosen, width_, height_);
         warnAboutCameraFit(chosen, camera_, width_, height_);
 
-        const auto build_start = std::chrono::steady_clock::now();
-        tracer_.emplace(scene_);
+        if (!tracer_) tracer_.emplace(scene_);
         lights_.emplace(scene_);
         build_seconds_ = secondsSince(build_start);
         warnWhenUnlit(scene_, *lights_, "image");
@@ -604,7 +608,8 @@ void registerRenderCommand(CLI::App& app) {
     cmd->add_option("--camera", options->camera,
                     "glTF camera (default: the first): by its node's name (Blender's object name), else by the glTF "
                     "camera's own name, else by its index, #N or N. A name two cameras share is refused with "
-                    "both listed");
+                    "both listed. A scene without cameras gets an automatic one: framing it from outside, or, "
+                    "closed around its centre (a room), looking across it from inside");
     cmd->add_option("--look-at", options->look_at,
                     "Camera from eye and target: \"ex,ey,ez,tx,ty,tz\" (overrides --camera)");
     cmd->add_option("--up", options->up, "Up vector for --look-at")->capture_default_str();

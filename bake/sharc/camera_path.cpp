@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -319,6 +320,35 @@ Camera automaticCamera(const Scene& scene, float yfov) {
     c.forward = -toward_camera;
     c.up = glm::normalize(glm::cross(glm::cross(c.forward, glm::vec3(0.0f, 1.0f, 0.0f)), c.forward));
     return c;
+}
+
+Camera automaticCamera(const Tracer& tracer, float yfov) {
+    const Scene& scene = tracer.scene();
+    Camera outside = automaticCamera(scene, yfov);
+    if (scene.empty()) return outside;
+    const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
+    const float clearance = 0.01f * glm::length(scene.bounds_max - scene.bounds_min);
+    const FreeSpaceProbe probe = probeFreeSpace(tracer, center, clearance, true);
+    if (!probe.free || probe.escaped > 0 || visible(tracer, outside.position, center)) return outside;
+    // Level (+Y up), along the horizontal axis with the most room, from near the wall behind: the
+    // view across the whole room (from the centre it filled the frame with the far wall alone).
+    const auto distanceTo = [&](glm::vec3 d) {
+        RayHit hit;
+        return tracer.intersect(Ray{center, d}, hit) ? hit.t : std::numeric_limits<float>::infinity();
+    };
+    const glm::vec3 axes[2] = {{0, 0, 1}, {1, 0, 0}};
+    float longest = -1.0f;
+    Camera inside = outside;
+    for (const glm::vec3& axis : axes) {
+        const float ahead = distanceTo(-axis), behind = distanceTo(axis);
+        if (!(ahead + behind > longest) || !std::isfinite(ahead + behind)) continue;
+        longest = ahead + behind;
+        inside.forward = -axis;  // glTF's cameras look down -Z: the first axis ties to that
+        inside.position = center + axis * (0.8f * behind);
+    }
+    if (longest < 0.0f) return outside;
+    inside.up = glm::vec3(0.0f, 1.0f, 0.0f);
+    return inside;
 }
 
 namespace {

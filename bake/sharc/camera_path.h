@@ -86,6 +86,13 @@ float framingDistance(const Scene& scene, float yfov);
 /// Named "automatic".
 Camera automaticCamera(const Scene& scene, float yfov);
 
+/// The same, unless the scene is closed around the centre of its bounds (a room without a camera:
+/// the centre is free space and no probe ray from it leaves the scene). From outside such a scene
+/// the camera sees only the outer sides of its walls, which nothing lights and the bake never
+/// reaches; it then stands at the centre, looking level along the horizontal axis with the most
+/// room. Named "automatic" either way.
+Camera automaticCamera(const Tracer& tracer, float yfov);
+
 /// The automatic camera's vertical field of view unless the user gives one (render's --fov), in
 /// degrees: also what the bake's report and hit-rate prediction look through.
 inline constexpr float kAutomaticCameraFovDegrees = 45.0f;

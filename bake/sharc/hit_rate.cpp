@@ -50,7 +50,7 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
     // Without a camera of its own, the scene is looked at first from where render's automatic
     // camera puts it (with render's default field of view).
     if (scene.cameras.empty() && region.kind != ViewRegion::Kind::Points && region.kind != ViewRegion::Kind::Box) {
-        PredictionView view{automaticCamera(scene, glm::radians(kAutomaticCameraFovDegrees)), true};
+        PredictionView view{automaticCamera(tracer, glm::radians(kAutomaticCameraFovDegrees)), true};
         view.camera.name = "automatic camera (render's view of a scene without cameras)";
         views.push_back(view);
     }

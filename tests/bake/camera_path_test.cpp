@@ -465,5 +465,27 @@ TEST(PredictHitRate, ReplaysStopAtTheirPixelBudget) {
     EXPECT_LT(prediction.views.back().eligible, kDeclaredViewMinLookups);
 }
 
+TEST(AutomaticCamera, LooksIntoAClosedRoomFromInsideAndAtAnOpenSceneFromOutside) {
+    // A closed room without a camera: from outside, render's automatic camera saw only the outer
+    // sides of its walls (black, and never baked). It now stands inside, near the wall behind,
+    // looking level along the room's longer axis.
+    test::TempDir dir;
+    const Scene room = loadRoom(dir, {false, true, false, true});
+    const Tracer room_tracer(room);
+    const Camera room_view = automaticCamera(room_tracer, 0.8f);
+    EXPECT_TRUE(inside(room_view.position, kRoomMin, kRoomMax))
+        << room_view.position.x << ", " << room_view.position.y << ", " << room_view.position.z;
+    EXPECT_FLOAT_EQ(room_view.forward.y, 0.0f);
+    EXPECT_FLOAT_EQ(std::abs(room_view.forward.z), 1.0f);  // the room is 5 m along Z, 4 m along X
+    EXPECT_EQ(room_view.name, "automatic");
+    // A lone object under the sky is looked at from outside, as before.
+    const Scene table = loadTable(dir, false);
+    const Tracer table_tracer(table);
+    const Camera outside = automaticCamera(table_tracer, 0.8f);
+    const Camera framing = automaticCamera(table, 0.8f);
+    EXPECT_EQ(outside.position, framing.position);
+    EXPECT_EQ(outside.forward, framing.forward);
+}
+
 }  // namespace
 }  // namespace sharcbake
