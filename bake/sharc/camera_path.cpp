@@ -371,12 +371,7 @@ std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uin
     const float distance = kViewsAroundDistance * boundingRadius(scene);
     constexpr float kYfov = 0.25f * kPi;
     for (uint32_t i = 0; i < count; ++i) {
-        // Spherical Fibonacci: even heights, golden-angle turns; no two views alike, none
-        // exactly along an axis.
-        const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(count);
-        const float ring = std::sqrt(std::max(0.0f, 1.0f - y * y));
-        const float turn = 2.39996323f * float(i);
-        const glm::vec3 direction(ring * std::cos(turn), y, ring * std::sin(turn));
+        const glm::vec3 direction = sphericalFibonacciDirection(i, count);
         // The points come in the order of the scene's triangles: a hashed pick keeps where a view
         // stands from deciding which part of the scene it looks at.
         const glm::vec3 target = targets[hashCombine(hashUint32(seed), i) % targets.size()].position;

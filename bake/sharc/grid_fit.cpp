@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/grid_fit.h"
 
+#include "tracing/sampling.h"
 #include "tracing/surface_points.h"
 
 #include <tbb/blocked_range.h>
@@ -24,6 +25,14 @@ constexpr double kTooManyFactor = 16.0;
 /// within 90% of that at level 1.
 constexpr double kGridRange = 0.9 * 65536.0;
 
+/// A triangle's area in double precision, 0 where it is not finite.
+double triangleAreaOf(const Scene& scene, size_t t) {
+    const glm::uvec3 tri = scene.triangles[t];
+    const glm::dvec3 p0(scene.positions[tri.x]), p1(scene.positions[tri.y]), p2(scene.positions[tri.z]);
+    const double a = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+    return std::isfinite(a) ? a : 0.0;
+}
+
 /// The farthest coordinate of the scene from the origin, along any axis.
 double farthestCoordinate(const Scene& scene) {
     const glm::vec3 m = glm::max(glm::abs(scene.bounds_min), glm::abs(scene.bounds_max));
@@ -35,10 +44,7 @@ double farthestCoordinate(const Scene& scene) {
 double visibleSurfaceArea(const Scene& scene) {
     double area = 0.0;
     for (size_t t = 0; t < scene.triangles.size(); ++t) {
-        const glm::uvec3 tri = scene.triangles[t];
-        const glm::dvec3 p0(scene.positions[tri.x]), p1(scene.positions[tri.y]), p2(scene.positions[tri.z]);
-        const double a = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-        if (!std::isfinite(a)) continue;
+        const double a = triangleAreaOf(scene, t);
         const bool double_sided = scene.materials[scene.triangle_materials[t]].double_sided;
         area += double_sided ? 2.0 * a : a;
     }
@@ -103,11 +109,7 @@ double seenTriangleArea(const Tracer& tracer, const std::vector<glm::vec3>& view
     std::vector<std::atomic<uint8_t>> sides(scene.triangles.size());  // bit 0 front, bit 1 back
     tbb::parallel_for(size_t(0), viewpoints.size(), [&](size_t v) {
         for (uint32_t i = 0; i < kDirectionsPerViewpoint; ++i) {
-            // Spherical Fibonacci: even heights, golden-angle turns.
-            const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(kDirectionsPerViewpoint);
-            const float ring = std::sqrt(std::max(0.0f, 1.0f - y * y));
-            const float turn = 2.39996323f * float(i);
-            const glm::vec3 direction(ring * std::cos(turn), y, ring * std::sin(turn));
+            const glm::vec3 direction = sphericalFibonacciDirection(i, kDirectionsPerViewpoint);
             RayHit hit;
             if (!tracer.intersect(Ray{viewpoints[v], direction}, hit)) continue;
             const glm::uvec3 tri = scene.triangles[hit.triangle];
@@ -120,10 +122,7 @@ double seenTriangleArea(const Tracer& tracer, const std::vector<glm::vec3>& view
     for (size_t t = 0; t < scene.triangles.size(); ++t) {
         const uint8_t seen = sides[t].load(std::memory_order_relaxed);
         if (!seen) continue;
-        const glm::uvec3 tri = scene.triangles[t];
-        const glm::dvec3 p0(scene.positions[tri.x]), p1(scene.positions[tri.y]), p2(scene.positions[tri.z]);
-        const double a = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-        if (!std::isfinite(a)) continue;
+        const double a = triangleAreaOf(scene, t);
         // A single-sided surface is visible from its front only (visibleSurfaceArea counts it once).
         const bool double_sided = scene.materials[scene.triangle_materials[t]].double_sided;
         area += double_sided ? a * double((seen & 1) + (seen >> 1)) : a;

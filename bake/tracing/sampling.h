@@ -189,6 +189,15 @@ inline glm::vec3 sampleUniformSphere(glm::vec2 u) {
     return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
+/// Direction `i` of `count` spread evenly over the sphere (a spherical Fibonacci set: even heights,
+/// golden-angle turns), +Y the first: no two alike, none exactly along an axis.
+inline glm::vec3 sphericalFibonacciDirection(uint32_t i, uint32_t count) {
+    const float y = 1.0f - 2.0f * (float(i) + 0.5f) / float(count);
+    const float ring = std::sqrt(std::max(0.0f, 1.0f - y * y));
+    const float turn = 2.39996323f * float(i);
+    return {ring * std::cos(turn), y, ring * std::sin(turn)};
+}
+
 /// Uniform point on a triangle as barycentrics (b1, b2) of vertices 1 and 2 (Heitz 2019's
 /// low-distortion square-to-triangle map keeps the Sobol stratification).
 inline glm::vec2 sampleUniformTriangle(glm::vec2 u) {
