@@ -4,6 +4,7 @@
 #include "cli/command_support.h"
 #include "cli/commands.h"
 #include "sharcbake/cache_merge.h"
+#include "support/fnv1a.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -27,9 +28,10 @@ struct MergeOptions {
 /// Caches baked before bakes recorded "sky" lack it: those may still merge with each other.
 const std::vector<std::string> kMustAgree = {"scene_hash", "sky", "max_bounces"};
 
-/// Metadata that describes one bake, not the merge: recomputed or dropped.
+/// Metadata that describes one bake or one merge, not this merge: recomputed or dropped.
 bool describesOneBake(const std::string& key) {
-    return key == "writer" || key == "iterations" || key == "shard" || key == "stop_reason";
+    return key == "writer" || key == "iterations" || key == "shard" || key == "stop_reason" || key == "merged_inputs" ||
+           key == "merged_shards" || key == "merged_bakes";
 }
 
 const std::string* findMetadata(const CacheData& data, const std::string& key) {
@@ -37,6 +39,48 @@ const std::string* findMetadata(const CacheData& data, const std::string& key) {
         if (entry.first == key) return &entry.second;
     }
     return nullptr;
+}
+
+/// "a,b,c" split at the commas (nothing for an empty text).
+std::vector<std::string> commaList(const std::string* text) {
+    std::vector<std::string> items;
+    if (!text || text->empty()) return items;
+    size_t start = 0;
+    for (size_t comma = text->find(',');; comma = text->find(',', start)) {
+        items.push_back(text->substr(start, comma - start));
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return items;
+}
+
+/// The bakes a cache holds, by a fingerprint of each bake's own metadata: itself for a bake, the
+/// list it records for a merge (merged_bakes). A merge of merges is a merge of their bakes, and a
+/// bake that two inputs both hold would count its samples twice.
+std::vector<std::string> bakesIn(const CacheData& data) {
+    if (const std::string* merged = findMetadata(data, "merged_bakes")) return commaList(merged);
+    uint64_t hash = kFnv1a64Basis;
+    for (const auto& [key, value] : data.metadata) {
+        hash = fnv1a64(key.data(), key.size(), hash);
+        hash = fnv1a64("=", 1, hash);
+        hash = fnv1a64(value.data(), value.size(), hash);
+        hash = fnv1a64("\n", 1, hash);
+    }
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx", (unsigned long long)hash);
+    return {text};
+}
+
+/// The shards ("i/N") a cache holds: its own, or those a merge recorded.
+std::vector<std::string> shardsIn(const CacheData& data) {
+    if (const std::string* merged = findMetadata(data, "merged_shards")) return commaList(merged);
+    if (const std::string* shard = findMetadata(data, "shard")) return {*shard};
+    return {};
+}
+
+uint64_t inputsIn(const CacheData& data) {
+    const std::string* merged = findMetadata(data, "merged_inputs");
+    return merged ? std::strtoull(merged->c_str(), nullptr, 10) : 1;
 }
 
 uint64_t iterationsOf(const CacheData& data) {
@@ -56,15 +100,26 @@ std::vector<std::pair<std::string, std::string>> mergedMetadata(const std::vecto
         });
         if (shared) metadata.emplace_back(key, value);
     }
-    uint64_t iterations = 0;
-    std::string shards;
+    uint64_t iterations = 0, merged_inputs = 0;
+    std::set<std::string> bakes;
+    std::set<std::pair<uint32_t, uint32_t>> shard_set;  // (count, index): ordered as i/N reads
     for (const CacheData& d : inputs) {
         iterations += iterationsOf(d);
-        if (const std::string* shard = findMetadata(d, "shard")) shards += (shards.empty() ? "" : ",") + *shard;
+        merged_inputs += inputsIn(d);
+        for (const std::string& bake : bakesIn(d)) bakes.insert(bake);
+        for (const std::string& shard : shardsIn(d)) {
+            unsigned index = 0, count = 0;
+            if (std::sscanf(shard.c_str(), "%u/%u", &index, &count) == 2) shard_set.insert({count, index});
+        }
     }
+    std::string shards, bake_list;
+    for (const auto& [count, index] : shard_set)
+        shards += (shards.empty() ? "" : ",") + std::to_string(index) + "/" + std::to_string(count);
+    for (const std::string& bake : bakes) bake_list += (bake_list.empty() ? "" : ",") + bake;
     metadata.emplace_back("iterations", std::to_string(iterations));
-    metadata.emplace_back("merged_inputs", std::to_string(inputs.size()));
+    metadata.emplace_back("merged_inputs", std::to_string(merged_inputs));
     if (!shards.empty()) metadata.emplace_back("merged_shards", shards);
+    metadata.emplace_back("merged_bakes", bake_list);
     return metadata;
 }
 
@@ -73,10 +128,9 @@ std::vector<std::pair<std::string, std::string>> mergedMetadata(const std::vecto
 void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
     std::map<uint32_t, std::set<uint32_t>> present;  // shard count -> indices given
     for (const CacheData& d : inputs) {
-        const std::string* shard = findMetadata(d, "shard");
-        unsigned index = 0, count = 0;
-        if (shard && std::sscanf(shard->c_str(), "%u/%u", &index, &count) == 2 && index < count) {
-            present[count].insert(index);
+        for (const std::string& shard : shardsIn(d)) {
+            unsigned index = 0, count = 0;
+            if (std::sscanf(shard.c_str(), "%u/%u", &index, &count) == 2 && index < count) present[count].insert(index);
         }
     }
     for (const auto& [count, indices] : present) {
@@ -90,6 +144,41 @@ void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
             std::fprintf(stderr, "warning: %u of %u shards missing (%s%s); the merge holds the work of the others\n",
                          missing_count, count, missing.c_str(), missing_count > 8 ? ", ..." : "");
         }
+    }
+}
+
+/// A bake held by two inputs (a merged cache and one of its own shards) would count its samples
+/// twice, and shards of different counts (1/3 beside 0/2) are not one bake split: refused, naming
+/// the files.
+void refuseOverlaps(const std::vector<CacheData>& inputs, const std::vector<std::string>& paths) {
+    std::map<std::string, size_t> holder;  // bake fingerprint -> input
+    std::map<std::string, size_t> shard_holder;
+    std::set<uint32_t> counts;
+    for (size_t i = 0; i < inputs.size(); ++i) {
+        for (const std::string& bake : bakesIn(inputs[i])) {
+            const auto [at, added] = holder.emplace(bake, i);
+            if (!added) {
+                throw CommandError(kExitInvalidInput, paths[at->second] + " and " + paths[i] +
+                                                          " both hold the same bake (a merged cache and one of "
+                                                          "its inputs?): merging them would count its samples "
+                                                          "twice");
+            }
+        }
+        for (const std::string& shard : shardsIn(inputs[i])) {
+            const auto [at, added] = shard_holder.emplace(shard, i);
+            if (!added) {
+                throw CommandError(kExitInvalidInput, paths[at->second] + " and " + paths[i] + " both hold shard " +
+                                                          shard + ": merging them would count it twice");
+            }
+            unsigned index = 0, count = 0;
+            if (std::sscanf(shard.c_str(), "%u/%u", &index, &count) == 2) counts.insert(count);
+        }
+    }
+    if (counts.size() > 1) {
+        std::string list;
+        for (const uint32_t c : counts) list += (list.empty() ? "" : ", ") + std::to_string(c);
+        throw CommandError(kExitInvalidInput, "the inputs are shards of bakes split different ways (shard counts " +
+                                                  list + "): shards of one bake share their count N");
     }
 }
 
@@ -119,6 +208,7 @@ void runMerge(const MergeOptions& o) {
                                                       "merging it twice would count its samples twice");
         }
     }
+    refuseOverlaps(inputs, o.inputs);
     std::vector<CacheData> sorted;
     std::vector<std::string> sorted_paths;
     for (size_t i : order) {

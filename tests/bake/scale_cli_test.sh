@@ -104,6 +104,22 @@ expect 0 "shard under another sky" "$sharcbake" bake "$furnace" -o "$work/sky.sh
 expect 3 "merge different skies" "$sharcbake" merge "$work/shard0.sharc" "$work/sky.sharc" -o "$work/x.sharc"
 grep -q '"sky" differs' "$work/err.txt" || fail "the sky mismatch message does not name the sky"
 expect 3 "merge the same shard twice" "$sharcbake" merge "$work/shard0.sharc" "$work/shard0.sharc" -o "$work/x.sharc"
+# Merges of merges: a merged cache and one of its own shards counted that shard twice (exit 0); two
+# merged caches failed on a duplicate metadata key; shards split different ways merged silently.
+expect 0 "merge half" "$sharcbake" merge "$work/shard0.sharc" "$work/shard1.sharc" -o "$work/half01.sharc" -q
+expect 0 "merge the other half" "$sharcbake" merge "$work/shard2.sharc" "$work/shard3.sharc" -o "$work/half23.sharc" -q
+expect 3 "merge a merge with one of its shards" "$sharcbake" merge "$work/half01.sharc" "$work/shard0.sharc" -o "$work/x.sharc"
+says "$work/err.txt" "both hold the same bake" "merge names the bake held twice"
+expect 0 "merge two merges" "$sharcbake" merge "$work/half01.sharc" "$work/half23.sharc" -o "$work/tree.sharc"
+expect 0 "info on the tree merge" "$sharcbake" info "$work/tree.sharc"
+says "$work/out.txt" "merged_shards: 0/4,1/4,2/4,3/4" "the tree merge lists every shard"
+says "$work/out.txt" "merged_inputs: 4" "the tree merge counts the bakes"
+expect 0 "merge a merge with the remaining shards" "$sharcbake" merge "$work/half01.sharc" "$work/shard2.sharc" "$work/shard3.sharc" -o "$work/mixed.sharc" -q
+expect 0 "info on that merge" "$sharcbake" info "$work/mixed.sharc"
+says "$work/out.txt" "merged_shards: 0/4,1/4,2/4,3/4" "a merge of a merge and shards lists every shard"
+expect 0 "a shard of another split" "$sharcbake" bake "$furnace" -o "$work/third.sharc" --iterations 8 --resolution 64x64 --capacity 65536 --shard 1/3 -q
+expect 3 "merge shards split different ways" "$sharcbake" merge "$work/shard0.sharc" "$work/third.sharc" -o "$work/x.sharc"
+says "$work/err.txt" "shard counts 3, 4" "merge names the shard counts"
 expect 3 "merge a checkpoint" "$sharcbake" merge "$work/shard0.sharc" "$work/short.ckpt" -o "$work/x.sharc"
 grep -q "checkpoint" "$work/err.txt" || fail "merge does not say that the input is a checkpoint"
 expect 3 "info on a checkpoint" "$sharcbake" info "$work/short.ckpt"
