@@ -799,6 +799,24 @@ private:
         if (!report_csv_.empty()) checkOutputPath(report_csv_, "report", others);
     }
 
+    /// A fresh bake (no --resume) whose --checkpoint names an existing file would replace it at its
+    /// first checkpoint: a rerun of a preempted job's command threw away 794 iterations so. Refused
+    /// before any work; --resume continues it (a finished bake's checkpoint too), deleting it
+    /// starts over.
+    void refuseToOverwriteCheckpoint() const {
+        if (!o_.resume_path.empty()) return;
+        std::error_code error;
+        const auto size = std::filesystem::file_size(checkpoint_path_, error);
+        if (error || size == 0) return;
+        throw CommandError(kExitUsage, checkpoint_path_ + ": --checkpoint names an existing file (" +
+                                           std::to_string(size) +
+                                           " bytes), which this fresh bake would replace: add "
+                                           "--resume " +
+                                           checkpoint_path_ +
+                                           " to continue the bake it holds, or "
+                                           "delete it to start over");
+    }
+
     void prepareOutputs() {
         if (!o_.report_dir.empty()) {
             std::error_code error;
@@ -808,6 +826,7 @@ private:
         // Two bakes sharing one checkpoint: refuse the second now.
         if (!checkpoint_path_.empty()) {
             checkpointStep("", [&] { checkpoint_lock_.emplace(checkpoint_path_); });
+            refuseToOverwriteCheckpoint();
         }
     }
 

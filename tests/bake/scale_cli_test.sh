@@ -83,6 +83,11 @@ done
 expect 0 "shard with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 4 --resolution 96x96 -q --shard 1/4 --checkpoint "$work/shard1.ckpt"
 expect 0 "shard resumed" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 8 --resolution 96x96 -q --shard 1/4 --resume "$work/shard1.ckpt"
 cmp -s "$work/shard1.sharc" "$work/shard1ck.sharc" || fail "the resumed shard differs from the uninterrupted one"
+# Rerunning the first command (no --resume) would replace the checkpoint with a fresh bake's: refused.
+cp "$work/shard1.ckpt" "$work/shard1.ckpt.before"
+expect 1 "a fresh bake onto an existing checkpoint" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 4 --resolution 96x96 -q --shard 1/4 --checkpoint "$work/shard1.ckpt"
+says "$work/err.txt" "add --resume" "the refusal says how to continue"
+cmp -s "$work/shard1.ckpt" "$work/shard1.ckpt.before" || fail "the refused bake changed the checkpoint"
 expect 3 "resume a shard's checkpoint as another shard" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --iterations 8 --resolution 96x96 -q --shard 2/4 --resume "$work/shard1.ckpt"
 expect 0 "merge" "$sharcbake" merge "$work/shard0.sharc" "$work/shard1.sharc" "$work/shard2.sharc" "$work/shard3.sharc" -o "$work/merged.sharc"
 expect 0 "merge in another order" "$sharcbake" merge "$work/shard2.sharc" "$work/shard0.sharc" "$work/shard3.sharc" "$work/shard1.sharc" -o "$work/merged2.sharc" -q
