@@ -187,6 +187,12 @@ void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
 CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& tracer, std::string& description) {
     const float diagonal = glm::length(scene.bounds_max - scene.bounds_min);
     if (!job.camera.path_file.empty()) {
+        std::error_code error;
+        if (!std::filesystem::is_regular_file(job.camera.path_file, error)) {  // I/O, not a malformed file
+            throw CommandError(kExitIo, job.camera.path_file +
+                                            ": cannot read the camera path: not a regular file (missing, a FIFO, a "
+                                            "device or a folder)");
+        }
         std::vector<CameraPose> poses;
         try {
             poses = readCameraPathFile(job.camera.path_file);

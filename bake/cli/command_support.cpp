@@ -282,8 +282,7 @@ void addSkyOptions(CLI::App& command, SkyOptions& options) {
                        "(scenes may set one in scene extras: sharcbake.sky_radiance)");
     command.add_option("--sky-exr", options.exr_path,
                        "Equirectangular EXR environment map for the sky (+Y up, Blender's "
-                       "orientation)")
-        ->check(CLI::ExistingFile);
+                       "orientation)");  // a missing file is an I/O error when it is read (exit 2)
     command.add_option("--sky-scale", options.scale, "Multiplier for the sky map")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber)

@@ -129,7 +129,7 @@ expect 3 "merge a checkpoint" "$sharcbake" merge "$work/shard0.sharc" "$work/sho
 grep -q "checkpoint" "$work/err.txt" || fail "merge does not say that the input is a checkpoint"
 expect 3 "info on a checkpoint" "$sharcbake" info "$work/short.ckpt"
 grep -q "bake --resume" "$work/err.txt" || fail "info does not say how to use a checkpoint"
-expect 1 "merge a missing file" "$sharcbake" merge "$work/shard0.sharc" "$work/none.sharc" -o "$work/x.sharc"
+expect 2 "merge a missing file (an I/O error, as the README's table says)" "$sharcbake" merge "$work/shard0.sharc" "$work/none.sharc" -o "$work/x.sharc"
 
 # --capacity auto: a table sized from the scene, and info reports what the bake left out.
 expect 1 "bad capacity" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --capacity lots
