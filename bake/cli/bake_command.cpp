@@ -1321,8 +1321,11 @@ void runBatch(const BakeOptions& batch) {
         if (outcome.code == kExitInterrupted || outcome.code == kExitTerminated) break;
     }
     const auto failed = std::count_if(outcomes.begin(), outcomes.end(), [](const Outcome& x) { return x.code != 0; });
-    std::printf("\nBatch: %zu of %zu scenes baked\n", outcomes.size() - size_t(failed), batch.scene_paths.size());
-    for (size_t i = 0; i < batch.scene_paths.size(); ++i) {
+    // -q prints nothing but warnings and errors, a batch's summary included: each failure has
+    // printed its error, and the exit code and the last error name the first one.
+    if (!batch.quiet)
+        std::printf("\nBatch: %zu of %zu scenes baked\n", outcomes.size() - size_t(failed), batch.scene_paths.size());
+    for (size_t i = 0; i < batch.scene_paths.size() && !batch.quiet; ++i) {
         if (i >= outcomes.size()) {
             std::printf("  not run   %s (the batch was stopped)\n", batch.scene_paths[i].c_str());
         } else if (outcomes[i].code == kExitOk) {

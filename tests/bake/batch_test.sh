@@ -12,7 +12,7 @@ work=$3
 furnace="$scenes/furnace_rho050/furnace_rho050.gltf"
 cornell="$scenes/cornell_box/cornell_box.gltf"
 small="--iterations 4 --resolution 160x90 --capacity 65536"
-rm -rf "$work/batch" "$work/stats" && mkdir -p "$work/broken"
+rm -rf "$work/batch" "$work/batch_q" "$work/stats" && mkdir -p "$work/broken"
 printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri": "nowhere.bin" } ] }' > "$work/broken/broken.gltf"
 
 # Three scenes, the second broken: the other two are baked, the summary names each, exit 3.
@@ -27,6 +27,11 @@ for name in furnace_rho050 cornell_box; do
     [ -s "$work/stats/$name.json" ] || fail "the batch did not write $name.json"
 done
 [ ! -e "$work/batch/broken.sharc" ] || fail "the broken scene left a cache"
+# -q prints nothing but warnings and errors, a batch's summary included; the error names the scene.
+expect 3 "a quiet batch with a broken scene" "$sharcbake" bake "$furnace" "$work/broken/broken.gltf" \
+    -o "$work/batch_q" $small -q
+[ -s "$work/out.txt" ] && fail "a -q batch printed on stdout: $(cat "$work/out.txt")"
+says "$work/err.txt" "broken.gltf" "the quiet batch's error names the scene"
 # Each scene's cache is the one a bake of that scene alone gives.
 expect 0 "the cornell box alone" "$sharcbake" bake "$cornell" -o "$work/alone.sharc" $small -q
 cmp -s "$work/alone.sharc" "$work/batch/cornell_box.sharc" || fail "a batch's cache differs from the same bake alone"
