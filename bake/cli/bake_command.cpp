@@ -864,6 +864,13 @@ private:
             checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_); });
         }
         first_iteration_ = baker_->iterationsDone();
+        if (first_iteration_ > o_.iterations) {
+            // A checkpoint is never cut back: the cache holds every iteration it had.
+            std::fprintf(stderr,
+                         "warning: %s holds %u iterations, more than --iterations %u: no more are baked, and the "
+                         "cache holds all %u\n",
+                         o_.resume_path.c_str(), first_iteration_, o_.iterations, first_iteration_);
+        }
         report_.scene = job_.scene_path;
         if (o_.target_error > 0.0) report_.target_error = o_.target_error;
         evaluator_ = makeEvaluator(o_, scene_, *tracer_, *lights_, report_.reference);

@@ -83,6 +83,10 @@ done
 expect 0 "shard with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 4 --resolution 96x96 -q --shard 1/4 --checkpoint "$work/shard1.ckpt"
 expect 0 "shard resumed" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 8 --resolution 96x96 -q --shard 1/4 --resume "$work/shard1.ckpt"
 cmp -s "$work/shard1.sharc" "$work/shard1ck.sharc" || fail "the resumed shard differs from the uninterrupted one"
+# Resuming with fewer --iterations than the checkpoint holds bakes none and says so.
+expect 0 "resume with fewer iterations than the checkpoint" "$sharcbake" bake "$furnace" -o "$work/fewer.sharc" --iterations 4 --resolution 96x96 -q --shard 1/4 --resume "$work/shard1.ckpt"
+says "$work/err.txt" "holds 8 iterations, more than --iterations 4" "the resume says it bakes no more"
+cmp -s "$work/shard1.sharc" "$work/fewer.sharc" || fail "the cache of a resume with fewer iterations differs from the checkpoint's bake"
 # Rerunning the first command (no --resume) would replace the checkpoint with a fresh bake's: refused.
 cp "$work/shard1.ckpt" "$work/shard1.ckpt.before"
 expect 1 "a fresh bake onto an existing checkpoint" "$sharcbake" bake "$furnace" -o "$work/shard1ck.sharc" --iterations 4 --resolution 96x96 -q --shard 1/4 --checkpoint "$work/shard1.ckpt"
