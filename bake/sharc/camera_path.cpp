@@ -77,21 +77,6 @@ FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance
     return {free, free && (escaped > 0 || votes > 0), escaped};
 }
 
-bool visible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
-    const glm::vec3 d = b - a;
-    const float length = glm::length(d);
-    if (length <= 0.0f) return true;
-    return !tracer.occluded(Ray{a, d / length, length});
-}
-
-/// Visible both ways. Embree's triangle test is not watertight: a ray that meets a shared edge
-/// can slip between its two triangles, and among the thousands of pairs one such ray joined a
-/// closed room's camera to the ground plane outside. The ray back starts elsewhere and rounds
-/// differently, so it does not slip through the same edge.
-bool mutuallyVisible(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
-    return visible(tracer, a, b) && visible(tracer, b, a);
-}
-
 }  // namespace
 
 Camera toCamera(const CameraPose& pose) {
@@ -186,7 +171,7 @@ std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePo
     };
     for (size_t a = 0; a < n; ++a) {
         for (size_t b = a + 1; b < n; ++b) {
-            if (root(a) != root(b) && mutuallyVisible(tracer, points[a].position, points[b].position)) {
+            if (root(a) != root(b) && visibleBothWays(tracer, points[a].position, points[b].position)) {
                 parent[root(b)] = root(a);
             }
         }
@@ -329,7 +314,7 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
     const float clearance = 0.01f * glm::length(scene.bounds_max - scene.bounds_min);
     const FreeSpaceProbe probe = probeFreeSpace(tracer, center, clearance, true);
-    if (!probe.free || probe.escaped > 0 || visible(tracer, outside.position, center)) return outside;
+    if (!probe.free || probe.escaped > 0 || visibleOneWay(tracer, outside.position, center)) return outside;
     // Level (+Y up), along the horizontal axis with the most room, from near the wall behind: the
     // view across the whole room (from the centre it filled the frame with the far wall alone).
     const auto distanceTo = [&](glm::vec3 d) {

@@ -61,21 +61,13 @@ constexpr uint32_t kDirectionsPerViewpoint = 256;
 /// ground plane) reads as 0.
 double seenShareOfPoints(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints,
                          const std::vector<SurfacePoint>& points) {
-    // Unoccluded both ways: Embree's triangle test is not watertight, and a ray that slips through
-    // a shared edge would count a point of a 10 km ground plane as seen from inside a closed room
-    // (1/4096 of the plane's area); the ray back rounds differently.
+    // Both ways (visibleBothWays): a ray slipping through a shared edge would count a point of a
+    // 10 km ground plane as seen from inside a closed room (1/4096 of the plane's area).
     const auto seenFromAny = [&](glm::vec3 position, glm::vec3 side) {
         const glm::vec3 origin = offsetRayOrigin(position, side);
-        for (const glm::vec3& v : viewpoints) {
-            const glm::vec3 d = v - origin;
-            if (!(glm::dot(d, side) > 0.0f)) continue;
-            const float length = glm::length(d);
-            if (length > 0.0f && !tracer.occluded(Ray{origin, d / length, length}) &&
-                !tracer.occluded(Ray{v, -d / length, length})) {
-                return true;
-            }
-        }
-        return false;
+        return std::any_of(viewpoints.begin(), viewpoints.end(), [&](const glm::vec3& v) {
+            return glm::dot(v - origin, side) > 0.0f && visibleBothWays(tracer, origin, v);
+        });
     };
     // Sides seen and sides there, summed over the points: integers, so the sums do not depend on
     // how the points are split between threads.

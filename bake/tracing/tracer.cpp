@@ -194,6 +194,17 @@ glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
     return result;
 }
 
+bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
+    const glm::vec3 d = b - a;
+    const float length = glm::length(d);
+    if (length <= 0.0f) return true;
+    return !tracer.occluded(Ray{a, d / length, length});
+}
+
+bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
+    return visibleOneWay(tracer, a, b) && visibleOneWay(tracer, b, a);
+}
+
 float largestRayOffset(float far_coordinate) {
     const glm::vec3 corner(far_coordinate);
     return glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner);

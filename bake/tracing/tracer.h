@@ -96,6 +96,14 @@ glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal);
 inline constexpr float kRayOffsetOriginRegion = 1.0f / 32.0f;
 inline constexpr float kRayOffsetNearOrigin = 1.0f / 65536.0f;
 
+/// True when nothing blocks the segment from `a` to `b` (a ray from `a`; true when they coincide).
+bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
+/// Unblocked from `a` to `b` and from `b` to `a`. Embree's triangle test is not watertight: a ray
+/// that meets a shared edge can slip between its two triangles (among thousands of segments, one
+/// joined a closed room's camera to the ground outside). The ray back starts elsewhere and rounds
+/// differently, so it does not slip through the same edge.
+bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
+
 /// The largest distance offsetRayOrigin moves an origin anywhere in the bounds: at the coordinate
 /// farthest from 0 on any axis (`far_coordinate`, as max |bounds|).
 float largestRayOffset(float far_coordinate);
