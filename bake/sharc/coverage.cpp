@@ -31,26 +31,26 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
     report.total_area = surfaceArea(scene);
     const HashGridParameters& grid = cache.settings().grid;
 
-    // A voxel with samples at `level` on a side a camera can see (the front; the back too where
-    // the material is double-sided).
-    const auto reachedAt = [&](const SurfacePoint& point, uint32_t level) {
+    // A voxel with samples, of the key `keyOf(position, normal)` gives, on a side a camera can see
+    // (the front; the back too where the material is double-sided).
+    const auto reached = [&](const SurfacePoint& point, const auto& keyOf) {
         const auto has_voxel = [&](glm::vec3 n) {
-            const glm::vec3& p = point.position;
-            const ResolvedEntry* e =
-                cache.findResolved(hashGridKeyAtLevel(Float3{p.x, p.y, p.z}, Float3{n.x, n.y, n.z}, level, grid));
+            const ResolvedEntry* e = cache.findResolved(keyOf(point.position, n));
             return e && e->weight > 0.0;
         };
         return has_voxel(point.normal) || (point.double_sided && has_voxel(-point.normal));
     };
-    // A voxel with samples at the level the bake deposits into on a side a camera can see. The
-    // bake camera's position only matters for the `bake-camera` region, which callers leave out.
+    const auto reachedAt = [&](const SurfacePoint& point, uint32_t level) {
+        return reached(point, [&](glm::vec3 p, glm::vec3 n) {
+            return hashGridKeyAtLevel(Float3{p.x, p.y, p.z}, Float3{n.x, n.y, n.z}, level, grid);
+        });
+    };
+    // At the level the bake deposits into; the bake camera's position only matters for the
+    // `bake-camera` region, which callers leave out.
     const auto reachedByDeposits = [&](const SurfacePoint& point) {
-        const auto has_voxel = [&](glm::vec3 n) {
-            const ResolvedEntry* e = cache.findResolved(
-                deposit_levels->key(point.position, n, Float3{0.0f, 0.0f, 0.0f}));
-            return e && e->weight > 0.0;
-        };
-        return has_voxel(point.normal) || (point.double_sided && has_voxel(-point.normal));
+        return reached(point, [&](glm::vec3 p, glm::vec3 n) {
+            return deposit_levels->key(p, n, Float3{0.0f, 0.0f, 0.0f});
+        });
     };
     const uint32_t finest = levels.empty() ? 0 : *std::min_element(levels.begin(), levels.end());
     uint32_t unreached = 0, unreached_finest = 0, unreached_deposit = 0;
