@@ -71,11 +71,29 @@ std::vector<std::string> bakesIn(const CacheData& data) {
     return {text};
 }
 
-/// The shards ("i/N") a cache holds: its own, or those a merge recorded.
-std::vector<std::string> shardsIn(const CacheData& data) {
-    if (const std::string* merged = findMetadata(data, "merged_shards")) return commaList(merged);
-    if (const std::string* shard = findMetadata(data, "shard")) return {*shard};
-    return {};
+/// Shard i of N (bake --shard i/N); ordered by N, then i.
+struct Shard {
+    uint32_t count = 0;
+    uint32_t index = 0;
+    bool operator<(const Shard& o) const { return count != o.count ? count < o.count : index < o.index; }
+    std::string text() const { return std::to_string(index) + "/" + std::to_string(count); }
+};
+
+/// The shards a cache holds: its own, or those a merge recorded ("i/N" texts that do not read as
+/// shards are left out).
+std::vector<Shard> shardsIn(const CacheData& data) {
+    std::vector<std::string> texts;
+    if (const std::string* merged = findMetadata(data, "merged_shards")) {
+        texts = commaList(merged);
+    } else if (const std::string* shard = findMetadata(data, "shard")) {
+        texts = {*shard};
+    }
+    std::vector<Shard> shards;
+    for (const std::string& text : texts) {
+        unsigned index = 0, count = 0;
+        if (std::sscanf(text.c_str(), "%u/%u", &index, &count) == 2) shards.push_back(Shard{count, index});
+    }
+    return shards;
 }
 
 uint64_t inputsIn(const CacheData& data) {
@@ -102,19 +120,15 @@ std::vector<std::pair<std::string, std::string>> mergedMetadata(const std::vecto
     }
     uint64_t iterations = 0, merged_inputs = 0;
     std::set<std::string> bakes;
-    std::set<std::pair<uint32_t, uint32_t>> shard_set;  // (count, index): ordered as i/N reads
+    std::set<Shard> shard_set;
     for (const CacheData& d : inputs) {
         iterations += iterationsOf(d);
         merged_inputs += inputsIn(d);
         for (const std::string& bake : bakesIn(d)) bakes.insert(bake);
-        for (const std::string& shard : shardsIn(d)) {
-            unsigned index = 0, count = 0;
-            if (std::sscanf(shard.c_str(), "%u/%u", &index, &count) == 2) shard_set.insert({count, index});
-        }
+        for (const Shard& shard : shardsIn(d)) shard_set.insert(shard);
     }
     std::string shards, bake_list;
-    for (const auto& [count, index] : shard_set)
-        shards += (shards.empty() ? "" : ",") + std::to_string(index) + "/" + std::to_string(count);
+    for (const Shard& shard : shard_set) shards += (shards.empty() ? "" : ",") + shard.text();
     for (const std::string& bake : bakes) bake_list += (bake_list.empty() ? "" : ",") + bake;
     metadata.emplace_back("iterations", std::to_string(iterations));
     metadata.emplace_back("merged_inputs", std::to_string(merged_inputs));
@@ -128,9 +142,8 @@ std::vector<std::pair<std::string, std::string>> mergedMetadata(const std::vecto
 void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
     std::map<uint32_t, std::set<uint32_t>> present;  // shard count -> indices given
     for (const CacheData& d : inputs) {
-        for (const std::string& shard : shardsIn(d)) {
-            unsigned index = 0, count = 0;
-            if (std::sscanf(shard.c_str(), "%u/%u", &index, &count) == 2 && index < count) present[count].insert(index);
+        for (const Shard& shard : shardsIn(d)) {
+            if (shard.index < shard.count) present[shard.count].insert(shard.index);
         }
     }
     for (const auto& [count, indices] : present) {
@@ -152,7 +165,7 @@ void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
 /// the files.
 void refuseOverlaps(const std::vector<CacheData>& inputs, const std::vector<std::string>& paths) {
     std::map<std::string, size_t> holder;  // bake fingerprint -> input
-    std::map<std::string, size_t> shard_holder;
+    std::map<Shard, size_t> shard_holder;
     std::set<uint32_t> counts;
     for (size_t i = 0; i < inputs.size(); ++i) {
         for (const std::string& bake : bakesIn(inputs[i])) {
@@ -164,14 +177,13 @@ void refuseOverlaps(const std::vector<CacheData>& inputs, const std::vector<std:
                                                           "twice");
             }
         }
-        for (const std::string& shard : shardsIn(inputs[i])) {
+        for (const Shard& shard : shardsIn(inputs[i])) {
             const auto [at, added] = shard_holder.emplace(shard, i);
             if (!added) {
                 throw CommandError(kExitInvalidInput, paths[at->second] + " and " + paths[i] + " both hold shard " +
-                                                          shard + ": merging them would count it twice");
+                                                          shard.text() + ": merging them would count it twice");
             }
-            unsigned index = 0, count = 0;
-            if (std::sscanf(shard.c_str(), "%u/%u", &index, &count) == 2) counts.insert(count);
+            counts.insert(shard.count);
         }
     }
     if (counts.size() > 1) {
