@@ -3,10 +3,12 @@
 #include "sharcbake/runtime_c.h"
 
 #include "sharcbake/runtime.h"
+#include "sharcbake/sdk_target.h"
 
 #include <cstring>
 #include <new>
 #include <string>
+#include <vector>
 
 struct sharcbake_cache {
     sharcbake::CacheView view;
@@ -307,6 +309,42 @@ sharcbake_status sharcbake_sdk_target_for_release(const char* release, sharcbake
         sharcbake::SharcSdkTarget t{};
         std::string text;
         const CacheFileStatus status = sharcbake::sharcSdkTargetForRelease(release, &t, &text);
+        copyMessage(text, message, message_size);
+        if (status == CacheFileStatus::kOk) *target = sharcbake_sdk_target(t);
+        return sharcbake_status(status);
+    } catch (...) {
+        copyMessage("out of memory", message, message_size);
+        return SHARCBAKE_IO_ERROR;
+    }
+}
+
+sharcbake_status sharcbake_identify_sdk_target(float logarithm_base, float scene_scale, float level_bias,
+                                               uint32_t capacity, const sharcbake_sdk_observation* observations,
+                                               size_t count, sharcbake_sdk_target* target, char* message,
+                                               size_t message_size) {
+    copyMessage("", message, message_size);
+    if (!target || (!observations && count > 0)) {
+        copyMessage("sharcbake_identify_sdk_target: target and observations must not be NULL", message, message_size);
+        return SHARCBAKE_INVALID_ARGUMENT;
+    }
+    try {
+        sharcbake::HashGridParameters grid;
+        grid.logarithm_base = logarithm_base;
+        grid.scene_scale = scene_scale;
+        grid.level_bias = level_bias;
+        grid.capacity = capacity;
+        std::vector<sharcbake::SharcSdkObservation> seen(count);
+        for (size_t i = 0; i < count; ++i) {
+            const sharcbake_sdk_observation& o = observations[i];
+            seen[i].position = sharcbake::Float3{o.position[0], o.position[1], o.position[2]};
+            seen[i].normal = sharcbake::Float3{o.normal[0], o.normal[1], o.normal[2]};
+            seen[i].camera = sharcbake::Float3{o.camera[0], o.camera[1], o.camera[2]};
+            seen[i].key = o.key;
+            seen[i].slot = o.slot;
+        }
+        sharcbake::SharcSdkTarget t{};
+        std::string text;
+        const CacheFileStatus status = sharcbake::identifySharcSdkTarget(grid, seen.data(), seen.size(), &t, &text);
         copyMessage(text, message, message_size);
         if (status == CacheFileStatus::kOk) *target = sharcbake_sdk_target(t);
         return sharcbake_status(status);

@@ -488,6 +488,52 @@ TEST(SdkTarget, IdentifiesTheReleaseFromTheEnginesObservations) {
     EXPECT_NE(message.find("normals have a negative component"), std::string::npos) << message;
 }
 
+// The C entry point gives what the C++ one gives, for the same observations.
+TEST(SdkTarget, IdentifiesTheReleaseThroughTheCInterface) {
+    HashGridParameters grid;
+    grid.capacity = 100003;
+    grid.level_bias = 2.515625f;
+    const auto toC = [](const std::vector<SharcSdkObservation>& seen) {
+        std::vector<sharcbake_sdk_observation> out(seen.size());
+        for (size_t i = 0; i < seen.size(); ++i) {
+            const SharcSdkObservation& o = seen[i];
+            out[i] = sharcbake_sdk_observation{{o.position.x, o.position.y, o.position.z},
+                                               {o.normal.x, o.normal.y, o.normal.z},
+                                               {o.camera.x, o.camera.y, o.camera.z},
+                                               o.slot,
+                                               o.key};
+        }
+        return out;
+    };
+    const auto identify = [&](const std::vector<sharcbake_sdk_observation>& seen, size_t count,
+                              sharcbake_sdk_target* target, char* message, size_t size) {
+        return sharcbake_identify_sdk_target(grid.logarithm_base, grid.scene_scale, grid.level_bias, grid.capacity,
+                                             seen.data(), count, target, message, size);
+    };
+    char message[512];
+    for (const Release& r : kReleases) {
+        const std::vector<sharcbake_sdk_observation> seen = toC(observe(r, grid));
+        sharcbake_sdk_target target{};
+        ASSERT_EQ(identify(seen, seen.size(), &target, message, sizeof message), SHARCBAKE_OK)
+            << r.name << ": " << message;
+        EXPECT_EQ(uint32_t(target), uint32_t(r.target)) << r.name;
+    }
+    // The C++ function's refusals and their reasons come through.
+    sharcbake_sdk_target target = SHARCBAKE_SDK_1_6;
+    const std::vector<sharcbake_sdk_observation> floor = toC(observe(kReleases[1], grid, false, true));
+    EXPECT_EQ(identify(floor, floor.size(), &target, message, sizeof message), SHARCBAKE_UNSUPPORTED_FEATURE);
+    EXPECT_NE(std::string(message).find("normals have a negative component"), std::string::npos) << message;
+    EXPECT_EQ(target, SHARCBAKE_SDK_1_6);  // untouched on failure
+    EXPECT_EQ(identify(floor, 3, &target, message, sizeof message), SHARCBAKE_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(message).find("4 observations"), std::string::npos) << message;
+    // NULL arguments are refused with a message, not dereferenced.
+    EXPECT_EQ(identify(floor, floor.size(), nullptr, message, sizeof message), SHARCBAKE_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(message).find("NULL"), std::string::npos) << message;
+    EXPECT_EQ(sharcbake_identify_sdk_target(grid.logarithm_base, grid.scene_scale, grid.level_bias, grid.capacity,
+                                            nullptr, 16, &target, nullptr, 0),
+              SHARCBAKE_INVALID_ARGUMENT);
+}
+
 // ------------------------------------------------------------------------------------------------
 // Build options
 // ------------------------------------------------------------------------------------------------

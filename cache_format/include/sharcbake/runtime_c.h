@@ -165,6 +165,27 @@ SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_sdk_target_for_release(const ch
                                                                         sharcbake_sdk_target* target, char* message,
                                                                         size_t message_size);
 
+/** What the engine's own SDK computed for one probe point (sharcbake::SharcSdkObservation). */
+typedef struct sharcbake_sdk_observation {
+    float position[3];
+    float normal[3];
+    float camera[3]; /**< the camera position the key was computed from */
+    uint32_t slot;   /**< the slot the SDK's insert returned, in an empty table of `capacity` slots */
+    uint64_t key;    /**< the 64-bit key the SDK computed */
+} sharcbake_sdk_observation;
+
+/** Which target reproduces every observation (sharcbake::identifySharcSdkTarget): the key layout
+ *  from the keys, the bucket rule from the slots. The grid is the engine's: logarithm base, scene
+ *  scale, level bias and table capacity. Needs at least 4 observations (16 distinct points
+ *  recommended), some of them with a normal that has a negative component (only those tell 1.6
+ *  from 1.7). SHARCBAKE_OK and `*target` when exactly one target fits; otherwise
+ *  SHARCBAKE_UNSUPPORTED_FEATURE or SHARCBAKE_INVALID_ARGUMENT and a reason in `message`. */
+SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_identify_sdk_target(float logarithm_base, float scene_scale,
+                                                                     float level_bias, uint32_t capacity,
+                                                                     const sharcbake_sdk_observation* observations,
+                                                                     size_t count, sharcbake_sdk_target* target,
+                                                                     char* message, size_t message_size);
+
 /** Frames a baked entry survives the SDK's Resolve without samples: clamp(stale, 8, 1024) - 1. */
 SHARCBAKE_RUNTIME_API uint32_t sharcbake_resolve_frames_kept(uint32_t stale_frame_num_max);
 
