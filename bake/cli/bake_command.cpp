@@ -840,7 +840,15 @@ private:
         scene_ = loadSceneForCommand(job_.scene_path, job_.sky, o_.quiet, o_.limits);
         checkOutputs(scene_.source_files);  // the buffers and images the scene read
         scene_hash_ = sceneContentHash(scene_.source_files);
-        if (scene_.empty()) throw CommandError(kExitInvalidInput, job_.scene_path + ": the scene has no triangles to bake");
+        if (scene_.empty()) {
+            const uint64_t collapsed = scene_.stats.triangles_collapsed_by_rounding;
+            throw CommandError(kExitInvalidInput,
+                               job_.scene_path + ": the scene has no triangles to bake" +
+                                   (collapsed > 0 ? " (" + std::to_string(collapsed) +
+                                                        " collapsed when rounded to float32 far from the origin: "
+                                                        "move the model towards the origin)"
+                                                  : ""));
+        }
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);
         lights_.emplace(scene_);

@@ -384,6 +384,7 @@ private:
         const float far_coordinate = std::max({far.x, far.y, far.z});
         const glm::vec3 sides = scene_.bounds_max - scene_.bounds_min;
         const float largest_side = std::max({sides.x, sides.y, sides.z});
+        if (scene_.triangles.empty() || !(largest_side > 0.0f)) return;  // nothing to leak through
         const float offset = largestRayOffset(far_coordinate);
         if (!(offset > kRayOffsetWarningShare * largest_side)) return;
         const bool near_origin = far_coordinate < kRayOffsetOriginRegion;

@@ -285,6 +285,9 @@ struct PrimitiveGeometry {
     std::vector<glm::vec4> colors;   ///< COLOR_0 as RGBA; empty when absent
     std::vector<glm::vec4> tangents; ///< TANGENT (xyz, w = bitangent sign); empty when absent
     std::vector<glm::uvec3> triangles;
+    /// World positions before their rounding to float (transformToWorld, skinToWorld), for
+    /// telling triangles the rounding collapsed from ones modelled flat; emptied after that.
+    std::vector<glm::dvec3> exact_positions;
 };
 
 /// Reads one component at p and converts it to double; normalized integers map to [0,1] or
@@ -389,6 +392,7 @@ public:
         settleAlphaModes();
         computeBounds();
         scene_.stats.triangles_loaded = scene_.triangles.size();
+        warnAboutCollapsedTriangles();
         return std::move(scene_);
     }
 
@@ -409,6 +413,8 @@ private:
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
     std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
+    uint64_t collapsed_triangles_ = 0;  ///< triangles flat in float but not in double (dropDegenerateTriangles)
+    double collapsed_farthest_ = 0.0;   ///< the largest coordinate among their vertices
 
     // ---------------------------------------------------------------- errors and warnings
 
@@ -1421,6 +1427,7 @@ private:
                      std::to_string(p.y) + ", " + std::to_string(p.z) + ") after the node transforms, beyond +-1e9 m");
             }
             geo.positions[i] = glm::vec3(p);
+            geo.exact_positions.push_back(p);
         }
         const glm::dmat3 linear(world);
         const double det = glm::determinant(linear);
@@ -1484,6 +1491,7 @@ private:
                   std::abs(p.z) <= kMaxWorldCoordinate))
                 fail(label + ": vertex " + std::to_string(i) + " lies beyond +-1e9 m after skinning");
             geo.positions[i] = glm::vec3(p);
+            geo.exact_positions.push_back(p);
             const glm::dmat3 linear(m);
             const double det = glm::determinant(linear);
             if (!geo.normals.empty()) {
@@ -1517,17 +1525,50 @@ private:
     /// and would give NaN geometric normals. Zero area is judged relative to the edge lengths
     /// so that tiny but well-shaped triangles survive.
     void dropDegenerateTriangles(PrimitiveGeometry& geo) {
-        auto degenerate = [&](const glm::uvec3& t) {
-            if (t.x == t.y || t.y == t.z || t.x == t.z) return true;
-            const glm::dvec3 a(geo.positions[t.x]);
-            const glm::dvec3 e1 = glm::dvec3(geo.positions[t.y]) - a;
-            const glm::dvec3 e2 = glm::dvec3(geo.positions[t.z]) - a;
+        const auto flat = [](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+            const glm::dvec3 e1 = b - a, e2 = c - a;
             const double crossLength = glm::length(glm::cross(e1, e2));  // NaN-safe: !(x > y)
             return !(crossLength > 1e-7 * glm::length(e1) * glm::length(e2));
+        };
+        const std::vector<glm::dvec3>& exact = geo.exact_positions;
+        auto degenerate = [&](const glm::uvec3& t) {
+            if (t.x == t.y || t.y == t.z || t.x == t.z) return true;
+            if (!flat(glm::dvec3(geo.positions[t.x]), glm::dvec3(geo.positions[t.y]), glm::dvec3(geo.positions[t.z])))
+                return false;
+            // Flat in float but not in double: rounding the world positions to float collapsed it
+            // (a model far from the origin, where float steps are as large as its detail).
+            if (exact.size() == geo.positions.size() && !flat(exact[t.x], exact[t.y], exact[t.z])) {
+                ++collapsed_triangles_;
+                for (const uint32_t v : {t.x, t.y, t.z}) {
+                    const glm::dvec3 p = glm::abs(exact[v]);
+                    collapsed_farthest_ = std::max({collapsed_farthest_, p.x, p.y, p.z});
+                }
+            }
+            return true;
         };
         const size_t before = geo.triangles.size();
         std::erase_if(geo.triangles, degenerate);
         scene_.stats.degenerate_triangles_dropped += before - geo.triangles.size();
+        geo.exact_positions = {};
+    }
+
+    /// One warning for every triangle that rounding to float collapsed: the scene lies too far
+    /// from the origin for its detail, which no float32 renderer (SHaRC's GPU code included) can
+    /// hold either, so the fix is the scene's, not the bake's.
+    void warnAboutCollapsedTriangles() {
+        if (collapsed_triangles_ == 0) return;
+        const double step = double(std::nextafter(float(collapsed_farthest_), INFINITY)) -
+                            double(float(collapsed_farthest_));
+        char text[512];
+        std::snprintf(text, sizeof text,
+                      "%llu triangles collapsed to zero area when their world positions were rounded to float32, "
+                      "%.3g from the origin, where float32 steps are %.3g apart: the model lies too far from the "
+                      "origin for its detail (any float32 renderer loses it there too); move it towards the origin "
+                      "(a translation on its root node, or the exporter's origin setting)%s",
+                      (unsigned long long)collapsed_triangles_, collapsed_farthest_, step,
+                      scene_.triangles.empty() ? "; no triangle is left" : "");
+        warn(text);
+        scene_.stats.triangles_collapsed_by_rounding = collapsed_triangles_;
     }
 
     /// glTF says a primitive without normals is flat shaded; that needs one vertex per

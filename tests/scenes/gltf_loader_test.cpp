@@ -215,6 +215,41 @@ TEST(GltfLoader, DegenerateTrianglesDroppedAndCounted) {
     expectVec3Near(scene.bounds_max, {1, 1, 0});
 }
 
+// A model placed far from the origin by its node: its triangles have area in the file's double
+// precision transforms, and rounding the world positions to float collapses the small ones. They
+// are counted apart from triangles modelled flat, and one warning says why and what to do.
+TEST(GltfLoader, TrianglesCollapsedByFloatRoundingAreNamed) {
+    TempDir dir;
+    GltfBuilder b;
+    // A 0.2 m triangle, a 100 m one, and one modelled flat (collinear), 1e7 m out along x.
+    const int pos = b.addPositions({0, 0, 0, 0.2f, 0, 0, 0, 0.2f, 0,  //
+                                    0, 0, 0, 100,  0, 0, 0, 100,  0,  //
+                                    0, 0, 1, 1,    0, 1, 2, 0,    1});
+    const int mesh_node = b.addMeshNode({{"attributes", {{"POSITION", pos}}}});
+    const int root = b.addNode({{"translation", {1e7, 0, 0}}, {"children", {mesh_node}}});
+    b.setScene({root});
+    const Scene far = loadGltf(b.writeEmbedded(dir, "far.gltf"));
+    EXPECT_EQ(far.triangles.size(), 1u);  // the 100 m triangle keeps its area at 1-unit float steps
+    EXPECT_EQ(far.stats.degenerate_triangles_dropped, 2u);
+    EXPECT_EQ(far.stats.triangles_collapsed_by_rounding, 1u);  // not the collinear one
+    const auto named = std::find_if(far.stats.warnings.begin(), far.stats.warnings.end(), [](const std::string& w) {
+        return w.find("1 triangles collapsed") != std::string::npos &&
+               w.find("1e+07 from the origin") != std::string::npos &&
+               w.find("move it towards the origin") != std::string::npos;
+    });
+    EXPECT_NE(named, far.stats.warnings.end()) << testing::PrintToString(far.stats.warnings);
+
+    // The same model at the origin: only the collinear triangle is dropped, and nothing is said.
+    GltfBuilder near_origin;
+    const int near_pos = near_origin.addPositions(
+        {0, 0, 0, 0.2f, 0, 0, 0, 0.2f, 0, 0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 1, 1, 0, 1, 2, 0, 1});
+    near_origin.setScene({near_origin.addMeshNode({{"attributes", {{"POSITION", near_pos}}}})});
+    const Scene home = loadGltf(near_origin.writeEmbedded(dir, "home.gltf"));
+    EXPECT_EQ(home.triangles.size(), 2u);
+    EXPECT_EQ(home.stats.triangles_collapsed_by_rounding, 0u);
+    for (const std::string& w : home.stats.warnings) EXPECT_EQ(w.find("collapsed"), std::string::npos) << w;
+}
+
 TEST(GltfLoader, SparseAccessorSubstitutesValues) {
     TempDir dir;
     GltfBuilder b;

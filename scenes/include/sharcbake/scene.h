@@ -215,6 +215,9 @@ struct Sky {
 struct LoadStats {
     uint64_t triangles_loaded = 0;
     uint64_t degenerate_triangles_dropped = 0;  ///< zero area or repeated indices
+    /// Of those, triangles with area in double precision that rounding their world positions to
+    /// float32 collapsed (a model far from the origin).
+    uint64_t triangles_collapsed_by_rounding = 0;
     uint64_t primitives_skipped = 0;            ///< non-triangle modes (points, lines)
     std::vector<std::string> warnings;          ///< human-readable, one per issue
 };
