@@ -777,6 +777,8 @@ public:
 
 private:
     void runPhases() {
+        // --stats-json -: stdout carries the JSON alone, what is printed for people goes to stderr.
+        HumanOutputOnStderr stats_on_stdout(isStandardOutput(o_.stats_json));
         prepareOutputs();
         setUp();
         if (!o_.quiet) printPlan();
@@ -784,6 +786,7 @@ private:
         writeCache();
         if (!o_.quiet) printSummary();
         if (evaluator_) writeReport();
+        stats_on_stdout.release();
         if (!o_.stats_json.empty()) writeStatsJson();
         warnAndStop();
     }
@@ -800,7 +803,7 @@ private:
             checkOutputPath(checkpoint_path_, "checkpoint", checkpoint_others);
         }
         others.push_back(checkpoint_path_);
-        if (!o_.stats_json.empty()) checkOutputPath(o_.stats_json, "stats JSON", others);
+        if (!o_.stats_json.empty()) checkTextOutputPath(o_.stats_json, "stats JSON", others);
         others.push_back(o_.stats_json);
         if (!report_csv_.empty()) checkOutputPath(report_csv_, "report", others);
     }
@@ -1292,6 +1295,9 @@ void checkBatch(const BakeOptions& o) {
     if (!o.resume_path.empty()) refuse("--resume continues one bake; resume each scene on its own");
     if (!o.reference_path.empty()) refuse("--reference is an image of one scene");
     if (!o.camera_path.empty()) refuse("--camera-path is a path through one scene");
+    if (isStandardOutput(o.stats_json)) {
+        refuse("--stats-json - would write one JSON document per scene on stdout; give a folder for NAME.json");
+    }
     std::set<std::string> stems;
     for (const std::string& scene : o.scene_paths) {
         if (!stems.insert(sceneStem(scene)).second) {
@@ -1505,7 +1511,9 @@ void registerBakeCommand(CLI::App& app) {
         ->capture_default_str();
     addSkyOptions(*cmd, o->sky);
     addSceneLimitOptions(*cmd, o->limits);
-    cmd->add_option("--stats-json", o->stats_json, "Write the bake statistics as JSON");
+    cmd->add_option("--stats-json", o->stats_json,
+                    "Write the bake statistics as JSON to this file; - writes them to stdout, and what the bake "
+                    "prints for people goes to stderr (one scene only)");
     cmd->add_option("--checkpoint", o->checkpoint_path,
                     "Save the bake state to this file every --checkpoint-interval iterations and at the end "
                     "(atomic: temporary file, then rename), so a killed bake can --resume");

@@ -111,11 +111,43 @@ void checkOutputPath(const std::string& path, const std::string& what, const std
     }
 }
 
+void checkTextOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others) {
+    if (!isStandardOutput(path)) checkOutputPath(path, what, others);
+}
+
 void writeTextOutput(const std::string& path, const std::string& what, const std::string& text) {
+    if (isStandardOutput(path)) {
+        if (std::fputs(text.c_str(), stdout) == EOF || std::fflush(stdout) != 0) {
+            throw CommandError(kExitIo, "cannot write the " + what + " to standard output: " + std::strerror(errno));
+        }
+        return;
+    }
     std::string message;
     if (writeFileAtomically(path, text.data(), text.size(), &message) != CacheFileStatus::kOk) {
         throw CommandError(kExitIo, "cannot write the " + what + ": " + message);
     }
+}
+
+HumanOutputOnStderr::HumanOutputOnStderr(bool active) {
+    if (!active) return;
+    std::fflush(stdout);
+    saved_stdout_ = ::dup(STDOUT_FILENO);
+    if (saved_stdout_ < 0) return;  // no stdout to keep clean
+    if (::dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
+        ::close(saved_stdout_);
+        saved_stdout_ = -1;
+        return;
+    }
+    // Lines in the order they are printed among the warnings, which stderr does not buffer.
+    std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);
+}
+
+void HumanOutputOnStderr::release() {
+    if (saved_stdout_ < 0) return;
+    std::fflush(stdout);
+    ::dup2(saved_stdout_, STDOUT_FILENO);
+    ::close(saved_stdout_);
+    saved_stdout_ = -1;
 }
 
 namespace {

@@ -68,9 +68,34 @@ glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
 /// resolving links, or by resolved path when it does not exist yet.
 void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others = {});
 
+/// "-": an output path that means standard output (the Unix convention), for the outputs that
+/// write a text report (--stats-json); never for caches, images or checkpoints.
+inline constexpr const char* kStandardOutputPath = "-";
+inline bool isStandardOutput(const std::string& path) { return path == kStandardOutputPath; }
+
+/// checkOutputPath for a text report's path; nothing to check for standard output ("-").
+void checkTextOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others = {});
+
 /// Writes `text` to `path` atomically with the caches' checked write (writeFileAtomically):
 /// a failed write throws CommandError(kExitIo) naming the file and leaves the old one intact.
+/// "-" writes it to standard output.
 void writeTextOutput(const std::string& path, const std::string& what, const std::string& text);
+
+/// While a command's report goes to standard output (`--stats-json -`), what it prints for people
+/// (the scene, the plan, progress lines, the summary) goes to stderr instead, so that stdout
+/// carries the report alone and a pipe can parse it. Active from construction (when `active`)
+/// until release(), which the command calls before it writes the report; the destructor releases.
+class HumanOutputOnStderr {
+public:
+    explicit HumanOutputOnStderr(bool active);
+    ~HumanOutputOnStderr() { release(); }
+    HumanOutputOnStderr(const HumanOutputOnStderr&) = delete;
+    HumanOutputOnStderr& operator=(const HumanOutputOnStderr&) = delete;
+    void release();
+
+private:
+    int saved_stdout_ = -1;  ///< the real stdout while redirected
+};
 
 /// A glTF camera of the scene by name or index, or the first when `selector` is empty; when the
 /// scene has none, the automatic camera with `fov_degrees` (automaticCamera: from outside, or from

@@ -224,6 +224,8 @@ public:
           threads_(o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency()) {}
 
     void run() {
+        // --stats-json -: stdout carries the JSON alone, what is printed for people goes to stderr.
+        HumanOutputOnStderr stats_on_stdout(isStandardOutput(o_.stats_json));
         checkOutputs({});
         start_ = std::chrono::steady_clock::now();
         tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
@@ -233,6 +235,7 @@ public:
         if (o_.debug_view == "bounces") rampBounces();
         writeImages();
         if (!o_.quiet) printSummary();
+        stats_on_stdout.release();
         if (!o_.stats_json.empty()) writeStatsJson();
     }
 
@@ -250,7 +253,7 @@ private:
             checkOutputPath(png_path_, "PNG preview", others);
             others.push_back(png_path_);
         }
-        if (!o_.stats_json.empty()) checkOutputPath(o_.stats_json, "stats JSON", others);
+        if (!o_.stats_json.empty()) checkTextOutputPath(o_.stats_json, "stats JSON", others);
     }
 
     void setUp() {
@@ -634,7 +637,9 @@ void registerRenderCommand(CLI::App& app) {
         ->capture_default_str()
         ->check(CLI::IsMember({"aces", "reinhard", "clamp"}));
     cmd->add_flag("--no-png", options->no_png, "Do not write the PNG preview");
-    cmd->add_option("--stats-json", options->stats_json, "Write timings and ray counts as JSON");
+    cmd->add_option("--stats-json", options->stats_json,
+                    "Write timings and ray counts as JSON to this file; - writes them to stdout, and what the "
+                    "render prints for people goes to stderr");
     CLI::Option* cache_option =
         cmd->add_option("--cache", options->cache_path, "Baked cache (.sharc): end paths on cache hits");
     cmd->add_flag("--allow-cache-mismatch", options->allow_cache_mismatch,

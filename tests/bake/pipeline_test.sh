@@ -55,6 +55,29 @@ assert s["seed"] == 0 and s["resolution"] == "320x180" and isinstance(s["level_b
 print("ok: bake stats JSON carries schema, tool, scene, outputs, camera mode and settings")
 PY
 
+# --stats-json - writes the JSON to stdout, alone: what is printed for people (the scene, the plan,
+# progress lines, the summary) goes to stderr, and no file named "-" is made (the cwd is $work).
+(cd "$work" && "$sharcbake" bake "$cornell" -o "$work/s.sharc" --iterations 8 $small --progress-interval 0.01 \
+    --stats-json - 2>"$work/err.txt") | python3 -c '
+import json, sys
+j = json.load(sys.stdin)
+assert j["schema"] == "sharcbake.bake-stats/1" and j["iterations"] == 8, j["schema"]
+' && echo "ok: bake --stats-json - prints the JSON alone on stdout" || fail "bake --stats-json -: stdout is not the JSON alone"
+says "$work/err.txt" "^Scene .*cornell_box.gltf" "with --stats-json -, the scene line goes to stderr"
+says "$work/err.txt" "^progress: Baking 8/8 iterations" "with --stats-json -, progress lines go to stderr"
+says "$work/err.txt" "^Baked 8 iterations" "with --stats-json -, the summary goes to stderr"
+(cd "$work" && "$sharcbake" render "$cornell" -o "$work/s.exr" --resolution 8 --spp 1 --stats-json - \
+    2>"$work/err.txt") | python3 -c '
+import json, sys
+j = json.load(sys.stdin)
+assert j["schema"] == "sharcbake.render-stats/1" and j["width"] == 8, j["schema"]
+' && echo "ok: render --stats-json - prints the JSON alone on stdout" || fail "render --stats-json -: stdout is not the JSON alone"
+says "$work/err.txt" "^Wrote .*s.exr" "with --stats-json -, the render's summary goes to stderr"
+[ ! -e "$work/-" ] || fail "--stats-json - wrote a file named -"
+expect 1 "--stats-json - with several scenes" "$sharcbake" bake "$cornell" "$scenes/two_rooms/two_rooms.gltf" \
+    -o "$work/several" --stats-json - $small
+says "$work/err.txt" "one JSON document per scene" "the refusal says why"
+
 # info --json gives metadata numbers as numbers.
 expect 0 "info --json" "$sharcbake" info "$work/c.sharc" --json
 python3 - "$work/out.txt" <<'PY' || fail "info --json metadata types"
