@@ -1,23 +1,24 @@
 // SPDX-License-Identifier: Apache-2.0
 // `sharcbake bake`: the SHaRC bake from a roaming virtual camera into a .sharc cache file.
+#include "cli/command_support.h"
+#include "cli/commands.h"
+#include "cli/config_file.h"
+#include "reports/convergence_report.h"
+#include "reports/stability_report.h"
 #include "sharc/baker.h"
 #include "sharc/camera_path.h"
 #include "sharc/capacity.h"
 #include "sharc/checkpoint.h"
-#include "cli/command_support.h"
-#include "cli/commands.h"
-#include "reports/convergence_report.h"
 #include "sharc/coverage.h"
 #include "sharc/grid_fit.h"
 #include "sharc/hit_rate.h"
 #include "sharc/voxel_materials.h"
-#include "support/json.h"
-#include "support/progress.h"
-#include "tracing/render.h"
-#include "reports/stability_report.h"
-#include "support/stopwatch.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
+#include "support/json.h"
+#include "support/progress.h"
+#include "support/stopwatch.h"
+#include "tracing/render.h"
 #include "tracing/tracer.h"
 
 #include <tbb/global_control.h>
@@ -1366,8 +1367,11 @@ void runBatch(const BakeOptions& batch) {
 
 /// The command's options as a TOML section that --config reads back: every option that has a
 /// value (defaults included, so the file pins them) under its help text. Options left unset
-/// (an empty path) are left out: read back, an empty value would be checked as a path.
-void printConfig(const CLI::App& command) {
+/// (an empty path) are left out: read back, an empty value would be checked as a path. Paths are
+/// written absolute: --config reads relative ones from the file's folder, and where the printed
+/// file will be kept is not known here.
+void printConfig(CLI::App& command) {
+    makePathOptionsAbsolute(command);
     std::istringstream lines(command.config_to_str(true, true));
     std::string text = "# sharcbake " SHARCBAKE_VERSION " bake settings: sharcbake --config FILE bake [SCENE...]\n[" +
                        command.get_name() + "]\n";
@@ -1412,12 +1416,13 @@ void registerBakeCommand(CLI::App& app) {
         "Examples:\n"
         "  sharcbake bake scenes/cornell_box/cornell_box.gltf -o out/cornell_box.sharc --iterations 512\n"
         "  sharcbake bake level.gltf -o level.sharc --view-region distance:0.5 --voxel-budget 1000000");
-    cmd->add_option("scene", o->scene_paths,
-                    "glTF 2.0 scene (.gltf or .glb); several scenes bake one after the other, each with its "
-                    "own outputs (then -o, --stats-json, --checkpoint and --report name folders holding "
-                    "NAME.sharc, NAME.json, NAME.ckpt and NAME/ for each scene NAME)")
+    pathOption(cmd->add_option("scene", o->scene_paths,
+                               "glTF 2.0 scene (.gltf or .glb); several scenes bake one after the other, each with its "
+                               "own outputs (then -o, --stats-json, --checkpoint and --report name folders holding "
+                               "NAME.sharc, NAME.json, NAME.ckpt and NAME/ for each scene NAME)"))
         ->required();
-    cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc), or its folder for several scenes")
+    pathOption(
+        cmd->add_option("-o,--output", o->output_path, "Output cache (.sharc), or its folder for several scenes"))
         ->required();
     cmd->add_option("--iterations", o->iterations, "Update + resolve iterations")->capture_default_str()->check(CLI::Range(1u, 1u << 30));
     cmd->add_option("--time-budget", o->time_budget, "Stop after this many seconds of baking (0 = no limit)")
@@ -1495,9 +1500,9 @@ void registerBakeCommand(CLI::App& app) {
         ->each([o](const std::string& name) {
             o->camera_source = name == "gltf" ? CameraPathSource::GltfCameras : CameraPathSource::Explore;
         });
-    cmd->add_option("--camera-path", o->camera_path,
-                    "Camera path file (overrides --camera-source): one waypoint per line, "
-                    "\"px py pz tx ty tz [fov_degrees]\", '#' comments");
+    pathOption(cmd->add_option("--camera-path", o->camera_path,
+                               "Camera path file (overrides --camera-source): one waypoint per line, "
+                               "\"px py pz tx ty tz [fov_degrees]\", '#' comments"));
     cmd->add_option("--explore-points", o->explore_points,
                     "Free-space points the exploring camera visits (and as many views from around an open scene "
                     "without cameras)")
@@ -1511,35 +1516,39 @@ void registerBakeCommand(CLI::App& app) {
         ->capture_default_str();
     addSkyOptions(*cmd, o->sky);
     addSceneLimitOptions(*cmd, o->limits);
-    cmd->add_option("--stats-json", o->stats_json,
-                    "Write the bake statistics as JSON to this file; - writes them to stdout, and what the bake "
-                    "prints for people goes to stderr (one scene only)");
-    cmd->add_option("--checkpoint", o->checkpoint_path,
-                    "Save the bake state to this file every --checkpoint-interval iterations and at the end "
-                    "(atomic: temporary file, then rename), so a killed bake can --resume");
+    pathOption(
+        cmd->add_option("--stats-json", o->stats_json,
+                        "Write the bake statistics as JSON to this file; - writes them to stdout, and what the bake "
+                        "prints for people goes to stderr (one scene only)"));
+    pathOption(cmd->add_option("--checkpoint", o->checkpoint_path,
+                               "Save the bake state to this file every --checkpoint-interval iterations and at the end "
+                               "(atomic: temporary file, then rename), so a killed bake can --resume"));
     cmd->add_option("--checkpoint-interval", o->checkpoint_interval,
                     "Iterations between checkpoints (counted in iterations, not seconds, so the files are "
                     "reproducible)")
         ->capture_default_str()->check(CLI::Range(1u, 1u << 30));
-    cmd->add_option("--resume", o->resume_path,
-                    "Continue the bake saved in this checkpoint. Give the same scene and options as the "
-                    "first run (--iterations may grow): the cache is byte-identical to an uninterrupted bake. "
-                    "Checkpoints keep going to this file unless --checkpoint names another");
+    pathOption(
+        cmd->add_option("--resume", o->resume_path,
+                        "Continue the bake saved in this checkpoint. Give the same scene and options as the "
+                        "first run (--iterations may grow): the cache is byte-identical to an uninterrupted bake. "
+                        "Checkpoints keep going to this file unless --checkpoint names another"));
     cmd->add_option("--shard", o->shard,
                     "Bake share i of N (0 <= i < N) of the work of one bake of N x --iterations: iteration k "
                     "does iteration k*N+i of that bake (its camera pose and samples). Combine the N caches "
                     "with 'sharcbake merge'")
         ->capture_default_str();
-    cmd->add_option("--report", o->report_dir,
-                    "Measure error against run time: at checkpoints 1, 2, 3, 4, 6, 8, 11, 16, ... iterations (two "
-                    "per octave), measure the cache, then plain path tracing of the same view; write "
-                    "DIR/convergence.csv, plain_path_tracing.csv, convergence.json and convergence.png "
-                    "(gnuplot). Evaluation time is not counted in the bake's time. Works on any scene: the "
-                    "cache is measured against a path-traced probe reference (--report-probes); --reference adds "
-                    "an image comparison, a scene with a known radiance an exact voxel error");
-    cmd->add_option("--reference", o->reference_path,
-                    "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
-                    "the image error is a render through the cache against it; its size is the evaluation size");
+    pathOption(
+        cmd->add_option("--report", o->report_dir,
+                        "Measure error against run time: at checkpoints 1, 2, 3, 4, 6, 8, 11, 16, ... iterations (two "
+                        "per octave), measure the cache, then plain path tracing of the same view; write "
+                        "DIR/convergence.csv, plain_path_tracing.csv, convergence.json and convergence.png "
+                        "(gnuplot). Evaluation time is not counted in the bake's time. Works on any scene: the "
+                        "cache is measured against a path-traced probe reference (--report-probes); --reference adds "
+                        "an image comparison, a scene with a known radiance an exact voxel error"));
+    pathOption(
+        cmd->add_option("--reference", o->reference_path,
+                        "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
+                        "the image error is a render through the cache against it; its size is the evaluation size"));
     cmd->add_option("--report-camera", o->report_camera,
                     "Evaluation camera (default: the first): a glTF camera by its node's name, its own name or its "
                     "index #N, as render --camera");
@@ -1565,7 +1574,8 @@ void registerBakeCommand(CLI::App& app) {
     addProgressIntervalOption(*cmd, o->progress_interval);
     cmd->add_flag("--print-config", o->print_config,
                   "Print these options as a [bake] section for 'sharcbake --config FILE bake' and exit "
-                  "without baking");
+                  "without baking (paths made absolute: in a config file, relative ones are relative to its "
+                  "folder)");
     cmd->callback([o, cmd] {
         if (o->print_config) return printConfig(*cmd);
         runBake(*o);

@@ -111,6 +111,17 @@ void checkOutputPath(const std::string& path, const std::string& what, const std
     }
 }
 
+namespace {
+constexpr const char* kPathTypeName = "PATH";
+}  // namespace
+
+CLI::Option* pathOption(CLI::Option* option) { return option->type_name(kPathTypeName); }
+
+bool isPathOption(const CLI::Option& option) {
+    // The type name, with ":" and the descriptions of any checks after it.
+    return option.get_type_name().rfind(kPathTypeName, 0) == 0;
+}
+
 void checkTextOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others) {
     if (!isStandardOutput(path)) checkOutputPath(path, what, others);
 }
@@ -312,9 +323,9 @@ void addSkyOptions(CLI::App& command, SkyOptions& options) {
     command.add_option("--sky", options.uniform,
                        "Uniform sky radiance \"r,g,b\" (linear), replacing the scene's sky "
                        "(scenes may set one in scene extras: sharcbake.sky_radiance)");
-    command.add_option("--sky-exr", options.exr_path,
-                       "Equirectangular EXR environment map for the sky (+Y up, Blender's "
-                       "orientation)");  // a missing file is an I/O error when it is read (exit 2)
+    pathOption(command.add_option("--sky-exr", options.exr_path,
+                                  "Equirectangular EXR environment map for the sky (+Y up, Blender's "
+                                  "orientation)"));  // a missing file is an I/O error when it is read (exit 2)
     command.add_option("--sky-scale", options.scale, "Multiplier for the sky map")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber)

@@ -68,6 +68,11 @@ glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
 /// resolving links, or by resolved path when it does not exist yet.
 void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others = {});
 
+/// Marks `option` as naming files or folders (its help shows PATH): a relative value read from a
+/// --config file is taken relative to that file's folder (config_file.h). Returns `option`.
+CLI::Option* pathOption(CLI::Option* option);
+bool isPathOption(const CLI::Option& option);
+
 /// "-": an output path that means standard output (the Unix convention), for the outputs that
 /// write a text report (--stats-json); never for caches, images or checkpoints.
 inline constexpr const char* kStandardOutputPath = "-";

@@ -61,8 +61,8 @@ void registerCompareCommand(CLI::App& app) {
                            "channels.\n\n"
                            "Example:\n"
                            "  sharcbake compare out/cached.exr out/reference.exr");
-    cmd->add_option("image", o->image_path, "Image to measure (.exr)")->required();
-    cmd->add_option("reference", o->reference_path, "Reference image (.exr)")->required();
+    pathOption(cmd->add_option("image", o->image_path, "Image to measure (.exr)"))->required();
+    pathOption(cmd->add_option("reference", o->reference_path, "Reference image (.exr)"))->required();
     cmd->add_flag("--json", o->json, "Print the measures as one JSON object");
     cmd->callback([o] { runCompare(*o); });
 }

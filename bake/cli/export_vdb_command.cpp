@@ -103,8 +103,8 @@ void registerExportVdbCommand(CLI::App& app) {
         "Exit codes: 1 bad option (or a --levels level the cache lacks), or an output that is the\n"
         "input; 2 cannot read/write (an existing output that is not a regular file included);\n"
         "3 invalid cache, or one OpenVDB cannot hold (no voxels, a voxel size out of its range).");
-    cmd->add_option("cache", o->input, "Cache file (.sharc)")->required();
-    cmd->add_option("-o,--output", o->output, "Output OpenVDB file (.vdb)")->required();
+    pathOption(cmd->add_option("cache", o->input, "Cache file (.sharc)"))->required();
+    pathOption(cmd->add_option("-o,--output", o->output, "Output OpenVDB file (.vdb)"))->required();
     cmd->add_option("--levels", o->levels, "Comma-separated SHaRC levels to export (default: all present)")
         ->delimiter(',');
     cmd->add_option("--channels", o->channels,

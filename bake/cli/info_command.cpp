@@ -200,7 +200,7 @@ void registerInfoCommand(CLI::App& app) {
         "first (exit 3 if invalid, 2 if unreadable).\n\n"
         "Example:\n"
         "  sharcbake info out/cornell_box.sharc --json");
-    info->add_option("file", o->path, "Cache file (.sharc)")->required();
+    pathOption(info->add_option("file", o->path, "Cache file (.sharc)"))->required();
     info->add_flag("--json", o->json, "Machine-readable JSON on stdout");
     info->callback([o] {
         const CacheView view = openOrThrow(o->path);
@@ -218,7 +218,7 @@ void registerInfoCommand(CLI::App& app) {
         "On failure prints the rule that failed. Exit codes: 0 valid, 3 invalid, 2 cannot read.\n\n"
         "Example:\n"
         "  sharcbake validate out/cornell_box.sharc");
-    validate->add_option("file", v->path, "Cache file (.sharc)")->required();
+    pathOption(validate->add_option("file", v->path, "Cache file (.sharc)"))->required();
     validate->add_flag("--json", v->json, "Print the result as JSON");
     validate->callback([v] {
         CacheView view;

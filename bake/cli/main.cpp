@@ -3,6 +3,7 @@
 // file only maps outcomes to the documented exit codes.
 #include "cli/command_support.h"
 #include "cli/commands.h"
+#include "cli/config_file.h"
 
 #include <CLI/CLI.hpp>
 
@@ -22,12 +23,14 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "sharcbake " SHARCBAKE_VERSION);
     // Settings under version control: a TOML file with a [bake] (or [render], ...) section of
     // option = value lines; the command line overrides it. An unknown key is an error, so a
-    // typo cannot silently fall back to a default.
-    app.set_config("--config", "",
-                   "Read options from a TOML file, one section per command ([bake], [render], ...; the "
-                   "names are the long options without --); the command line overrides it. 'sharcbake bake "
-                   "... --print-config' writes one. Give it before the command: sharcbake --config FILE bake ...");
-    app.allow_config_extras(CLI::config_extras_mode::error);
+    // typo cannot silently fall back to a default. Before the commands, which take its reader.
+    addConfigFileOption(app,
+                        "Read options from a TOML file, one section per command ([bake], [render], ...; the "
+                        "names are the long options without --); the command line overrides it. Relative paths "
+                        "in the file (the scene, -o, --checkpoint, --stats-json, --sky-exr, --camera-path, ...) "
+                        "are relative to the file's folder, so it can be kept beside its scene. 'sharcbake bake "
+                        "... --print-config' writes one. Give it before the command: sharcbake --config FILE bake "
+                        "...");
     registerRenderCommand(app);
     registerBakeCommand(app);
     registerInfoCommand(app);

@@ -272,8 +272,8 @@ void registerMergeCommand(CLI::App& app) {
         "  sharcbake merge shard0.sharc shard1.sharc shard2.sharc shard3.sharc -o scene.sharc");
     // No CLI11 existence check: a missing or unreadable input is an I/O error (exit 2), as every
     // other command reports it, not a usage error.
-    cmd->add_option("inputs", o->inputs, "Caches to merge (.sharc)")->required();
-    cmd->add_option("-o,--output", o->output_path, "Merged cache (.sharc)")->required();
+    pathOption(cmd->add_option("inputs", o->inputs, "Caches to merge (.sharc)"))->required();
+    pathOption(cmd->add_option("-o,--output", o->output_path, "Merged cache (.sharc)"))->required();
     cmd->add_flag("-q,--quiet", o->quiet, "No summary output; warnings and errors still print");
     cmd->callback([o] { runMerge(*o); });
 }

@@ -604,10 +604,11 @@ void registerRenderCommand(CLI::App& app) {
         "  sharcbake render scenes/cornell_box/cornell_box.gltf -o out/cached.exr --cache out/cornell.sharc\n"
         "  sharcbake render scenes/cornell_box/cornell_box.gltf -o out/hash.exr --cache out/cornell.sharc \\\n"
         "      --debug-view hash --spp 1");
-    cmd->add_option("scene", options->scene_path, "glTF 2.0 scene (.gltf or .glb)")->required();
-    cmd->add_option("-o,--output", options->output_path,
-                    "Output image: .exr (linear radiance, and a tone-mapped .png preview beside it) or .png (the "
-                    "preview alone)")
+    pathOption(cmd->add_option("scene", options->scene_path, "glTF 2.0 scene (.gltf or .glb)"))->required();
+    pathOption(
+        cmd->add_option("-o,--output", options->output_path,
+                        "Output image: .exr (linear radiance, and a tone-mapped .png preview beside it) or .png (the "
+                        "preview alone)"))
         ->required();
     cmd->add_option("--camera", options->camera,
                     "glTF camera (default: the first): by its node's name (Blender's object name), else by the glTF "
@@ -637,11 +638,12 @@ void registerRenderCommand(CLI::App& app) {
         ->capture_default_str()
         ->check(CLI::IsMember({"aces", "reinhard", "clamp"}));
     cmd->add_flag("--no-png", options->no_png, "Do not write the PNG preview");
-    cmd->add_option("--stats-json", options->stats_json,
-                    "Write timings and ray counts as JSON to this file; - writes them to stdout, and what the "
-                    "render prints for people goes to stderr");
-    CLI::Option* cache_option =
-        cmd->add_option("--cache", options->cache_path, "Baked cache (.sharc): end paths on cache hits");
+    pathOption(
+        cmd->add_option("--stats-json", options->stats_json,
+                        "Write timings and ray counts as JSON to this file; - writes them to stdout, and what the "
+                        "render prints for people goes to stderr"));
+    CLI::Option* cache_option = pathOption(
+        cmd->add_option("--cache", options->cache_path, "Baked cache (.sharc): end paths on cache hits"));
     cmd->add_flag("--allow-cache-mismatch", options->allow_cache_mismatch,
                   "Render with a --cache baked from another scene (its scene_hash differs: another file, or an "
                   "edited version of this one) or under another sky, with a warning instead of exit 3")

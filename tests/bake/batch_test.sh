@@ -57,5 +57,43 @@ python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['iteration
 printf '[bake]\niteratoins = 5\n' > "$work/typo.toml"
 expect 1 "a config with a misspelt option" "$sharcbake" --config "$work/typo.toml" bake "$cornell" -o "$work/x.sharc"
 says "$work/err.txt" "iteratoins" "the error names the unknown key"
+says "$work/err.txt" "typo.toml" "the error names the config file"
+printf '[bake]\niterations = "many"\n' > "$work/bad_value.toml"
+expect 1 "a config with a bad value" "$sharcbake" --config "$work/bad_value.toml" bake "$cornell" -o "$work/x.sharc"
+says "$work/err.txt" "bad_value.toml: .*iterations" "the error names the config file and the option"
+
+# Relative paths in a config file are relative to its folder (kept beside its scene), whatever the
+# current folder; paths on the command line stay relative to the current folder.
+mkdir -p "$work/level/out" "$work/elsewhere"
+cp "$scenes/furnace_rho050/furnace_rho050.gltf" "$scenes/furnace_rho050/furnace_rho050.bin" "$work/level/"
+printf '0 0.5 0 0 0.5 -1\n0.3 0.5 0 0 0.5 1\n' > "$work/level/path.txt"
+cat > "$work/level/scene.toml" <<'EOF'
+[bake]
+scene = ["furnace_rho050.gltf"]
+output = "out/level.sharc"
+checkpoint = "out/level.ckpt"
+stats-json = "out/level.json"
+camera-path = "path.txt"
+iterations = 4
+resolution = "32x32"
+capacity = 65536
+EOF
+expect 0 "a config with relative paths, from another folder" sh -c "cd '$work/elsewhere' && '$sharcbake' --config ../level/scene.toml bake -q"
+for f in level.sharc level.ckpt level.json; do
+    [ -s "$work/level/out/$f" ] || fail "the config's relative path out/$f was not taken from the config's folder"
+done
+says "$work/level/out/level.json" "path file .*level/path.txt" "the camera path is read from the config's folder"
+expect 0 "the config's paths overridden on the command line" sh -c "cd '$work/elsewhere' && '$sharcbake' \
+    --config ../level/scene.toml bake -q -o line.sharc --stats-json line.json --checkpoint line.ckpt"
+[ -s "$work/elsewhere/line.sharc" ] && [ -s "$work/elsewhere/line.json" ] ||
+    fail "paths given on the command line are not relative to the current folder"
+cmp -s "$work/elsewhere/line.sharc" "$work/level/out/level.sharc" || fail "the same bake from another folder differs"
+# --print-config writes absolute paths, so the printed file names the same files from anywhere.
+expect 0 "--print-config with relative paths" sh -c "cd '$work/level' && '$sharcbake' bake furnace_rho050.gltf \
+    -o out/printed.sharc --camera-path path.txt --iterations 4 --resolution 32x32 --capacity 65536 --print-config \
+    > '$work/elsewhere/printed.toml'"
+says "$work/elsewhere/printed.toml" "^scene=\"/.*level/furnace_rho050.gltf\"" "--print-config writes the scene's absolute path"
+expect 0 "bake from the printed config in another folder" "$sharcbake" --config "$work/elsewhere/printed.toml" bake -q
+[ -s "$work/level/out/printed.sharc" ] || fail "the printed config's bake did not write its absolute -o"
 
 finish "batch and config"

@@ -1,0 +1,116 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "cli/config_file.h"
+
+#include "cli/command_support.h"
+
+#include <filesystem>
+#include <istream>
+#include <memory>
+#include <vector>
+
+namespace sharcbake {
+namespace {
+
+/// `value` read from a config file in `folder`: a relative path becomes relative to the folder.
+std::string relativeToConfig(const std::filesystem::path& folder, const std::string& value) {
+    if (value.empty() || isStandardOutput(value) || folder.empty() || !std::filesystem::path(value).is_relative()) {
+        return value;
+    }
+    return (folder / value).string();
+}
+
+/// "[bake] iterations" for a key of a section, "iterations" for one outside any.
+std::string keyName(const CLI::ConfigItem& item) {
+    std::string section;
+    for (const std::string& parent : item.parents) section += (section.empty() ? "" : ".") + parent;
+    return section.empty() ? item.name : "[" + section + "] " + item.name;
+}
+
+/// CLI11's TOML reader, which also applies the file's values itself, one by one, so that a value
+/// an option refuses is reported with the file's name (CLI11 applies the values it returns only
+/// to options still empty: these are no longer). The rules are CLI11's own (App::
+/// _parse_single_config): the command line overrides the file; flags take true/false values.
+class ConfigFileReader : public CLI::ConfigTOML {
+public:
+    explicit ConfigFileReader(CLI::App& app) : app_(app) {}
+
+    std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+        // Read when --config names a file, so the option holds exactly one value.
+        const std::string file = app_.get_config_ptr()->as<std::string>();
+        std::vector<CLI::ConfigItem> items;
+        try {
+            items = CLI::ConfigTOML::from_config(input);
+        } catch (const CLI::ParseError& e) {
+            throw CLI::ConfigError(file + ": " + e.what());
+        }
+        const std::filesystem::path folder = std::filesystem::path(file).parent_path();
+        for (CLI::ConfigItem& item : items) {
+            if (item.name == "++" || item.name == "--") continue;  // the start and end of a section
+            CLI::Option* option = findOption(item);
+            if (!option) {
+                throw CLI::ConfigError(file + ": " + keyName(item) +
+                                       " is not an option (a section is a command, [bake], [render], ...; a key "
+                                       "is a long option without --, as --print-config writes them)");
+            }
+            if (!option->get_configurable()) {
+                throw CLI::ConfigError(file + ": " + keyName(item) + " cannot be set in a config file");
+            }
+            if (!option->empty()) continue;  // given on the command line, which overrides the file
+            if (isPathOption(*option)) {
+                for (std::string& value : item.inputs) value = relativeToConfig(folder, value);
+            }
+            try {
+                if (option->get_expected_min() == 0) {  // a flag
+                    option->add_result(option->get_flag_value(item.name, to_flag(item)));
+                } else {
+                    option->add_result(item.inputs);
+                    option->run_callback();
+                }
+            } catch (const CLI::ParseError& e) {
+                throw CLI::ConfigError(file + ": " + keyName(item) + ": " + e.what());
+            }
+        }
+        return items;
+    }
+
+private:
+    /// The option a key names, looked up as CLI11 does: --name, -n, then a positional's name.
+    CLI::Option* findOption(const CLI::ConfigItem& item) const {
+        CLI::App* command = &app_;
+        for (const std::string& parent : item.parents) {
+            try {
+                command = command->get_subcommand(parent);
+            } catch (const CLI::OptionNotFound&) {
+                return nullptr;
+            }
+        }
+        CLI::Option* option = command->get_option_no_throw("--" + item.name);
+        if (!option && item.name.size() == 1) option = command->get_option_no_throw("-" + item.name);
+        if (!option) option = command->get_option_no_throw(item.name);
+        return option;
+    }
+
+    CLI::App& app_;
+};
+
+}  // namespace
+
+void addConfigFileOption(CLI::App& app, const std::string& help) {
+    app.config_formatter(std::make_shared<ConfigFileReader>(app));
+    app.set_config("--config", "", help)->type_name("FILE");
+    app.allow_config_extras(CLI::config_extras_mode::error);
+}
+
+void makePathOptionsAbsolute(CLI::App& command) {
+    for (CLI::Option* option : command.get_options()) {
+        if (!isPathOption(*option) || option->count() == 0) continue;
+        std::vector<std::string> values = option->results();
+        for (std::string& value : values) {
+            if (!value.empty() && !isStandardOutput(value)) value = std::filesystem::absolute(value).string();
+        }
+        option->clear();
+        option->add_result(values);
+    }
+}
+
+}  // namespace sharcbake
