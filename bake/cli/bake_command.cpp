@@ -756,6 +756,19 @@ BakeSettingsText resumeSettings(const std::vector<std::pair<std::string, std::st
     return settings;
 }
 
+/// Options that do not change the bake's state (its table and voxels), only what is made from it
+/// after the iterations: the cache's voxel materials, GPU radiance scale and predicted hit rate,
+/// and the coverage report. The checkpoint records them under their option names; a resume with
+/// other values warns and goes on (isCacheNeutralSetting).
+BakeSettingsText cacheNeutralSettings(const BakeOptions& o) {
+    char scale[32];
+    std::snprintf(scale, sizeof scale, "%.9g", double(o.gpu_radiance_scale));
+    return {{"--voxel-materials", o.voxel_materials ? "true" : "false"},
+            {"--gpu-radiance-scale", scale},
+            {"--prediction-views", std::to_string(o.prediction_views)},
+            {"--coverage-points", std::to_string(o.coverage_points)}};
+}
+
 /// One `sharcbake bake`, phase by phase: the outputs checked and the checkpoint locked before
 /// any work, the scene loaded and the bake set up, the iterations, the cache written, then what
 /// is reported about it. Each phase is a function; the state they share is the members.
@@ -872,8 +885,17 @@ private:
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
                                          SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
         resume_settings_ = resumeSettings(metadata(std::nullopt), job_);
+        for (auto& setting : cacheNeutralSettings(o_)) resume_settings_.push_back(std::move(setting));
         if (!o_.resume_path.empty()) {
-            checkpointStep("--resume: ", [&] { resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_); });
+            std::vector<std::string> neutral_differences;
+            checkpointStep("--resume: ", [&] {
+                neutral_differences = resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_);
+            });
+            for (const std::string& difference : neutral_differences) {
+                std::fprintf(stderr,
+                             "warning: --resume %s: %s (it does not change the baked voxels; the bake goes on)\n",
+                             o_.resume_path.c_str(), difference.c_str());
+            }
         }
         first_iteration_ = baker_->iterationsDone();
         if (first_iteration_ > o_.iterations) {
@@ -1531,7 +1553,10 @@ void registerBakeCommand(CLI::App& app) {
         cmd->add_option("--resume", o->resume_path,
                         "Continue the bake saved in this checkpoint. Give the same scene and options as the "
                         "first run (--iterations may grow): the cache is byte-identical to an uninterrupted bake. "
-                        "Checkpoints keep going to this file unless --checkpoint names another"));
+                        "Other values of --voxel-materials, --gpu-radiance-scale, --prediction-views and "
+                        "--coverage-points (they do not change the baked voxels) are warned about; any other "
+                        "difference is refused. Checkpoints keep going to this file unless --checkpoint names "
+                        "another"));
     cmd->add_option("--shard", o->shard,
                     "Bake share i of N (0 <= i < N) of the work of one bake of N x --iterations: iteration k "
                     "does iteration k*N+i of that bake (its camera pose and samples). Combine the N caches "

@@ -61,11 +61,13 @@ const Value* findNamed(const std::vector<std::pair<std::string, Value>>& list, c
     return nullptr;
 }
 
-/// "seed: checkpoint 3, this bake 4" for every setting that differs, or "".
+/// "seed: checkpoint 3, this bake 4" for every setting that differs, or "". Cache-neutral
+/// settings are left out (neutralDifferences).
 std::string settingDifferences(const BakeSettingsText& stored, const BakeSettingsText& current) {
     std::string differences;
     auto add = [&](const std::string& line) { differences += "\n  " + line; };
     for (const auto& [key, value] : current) {
+        if (isCacheNeutralSetting(key)) continue;
         const std::string* old = findNamed(stored, key);
         if (!old) {
             add(key + ": not in the checkpoint, this bake \"" + value + "\"");
@@ -74,7 +76,20 @@ std::string settingDifferences(const BakeSettingsText& stored, const BakeSetting
         }
     }
     for (const auto& [key, value] : stored) {
-        if (!findNamed(current, key)) add(key + ": checkpoint \"" + value + "\", not set by this bake");
+        if (!isCacheNeutralSetting(key) && !findNamed(current, key)) {
+            add(key + ": checkpoint \"" + value + "\", not set by this bake");
+        }
+    }
+    return differences;
+}
+
+/// The cache-neutral settings that both record, with other values.
+std::vector<std::string> neutralDifferences(const BakeSettingsText& stored, const BakeSettingsText& current) {
+    std::vector<std::string> differences;
+    for (const auto& [key, value] : current) {
+        const std::string* old = isCacheNeutralSetting(key) ? findNamed(stored, key) : nullptr;
+        if (old && *old != value)
+            differences.push_back(key + ": checkpoint \"" + *old + "\", this bake \"" + value + "\"");
     }
     return differences;
 }
@@ -125,7 +140,7 @@ void saveCheckpoint(const std::string& path, const Baker& baker, const BakeSetti
     }
 }
 
-void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& settings, Baker& baker) {
+std::vector<std::string> resumeFromCheckpoint(const std::string& path, const BakeSettingsText& settings, Baker& baker) {
     CheckpointData data;
     std::string message;
     const CacheFileStatus status = readCheckpointFile(path, &data, &message);
@@ -180,6 +195,7 @@ void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& setti
     }
     cache.restoreNumerics(numerics);
     baker.resumeAt(data.iterations_done, update);
+    return neutralDifferences(data.settings, settings);
 }
 
 CheckpointLock::CheckpointLock(const std::string& path) : lock_path_(path + ".lock") {

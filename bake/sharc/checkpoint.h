@@ -16,6 +16,11 @@ namespace sharcbake {
 
 using BakeSettingsText = std::vector<std::pair<std::string, std::string>>;
 
+/// A setting whose key is an option's name ("--voxel-materials") records an option that does not
+/// change the bake's state (the table, the voxels, the iterations), only what is made from it
+/// afterwards: a resume that gives it another value warns instead of refusing.
+inline bool isCacheNeutralSetting(const std::string& key) { return key.rfind("--", 0) == 0; }
+
 /// Why a checkpoint could not be saved, resumed from or locked. The message names the file;
 /// the command line adds which option it came from and the exit code.
 class CheckpointError : public std::runtime_error {
@@ -40,8 +45,11 @@ void saveCheckpoint(const std::string& path, const Baker& baker, const BakeSetti
 
 /// Reads `path` and puts its state into `baker`, which must be fresh (no iteration run).
 /// Throws CheckpointError: kIo if the file cannot be read, kInvalid if it is not a valid
-/// checkpoint or was written with other settings (the message lists each difference).
-void resumeFromCheckpoint(const std::string& path, const BakeSettingsText& settings, Baker& baker);
+/// checkpoint or was written with other settings (the message lists each difference). Returns
+/// one line for each cache-neutral setting (isCacheNeutralSetting) that the checkpoint records
+/// with another value, e.g. "--voxel-materials: checkpoint \"false\", this bake \"true\"";
+/// one the checkpoint does not record (an older one) is not compared.
+std::vector<std::string> resumeFromCheckpoint(const std::string& path, const BakeSettingsText& settings, Baker& baker);
 
 /// Exclusive use of a checkpoint path for one bake, taken before any work: two bakes sharing one
 /// checkpoint would overwrite each other's state, so the second is refused at start

@@ -61,6 +61,25 @@ expect 0 "bake 40 with a checkpoint" "$sharcbake" bake "$cornell" -o "$work/shor
 expect 0 "extend it to 60" "$sharcbake" bake "$cornell" -o "$work/extended.sharc" $bake_args -q --resume "$work/short.ckpt"
 cmp -s "$work/full.sharc" "$work/extended.sharc" || fail "40 + 20 iterations differ from 60"
 
+# Options that change what is made from the baked voxels but not the voxels (--voxel-materials,
+# --prediction-views, ...) may differ on a resume: one warning line for each names the option and
+# both values, and the bake goes on. A resume with the same values warns about none.
+neutral_args="--resolution 32x32 --capacity 65536 -q"
+expect 0 "bake 2 with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/neutral.sharc" --iterations 2 $neutral_args \
+    --checkpoint "$work/neutral.ckpt"
+expect 0 "resume with other cache-neutral options" "$sharcbake" bake "$furnace" -o "$work/neutral.sharc" --iterations 4 \
+    $neutral_args --resume "$work/neutral.ckpt" --voxel-materials --prediction-views 8
+says "$work/err.txt" '^warning: .*neutral.ckpt: --voxel-materials: checkpoint "false", this bake "true"' \
+    "the resume warns that --voxel-materials differs, with both values"
+says "$work/err.txt" '^warning: .*neutral.ckpt: --prediction-views: checkpoint "32", this bake "8"' \
+    "the resume warns that --prediction-views differs, with both values"
+[ "$(grep -c 'checkpoint "' "$work/err.txt")" -eq 2 ] || fail "expected two warnings about the checkpoint's options"
+expect 0 "info on the resumed bake" "$sharcbake" info "$work/neutral.sharc"
+says "$work/out.txt" "iterations: 4" "the resume with other cache-neutral options baked"
+expect 0 "resume with the same cache-neutral options" "$sharcbake" bake "$furnace" -o "$work/neutral.sharc" \
+    --iterations 6 $neutral_args --resume "$work/neutral.ckpt" --voxel-materials --prediction-views 8
+grep -q 'checkpoint "' "$work/err.txt" && fail "a resume with the checkpoint's own options warned: $(cat "$work/err.txt")"
+
 # Refusals: other settings, a damaged checkpoint, a cache given as a checkpoint, a missing file.
 expect 3 "resume with another seed" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args --seed 7 -q --resume "$work/short.ckpt"
 grep -q 'seed: checkpoint "0", this bake "7"' "$work/err.txt" || fail "the mismatch message does not name the setting"
