@@ -722,9 +722,11 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job
 }
 
 /// With --capacity auto and --resume: the starting capacity and its description that the first
-/// run chose (its checkpoint's settings), so the resumed bake uses that table whatever
-/// --iterations now says (the pre-pass depends on it). Nothing when the checkpoint cannot be
-/// read or was not an auto bake; resumeFromCheckpoint then reports what is wrong.
+/// run chose (its checkpoint's settings), so the resumed bake continues on that table without a
+/// pre-pass. The pre-pass does not depend on --iterations, so this is what a fresh one would
+/// choose; a checkpoint of an older sharcbake, whose pre-pass did, keeps its own. Nothing when
+/// the checkpoint cannot be read or was not an auto bake; resumeFromCheckpoint then reports
+/// what is wrong.
 std::optional<std::pair<uint32_t, std::string>> autoCapacityOfCheckpoint(const std::string& path) {
     CheckpointData data;
     std::string message;
@@ -921,11 +923,11 @@ private:
 
     void chooseAutoCapacity() {
         if (const auto resumed = autoCapacityOfCheckpoint(o_.resume_path)) {
-            // Resuming: the table the first run chose, however many iterations are asked now.
+            // Resuming: the table the first run chose (chooseCapacity would choose it again).
             capacity_choice_.capacity = resumed->first;
             capacity_choice_text_ = resumed->second;
         } else {
-            capacity_choice_ = chooseCapacity(*tracer_, *lights_, *camera_path_, job_.settings, o_.iterations);
+            capacity_choice_ = chooseCapacity(*tracer_, *lights_, *camera_path_, job_.settings);
             capacity_choice_text_ = capacity_choice_.describe();
         }
         job_.settings.sharc.grid.capacity = capacity_choice_.capacity;
@@ -1492,7 +1494,10 @@ void registerBakeCommand(CLI::App& app) {
         ->capture_default_str()->check(CLI::Range(0u, 4096u));
     cmd->add_option("--capacity", o->capacity,
                     "Hash table slots (>= 16; a power of two is SDK-friendly), or \"auto\": sized from the scene "
-                    "to start by a short pre-pass (4x the voxels that 16 sampled iterations reach, next power of two), doubled between iterations whenever a quarter is occupied")
+                    "to start by a short pre-pass (4x the voxels that 16 iterations sampled over one loop of the "
+                    "camera path reach, next power of two; the same for any --iterations, so a resumed bake "
+                    "records what an uninterrupted one does), doubled between iterations whenever a quarter is "
+                    "occupied")
         ->capture_default_str();
     cmd->add_option("--update-stride", o->update_stride, "One update path per NxN pixel block")
         ->capture_default_str()->check(CLI::Range(1u, 64u));

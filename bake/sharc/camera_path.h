@@ -12,9 +12,10 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <cstdint>
-#include <stdexcept>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -132,6 +133,13 @@ public:
     CameraPose poseAt(uint32_t iteration) const;
 
     const std::vector<CameraPose>& waypoints() const { return waypoints_; }
+
+    /// Iterations of one loop of the path: after it the poses repeat (up to their random
+    /// directions and jitter). One per waypoint when exploring, else iterations_per_leg each.
+    uint32_t period() const {
+        const uint64_t loop = uint64_t(waypoints_.size()) * (random_directions_ ? 1u : iterations_per_leg_);
+        return uint32_t(std::min<uint64_t>(std::max<uint64_t>(loop, 1), UINT32_MAX));
+    }
 
 private:
     std::vector<CameraPose> waypoints_;

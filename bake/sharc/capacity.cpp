@@ -21,7 +21,7 @@ std::string CapacityChoice::describe() const {
 }
 
 CapacityChoice chooseCapacity(const Tracer& tracer, const LightSampler& lights, const CameraPath& camera_path,
-                              BakeSettings settings, uint32_t iterations) {
+                              BakeSettings settings) {
     const auto start = std::chrono::steady_clock::now();
     // A table of the smallest size: the pre-pass never commits, it only needs an (empty) cache
     // for the paths to look up.
@@ -29,14 +29,18 @@ CapacityChoice chooseCapacity(const Tracer& tracer, const LightSampler& lights, 
     const Baker sampler(tracer, lights, camera_path, settings, 1.0);
 
     CapacityChoice choice;
-    choice.sampled_iterations = std::max(1u, std::min(iterations, kCapacitySampleIterations));
+    choice.sampled_iterations = kCapacitySampleIterations;
+    // One loop of the camera path, never the bake's --iterations: a resumed bake must choose
+    // what the uninterrupted one chose. A shard's iterations k*N+i visit, over one loop, every
+    // pose that shard ever visits.
+    const uint32_t iterations = std::max(camera_path.period(), kCapacitySampleIterations);
     std::vector<uint64_t> keys;
     std::vector<std::vector<Deposit>> chunks;
     UpdateCounters counters;
     for (uint32_t k = 0; k < choice.sampled_iterations; ++k) {
-        // Spread over this bake's iterations by the golden-ratio sequence: an even stride would
-        // alias with a looping camera path (16 samples of 256 iterations on a 64-waypoint loop
-        // would visit 4 waypoints), this visits different parts of the path at every step.
+        // Spread over the loop by the golden-ratio sequence: an even stride would alias with the
+        // waypoints (16 samples of 256 iterations on a 64-waypoint loop would visit 4 of
+        // them), this visits different parts of the path at every step.
         const double position = std::fmod(0.5 + double(k) * 0.6180339887498949, 1.0);
         const uint32_t iteration = std::min(iterations - 1, uint32_t(position * double(iterations)));
         sampler.traceUpdatePaths(sampler.workIteration(iteration), chunks, counters);

@@ -158,11 +158,12 @@ expect 2 "merge a missing file (an I/O error, as the README's table says)" "$sha
 expect 1 "bad capacity" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --capacity lots
 expect 1 "capacity below a bucket" "$sharcbake" bake "$furnace" -o "$work/x.sharc" --capacity 8
 expect 0 "bake with --capacity auto" "$sharcbake" bake "$cornell" -o "$work/auto.sharc" --iterations 8 --resolution 160x90 --capacity auto
-grep -q "Capacity auto: 131072 slots to start" "$work/out.txt" || fail "auto capacity: expected 131072 slots for this Cornell bake"
+# 16 iterations sampled over the 64-waypoint loop, whatever --iterations (here 8).
+grep -q "Capacity auto: 262144 slots to start" "$work/out.txt" || fail "auto capacity: expected 262144 slots for this Cornell bake"
 expect 0 "info on the auto bake" "$sharcbake" info "$work/auto.sharc"
 grep -q "Left out by the bake: sky lookups and sky sampling (black sky); texture fetches and UV interpolation (no textures)" \
     "$work/out.txt" || fail "info does not report what the Cornell bake left out"
-grep -q "Table capacity auto: 131072 slots" "$work/out.txt" || fail "info does not report the auto capacity"
+grep -q "Table capacity auto: 262144 slots" "$work/out.txt" || fail "info does not report the auto capacity"
 expect 0 "the same bake with a fixed capacity" "$sharcbake" bake "$cornell" -o "$work/fixed.sharc" --iterations 8 --resolution 160x90 --capacity 65536 -q
 # The voxels (KEYS and VOXL sections, compared by their CRC-32s) do not depend on the capacity.
 for f in auto fixed; do
@@ -172,5 +173,17 @@ print(sorted((s['type'], s['crc32']) for s in json.load(sys.stdin)['sections'] i
         > "$work/$f.voxels"
 done
 cmp -s "$work/auto.voxels" "$work/fixed.voxels" || fail "--capacity auto changed the baked voxels"
+# A bake split by a checkpoint and a resume with more --iterations records the uninterrupted bake's
+# capacity_choice: the pre-pass samples one loop of the camera path, never --iterations, so the
+# two files are the same byte for byte.
+auto_args="--resolution 64x64 --capacity auto -q"
+expect 0 "an auto-capacity bake of 16 iterations" "$sharcbake" bake "$furnace" -o "$work/auto16.sharc" --iterations 16 $auto_args
+expect 0 "the same bake, 8 iterations with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/auto8.sharc" \
+    --iterations 8 $auto_args --checkpoint "$work/auto8.ckpt"
+expect 0 "resumed to 16 iterations" "$sharcbake" bake "$furnace" -o "$work/auto8.sharc" --iterations 16 $auto_args \
+    --resume "$work/auto8.ckpt"
+cmp -s "$work/auto16.sharc" "$work/auto8.sharc" ||
+    fail "--capacity auto: 8 + 8 resumed iterations differ from 16 ($("$sharcbake" info "$work/auto16.sharc" |
+        grep capacity_choice) / $("$sharcbake" info "$work/auto8.sharc" | grep capacity_choice))"
 
 finish "bake at scale"

@@ -215,14 +215,14 @@ TEST(GrowingTable, ResumesAcrossGrowth) {
 TEST(AutoCapacity, SizesTheTableFromWhatSampledIterationsReach) {
     const BakeScene cornell("cornell_box");
     std::unique_ptr<Baker> probe = cornell.baker(0, 1);
-    const CapacityChoice choice = chooseCapacity(*cornell.tracer, *cornell.lights, *cornell.path, probe->settings(), 64);
+    const CapacityChoice choice = chooseCapacity(*cornell.tracer, *cornell.lights, *cornell.path, probe->settings());
     EXPECT_EQ(choice.sampled_iterations, kCapacitySampleIterations);
     EXPECT_GT(choice.sampled_voxels, 0u);
     EXPECT_EQ(choice.capacity & (choice.capacity - 1), 0u) << "a power of two";
     EXPECT_GE(choice.capacity, kCapacityHeadroom * choice.sampled_voxels);
     EXPECT_LT(choice.capacity, 2 * kCapacityHeadroom * choice.sampled_voxels + kCapacityMinimum);
     // Deterministic, and enough for the bake it was chosen for: no growth, no failed insert.
-    const CapacityChoice again = chooseCapacity(*cornell.tracer, *cornell.lights, *cornell.path, probe->settings(), 64);
+    const CapacityChoice again = chooseCapacity(*cornell.tracer, *cornell.lights, *cornell.path, probe->settings());
     EXPECT_EQ(again.capacity, choice.capacity);
     EXPECT_EQ(again.sampled_voxels, choice.sampled_voxels);
     std::unique_ptr<Baker> baker = cornell.baker(0, 1, choice.capacity, true);
