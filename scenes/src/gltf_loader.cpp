@@ -447,7 +447,51 @@ private:
     struct FileAccess {
         std::vector<std::string>* files;
         std::filesystem::path folder;  ///< canonical
+        std::string_view json;         ///< the glTF's JSON text, for imageFiles
+        /// The files the images' URIs name (canonical; not those a buffer names too), read from
+        /// `json` when an empty file first asks for them.
+        std::optional<std::set<std::filesystem::path>> image_files;
     };
+
+    /// What readAndRecordFile hands tinygltf for an empty image file, which tinygltf would refuse
+    /// before the image loader sees it (this version as a missing image, with its own "File
+    /// read error" lines; others fail the parse): not an image of any format, so that
+    /// loadImageBounded reports it as an image that cannot be decoded, like any other.
+    static constexpr char kEmptyImageFile[] = "\0sharcbake: an empty image file\0";
+
+    static bool isEmptyImageFile(const unsigned char* bytes, int size) {
+        return size == int(sizeof kEmptyImageFile) && std::memcmp(bytes, kEmptyImageFile, sizeof kEmptyImageFile) == 0;
+    }
+
+    /// The file a relative URI names in the scene's folder, decoded as tinygltf decodes it ('+'
+    /// is a space to it, "%2B" a plus).
+    static std::filesystem::path uriFile(const FileAccess& access, std::string uri) {
+        for (size_t at = uri.find('+'); at != std::string::npos; at = uri.find('+', at)) uri.replace(at, 1, "%20");
+        std::error_code error;
+        return std::filesystem::weakly_canonical(access.folder / uriDecode(uri), error);
+    }
+
+    /// True when `path` is the file of one of the scene's images and of none of its buffers.
+    static bool isImageFile(FileAccess& access, const std::string& path) {
+        if (!access.image_files) {
+            access.image_files.emplace();
+            const nlohmann::json doc = nlohmann::json::parse(access.json.begin(), access.json.end(), nullptr, false);
+            std::set<std::filesystem::path> buffer_files;
+            const auto files = [&](const char* array, std::set<std::filesystem::path>& into) {
+                if (doc.is_discarded() || !doc.is_object() || !doc.contains(array) || !doc[array].is_array()) return;
+                for (const nlohmann::json& item : doc[array]) {
+                    if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+                    const std::string uri = item["uri"].get<std::string>();
+                    if (uri.rfind("data:", 0) != 0) into.insert(uriFile(access, uri));
+                }
+            };
+            files("images", *access.image_files);
+            files("buffers", buffer_files);
+            for (const std::filesystem::path& file : buffer_files) access.image_files->erase(file);
+        }
+        std::error_code error;
+        return access.image_files->count(std::filesystem::weakly_canonical(path, error)) > 0;
+    }
 
     /// Reads one file for tinygltf. Untrusted scenes: only regular files (a FIFO or a device
     /// would block or never end), and a buffer or image only from the scene's folder or below
@@ -473,7 +517,12 @@ private:
                 return false;
             }
         }
-        if (!tinygltf::ReadWholeFile(out, err, path, nullptr)) return false;
+        const auto size = std::filesystem::file_size(path, error);
+        if (!error && size == 0 && isImageFile(access, path)) {
+            out->assign(std::begin(kEmptyImageFile), std::end(kEmptyImageFile));
+        } else if (!tinygltf::ReadWholeFile(out, err, path, nullptr)) {
+            return false;
+        }
         auto& list = *access.files;
         const std::string file = std::filesystem::path(path).lexically_normal().string();
         if (std::find(list.begin(), list.end(), file) == list.end()) list.push_back(file);
@@ -580,11 +629,16 @@ private:
     /// declares a huge image is refused before its texels are allocated. An image that cannot be
     /// decoded (corrupt, or a format stb does not read) does not fail the parse: tinygltf would
     /// refuse the whole scene for it, where a missing image only drops its textures. It is
-    /// recorded in the ImageDecoding `user` and left without texels. KTX2 images are not decoded
-    /// at all: KHR_texture_basisu's textures read their PNG or JPEG fallback.
+    /// recorded in the ImageDecoding `user` and left without texels; so is an empty file, which
+    /// arrives as kEmptyImageFile. KTX2 images are not decoded at all: KHR_texture_basisu's
+    /// textures read their PNG or JPEG fallback.
     static bool loadImageBounded(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
                                  int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
         ImageDecoding& decoding = *static_cast<ImageDecoding*>(user);
+        if (isEmptyImageFile(bytes, size)) {
+            decoding.not_decoded.emplace(index, ImageDecoding::NotDecoded{"the file is empty (0 bytes)", false});
+            return true;
+        }
         if (isKtx2(bytes, size)) {
             decoding.not_decoded.emplace(
                 index,
@@ -627,6 +681,7 @@ private:
         // Decide by content, not extension: a .gltf that is really binary still loads.
         const bool glb = hasGlbMagic(path_);
         if (glb) checkGlbContainerVersion(bytes);
+        access.json = jsonText(bytes, glb);
         std::optional<TinygltfInput> rewritten;
         if (mayNeedRewrite(bytes)) {
             // Recorded first, as tinygltf's reader would (the buffers and images read later must

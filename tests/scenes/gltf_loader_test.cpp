@@ -1243,6 +1243,38 @@ TEST(GltfLoaderImages, UndecodableImageWarnsAndDropsOnlyItsTextures) {
     EXPECT_EQ(warningsWith(scene, {"texture 4: image 5 could not be decoded; texture ignored"}), 1u);
 }
 
+// A 0-byte image file is an image that cannot be decoded, like any other: tinygltf refuses an empty
+// file before the loader's decoder sees it (here as a missing image, with its own "File read
+// error" lines; in some versions as a failed parse), so the loader catches it at the read.
+TEST(GltfLoaderImages, EmptyImageFileWarnsAndDropsItsTextures) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);  // image 0, texture 0: a good PNG
+    test::writeFile(dir.file("empty.png"), "");
+    b.doc["images"].push_back({{"uri", "empty.png"}});  // image 1
+    b.doc["textures"].push_back({{"source", 1}});       // texture 1
+    prim["material"] = b.addMaterial({{"pbrMetallicRoughness",
+                                       {{"baseColorFactor", {0.5, 0.25, 1, 1}},
+                                        {"baseColorTexture", {{"index", 1}}},
+                                        {"metallicRoughnessTexture", {{"index", 0}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    const std::string path = b.writeExternal(dir, "empty_image.gltf", "empty_image.bin");
+    Scene scene;
+    ASSERT_NO_THROW(scene = loadGltf(path));
+
+    const Material& m = scene.materials.at(0);
+    EXPECT_FALSE(m.base_color_texture.isSet());  // the factor alone
+    expectVec3Near(m.base_color, {0.5f, 0.25f, 1.0f});
+    EXPECT_TRUE(m.metallic_roughness_texture.isSet());  // the good image is still read
+    EXPECT_EQ(warningsWith(scene, {"image 1 'empty.png' cannot be decoded: the file is empty", "ignored"}), 1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"texture 1: image 1 'empty.png' could not be decoded; texture ignored"}), 1u);
+    EXPECT_EQ(warningsWith(scene, {"tinygltf"}), 0u) << "the loader's warning, not tinygltf's file-read lines";
+    // The file was read: it is one of the scene's files (and the scene's hash changes when it is filled).
+    EXPECT_NE(std::find(scene.source_files.begin(), scene.source_files.end(), dir.file("empty.png")),
+              scene.source_files.end());
+}
+
 /// A triangle whose base colour texture is texture 0 = `texture`, over a PNG (image 0) and a
 /// KTX2 image (image 1, in a bufferView as a GLB holds it), with KHR_texture_basisu used or
 /// required.
