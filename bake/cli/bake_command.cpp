@@ -1066,6 +1066,8 @@ private:
         written_levels_ = levelsPresent(data);
         finish_seconds_ = secondsSince(finish_start);
         stability_ = makeStabilityReport(cache, baker_->counters(), scene_.bounds_min, scene_.bounds_max, levels_);
+        if (lights_->hasLights())
+            addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, 2048, job_.settings.seed));
     }
 
     double raysPerSecond() const {

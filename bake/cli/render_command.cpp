@@ -14,6 +14,7 @@
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
+#include "tracing/scene_reflectance.h"
 #include "tracing/surface.h"
 #include "tracing/tracer.h"
 
@@ -278,6 +279,7 @@ private:
         build_seconds_ = secondsSince(build_start);
         warnWhenUnlit(scene_, *lights_, "image");
         warnAboutRayOffset();
+        warnAboutLongPaths();
         scene_hash_ = sceneContentHash(scene_.source_files);
         if (!o_.cache_path.empty()) {
             CacheView view = openCacheForCommand(o_.cache_path);
@@ -407,6 +409,26 @@ private:
                          ? "the scene is very small in its units: scale it up (a scale on its root node, or the "
                            "exporter's unit setting)"
                          : "move the scene towards the origin");
+    }
+
+    /// In a scene that keeps its light (a closed room of near-white walls) Russian roulette keeps
+    /// paths alive while the albedo is near 1: a reference render ran 1024 bounces per path and
+    /// would have taken an hour with no word said.
+    void warnAboutLongPaths() const {
+        if (!lights_->hasLights() || !(o_.debug_view.empty() || o_.debug_view == "bounces")) return;
+        const SceneReflectance reflectance = estimateSceneReflectance(*tracer_);
+        if (!(reflectance.reflectance > kStiffReflectance)) return;
+        if (reflectance.unbounded()) {
+            std::fprintf(stderr,
+                         "warning: %s; a path ends only at --max-bounces (%u), and the image shows that cap, not "
+                         "the scene's light: give the surfaces an albedo below 1 (base colour) or open the scene\n",
+                         reflectance.describe().c_str(), o_.max_bounces);
+        } else {
+            std::fprintf(stderr,
+                         "warning: %s; paths run long (Russian roulette keeps them while the albedo is near 1, up "
+                         "to --max-bounces %u), so the render is slow\n",
+                         reflectance.describe().c_str(), o_.max_bounces);
+        }
     }
 
     void warnAboutHitRate() const {

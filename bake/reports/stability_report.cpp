@@ -145,6 +145,21 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
     return r;
 }
 
+void addSceneReflectance(StabilityReport& r, const SceneReflectance& reflectance) {
+    if (reflectance.points == 0) return;
+    r.scene_reflectance = reflectance.reflectance;
+    if (!(reflectance.reflectance > kStiffReflectance)) return;
+    r.warnings.push_back(
+        reflectance.describe() +
+        (reflectance.unbounded()
+             ? "; the cache's values grow with every iteration and say how long it baked, not what the scene "
+               "looks like; give the surfaces an albedo below 1 (base colour) or open the scene"
+             : ": update paths carry a few of those bounces and the cache's feedback the rest, iteration after "
+               "iteration, so the cache converges slowly and reads dark until it has; --resampling end "
+               "--propagation-depth 16 --max-bounces 17 carries 16 bounces per iteration (docs/baking.md, "
+               "\"Stiff scenes\"); compare a render through the cache with a reference before trusting it"));
+}
+
 void printStabilitySection(std::FILE* out, const StabilityReport& r) {
     std::fprintf(out, "Stability:\n");
     std::fprintf(out, "  energy: %llu deposits, %.6g deposited (fixed-point scale %g)\n", (unsigned long long)r.deposits,
@@ -165,6 +180,11 @@ void printStabilitySection(std::FILE* out, const StabilityReport& r) {
                           "(%.3g, level %u), ray offset %.3g; grid cells up to %lld of +-65536\n",
                      r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(), r.finest_voxel_size,
                      r.finest_level, r.ray_offset, (long long)r.max_grid_coordinate);
+    }
+    if (r.scene_reflectance >= 0.0) {
+        std::fprintf(out,
+                     "  light transport: the surfaces send %.3g%% of the light reaching them back onto the scene\n",
+                     100.0 * r.scene_reflectance);
     }
     for (const std::string& w : r.warnings) std::fprintf(out, "  warning: %s\n", w.c_str());
     if (r.warnings.empty()) std::fprintf(out, "  no problems found\n");
@@ -197,6 +217,7 @@ Json stabilityJson(const StabilityReport& r) {
         {"float_spacing_share_of_finest_voxel", r.precisionShare()},
         {"max_grid_coordinate", r.max_grid_coordinate},
         {"grid_coordinates_wrap", r.grid_coordinates_wrap},
+        {"scene_reflectance", r.scene_reflectance},
         {"warnings", r.warnings},
     };
 }

@@ -3,13 +3,14 @@
 // Le / (1 - rho): the reference path tracer's image and the baked cache's voxels must match it.
 // Also: renders and bakes are identical for any thread count.
 #include "sharc/baker.h"
-#include "test_bake_scene.h"
 #include "sharc/camera_path.h"
+#include "sharcbake/runtime.h"
+#include "sharcbake/scene_loader.h"
+#include "test_bake_scene.h"
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
-#include "sharcbake/runtime.h"
-#include "sharcbake/scene_loader.h"
+#include "tracing/scene_reflectance.h"
 #include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
@@ -213,6 +214,35 @@ TEST(Determinism, BakeIsIdenticalForAnyThreadCount) {
     many = snapshot(SmallBake("cornell_box", 8, HistorySchedule{}, 96));
     ASSERT_FALSE(one.empty());
     EXPECT_EQ(one, many);
+}
+
+// How long light stays in a scene: in a closed furnace every reflected ray hits a wall again, so
+// the scene sends back exactly what its walls reflect, rho (Lambertian walls), and light makes
+// 1 / (1 - rho) bounces; out of doors most reflected light leaves.
+TEST(SceneReflectance, ClosedFurnacesKeepWhatTheirWallsReflect) {
+    for (const auto& [name, rho] :
+         std::map<std::string, double>{{"furnace_rho050", 0.5}, {"furnace_rho090", 0.9}, {"furnace_rho099", 0.99}}) {
+        const Scene scene = loadGltf(scenePath(name));
+        const Tracer tracer(scene);
+        const SceneReflectance r = estimateSceneReflectance(tracer);
+        EXPECT_GT(r.points, 1000u) << name;
+        EXPECT_NEAR(r.reflectance, rho, 0.002) << name;
+        EXPECT_FALSE(r.unbounded()) << name;
+        // Deterministic, whatever the threads do.
+        EXPECT_EQ(estimateSceneReflectance(tracer).reflectance, r.reflectance) << name;
+    }
+    const Scene outdoor = loadGltf(scenePath("outdoor"));
+    const SceneReflectance open = estimateSceneReflectance(Tracer(outdoor));
+    EXPECT_LT(open.reflectance, 0.5);
+    EXPECT_LT(open.bounces(), 2.0);
+
+    // A white furnace (every wall's base colour 1): light never leaves, and says so.
+    Scene white = loadGltf(scenePath("furnace_rho050"));
+    for (Material& m : white.materials) m.base_color = glm::vec3(1.0f);
+    const SceneReflectance closed = estimateSceneReflectance(Tracer(white));
+    EXPECT_TRUE(closed.unbounded()) << closed.reflectance;
+    EXPECT_NE(closed.describe().find("never leaves"), std::string::npos) << closed.describe();
+    EXPECT_TRUE(std::isinf(closed.bounces()) || closed.bounces() > 1e4);
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 # Degenerate input through the command line: a clear message and the documented exit code for an
 # empty scene, a sky-only scene, a NaN vertex, a closed scene with no light and capacities out of
 # range; the Stability section and the stability object of --stats-json for a table far too
-# small and for a healthy bake.
+# small and for a healthy bake; the stiff-scene warning (light making ~100 bounces) in a bake and a
+# render of the rho = 0.99 furnace.
 # Usage: cli_stability_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -70,5 +71,20 @@ python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['stability']; assert
 expect 0 "healthy bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/ok.sharc" \
     --iterations 4 --resolution 64x64
 says "$work/out.txt" "no problems found" "healthy bake: no warnings"
+
+says "$work/out.txt" "light transport: the surfaces send 5[0-9]\.[0-9]*% of the light" "healthy bake: reflectance stated"
+
+# A stiff scene: light makes about 1 / (1 - 0.99) = 100 bounces in the closed rho = 0.99 furnace.
+# Both the bake and a render say so, with the count, instead of "no problems found" and a slow
+# render without a word.
+expect 0 "stiff bake" "$sharcbake" bake "$scenes/furnace_rho099/furnace_rho099.gltf" -o "$work/stiff.sharc" \
+    --iterations 4 --resolution 64x64 --stats-json "$work/stiff.json"
+says "$work/out.txt" "warning: light stays in this scene for about 10[0-9] bounces .* converges slowly" "stiff bake: warned"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['stability']; assert 0.985 < s['scene_reflectance'] < 0.995, s" \
+    "$work/stiff.json" && echo "ok: stats JSON holds the scene reflectance" ||
+    { echo "FAIL: stats JSON scene_reflectance"; failures=$((failures + 1)); }
+expect 0 "stiff render" "$sharcbake" render "$scenes/furnace_rho099/furnace_rho099.gltf" -o "$work/stiff.exr" \
+    --resolution 8 --spp 1
+says "$work/err.txt" "warning: light stays in this scene for about 10[0-9] bounces .* the render is slow" "stiff render: warned"
 
 finish "stability (command line)"
