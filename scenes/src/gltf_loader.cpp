@@ -393,6 +393,7 @@ public:
         computeBounds();
         scene_.stats.triangles_loaded = scene_.triangles.size();
         warnAboutCollapsedTriangles();
+        warnAboutCoincidentEmitters();
         return std::move(scene_);
     }
 
@@ -1478,8 +1479,10 @@ private:
             // Embree's BVH needs bounded coordinates (it asserts near 1e19); 1e9 m is far beyond any scene.
             if (!(std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
                   std::abs(p.z) <= kMaxWorldCoordinate)) {
-                fail(label + ": vertex " + std::to_string(i) + " lies at (" + std::to_string(p.x) + ", " +
-                     std::to_string(p.y) + ", " + std::to_string(p.z) + ") after the node transforms, beyond +-1e9 m");
+                char at[96];
+                std::snprintf(at, sizeof at, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
+                fail(label + ": vertex " + std::to_string(i) + " lies at " + at +
+                     " after the node transforms, beyond +-1e9 m");
             }
             geo.positions[i] = glm::vec3(p);
             geo.exact_positions.push_back(p);
@@ -1605,6 +1608,34 @@ private:
         std::erase_if(geo.triangles, degenerate);
         scene_.stats.degenerate_triangles_dropped += before - geo.triangles.size();
         geo.exact_positions = {};
+    }
+
+    /// Emissive triangles with the same three corners as another (a face duplicated by an
+    /// export, an emissive mesh instanced twice at one place): each is a light, so N copies light
+    /// the scene N times as brightly while a camera sees one surface of the emitter's radiance.
+    /// Every renderer that samples lights per triangle does the same; the file is what to fix.
+    void warnAboutCoincidentEmitters() {
+        using Corners = std::array<std::array<float, 3>, 3>;
+        std::vector<Corners> emitters;
+        for (size_t t = 0; t < scene_.triangles.size(); ++t) {
+            if (!scene_.materials[scene_.triangle_materials[t]].isEmissive()) continue;
+            Corners c;
+            const glm::uvec3 tri = scene_.triangles[t];
+            for (int k = 0; k < 3; ++k) {
+                const glm::vec3 p = scene_.positions[tri[k]];
+                c[size_t(k)] = {p.x, p.y, p.z};
+            }
+            std::sort(c.begin(), c.end());  // either winding, any first corner
+            emitters.push_back(c);
+        }
+        std::sort(emitters.begin(), emitters.end());
+        uint64_t copies = 0;
+        for (size_t i = 1; i < emitters.size(); ++i) copies += emitters[i] == emitters[i - 1];
+        if (copies == 0) return;
+        warn(std::to_string(copies) +
+             " emissive triangles lie exactly on another emissive triangle (the same three corners: a duplicated "
+             "face, or an emissive mesh placed twice): each is a light, so two copies light the scene twice as "
+             "brightly while a camera sees one surface; remove the duplicates");
     }
 
     /// One warning for every triangle that rounding to float collapsed: the scene lies too far

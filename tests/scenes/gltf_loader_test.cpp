@@ -250,6 +250,38 @@ TEST(GltfLoader, TrianglesCollapsedByFloatRoundingAreNamed) {
     for (const std::string& w : home.stats.warnings) EXPECT_EQ(w.find("collapsed"), std::string::npos) << w;
 }
 
+// An emissive face exported twice (here once with the other winding) is two lights on one
+// surface: the light doubles, and the loader says so; a plain duplicated face is left alone.
+TEST(GltfLoader, CoincidentEmissiveTrianglesAreNamed) {
+    TempDir dir;
+    GltfBuilder b;
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 0, 0, 6, 0, 0, 5, 1, 0});
+    const std::vector<uint16_t> idx = {0, 1, 2, 0, 2, 1, 3, 4, 5, 3, 4, 5};
+    b.addMaterial({{"emissiveFactor", {1, 1, 1}}});
+    b.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}}}});
+    const int indices = b.addData(idx, test::kUnsignedShort, "SCALAR");
+    const int lit = b.addMeshNode({{"attributes", {{"POSITION", pos}}}, {"indices", indices}, {"material", 0}});
+    b.setScene({lit});
+    const Scene twice = loadGltf(b.writeEmbedded(dir, "twice.gltf"));
+    EXPECT_EQ(twice.triangles.size(), 4u);
+    const auto named = [](const Scene& scene) {
+        return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(), [](const std::string& w) {
+            return w.find("2 emissive triangles lie exactly on another") != std::string::npos;
+        });
+    };
+    EXPECT_EQ(named(twice), 1) << testing::PrintToString(twice.stats.warnings);
+
+    GltfBuilder plain;
+    const int plain_pos = plain.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    plain.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}}}});
+    const std::vector<uint16_t> plain_idx = {0, 1, 2, 0, 1, 2};
+    plain.setScene({plain.addMeshNode({{"attributes", {{"POSITION", plain_pos}}},
+                                       {"indices", plain.addData(plain_idx, test::kUnsignedShort, "SCALAR")},
+                                       {"material", 0}})});
+    const Scene unlit = loadGltf(plain.writeEmbedded(dir, "plain.gltf"));
+    for (const std::string& w : unlit.stats.warnings) EXPECT_EQ(w.find("emissive triangles"), std::string::npos) << w;
+}
+
 TEST(GltfLoader, SparseAccessorSubstitutesValues) {
     TempDir dir;
     GltfBuilder b;
