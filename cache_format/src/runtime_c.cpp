@@ -87,6 +87,23 @@ bool knownTarget(const sharcbake_gpu_options& o, char* message, size_t message_s
     return false;
 }
 
+/// Runs `find(&target, &text)` (a function answering with an SDK target and a message) for the C
+/// interface: the message copied out, `*target` set only on success, exceptions caught.
+template <typename Find>
+sharcbake_status answerWithTarget(Find&& find, sharcbake_sdk_target* target, char* message, size_t message_size) {
+    try {
+        sharcbake::SharcSdkTarget t{};
+        std::string text;
+        const CacheFileStatus status = find(&t, &text);
+        copyMessage(text, message, message_size);
+        if (status == CacheFileStatus::kOk) *target = sharcbake_sdk_target(t);
+        return sharcbake_status(status);
+    } catch (...) {
+        copyMessage("out of memory", message, message_size);
+        return SHARCBAKE_IO_ERROR;
+    }
+}
+
 }  // namespace
 
 extern "C" {
@@ -305,17 +322,11 @@ sharcbake_status sharcbake_sdk_target_for_release(const char* release, sharcbake
                                                   size_t message_size) {
     copyMessage("", message, message_size);
     if (!release || !target) return SHARCBAKE_INVALID_ARGUMENT;
-    try {
-        sharcbake::SharcSdkTarget t{};
-        std::string text;
-        const CacheFileStatus status = sharcbake::sharcSdkTargetForRelease(release, &t, &text);
-        copyMessage(text, message, message_size);
-        if (status == CacheFileStatus::kOk) *target = sharcbake_sdk_target(t);
-        return sharcbake_status(status);
-    } catch (...) {
-        copyMessage("out of memory", message, message_size);
-        return SHARCBAKE_IO_ERROR;
-    }
+    return answerWithTarget(
+        [&](sharcbake::SharcSdkTarget* t, std::string* text) {
+            return sharcbake::sharcSdkTargetForRelease(release, t, text);
+        },
+        target, message, message_size);
 }
 
 sharcbake_status sharcbake_identify_sdk_target(float logarithm_base, float scene_scale, float level_bias,
@@ -327,7 +338,8 @@ sharcbake_status sharcbake_identify_sdk_target(float logarithm_base, float scene
         copyMessage("sharcbake_identify_sdk_target: target and observations must not be NULL", message, message_size);
         return SHARCBAKE_INVALID_ARGUMENT;
     }
-    try {
+    return answerWithTarget(
+        [&](sharcbake::SharcSdkTarget* t, std::string* text) {
         sharcbake::HashGridParameters grid;
         grid.logarithm_base = logarithm_base;
         grid.scene_scale = scene_scale;
@@ -342,16 +354,9 @@ sharcbake_status sharcbake_identify_sdk_target(float logarithm_base, float scene
             seen[i].key = o.key;
             seen[i].slot = o.slot;
         }
-        sharcbake::SharcSdkTarget t{};
-        std::string text;
-        const CacheFileStatus status = sharcbake::identifySharcSdkTarget(grid, seen.data(), seen.size(), &t, &text);
-        copyMessage(text, message, message_size);
-        if (status == CacheFileStatus::kOk) *target = sharcbake_sdk_target(t);
-        return sharcbake_status(status);
-    } catch (...) {
-        copyMessage("out of memory", message, message_size);
-        return SHARCBAKE_IO_ERROR;
-    }
+        return sharcbake::identifySharcSdkTarget(grid, seen.data(), seen.size(), t, text);
+        },
+        target, message, message_size);
 }
 
 uint32_t sharcbake_resolve_frames_kept(uint32_t stale_frame_num_max) {
