@@ -1597,11 +1597,14 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--report-probe-spp", o->report_probe_spp,
                     "Path samples of each probe's reference; its noise is estimated and taken out of the error")
         ->capture_default_str()->check(CLI::Range(2u, 1u << 20));
-    cmd->add_option("--target-error", o->target_error,
-                    "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
-                    "mean relative error against the known radiance where the scene has one, else the probes' mean "
-                    "relative error (over the probes live at the time), else the image's against --reference")
-        ->check(CLI::PositiveNumber)->check(kFiniteNumber);
+    cmd->add_option(
+           "--target-error", o->target_error,
+           "Stop at the first checkpoint where the error is at most E (a fraction: 0.02 = 2%): the voxels' "
+           "mean relative error against the known radiance where the scene has one, else the probes' mean "
+           "relative error (over the probes live at the time), else the image's against --reference (sharcbake "
+           "compare's, the same in any radiance units)")
+        ->check(CLI::PositiveNumber)
+        ->check(kFiniteNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary output; warnings and errors still print");
     addProgressIntervalOption(*cmd, o->progress_interval);
     cmd->add_flag("--print-config", o->print_config,

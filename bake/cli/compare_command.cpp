@@ -33,6 +33,12 @@ void runCompare(const CompareOptions& o) {
     } catch (const std::invalid_argument& e) {
         throw CommandError(kExitInvalidInput, o.image_path + ": " + e.what());
     }
+    if (error.scale_is_fallback) {
+        std::fprintf(stderr,
+                     "warning: %s has no positive finite mean (black, or NaN/Inf pixels): the measures' epsilons "
+                     "fall back to an absolute 0.01, so they depend on the images' units\n",
+                     o.reference_path.c_str());
+    }
     if (o.json) {
         const Json json = {{"schema", jsonSchemaId("compare")},
                            {"relative_mse", jsonNumber(error.relative_mse)},
@@ -56,9 +62,10 @@ void registerCompareCommand(CLI::App& app) {
                            "Error of an image against a reference image.\n\n"
                            "Both are linear EXRs of the same camera and resolution; either may come from any\n"
                            "renderer. A multilayer EXR (Blender's) is read from its only RGB layer or its Combined\n"
-                           "pass. Prints relative MSE ((x-r)^2/(r^2+0.01)), mean relative error\n"
-                           "(|x-r|/(|r|+0.01)) and the relative bias of the image mean, averaged over pixels and\n"
-                           "channels.\n\n"
+                           "pass. Prints relative MSE ((x-r)^2/(r^2+(0.1m)^2)), mean relative error\n"
+                           "(|x-r|/(|r|+0.01m)) and the relative bias of the image mean, averaged over pixels and\n"
+                           "channels. m is the reference's mean over pixels and channels, so the measures do not\n"
+                           "depend on the images' radiance units (m = 1 for a black reference).\n\n"
                            "Example:\n"
                            "  sharcbake compare out/cached.exr out/reference.exr");
     pathOption(cmd->add_option("image", o->image_path, "Image to measure (.exr)"))->required();

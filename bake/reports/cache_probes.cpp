@@ -295,8 +295,8 @@ ProbeMeasure CacheProbes::measure(size_t index, size_t population_index) {
     computeReferences(pairs);
     const Record& record = records_[index];
     // Points in shadow (a block's foot on the floor) would divide by almost nothing: errors are
-    // relative to at least a hundredth of the probes' mean grey level, as image errors are to
-    // an epsilon.
+    // relative to at least a hundredth of the probes' mean grey level, as image errors are to a
+    // hundredth of the reference's mean.
     double grey_sum = 0.0;
     for (const Pair& pair : pairs) grey_sum += greyOf(references_[pair.candidate]);
     const double grey_floor = pairs.empty() ? 0.0 : kRelativeFloor * grey_sum / double(pairs.size());

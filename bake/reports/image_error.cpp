@@ -9,7 +9,21 @@ namespace sharcbake {
 
 namespace {
 
-constexpr double kEpsilon = 1e-2;
+/// The measures' epsilons, as shares of the reference's mean m (errorScale): r^2 + (0.1 m)^2 under
+/// a squared error, |r| + 0.01 m under an absolute one.
+constexpr double kSquaredEpsilonShare = 0.1;
+constexpr double kAbsoluteEpsilonShare = 0.01;
+
+/// What a relative measure divides by, per reference value r, for a reference of scale m.
+struct Denominators {
+    explicit Denominators(double m)
+        : squared_epsilon((kSquaredEpsilonShare * m) * (kSquaredEpsilonShare * m)),
+          absolute_epsilon(kAbsoluteEpsilonShare * m) {}
+    double squared(double r) const { return r * r + squared_epsilon; }
+    double absolute(double r) const { return std::abs(r) + absolute_epsilon; }
+    double squared_epsilon;
+    double absolute_epsilon;
+};
 
 void requireSameSize(const Image& image, const Image& reference) {
     if (image.width != reference.width || image.height != reference.height) {
@@ -22,7 +36,7 @@ void requireSameSize(const Image& image, const Image& reference) {
 bool finite(glm::vec3 x) { return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z); }
 
 /// Mean relative error of the kComparisonTile^2 tile means (non-finite pixels left out of both).
-double tileMeanRelativeError(const Image& image, const Image& reference) {
+double tileMeanRelativeError(const Image& image, const Image& reference, const Denominators& divide) {
     double sum = 0.0;
     uint64_t terms = 0;
     for (int ty = 0; ty < image.height; ty += kComparisonTile) {
@@ -41,7 +55,7 @@ double tileMeanRelativeError(const Image& image, const Image& reference) {
             if (pixels == 0) continue;
             x /= double(pixels);
             r /= double(pixels);
-            for (int c = 0; c < 3; ++c) sum += std::abs(x[c] - r[c]) / (std::abs(r[c]) + kEpsilon);
+            for (int c = 0; c < 3; ++c) sum += std::abs(x[c] - r[c]) / divide.absolute(r[c]);
             terms += 3;
         }
     }
@@ -50,6 +64,15 @@ double tileMeanRelativeError(const Image& image, const Image& reference) {
 
 }  // namespace
 
+double errorScale(const Image& reference, bool* fallback) {
+    double sum = 0.0;
+    for (const glm::vec3& r : reference.pixels) sum += double(r.x) + double(r.y) + double(r.z);
+    const double mean = reference.pixels.empty() ? 0.0 : sum / (3.0 * double(reference.pixels.size()));
+    const bool usable = std::isfinite(mean) && mean > 0.0;
+    if (fallback) *fallback = !usable;
+    return usable ? mean : 1.0;
+}
+
 ImageComparison compareImages(const Image& image, const Image& reference, const std::vector<uint8_t>* mask) {
     requireSameSize(image, reference);
     if (mask && mask->size() != reference.pixels.size()) {
@@ -57,6 +80,8 @@ ImageComparison compareImages(const Image& image, const Image& reference, const 
                                     std::to_string(reference.pixels.size()));
     }
     ImageComparison e;
+    e.scale = errorScale(reference, &e.scale_is_fallback);
+    const Denominators divide(e.scale);
     double sum_image = 0.0, sum_reference = 0.0;
     const size_t n = image.pixels.size();
     for (size_t i = 0; i < n; ++i) {
@@ -74,8 +99,8 @@ ImageComparison compareImages(const Image& image, const Image& reference, const 
         }
         for (int c = 0; c < 3; ++c) {
             const double d = double(x[c]) - double(r[c]);
-            const double squared = d * d / (double(r[c]) * double(r[c]) + kEpsilon);
-            const double relative = std::abs(d) / (std::abs(double(r[c])) + kEpsilon);
+            const double squared = d * d / divide.squared(double(r[c]));
+            const double relative = std::abs(d) / divide.absolute(double(r[c]));
             e.relative_mse += squared;
             e.mean_relative_error += relative;
             if (masked) {
@@ -92,7 +117,7 @@ ImageComparison compareImages(const Image& image, const Image& reference, const 
     const double masked_count = 3.0 * double(std::max<uint64_t>(e.masked_pixels, 1));
     e.masked_relative_mse /= masked_count;
     e.masked_mean_relative_error /= masked_count;
-    e.tile_mean_relative_error = tileMeanRelativeError(image, reference);
+    e.tile_mean_relative_error = tileMeanRelativeError(image, reference, divide);
     e.relative_bias = sum_reference > 0.0 ? (sum_image - sum_reference) / sum_reference : 0.0;
     return e;
 }
@@ -104,6 +129,7 @@ RelativeMseSplit splitRelativeMse(const Image& a, uint32_t a_samples, const Imag
     const double n = double(a_samples) + double(b_samples);
     const double a_weight = double(a_samples) / n, b_weight = double(b_samples) / n;
     const double noise_weight = a_weight * b_weight;
+    const Denominators divide(errorScale(reference));
     RelativeMseSplit split;
     double sum_rest_squares = 0.0;
     for (size_t i = 0; i < reference.pixels.size(); ++i) {
@@ -117,7 +143,7 @@ RelativeMseSplit splitRelativeMse(const Image& a, uint32_t a_samples, const Imag
                 pixel_total += 1.0;  // as compareImages counts a non-finite pixel
                 continue;
             }
-            const double scale = 1.0 / (r * r + kEpsilon);
+            const double scale = 1.0 / divide.squared(r);
             pixel_total += (mean - r) * (mean - r) * scale;
             pixel_noise += noise_weight * (x - y) * (x - y) * scale;
         }

@@ -12,10 +12,12 @@
 namespace sharcbake {
 
 /// Error measures, per pixel and channel, averaged over all of them:
-/// - relative MSE: (x - r)^2 / (r^2 + epsilon), the usual measure for rendering comparisons;
-/// - mean relative error: |x - r| / (|r| + epsilon);
+/// - relative MSE: (x - r)^2 / (r^2 + (0.1 m)^2), the usual measure for rendering comparisons;
+/// - mean relative error: |x - r| / (|r| + 0.01 m);
 /// - mean (signed) bias relative to the reference mean: (mean x - mean r) / mean r.
-/// epsilon = 1e-2 keeps black reference pixels from dominating.
+/// m is the reference's mean over pixels and channels (errorScale), so the epsilons keep black
+/// reference pixels from dominating in any radiance units: scaling both images by the same factor
+/// leaves every measure as it was, and a reference of mean 1 has both epsilons 0.01.
 /// Two more see past per-pixel noise and past pixels the cache plays no part in:
 /// - tile mean relative error: both images averaged over kComparisonTile^2-pixel tiles first,
 ///   which divides a render's noise variance by the tile's pixel count and keeps what is smooth
@@ -31,7 +33,17 @@ struct ImageComparison {
     double masked_relative_mse = 0.0;         ///< as relative_mse, over the mask (all pixels without one)
     double masked_mean_relative_error = 0.0;  ///< as mean_relative_error, over the mask
     uint64_t masked_pixels = 0;               ///< pixels in the mask
+    double scale = 1.0;                       ///< m, errorScale(reference)
+    bool scale_is_fallback = false;           ///< the reference had no mean to take m from (m = 1)
 };
+
+/// The scale m of the measures' epsilons: the reference's mean over pixels and channels. A
+/// reference whose mean is not a positive finite number (black, or holding NaN or infinity) has
+/// no scale of its own and gets m = 1, i.e. absolute epsilons of 0.01: the measures stay finite,
+/// are 0 for a black image and grow with the image's brightness, in its units (borrowing the
+/// image's own mean instead would give every image the same mean relative error, 100, against
+/// a black reference). `fallback`, when given, says whether m fell back to 1.
+double errorScale(const Image& reference, bool* fallback = nullptr);
 
 /// Tile edge, in pixels, of ImageComparison::tile_mean_relative_error (partial tiles at the
 /// right and bottom edges count as tiles).
@@ -49,7 +61,7 @@ ImageComparison compareImages(const Image& image, const Image& reference,
 ///   (c - r)^2 - d^2 a_samples b_samples / n^2
 /// estimates, without bias, the squared error of what the renders converge to (for a render
 /// through a cache: the cache's own error) plus the reference's noise. Normalised like
-/// ImageComparison::relative_mse. The rest is a difference of two noisy means and may come out
+/// ImageComparison::relative_mse (the same m, from `reference`). The rest is a difference of two noisy means and may come out
 /// negative; its standard error over the pixels says how far it can be trusted (fireflies make it
 /// large).
 struct RelativeMseSplit {

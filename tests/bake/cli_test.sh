@@ -93,7 +93,10 @@ for f in det_2_a det_7_a det_16_a det_1_b; do
 done
 
 # Cornell box: a cached render against a converged reference of the same camera.
-# Tolerances: |bias of the image mean| < 2%, mean relative error < 6% (measured 0.13% and 3.3%).
+# Tolerances: |bias of the image mean| < 2%, mean relative error < 9% (measured 0.18% and 5.0%).
+# The error's epsilon is 0.01 of the reference's mean (0.116 here): its dark pixels weigh more
+# than an absolute 0.01 let them, under which this pair read 3.4% against a bound of 6%. 9% keeps
+# that margin.
 cornell="$scenes/cornell_box/cornell_box.gltf"
 # Level bias 0 (the SDK's): every point of this 1 m room is on level 1, whose 4 cm voxels keep the
 # light (1 mm below the ceiling) and the ceiling apart. The fitted grid puts them in shared voxels
@@ -105,7 +108,7 @@ expect 0 "compare" "$sharcbake" compare "$work/cached48.exr" "$work/ref48.exr" -
 python3 - "$work/out.txt" <<'PY' || failures=$((failures + 1))
 import json, sys
 m = json.load(open(sys.argv[1]))
-ok = abs(m["relative_bias"]) < 0.02 and m["mean_relative_error"] < 0.06 and m["non_finite_pixels"] == 0
+ok = abs(m["relative_bias"]) < 0.02 and m["mean_relative_error"] < 0.09 and m["non_finite_pixels"] == 0
 print(("ok" if ok else "FAIL") + ": cornell cached vs reference:", m)
 sys.exit(0 if ok else 1)
 PY
