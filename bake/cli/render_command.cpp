@@ -232,6 +232,7 @@ public:
         tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
         setUp();
         render();
+        warnAboutNonFiniteSamples();
         warnAboutHitRate();
         if (o_.debug_view == "bounces") rampBounces();
         writeImages();
@@ -429,6 +430,21 @@ private:
                          "to --max-bounces %u), so the render is slow\n",
                          reflectance.describe().c_str(), o_.max_bounces);
         }
+    }
+
+    /// The path tracer drops a NaN or infinite path sample (it would poison its pixel) and counts
+    /// it. Warned even with -q: the image is missing that light, which nothing else shows.
+    void warnAboutNonFiniteSamples() const {
+        if (primaryView() || counts_.non_finite_samples == 0) return;
+        const double samples = double(width_) * double(height_) * double(o_.spp);
+        std::fprintf(stderr,
+                     "warning: %llu of %.0f path samples (%.3g%%) were NaN or infinite and were dropped%s. Most "
+                     "often radiance overflowed float32 (beyond 3.4e38): an emissive strength, a light's "
+                     "intensity, the sky or --sky-scale is too large. Scale the scene's light down (the image "
+                     "scales with it; --exposure sets the preview's brightness)\n",
+                     (unsigned long long)counts_.non_finite_samples, samples,
+                     100.0 * double(counts_.non_finite_samples) / samples,
+                     o_.debug_view.empty() ? " (counted as black): the image is too dark where they fell" : "");
     }
 
     void warnAboutHitRate() const {

@@ -1,7 +1,8 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
-# What a build pipeline relies on: progress lines in logs, warnings that --quiet does not hide,
-# provenance in the JSON outputs, and renders that refuse a cache of another scene or sky.
+# What a build pipeline relies on: progress lines in logs, warnings that --quiet does not hide
+# (the loader's, dropped non-finite samples), provenance in the JSON outputs, and renders that
+# refuse a cache of another scene or sky.
 # Usage: pipeline_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -38,6 +39,30 @@ PY
 expect 0 "render -q of a scene with a loader warning" "$sharcbake" render "$work/edited.gltf" -o "$work/e.exr" \
     --resolution 8 --spp 1 -q
 says "$work/err.txt" "^warning: .*no material" "-q still prints the loader's warnings"
+
+# Radiance beyond float32: a furnace whose walls emit 3e38 sums past 3.4e38 on every path. The
+# samples are dropped (exit 0, as before), with a warning that -q does not hide either.
+furnace="$scenes/furnace_rho050/furnace_rho050.gltf"
+cp "$scenes/furnace_rho050/furnace_rho050.bin" "$work/"
+python3 - "$furnace" "$work/overflow.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+g.setdefault("extensionsUsed", []).append("KHR_materials_emissive_strength")
+g["materials"][0].setdefault("extensions", {})["KHR_materials_emissive_strength"] = {"emissiveStrength": 3e38}
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "render -q of a scene whose radiance overflows" "$sharcbake" render "$work/overflow.gltf" -o "$work/o.exr" \
+    --resolution 8 --spp 2 -q --no-png
+says "$work/err.txt" "^warning: 128 of 128 path samples (100%) were NaN or infinite and were dropped" \
+    "-q still warns about dropped non-finite samples, with their count and share"
+says "$work/err.txt" "overflowed float32.*--sky-scale is too large. Scale the scene's light down" \
+    "the warning says what they mean and what to do"
+expect 0 "render of a scene whose radiance overflows" "$sharcbake" render "$work/overflow.gltf" -o "$work/o.exr" \
+    --resolution 8 --spp 2 --no-png
+says "$work/err.txt" "^warning: 128 of 128 path samples" "without -q the warning is on stderr too"
+says "$work/out.txt" "dropped 128 non-finite path samples" "and the summary still counts them"
+expect 0 "render of the furnace as it is" "$sharcbake" render "$furnace" -o "$work/o.exr" --resolution 8 --spp 2 --no-png -q
+grep -q "non-finite\|NaN" "$work/err.txt" && fail "a furnace of finite radiance warned about non-finite samples"
 
 # Provenance in the bake's stats JSON.
 python3 - "$work/bake.json" "$work/c.sharc" "$work/c.ckpt" <<'PY' || fail "bake stats JSON provenance"
