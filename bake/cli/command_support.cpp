@@ -7,6 +7,7 @@
 #include "support/fnv1a.h"
 #include "tracing/lights.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -326,7 +328,10 @@ void addSkyOptions(CLI::App& command, SkyOptions& options) {
     pathOption(command.add_option("--sky-exr", options.exr_path,
                                   "Equirectangular EXR environment map for the sky (+Y up, Blender's "
                                   "orientation)"));  // a missing file is an I/O error when it is read (exit 2)
-    command.add_option("--sky-scale", options.scale, "Multiplier for the sky map")
+    command
+        .add_option("--sky-scale", options.scale,
+                    "Multiplier for the sky map (refused where it takes a texel or the sky's total beyond "
+                    "float32)")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber)
         ->check(kFiniteNumber);
@@ -384,6 +389,54 @@ void addProgressIntervalOption(CLI::App& command, double& seconds) {
         ->check(CLI::Range(0.0, 86400.0));
 }
 
+namespace {
+
+std::string shortNumber(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", value);
+    return text;
+}
+
+/// --sky-scale multiplies the map's texels where paths read them (Sky::scale), in float32. A
+/// product beyond float32's range is as infinite as a texel stored so, which loadEquirectExr
+/// refuses: every path that escapes towards it would be dropped as non-finite. So is a sky whose
+/// total, its radiance integrated over all directions, overflows float32 (the light sampler
+/// weighs the sky by such a sum).
+void checkScaledSky(const std::string& path, const Texture& map, float scale) {
+    uint64_t overflowing = 0;
+    float largest = 0.0f;
+    double total = 0.0;  // sum of texel radiance x solid angle, channels averaged, then scaled
+    const double pi = std::acos(-1.0);
+    for (int y = 0; y < map.height; ++y) {
+        const double sin_theta = std::sin(pi * (double(y) + 0.5) / double(map.height));
+        const double solid_angle = (2.0 * pi / double(map.width)) * (pi / double(map.height)) * sin_theta;
+        for (int x = 0; x < map.width; ++x) {
+            const glm::vec4& texel = map.texels[size_t(y) * size_t(map.width) + size_t(x)];
+            for (int c = 0; c < 3; ++c) {
+                overflowing += std::isfinite(texel[c] * scale) ? 0 : 1;
+                largest = std::max(largest, texel[c]);
+            }
+            total += (double(texel.x) + double(texel.y) + double(texel.z)) / 3.0 * solid_angle;
+        }
+    }
+    total *= double(scale);
+    const std::string advice = "; lower --sky-scale (the radiance of the scene scales with it)";
+    if (overflowing > 0) {
+        throw CommandError(kExitInvalidInput, path + ": " + std::to_string(overflowing) +
+                                                  " colour values are infinite at --sky-scale " + shortNumber(scale) +
+                                                  " (the brightest texel, " + shortNumber(largest) +
+                                                  ", times the scale is beyond float32's 3.4e38)" + advice);
+    }
+    if (!(total <= double(std::numeric_limits<float>::max()))) {
+        throw CommandError(kExitInvalidInput, path +
+                                                  ": the sky's total radiance (over all directions) is infinite "
+                                                  "at --sky-scale " +
+                                                  shortNumber(scale) + ", beyond float32's 3.4e38" + advice);
+    }
+}
+
+}  // namespace
+
 Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
     std::error_code error;
     if (!std::filesystem::is_regular_file(path, error)) {
@@ -404,6 +457,7 @@ Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool q
     } catch (const SceneLoadError& e) {
         throw CommandError(kExitInvalidInput, e.what());
     }
+    if (scene.sky.map && sky.uniform.empty()) checkScaledSky(sky.exr_path, *scene.sky.map, scene.sky.scale);
     if (!sky.uniform.empty()) {
         scene.sky.uniform = parseVec3(sky.uniform, "--sky");
         if (scene.sky.uniform.x < 0.0f || scene.sky.uniform.y < 0.0f || scene.sky.uniform.z < 0.0f) {

@@ -1,8 +1,8 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
 # What a build pipeline relies on: progress lines in logs, warnings that --quiet does not hide
-# (the loader's, dropped non-finite samples), provenance in the JSON outputs, and renders that
-# refuse a cache of another scene or sky.
+# (the loader's, dropped non-finite samples), skies scaled beyond float32 refused, provenance in
+# the JSON outputs, and renders that refuse a cache of another scene or sky.
 # Usage: pipeline_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -63,6 +63,19 @@ says "$work/err.txt" "^warning: 128 of 128 path samples" "without -q the warning
 says "$work/out.txt" "dropped 128 non-finite path samples" "and the summary still counts them"
 expect 0 "render of the furnace as it is" "$sharcbake" render "$furnace" -o "$work/o.exr" --resolution 8 --spp 2 --no-png -q
 grep -q "non-finite\|NaN" "$work/err.txt" && fail "a furnace of finite radiance warned about non-finite samples"
+
+# --sky-scale is checked against the map it scales: a product beyond float32 is refused as a
+# texel stored infinite is (the furnace's render, radiance about 2, as the map).
+expect 0 "render a sky map" "$sharcbake" render "$furnace" -o "$work/sky.exr" --resolution 8x4 --spp 4 --no-png -q
+expect 0 "a sky map at --sky-scale 1e30" "$sharcbake" render "$cornell" -o "$work/s.exr" --sky-exr "$work/sky.exr" \
+    --sky-scale 1e30 --resolution 8 --spp 1 --no-png -q
+expect 3 "a sky map at --sky-scale 3e38" "$sharcbake" render "$cornell" -o "$work/s.exr" --sky-exr "$work/sky.exr" \
+    --sky-scale 3e38 --resolution 8 --spp 1 --no-png -q
+says "$work/err.txt" "sky.exr: 96 colour values are infinite at --sky-scale 3e+38" "the refusal names the map, the count and the scale"
+expect 3 "a sky map whose total overflows at --sky-scale 5e37" "$sharcbake" bake "$cornell" -o "$work/s.sharc" \
+    --sky-exr "$work/sky.exr" --sky-scale 5e37 --iterations 1 -q
+says "$work/err.txt" "sky.exr: the sky's total radiance (over all directions) is infinite at --sky-scale 5e+37" \
+    "a sky of finite texels whose total overflows is refused as well"
 
 # Provenance in the bake's stats JSON.
 python3 - "$work/bake.json" "$work/c.sharc" "$work/c.ckpt" <<'PY' || fail "bake stats JSON provenance"
