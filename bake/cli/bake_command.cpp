@@ -1242,6 +1242,10 @@ private:
                          100.0 * unreached, coverage_.points, sight, remedies);
         }
         if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
+        // Without the summary (-q) its Stability section's warnings would go unsaid.
+        if (o_.quiet) {
+            for (const std::string& w : stability_.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+        }
         if (autoCapacity() && cache.numerics().failed_inserts > 0) {
             // The table doubles between iterations; one iteration filled it faster than that.
             std::fprintf(stderr,

@@ -79,6 +79,11 @@ bool sameFile(const std::string& a, const std::string& b) {
 
 void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others) {
     namespace fs = std::filesystem;
+    // A file literally named "-" is never what was meant; text reports take "-" for stdout, and
+    // this output is not one of them.
+    if (isStandardOutput(path)) {
+        throw CommandError(kExitUsage, "the " + what + " cannot go to standard output (\"-\"): name a file");
+    }
     std::string target, temporary, message;
     if (prepareOutputFile(path, &target, &temporary, &message) != CacheFileStatus::kOk) {
         throw CommandError(kExitIo, message + " (the " + what + ")");

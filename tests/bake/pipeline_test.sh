@@ -115,6 +115,13 @@ says "$work/err.txt" "^Wrote .*s.exr" "with --stats-json -, the render's summary
 expect 1 "--stats-json - with several scenes" "$sharcbake" bake "$cornell" "$scenes/two_rooms/two_rooms.gltf" \
     -o "$work/several" --stats-json - $small
 says "$work/err.txt" "one JSON document per scene" "the refusal says why"
+# Binary outputs take no "-": refused before any work, and no file named "-" is made.
+(cd "$work" && "$sharcbake" bake "$cornell" -o - $small >"$work/out.txt" 2>"$work/err.txt")
+[ $? -eq 1 ] && echo "ok: bake -o - refused (exit 1)" || fail "bake -o -: not refused with exit 1"
+says "$work/err.txt" "the cache cannot go to standard output" "bake -o -: the refusal says why"
+(cd "$work" && "$sharcbake" render "$cornell" -o - --resolution 8 --spp 1 >"$work/out.txt" 2>"$work/err.txt")
+[ $? -eq 1 ] && echo "ok: render -o - refused (exit 1)" || fail "render -o -: not refused with exit 1"
+[ ! -e "$work/-" ] || fail "-o - wrote a file named -"
 
 # info --json gives metadata numbers as numbers.
 expect 0 "info --json" "$sharcbake" info "$work/c.sharc" --json

@@ -83,6 +83,11 @@ says "$work/out.txt" "warning: light stays in this scene for about 10[0-9] bounc
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['stability']; assert 0.985 < s['scene_reflectance'] < 0.995, s" \
     "$work/stiff.json" && echo "ok: stats JSON holds the scene reflectance" ||
     { echo "FAIL: stats JSON scene_reflectance"; failures=$((failures + 1)); }
+# -q leaves out the summary, not its warnings.
+expect 0 "stiff bake, quiet" "$sharcbake" bake "$scenes/furnace_rho099/furnace_rho099.gltf" -o "$work/stiff_q.sharc" \
+    --iterations 4 --resolution 64x64 -q
+says "$work/err.txt" "warning: light stays in this scene for about 10[0-9] bounces" "stiff bake, quiet: warned on stderr"
+if [ -s "$work/out.txt" ]; then fail "stiff bake, quiet: stdout not empty"; cat "$work/out.txt"; else echo "ok: stiff bake, quiet: stdout empty"; fi
 expect 0 "stiff render" "$sharcbake" render "$scenes/furnace_rho099/furnace_rho099.gltf" -o "$work/stiff.exr" \
     --resolution 8 --spp 1
 says "$work/err.txt" "warning: light stays in this scene for about 10[0-9] bounces .* the render is slow" "stiff render: warned"
