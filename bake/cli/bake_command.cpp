@@ -4,6 +4,7 @@
 #include "cli/commands.h"
 #include "cli/config_file.h"
 #include "reports/convergence_report.h"
+#include "reports/image_error.h"
 #include "reports/stability_report.h"
 #include "sharc/baker.h"
 #include "sharc/camera_path.h"
@@ -275,6 +276,16 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
         }
         view.width = reference->width;
         view.height = reference->height;
+        bool no_scale = false;
+        errorScale(*reference, &no_scale);
+        if (no_scale) {
+            // As compare says: the image rows' numbers would then be in the scene's units.
+            std::fprintf(stderr,
+                         "warning: --reference %s has no positive finite mean (black, or no finite pixel): the "
+                         "report's image measures fall back to absolute epsilons of 0.01 and depend on the "
+                         "scene's units (its probe measures do not)\n",
+                         o.reference_path.c_str());
+        }
         if (!o.report_resolution.empty()) {
             int width = 0, height = 0;
             parseImageSize(o.report_resolution, "--report-resolution", view.camera.aspect_ratio, width, height,

@@ -65,9 +65,16 @@ double tileMeanRelativeError(const Image& image, const Image& reference, const D
 }  // namespace
 
 double errorScale(const Image& reference, bool* fallback) {
+    // Over the finite pixels: compareImages counts a NaN or infinite one as a full error of its
+    // own, and it must not take the scale of every other pixel with it.
     double sum = 0.0;
-    for (const glm::vec3& r : reference.pixels) sum += double(r.x) + double(r.y) + double(r.z);
-    const double mean = reference.pixels.empty() ? 0.0 : sum / (3.0 * double(reference.pixels.size()));
+    size_t counted = 0;
+    for (const glm::vec3& r : reference.pixels) {
+        if (!finite(r)) continue;
+        sum += double(r.x) + double(r.y) + double(r.z);
+        ++counted;
+    }
+    const double mean = counted == 0 ? 0.0 : sum / (3.0 * double(counted));
     const bool usable = std::isfinite(mean) && mean > 0.0;
     if (fallback) *fallback = !usable;
     return usable ? mean : 1.0;

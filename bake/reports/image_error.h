@@ -37,9 +37,9 @@ struct ImageComparison {
     bool scale_is_fallback = false;           ///< the reference had no mean to take m from (m = 1)
 };
 
-/// The scale m of the measures' epsilons: the reference's mean over pixels and channels. A
-/// reference whose mean is not a positive finite number (black, or holding NaN or infinity) has
-/// no scale of its own and gets m = 1, i.e. absolute epsilons of 0.01: the measures stay finite,
+/// The scale m of the measures' epsilons: the reference's mean over its finite pixels and their
+/// channels (a NaN or infinite pixel is a full error of its own in compareImages). A reference
+/// whose mean is not a positive number (black, or no finite pixel) has no scale of its own and gets m = 1, i.e. absolute epsilons of 0.01: the measures stay finite,
 /// are 0 for a black image and grow with the image's brightness, in its units (borrowing the
 /// image's own mean instead would give every image the same mean relative error, 100, against
 /// a black reference). `fallback`, when given, says whether m fell back to 1.

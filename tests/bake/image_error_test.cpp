@@ -200,11 +200,15 @@ TEST(CompareImages, ABlackReferenceDividesByNoZero) {
     EXPECT_NEAR(split.total, 0.25 / 0.01, 1e-5);  // 0.4f and 0.6f round
     EXPECT_NEAR(split.noise, 0.25 * 0.04 / 0.01, 1e-5);
     EXPECT_TRUE(std::isfinite(split.rest_standard_error));
-    // A reference with a NaN pixel has no usable mean either; m falls back the same way.
-    Image poisoned = filled(4, 4, glm::vec3(1.0f));
+    // A NaN pixel in the reference counts as a full error of its own (compareImages), and the
+    // scale is the other pixels' mean: it does not fall back to 1 for the whole image.
+    Image poisoned = filled(4, 4, glm::vec3(3e-3f));
     poisoned.pixels[3].y = std::numeric_limits<float>::quiet_NaN();
-    bool fallback = false;
-    EXPECT_EQ(errorScale(poisoned, &fallback), 1.0);
+    bool fallback = true;
+    EXPECT_NEAR(errorScale(poisoned, &fallback), 3e-3, 1e-9);
+    EXPECT_FALSE(fallback);
+    Image all_nan = filled(2, 2, glm::vec3(std::numeric_limits<float>::quiet_NaN()));
+    EXPECT_EQ(errorScale(all_nan, &fallback), 1.0);
     EXPECT_TRUE(fallback);
     EXPECT_EQ(errorScale(filled(4, 4, glm::vec3(-1.0f)), &fallback), 1.0);
     EXPECT_TRUE(fallback);

@@ -55,6 +55,12 @@ expect 0 "closed scene with no light" "$sharcbake" bake "$work/dark.gltf" -o "$w
     --resolution 32x32 --stats-json "$work/dark.json"
 says "$work/err.txt" "the cache will be black" "dark scene: warned"
 says "$work/dark.json" '"non_finite_dropped": 0' "dark scene: no NaN/Inf"
+# Its black render as a --reference has no scale for the image measures' epsilons: said, as
+# compare says it.
+expect 0 "black reference render" "$sharcbake" render "$work/dark.gltf" -o "$work/dark.exr" --resolution 16 --spp 1
+expect 0 "bake against a black reference" "$sharcbake" bake "$work/dark.gltf" -o "$work/dark_ref.sharc" --iterations 2 \
+    --resolution 32x32 --report "$work/dark_report" --reference "$work/dark.exr"
+says "$work/err.txt" "warning: --reference .*dark.exr has no positive finite mean" "black reference: warned"
 
 # A table far too small, and not a power of two: every failed insert counted, the lost energy stated.
 expect 0 "bake with 1000 slots" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/small.sharc" \
