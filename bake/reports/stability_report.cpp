@@ -38,6 +38,19 @@ void addWarnings(StabilityReport& r) {
                                     "check for extreme emission or path weights)",
                                     double(r.clamped_deposits), 100.0 * r.share(r.clamped_energy)));
     }
+    if (r.deposits > 0 && double(r.sub_step_deposits) > kSubStepWarningShare * double(r.deposits)) {
+        // The scale puts the brightest radiance the scene can make at 2^40 steps (chooseRadianceScale).
+        r.warnings.push_back(
+            format("%.3g%% of deposits carried less than one fixed-point step (radiance below "
+                   "%.3g, where the brightest emitter's %.3g is 2^40 steps): dithered rounding "
+                   "keeps them on average, but the voxels they feed hold a few steps at most and "
+                   "read as noise or 0; the scene's radiance spans more than the fixed point "
+                   "holds: turn its brightest emitter down, or bake its dim part as a scene of "
+                   "its own",
+                   100.0 * double(r.sub_step_deposits) / double(r.deposits),
+                   r.radiance_scale > 0.0 ? 1.0 / r.radiance_scale : 0.0,
+                   r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0));
+    }
     if (r.saturated_sums > 0) {
         r.warnings.push_back(format("%.0f deposits met a voxel sum already at its 72-bit ceiling (2^72 fixed-point "
                                     "units in one iteration); those voxels are darker than they should be",
@@ -108,6 +121,7 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
     r.deposits = n.deposits;
     r.deposited_energy = channelSum(n.deposited_energy);
     r.clamped_deposits = n.clamped_deposits;
+    r.sub_step_deposits = n.sub_step_deposits;
     r.clamped_energy = channelSum(n.clamped_energy);
     r.saturated_sums = n.saturated_sums;
     r.failed_inserts = n.failed_inserts;
@@ -164,9 +178,9 @@ void printStabilitySection(std::FILE* out, const StabilityReport& r) {
     std::fprintf(out, "Stability:\n");
     std::fprintf(out, "  energy: %llu deposits, %.6g deposited (fixed-point scale %g)\n", (unsigned long long)r.deposits,
                  r.deposited_energy, r.radiance_scale);
-    std::fprintf(out, "  clamped: %llu deposits, %.3g energy (%.3g%%); saturated sums %llu\n",
+    std::fprintf(out, "  clamped: %llu deposits, %.3g energy (%.3g%%); saturated sums %llu; below one step %llu\n",
                  (unsigned long long)r.clamped_deposits, r.clamped_energy, 100.0 * r.share(r.clamped_energy),
-                 (unsigned long long)r.saturated_sums);
+                 (unsigned long long)r.saturated_sums, (unsigned long long)r.sub_step_deposits);
     std::fprintf(out, "  failed inserts: %llu deposits, %.3g energy (%.3g%%); %llu of %u slots in use%s\n",
                  (unsigned long long)r.failed_inserts, r.failed_insert_energy, 100.0 * r.share(r.failed_insert_energy),
                  (unsigned long long)r.occupied_slots, r.capacity,
@@ -196,6 +210,7 @@ Json stabilityJson(const StabilityReport& r) {
         {"deposited_energy", r.deposited_energy},
         {"radiance_scale", r.radiance_scale},
         {"clamped_deposits", r.clamped_deposits},
+        {"sub_step_deposits", r.sub_step_deposits},
         {"clamped_energy", r.clamped_energy},
         {"clamped_energy_share", r.share(r.clamped_energy)},
         {"saturated_sums", r.saturated_sums},

@@ -30,11 +30,16 @@ inline constexpr double kPrecisionWarningShare = 0.05;
 /// (docs/sharc_algorithm.md §10.9); the bias is part of the bit-exact key and cannot follow the scene.
 inline constexpr double kPositionBiasWarningFactor = 16.0;
 
+/// Above this share of deposits below one fixed-point step the dim part of the scene is mostly
+/// rounding noise (a room lit at 1e-6 beside a 1e12 emitter read 0 in every voxel).
+inline constexpr double kSubStepWarningShare = 0.01;
+
 struct StabilityReport {
     // Energy (radiance x weight summed over deposits, all channels).
     uint64_t deposits = 0;
     double deposited_energy = 0.0;     ///< every finite deposit, before any change
     uint64_t clamped_deposits = 0;     ///< single deposits above the fixed-point ceiling
+    uint64_t sub_step_deposits = 0;    ///< deposits below one fixed-point step in every channel
     double clamped_energy = 0.0;       ///< removed by that ceiling
     uint64_t saturated_sums = 0;       ///< deposits into a voxel sum already at its ceiling
     uint64_t failed_inserts = 0;       ///< deposits dropped because their bucket was full

@@ -39,6 +39,7 @@ constexpr NamedNumericsCount kNumericsCounts[] = {
     {"non_finite_deposits", &NumericsCounters::non_finite_deposits},
     {"negative_deposits", &NumericsCounters::negative_deposits},
     {"clamped_deposits", &NumericsCounters::clamped_deposits},
+    {"sub_step_deposits", &NumericsCounters::sub_step_deposits},
     {"saturated_sums", &NumericsCounters::saturated_sums},
     {"orphan_sums", &NumericsCounters::orphan_sums},
 };

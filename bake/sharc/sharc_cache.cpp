@@ -158,7 +158,7 @@ private:
 
 /// What accumulating one chunk counted, added up in chunk order afterwards.
 struct SharcCache::ChunkNumerics {
-    uint64_t failed = 0, negative = 0, clamped = 0, saturated = 0;
+    uint64_t failed = 0, negative = 0, clamped = 0, saturated = 0, sub_step = 0;
     glm::dvec3 failed_energy{0.0}, clamped_energy{0.0};
     std::vector<uint32_t> touched;
 };
@@ -288,6 +288,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
         numerics_.failed_insert_energy += n.failed_energy;
         numerics_.negative_deposits += n.negative;
         numerics_.clamped_deposits += n.clamped;
+        numerics_.sub_step_deposits += n.sub_step;
         numerics_.clamped_energy += n.clamped_energy;
         numerics_.saturated_sums += n.saturated;
         touched_.insert(touched_.end(), n.touched.begin(), n.touched.end());
@@ -513,6 +514,7 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
         if (slots[i] == kDropped) continue;
         PendingSums::Sum& sum = pending.at(slots[i], flush);
         bool negative = false, clamped = false;
+        double largest_scaled = 0.0;
         std::array<double, 3> dither{};
         bool dither_ready = false;
         for (int c = 0; c < 3; ++c) {
@@ -526,6 +528,7 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
             // good (docs/sharc_algorithm.md §10.2). Above 2^20 steps, rounding to nearest is off
             // by at most 2^-21 and the hash is not worth its time.
             const double scaled = value * radiance_scale_;
+            largest_scaled = std::max(largest_scaled, scaled);
             double fixed;
             if (scaled >= kDitherBelow) {
                 fixed = std::nearbyint(scaled);
@@ -549,6 +552,7 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
         }
         numerics.negative += negative;
         numerics.clamped += clamped;
+        numerics.sub_step += largest_scaled > 0.0 && largest_scaled < 1.0;
         sum.samples += d.samples;
     }
     pending.flushAll(flush);

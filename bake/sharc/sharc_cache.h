@@ -140,6 +140,9 @@ struct NumericsCounters {
     uint64_t negative_deposits = 0;        ///< negative channel values clamped to 0
     uint64_t clamped_deposits = 0;         ///< single deposits above the fixed-point ceiling
     glm::dvec3 clamped_energy{0.0};        ///< energy removed by that ceiling
+    /// Deposits with radiance but less than one fixed-point step in every channel: dithered
+    /// rounding keeps them on average, as 0 or 1 step each, so the voxels they feed read as noise.
+    uint64_t sub_step_deposits = 0;
     uint64_t saturated_sums = 0;           ///< times a voxel sum reached its 72-bit ceiling
     uint64_t orphan_sums = 0;              ///< radiance without a sample (dropped at resolve)
 };

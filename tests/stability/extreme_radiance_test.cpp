@@ -3,7 +3,11 @@
 // large one. No integer wrap, no fp saturation, energy conserved, every clamp counted.
 #include "stability_support.h"
 
+#include "reports/stability_report.h"
+
 #include <gtest/gtest.h>
+
+#include <algorithm>
 
 namespace sharcbake::stability {
 namespace {
@@ -120,6 +124,19 @@ TEST(FixedPoint, RadianceFarBelowOneStepIsKeptOnAverage) {
     ASSERT_NE(e, nullptr);
     // Binomial(1e5, 0.1) / 1e5 has a relative standard deviation of 0.95%: 5% is > 5 sigma.
     EXPECT_NEAR(e->mean.x, tiny, 0.05 * tiny);
+    // Every one of them was below one step: counted, and the stability report says what it costs.
+    EXPECT_EQ(cache.numerics().sub_step_deposits, uint64_t(kDeposits));
+    const StabilityReport report = makeStabilityReport(cache, UpdateCounters{}, glm::vec3(0.0f), glm::vec3(1.0f), {1});
+    EXPECT_EQ(report.sub_step_deposits, uint64_t(kDeposits));
+    const bool warned = std::any_of(report.warnings.begin(), report.warnings.end(), [](const std::string& w) {
+        return w.find("100% of deposits carried less than one fixed-point step") != std::string::npos;
+    });
+    EXPECT_TRUE(warned) << testing::PrintToString(report.warnings);
+
+    // One step and more is not counted, however dim against the brightest emitter.
+    SharcCache steps(oneVoxelSettings(), scale);
+    steps.commit(std::vector<Deposit>(100, Deposit{kKey, glm::vec3(float(1.5 / scale)), 1}));
+    EXPECT_EQ(steps.numerics().sub_step_deposits, 0u);
 }
 
 /// 1024 deposits of 2^52 fixed-point units (2^12 times the brightest emission) sum to 2^62;
