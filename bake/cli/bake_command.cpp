@@ -1414,7 +1414,9 @@ void runBatch(const BakeOptions& batch) {
 void printConfig(CLI::App& command) {
     makePathOptionsAbsolute(command);
     std::istringstream lines(command.config_to_str(true, true));
-    std::string text = "# sharcbake " SHARCBAKE_VERSION " bake settings: sharcbake --config FILE bake [SCENE...]\n[" +
+    std::string text = "# sharcbake " SHARCBAKE_VERSION " bake settings: sharcbake --config FILE bake [SCENE...]\n"
+                       "# Paths are written absolute; relative ones, if you edit them in, are read from this "
+                       "file's folder.\n[" +
                        command.get_name() + "]\n";
     std::string comment;
     for (std::string line; std::getline(lines, line);) {
