@@ -3,6 +3,7 @@
 
 #include "tracing/sampling.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -141,15 +142,32 @@ void LightSampler::addSky(float disk_area, std::vector<float>& powers) {
     float mean_luminance = luminance(scene_.sky.uniform);
     if (scene_.sky.map) {
         const Texture& map = *scene_.sky.map;
-        std::vector<float> weights(size_t(map.width) * size_t(map.height));
+        const size_t width = size_t(map.width), height = size_t(map.height);
+        std::vector<float> lum(width * height);
+        for (size_t i = 0; i < lum.size(); ++i) lum[i] = std::max(0.0f, luminance(glm::vec3(map.texels[i])));
+        // Each cell's weight is the mean of the bilinear lookup over it (skyRadiance filters the
+        // map): a texel's light spreads half a texel into its eight neighbours, 1/8, 3/4, 1/8 along
+        // each axis (u wraps, v clamps, as the lookup does). With the texel alone the neighbours
+        // had no light-sampling pdf, and a one-texel sun lit them only through BSDF samples:
+        // fireflies, three times the noise of the same sun spread over 3x3 texels.
+        const auto at = [&](int64_t x, int64_t y) {
+            const int64_t w = int64_t(width), h = int64_t(height);
+            return lum[size_t(std::clamp<int64_t>(y, 0, h - 1)) * width + size_t(((x % w) + w) % w)];
+        };
+        constexpr float kTent[3] = {0.125f, 0.75f, 0.125f};
+        std::vector<float> weights(width * height);
         double sum = 0.0;
-        for (int y = 0; y < map.height; ++y) {
+        for (size_t y = 0; y < height; ++y) {
             // Rows near the poles cover less solid angle.
             const float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(map.height));
-            for (int x = 0; x < map.width; ++x) {
-                const float lum = std::max(0.0f, luminance(glm::vec3(map.texels[size_t(y) * size_t(map.width) + size_t(x)])));
-                weights[size_t(y) * size_t(map.width) + size_t(x)] = lum * sin_theta;
-                sum += double(lum * sin_theta);
+            for (size_t x = 0; x < width; ++x) {
+                float cell = 0.0f;
+                for (int dy = -1; dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx)
+                        cell += kTent[dy + 1] * kTent[dx + 1] * at(int64_t(x) + dx, int64_t(y) + dy);
+                }
+                weights[y * width + x] = cell * sin_theta;
+                sum += double(cell * sin_theta);
             }
         }
         sky_map_distribution_ = Distribution2D(weights, map.width, map.height);

@@ -691,5 +691,51 @@ TEST(OcclusionMaps, AreDroppedWithAWarning) {
     EXPECT_TRUE(warnedAbout(scene, "occlusionTexture ignored"));
 }
 
+// A sky map is looked up bilinearly, so one bright texel lights the half texel around it in its
+// eight neighbours too; light sampling must reach every direction it lights (else those are lit
+// through BSDF samples alone, as fireflies), and its pdf must integrate to 1 over the sphere.
+TEST(SkyMap, LightSamplingReachesEveryDirectionTheMapLights) {
+    Scene scene = loadGltf(scenePath("cornell_box"));
+    Texture map;
+    map.width = 32;
+    map.height = 16;
+    map.texels.assign(size_t(map.width) * size_t(map.height), glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    map.wrap_t = WrapMode::ClampToEdge;
+    const int sun_x = 0, sun_y = 5;  // on the seam, where u wraps
+    map.texels[size_t(sun_y) * size_t(map.width) + size_t(sun_x)] = glm::vec4(1e6f, 1e6f, 1e6f, 1.0f);
+    scene.sky.map = map;
+    const LightSampler lights(scene);
+    const glm::vec3 normal(0.0f, 1.0f, 0.0f);  // a map's pdf does not depend on the surface
+    int lit = 0;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            for (const float inset : {0.3f, 0.5f, 0.7f}) {  // inside the cell, off its centre too
+                const float u = (float(sun_x + dx) + inset) / float(map.width);
+                const glm::vec3 direction = equirectToDirection(
+                    glm::vec2(u < 0.0f ? u + 1.0f : u, (float(sun_y + dy) + inset) / float(map.height)));
+                if (!(maxComponent(lights.skyRadiance(direction)) > 0.0f)) continue;
+                ++lit;
+                EXPECT_GT(lights.pdfSky(normal, direction), 0.0f) << "cell " << dx << ", " << dy << " inset " << inset;
+            }
+        }
+    }
+    EXPECT_GE(lit, 9);  // the sun's own cell, and the half texel of each neighbour nearest it
+    // The pdf over directions integrates to 1 (a grid over the sphere, sin-weighted).
+    double integral = 0.0;
+    constexpr int kSteps = 512;
+    for (int j = 0; j < kSteps; ++j) {
+        for (int i = 0; i < 2 * kSteps; ++i) {
+            const glm::vec2 uv((float(i) + 0.5f) / float(2 * kSteps), (float(j) + 0.5f) / float(kSteps));
+            const double sin_theta = std::sin(kPi * double(uv.y));
+            integral += double(lights.pdfSky(normal, equirectToDirection(uv))) * sin_theta *
+                        (2.0 * kPi / (2 * kSteps)) * (kPi / kSteps);
+        }
+    }
+    // pdfSky includes the sky's share of light selection; with the Cornell box's panel beside it
+    // that share is below 1, so the integral is that share.
+    EXPECT_GT(integral, 0.0);
+    EXPECT_LE(integral, 1.0 + 1e-3);
+}
+
 }  // namespace
 }  // namespace sharcbake
