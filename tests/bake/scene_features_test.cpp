@@ -737,5 +737,36 @@ TEST(SkyMap, LightSamplingReachesEveryDirectionTheMapLights) {
     EXPECT_LE(integral, 1.0 + 1e-3);
 }
 
+// KHR_lights_punctual's range: the inverse square law times the extension's recommended
+// clamp(1 - (d/range)^4, 0, 1), nothing beyond. (The squared window, UE4's, gave 0.64 of the
+// spec's light at two thirds of the range.)
+TEST(PunctualLights, RangeWindowsTheInverseSquareLawAsTheExtensionRecommends) {
+    Scene scene = loadGltf(scenePath("cornell_box"));
+    scene.lights.clear();
+    PunctualLight bulb;
+    bulb.type = LightType::Point;
+    bulb.position = glm::vec3(0.0f, 10.0f, 0.0f);
+    bulb.intensity = glm::vec3(4.0f);
+    bulb.range = 1.5f;
+    scene.lights.push_back(bulb);
+    for (Material& m : scene.materials) m.emissive = glm::vec3(0.0f);  // the light alone
+    const LightSampler lights(scene);
+    for (const float d : {0.5f, 1.0f, 1.4f, 1.6f}) {
+        SurfaceHit at;
+        at.position = bulb.position - glm::vec3(0.0f, d, 0.0f);
+        at.geometric_normal = at.shading_normal = at.face_normal = glm::vec3(0.0f, 1.0f, 0.0f);
+        LightSample sample;
+        const bool lit = lights.sample(at, 0.5f, glm::vec2(0.5f), sample);
+        const float ratio = d / bulb.range;
+        const float expected = 4.0f / (d * d) * std::max(0.0f, 1.0f - ratio * ratio * ratio * ratio);
+        if (d > bulb.range) {
+            EXPECT_FALSE(lit && sample.radiance.x > 0.0f) << d;
+            continue;
+        }
+        ASSERT_TRUE(lit) << d;
+        EXPECT_NEAR(sample.radiance.x * sample.pdf, expected, 1e-4f * expected) << d;  // pdf: selection only
+    }
+}
+
 }  // namespace
 }  // namespace sharcbake

@@ -165,7 +165,9 @@ struct PunctualLight {
     /// Point/spot: radiant intensity in W/sr (candela / 683).
     /// Directional: irradiance in W/m^2 on a surface facing the light (lux / 683).
     glm::vec3 intensity{0.0f};
-    float range = 0.0f;  ///< 0 = infinite. glTF's range is a cut-off hint; we honour it as a hard cut-off.
+    /// 0 = infinite. Beyond it the light gives nothing; within it the inverse square law is
+    /// windowed by KHR_lights_punctual's recommended clamp(1 - (d/range)^4, 0, 1).
+    float range = 0.0f;
     float inner_cone_angle = 0.0f;                    ///< spot, radians
     float outer_cone_angle = 0.785398163397448f;      ///< spot, radians (pi/4 default)
 };
