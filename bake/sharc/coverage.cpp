@@ -31,14 +31,18 @@ CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, cons
     report.total_area = surfaceArea(scene);
     const HashGridParameters& grid = cache.settings().grid;
 
-    // A voxel with samples, of the key `keyOf(position, normal)` gives, on a side a camera can see
-    // (the front; the back too where the material is double-sided).
+    // A voxel with samples, of the key `keyOf(position, normal)` gives, on either side. Paths shade
+    // both sides of every surface (a single-sided one only emits from its front) and SHaRC keys
+    // the normal turned towards the ray: a room modelled from a cube, its normals out, is
+    // reached on the backs of its single-sided walls alone. A point is one point of surface
+    // whichever side was reached, double-sided or not (the outside of a closed room faces the
+    // void, where no path comes from).
     const auto reached = [&](const SurfacePoint& point, const auto& keyOf) {
         const auto has_voxel = [&](glm::vec3 n) {
             const ResolvedEntry* e = cache.findResolved(keyOf(point.position, n));
             return e && e->weight > 0.0;
         };
-        return has_voxel(point.normal) || (point.double_sided && has_voxel(-point.normal));
+        return has_voxel(point.normal) || has_voxel(-point.normal);
     };
     const auto reachedAt = [&](const SurfacePoint& point, uint32_t level) {
         return reached(point, [&](glm::vec3 p, glm::vec3 n) {

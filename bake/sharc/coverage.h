@@ -37,9 +37,11 @@ struct CoverageReport {
     double total_area = 0.0;      ///< world units squared
 };
 
-/// Tests `points` surface points, distributed by area (deterministic), on the sides a camera
-/// can see (the front; both sides for double-sided materials), at each of `levels` (the cache's,
-/// from levelsPresent()), and with `deposit_levels` at the level the bake deposits there.
+/// Tests `points` surface points, distributed by area (deterministic), at each of `levels` (the
+/// cache's, from levelsPresent()), and with `deposit_levels` at the level the bake deposits there.
+/// A point is reached where either of its sides has a voxel: paths shade the back of a
+/// single-sided surface too (only its emission is one-sided), so the inside of a room whose
+/// single-sided walls face out is reached on their backs.
 CoverageReport measureCoverage(const Scene& scene, const SharcCache& cache, const std::vector<uint32_t>& levels,
                                uint32_t points, const DepositLevels* deposit_levels = nullptr);
 

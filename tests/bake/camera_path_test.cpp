@@ -47,10 +47,12 @@ struct RoomOptions {
     bool camera = true;
     bool closed_cube = false;  ///< a closed 1 m cube (wound outwards) on the floor
     float ground_half = 0.0f;  ///< > 0: a ground plane this far out each way, facing up, under the room
+    bool box_outside = false;  ///< a closed 2 m box (wound outwards) 4 m beyond the +X wall: nothing reaches it
 };
 
 constexpr glm::vec3 kRoomMin{-2.0f, 0.0f, -2.5f}, kRoomMax{2.0f, 3.0f, 2.5f};
 constexpr glm::vec3 kCubeMin{0.5f, 0.0f, -1.5f}, kCubeMax{1.5f, 1.0f, -0.5f};
+constexpr glm::vec3 kOutsideMin{6.0f, 0.0f, -1.0f}, kOutsideMax{8.0f, 2.0f, 1.0f};
 
 Scene loadRoom(const test::TempDir& dir, const RoomOptions& options) {
     test::GltfBuilder gltf;
@@ -58,6 +60,7 @@ Scene loadRoom(const test::TempDir& dir, const RoomOptions& options) {
     std::vector<uint32_t> indices;
     addBox(positions, indices, kRoomMin, kRoomMax, options.walls_inwards);
     if (options.closed_cube) addBox(positions, indices, kCubeMin, kCubeMax, false);
+    if (options.box_outside) addBox(positions, indices, kOutsideMin, kOutsideMax, false);
     if (options.ground_half > 0.0f) {
         const float h = options.ground_half, y = kRoomMin.y - 0.01f;
         const uint32_t base = uint32_t(positions.size() / 3);
@@ -378,6 +381,46 @@ TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {
                 before, after);
     EXPECT_GT(before, 0.4);           // measured 0.46
     EXPECT_LT(after, 0.1 * before);   // measured 0.027
+}
+
+TEST(Coverage, ASingleSidedRoomWoundOutwardsIsReachedFromInside) {
+    // A Blender cube scaled into a room, backface culling on: single-sided walls whose winding
+    // faces out, seen from inside. The path tracer shades their backs and SHaRC keys the normal
+    // towards the ray, so every voxel sits on a back side; coverage tested the fronts alone and
+    // said 100% of the surface was never reached (29% without a voxel at any level) of a room
+    // its camera found whole.
+    test::TempDir dir;
+    BakeSettings settings;
+    settings.width = settings.height = 320;
+    settings.sharc.grid.capacity = 1u << 18;
+    const auto coverageOf = [&](const RoomOptions& options, const char* what) {
+        const TestBakeScene bake(loadRoom(dir, options));
+        const std::unique_ptr<Baker> baker = bake.makeBaker(settings);
+        for (int i = 0; i < 32; ++i) baker->runIteration();
+        const CoverageReport r = measureCoverage(bake.scene, baker->cache(), levelsPresent(baker->cache()), 4000,
+                                                 &baker->depositLevels());
+        std::printf("[coverage] %s: no voxel at any level %.4f, at the deposit level %.4f\n", what, r.unreached_area,
+                    r.unreached_deposit_area);
+        return r;
+    };
+    RoomOptions options{false, false, true, false};  // single-sided, wound outwards, a camera inside
+    const CoverageReport outwards = coverageOf(options, "single-sided room wound outwards");
+    EXPECT_LT(outwards.unreached_area, 0.01);
+    EXPECT_LT(outwards.unreached_deposit_area, 0.05);
+    // The same room wound inwards, and double-sided wound outwards, read the same.
+    const CoverageReport inwards = coverageOf({false, true, true, false}, "single-sided room wound inwards");
+    EXPECT_LT(inwards.unreached_deposit_area, 0.05);
+    const CoverageReport both = coverageOf({true, false, true, false}, "double-sided room wound outwards");
+    EXPECT_LT(both.unreached_deposit_area, 0.05);
+    // A closed box outside the room, which no path reaches from either side, still reads unreached
+    // at the level the bake deposits there: its 24 m^2 of the 118 m^2 in all (the coarsest
+    // voxels, summed from the room, cover it, as they cover any surface near reached surface).
+    options.box_outside = true;
+    const CoverageReport with_box = coverageOf(options, "the room and a closed box outside it");
+    const glm::vec3 room = kRoomMax - kRoomMin, box = kOutsideMax - kOutsideMin;
+    const double box_area = 2.0 * (box.x * box.y + box.x * box.z + box.y * box.z);
+    const double box_share = box_area / (box_area + 2.0 * (room.x * room.y + room.x * room.z + room.y * room.z));
+    EXPECT_NEAR(with_box.unreached_deposit_area, box_share, 0.03);
 }
 
 /// `iterations` iterations of a small bake (64x64 paths, 2^16 slots), as the file would hold them.
