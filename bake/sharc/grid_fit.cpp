@@ -70,17 +70,21 @@ double seenShareOfPoints(const Tracer& tracer, const std::vector<glm::vec3>& vie
         });
     };
     // Sides seen and sides there, summed over the points: integers, so the sums do not depend on
-    // how the points are split between threads.
+    // how the points are split between threads. A single-sided surface is one side
+    // (visibleSurfaceArea counts it once), seen from either: paths shade its back too, and a
+    // room modelled from a cube, its normals out, is seen from inside on the backs of its walls.
     using Counts = std::pair<uint64_t, uint64_t>;
     const Counts counts = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, points.size()), Counts{0, 0},
         [&](const tbb::blocked_range<size_t>& range, Counts sum) {
             for (size_t i = range.begin(); i != range.end(); ++i) {
                 const SurfacePoint& p = points[i];
-                sum.first += seenFromAny(p.position, p.normal);
-                sum.second += 1;
                 if (p.double_sided) {
+                    sum.first += seenFromAny(p.position, p.normal);
                     sum.first += seenFromAny(p.position, -p.normal);
+                    sum.second += 2;
+                } else {
+                    sum.first += seenFromAny(p.position, p.normal) || seenFromAny(p.position, -p.normal);
                     sum.second += 1;
                 }
             }
@@ -115,7 +119,8 @@ double seenTriangleArea(const Tracer& tracer, const std::vector<glm::vec3>& view
         const uint8_t seen = sides[t].load(std::memory_order_relaxed);
         if (!seen) continue;
         const double a = triangleAreaOf(scene, t);
-        // A single-sided surface is visible from its front only (visibleSurfaceArea counts it once).
+        // A single-sided surface counts once, whichever side a ray hit (visibleSurfaceArea counts it
+        // once).
         const bool double_sided = scene.materials[scene.triangle_materials[t]].double_sided;
         area += double_sided ? a * double((seen & 1) + (seen >> 1)) : a;
     }

@@ -43,7 +43,8 @@ struct SeenSurface {
 
 /// Estimates SeenSurface from `samples` points spread over the surface by area: a point's side
 /// (each side of a double-sided surface) counts as seen when an unoccluded segment joins it to any
-/// viewpoint in front of it. Deterministic for a seed; parallel over the points.
+/// viewpoint in front of it; a single-sided point, when either side is (paths shade the back of
+/// a single-sided surface too). Deterministic for a seed; parallel over the points.
 SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints, uint32_t samples,
                             uint32_t seed);
 
