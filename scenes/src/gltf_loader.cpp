@@ -366,6 +366,42 @@ glm::dmat4 localTransform(const tinygltf::Node& node) {
     return composeTrs(vec3(node.translation), rotation, vec3(node.scale));
 }
 
+/// The rotation of a node's local transform, what orients a light whose node is scaled to zero
+/// (its -Z axis has then no direction): R times the signs of S for T * R * S (a zero scale keeps
+/// its axis, a negative one mirrors it, as in the full transform), the orthogonal factor of the
+/// polar decomposition of a matrix. Nothing for a singular matrix: it has no orientation.
+std::optional<glm::dmat3> localOrientation(const tinygltf::Node& node) {
+    if (node.matrix.size() != 16) {
+        glm::dmat3 r(1.0);
+        if (node.rotation.size() == 4) {
+            r = glm::mat3_cast(
+                glm::normalize(glm::dquat(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2])));
+        }
+        if (node.scale.size() == 3) {
+            for (int axis = 0; axis < 3; ++axis)
+                if (node.scale[size_t(axis)] < 0.0) r[axis] = -r[axis];
+        }
+        return r;
+    }
+    glm::dmat3 q(glm::make_mat4(node.matrix.data()));
+    const double size = glm::length(q[0]) * glm::length(q[1]) * glm::length(q[2]);
+    if (!(std::abs(glm::determinant(q)) > 1e-12 * size)) return std::nullopt;  // NaN too
+    // Newton's iteration for the polar decomposition, scaled so that it converges in a few steps
+    // whatever the matrix's scale (Higham, "Computing the polar decomposition", 1986).
+    const auto norm = [](const glm::dmat3& m) {  // Frobenius
+        return std::sqrt(glm::dot(m[0], m[0]) + glm::dot(m[1], m[1]) + glm::dot(m[2], m[2]));
+    };
+    for (int i = 0; i < 100; ++i) {
+        const glm::dmat3 inverse_transpose = glm::transpose(glm::inverse(q));
+        const double gamma = std::sqrt(norm(inverse_transpose) / norm(q));
+        const glm::dmat3 next = 0.5 * (gamma * q + (1.0 / gamma) * inverse_transpose);
+        const glm::dmat3 step = next - q;
+        q = next;
+        if (norm(step) < 1e-15) break;
+    }
+    return q;
+}
+
 /// Builds the glTF-spec default material used by primitives without one.
 Material defaultMaterial() {
     Material m;
@@ -1029,6 +1065,23 @@ private:
         }
     }
 
+    /// The rotation of a node's world transform: localOrientation along its path from the root,
+    /// what orients a light where a zero scale leaves its -Z axis no direction; or the nearest node
+    /// of the path whose matrix is singular, where there is no orientation.
+    struct WorldOrientation {
+        glm::dmat3 rotation{1.0};
+        int singular_node = -1;
+    };
+    WorldOrientation pathOrientation(const std::vector<int>& path) const {
+        WorldOrientation o;
+        for (int index : path) {
+            if (const std::optional<glm::dmat3> local = localOrientation(model_.nodes[size_t(index)]))
+                o.rotation *= *local;
+            else o.singular_node = index;
+        }
+        return o;
+    }
+
     void visitNode(int root, const glm::dmat4& parent) {
         struct Frame {
             int index;
@@ -1057,7 +1110,13 @@ private:
                 }
             }
             if (node.camera >= 0) addCamera(node, world);
-            addNodeLight(node, world);
+            // The path's orientation is made only for a light that needs it (a rare zero scale).
+            addNodeLight(index, world, [&] {
+                std::vector<int> path;
+                for (const Frame& f : stack) path.push_back(f.index);
+                path.push_back(index);
+                return pathOrientation(path);
+            });
             stack.push_back(Frame{index, world, 0});
         };
         enter(root, parent);
@@ -2346,7 +2405,14 @@ private:
 
     // ---------------------------------------------------------------- lights
 
-    void addNodeLight(const tinygltf::Node& node, const glm::dmat4& world) {
+    std::string nodeLabel(int index) const {
+        const std::string& name = model_.nodes[size_t(index)].name;
+        return "node " + std::to_string(index) + (name.empty() ? "" : " " + quoted(name));
+    }
+
+    template <typename OrientationOfPath>
+    void addNodeLight(int nodeIndex, const glm::dmat4& world, const OrientationOfPath& orientation) {
+        const tinygltf::Node& node = model_.nodes[size_t(nodeIndex)];
         const tinygltf::Value* ext = extension(node.extensions, "KHR_lights_punctual");
         if (!ext) return;
         const std::optional<double> index = number(*ext, "light");
@@ -2354,13 +2420,20 @@ private:
             fail("node " + quoted(node.name) + ": KHR_lights_punctual light " +
                  (index ? std::to_string(static_cast<long long>(*index)) : std::string("(missing)")) +
                  " does not exist");
-        scene_.lights.push_back(convertLight(model_.lights[static_cast<size_t>(*index)], world));
+        const size_t light = static_cast<size_t>(*index);
+        if (std::optional<PunctualLight> converted = convertLight(model_.lights[light], light, nodeIndex, world,
+                                                                  orientation)) {
+            scene_.lights.push_back(std::move(*converted));
+        }
     }
 
     /// Photometric glTF units to the renderer's radiometric ones: candela (lm/sr) / 683 =
     /// W/sr for point and spot, lux (lm/m^2) / 683 = W/m^2 for directional. The colour is a
-    /// per-channel multiplier on the intensity (KHR_lights_punctual).
-    PunctualLight convertLight(const tinygltf::Light& src, const glm::dmat4& world) {
+    /// per-channel multiplier on the intensity (KHR_lights_punctual). Nothing, with a warning,
+    /// for a directional or spot light without a direction.
+    template <typename OrientationOfPath>
+    std::optional<PunctualLight> convertLight(const tinygltf::Light& src, size_t lightIndex, int nodeIndex,
+                                              const glm::dmat4& world, const OrientationOfPath& orientationOfPath) {
         PunctualLight light;
         light.name = src.name;
         if (src.type == "directional") light.type = LightType::Directional;
@@ -2369,8 +2442,31 @@ private:
         else fail("light " + quoted(src.name) + ": unknown type " + quoted(src.type));
 
         light.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        // The node's -Z in world space, through the whole world matrix (a mirror turns it). Where a
+        // scale of zero collapses that axis (how some tools hide an object), the rotations along
+        // the node's path orient the light, as glTF says; a singular matrix has none.
         const glm::dvec3 dir = glm::dmat3(world) * glm::dvec3(0.0, 0.0, -1.0);
-        if (glm::length(dir) > 0.0) light.direction = glm::vec3(glm::normalize(dir));
+        const double length = glm::length(dir);
+        if (std::isfinite(length) && length > 0.0) {
+            light.direction = glm::vec3(dir / length);
+        } else if (light.type != LightType::Point) {
+            const WorldOrientation orientation = orientationOfPath();
+            const glm::dvec3 oriented = orientation.rotation * glm::dvec3(0.0, 0.0, -1.0);
+            const std::string label = "light " + std::to_string(lightIndex) +
+                                      (src.name.empty() ? "" : " " + quoted(src.name)) + " on " + nodeLabel(nodeIndex);
+            if (orientation.singular_node >= 0) {
+                warn(label + ": the node's -Z axis has no direction in world space (a scale of zero), and the " +
+                     "matrix of " + nodeLabel(orientation.singular_node) +
+                     " is singular, so nothing orients the light; skipped (give that node rotation, translation "
+                     "and scale instead of its matrix)");
+                return std::nullopt;
+            }
+            if (!isFinite(glm::vec3(oriented))) {
+                warn(label + ": the node's transform is not finite, so the light has no direction; skipped");
+                return std::nullopt;
+            }
+            light.direction = glm::vec3(glm::normalize(oriented));
+        }
         // A negative colour or intensity would take light away; out of the extension's ranges, they
         // are clamped into them (colour [0, 1], intensity at least 0) with a warning.
         const glm::vec3 given_colour = vec3Or(src.color, glm::vec3(1.0f));

@@ -1397,6 +1397,59 @@ TEST(GltfLoaderLights, PhotometricToRadiometric) {
     EXPECT_FLOAT_EQ(sp.outer_cone_angle, 0.5f);
 }
 
+TEST(GltfLoaderLights, AZeroScaleKeepsTheDirectionOfTheNodesRotation) {
+    // Scaling a node to zero is how some tools hide an object; glTF orients a light by its node's
+    // rotation and leaves its properties to no scale. A sun scaled [1, 1, 0] and rotated to shine
+    // down shone along -Z (its collapsed -Z axis had no direction), and the room it lit was black.
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "Sun"}, {"type", "directional"}, {"intensity", 683.0}},
+         {{"name", "Spot"}, {"type", "spot"}, {"intensity", 683.0}, {"spot", json::object()}},
+         {{"name", "Child sun"}, {"type", "directional"}},
+         {{"name", "Matrix sun"}, {"type", "directional"}},
+         {{"name", "Hidden spot"}, {"type", "spot"}, {"spot", json::object()}},
+         {{"name", "Hidden bulb"}, {"type", "point"}}});
+    const auto light = [](int index) { return json{{"KHR_lights_punctual", {{"light", index}}}}; };
+    const float s = std::sqrt(0.5f);
+    const json down = {-s, 0, 0, s};  // -90 degrees about X: -Z turns into -Y
+    std::vector<int> roots;
+    roots.push_back(b.addNode({{"rotation", down}, {"scale", {1, 1, 0}}, {"extensions", light(0)}}));
+    roots.push_back(
+        b.addNode({{"translation", {1, 2, 3}}, {"rotation", down}, {"scale", {0, 0, 0}}, {"extensions", light(1)}}));
+    // Scaled to zero above the light: the parent's rotation turns the child.
+    const int child = b.addNode({{"extensions", light(2)}});
+    roots.push_back(b.addNode({{"rotation", down}, {"scale", {1, 1, 0}}, {"children", {child}}}));
+    // A matrix (column-major) turning -Z into -Y with a scale of 2, 3, 4, under a parent scaled to
+    // zero: the matrix's rotation orients the light.
+    const int scaled = b.addNode(
+        {{"matrix", {2, 0, 0, 0, 0, 0, -3, 0, 0, 4, 0, 0, 0, 0, 0, 1}}, {"extensions", light(3)}});
+    roots.push_back(b.addNode({{"scale", {0, 0, 0}}, {"children", {scaled}}}));
+    // The same rotation with Z scaled to zero in a matrix: a singular matrix has no orientation,
+    // so the spot has no direction. A point light needs none.
+    const json flat = {1, 0, 0, 0, 0, 0, -1, 0, 0, 0, 0, 0, 0, 5, 0, 1};
+    roots.push_back(b.addNode({{"name", "Flat"}, {"matrix", flat}, {"extensions", light(4)}}));
+    roots.push_back(b.addNode({{"matrix", flat}, {"extensions", light(5)}}));
+    b.setScene(roots);
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "hidden_lights.gltf"));
+
+    ASSERT_EQ(scene.lights.size(), 5u) << testing::PrintToString(scene.stats.warnings);
+    for (size_t i = 0; i < 4; ++i) {
+        SCOPED_TRACE(scene.lights[i].name);
+        expectVec3Near(scene.lights[i].direction, {0, -1, 0});
+    }
+    expectVec3Near(scene.lights[0].intensity, {1, 1, 1});  // unscaled
+    expectVec3Near(scene.lights[1].position, {1, 2, 3});
+    EXPECT_EQ(scene.lights[4].name, "Hidden bulb");
+    expectVec3Near(scene.lights[4].position, {0, 5, 0});
+    const auto said = std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(), [](const std::string& w) {
+        return w.find("'Hidden spot'") != std::string::npos && w.find("'Flat'") != std::string::npos &&
+               w.find("singular") != std::string::npos && w.find("skipped") != std::string::npos;
+    });
+    EXPECT_EQ(said, 1) << testing::PrintToString(scene.stats.warnings);
+}
+
 TEST(GltfLoaderLights, SpotConesClampedToValidRange) {
     TempDir dir;
     GltfBuilder b;
