@@ -423,7 +423,9 @@ public:
         convertMaterials();
         readSky();
         readKnownRadiance();
-        for (int root : rootNodes()) visitNode(root, glm::dmat4(1.0));
+        removeRepeatedChildren();
+        for (int root : uniqueRootNodes()) visitNode(root, glm::dmat4(1.0));
+        warnAboutSeveralParents();
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
         settleAlphaModes();
         computeBounds();
@@ -448,6 +450,10 @@ private:
     std::map<std::pair<int, int>, uint64_t> draco_index_counts_;      ///< (mesh, primitive) -> indices' count
     std::map<std::pair<int, float>, int> roughness_from_glossiness_;  ///< (texture, glossiness) -> converted
     std::vector<bool> on_path_;  ///< nodes on the current hierarchy path (cycle detection)
+    /// Per node, where the walk first reached it: -2 not yet, -1 as a root of the scene, else the
+    /// parent node's index; and the other parents of the nodes reached under several.
+    std::vector<int> first_parent_;
+    std::map<int, std::vector<int>> other_parents_;
     std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
     uint64_t collapsed_triangles_ = 0;  ///< triangles flat in float but not in double (dropDegenerateTriangles)
@@ -1045,6 +1051,77 @@ private:
         return roots;
     }
 
+    /// Leaves out the repeats of an index in `list` (the first of each stays); returns each
+    /// repeated index with how many times it was listed, in the order of the list.
+    static std::vector<std::pair<int, int>> removeRepeats(std::vector<int>& list) {
+        std::vector<std::pair<int, int>> repeated;
+        if (list.size() < 2) return repeated;
+        std::map<int, int> count;
+        for (int index : list) ++count[index];
+        if (count.size() == list.size()) return repeated;
+        std::vector<int> unique;
+        for (int index : list) {
+            int& n = count[index];
+            if (n == 0) continue;  // listed before
+            if (n > 1) repeated.emplace_back(index, n);
+            unique.push_back(index);
+            n = 0;
+        }
+        list = std::move(unique);
+        return repeated;
+    }
+
+    /// "node 3 'Lamp'", or "node 3" for a node without a name (or no node at all).
+    std::string nodeLabel(int index) const {
+        std::string label = "node " + std::to_string(index);
+        if (index >= 0 && static_cast<size_t>(index) < model_.nodes.size() &&
+            !model_.nodes[size_t(index)].name.empty()) {
+            label += ' ';
+            label += quoted(model_.nodes[size_t(index)].name);
+        }
+        return label;
+    }
+
+    /// glTF wants a node's children listed once each; a node listed twice was loaded twice at
+    /// one place (two copies of its meshes on each other, its light twice as bright).
+    void removeRepeatedChildren() {
+        for (size_t i = 0; i < model_.nodes.size(); ++i) {
+            for (const auto& [child, times] : removeRepeats(model_.nodes[i].children)) {
+                warn(nodeLabel(int(i)) + " lists " + nodeLabel(child) + " " + std::to_string(times) +
+                     " times among its children; glTF wants each once: it is loaded once");
+            }
+        }
+    }
+
+    /// rootNodes() with each listed once, as glTF wants (a root listed twice was loaded twice at
+    /// one place), and a warning for each repeat.
+    std::vector<int> uniqueRootNodes() {
+        std::vector<int> roots = rootNodes();
+        for (const auto& [root, times] : removeRepeats(roots)) {
+            warn("the scene lists " + nodeLabel(root) + " " + std::to_string(times) +
+                 " times among its root nodes; glTF wants each once: it is loaded once");
+        }
+        return roots;
+    }
+
+    /// glTF allows a node one parent, and a root none. A node under two (two nodes list it as a
+    /// child, or the scene lists as a root a node that another lists) sits at two places: it is
+    /// loaded at each, a copy under each parent, as the loader always did (viewers differ: three.js
+    /// keeps one); said here, since the copies double what it holds.
+    void warnAboutSeveralParents() {
+        for (const auto& [node, others] : other_parents_) {
+            std::vector<int> parents{first_parent_[size_t(node)]};
+            parents.insert(parents.end(), others.begin(), others.end());
+            std::string where;
+            for (size_t i = 0; i < parents.size(); ++i) {
+                where += i == 0 ? "" : i + 1 == parents.size() ? " and " : ", ";
+                where += parents[i] < 0 ? "a root of the scene" : "the child of " + nodeLabel(parents[i]);
+            }
+            warn(nodeLabel(node) + " is " + where + "; glTF allows a node one parent: a copy of it (and of its " +
+                 "children) is loaded at each place, " + std::to_string(parents.size()) + " in all");
+        }
+    }
+
     /// Depth-first over the hierarchy under `root` with an explicit stack, not recursion, so a
     /// crafted chain of 20,000 nested nodes cannot overflow the call stack.
     /// glTF's rotations are unit quaternions; exporters write them so to a few digits. Another
@@ -1089,13 +1166,21 @@ private:
             size_t next_child;
         };
         std::vector<Frame> stack;
-        const auto enter = [&](int index, const glm::dmat4& parent_world) {
+        const auto enter = [&](int index, const glm::dmat4& parent_world, int parent_index) {
             if (index < 0 || static_cast<size_t>(index) >= model_.nodes.size())
                 fail("node " + std::to_string(index) + " does not exist");
             if (on_path_.empty()) on_path_.assign(model_.nodes.size(), false);
             if (on_path_[index])
                 fail("node " + std::to_string(index) + " is its own ancestor (cycle in the node hierarchy)");
             on_path_[index] = true;
+            if (first_parent_.empty()) first_parent_.assign(model_.nodes.size(), -2);
+            if (first_parent_[index] == -2) {
+                first_parent_[index] = parent_index;
+            } else if (first_parent_[index] != parent_index) {
+                std::vector<int>& others = other_parents_[index];
+                if (std::find(others.begin(), others.end(), parent_index) == others.end())
+                    others.push_back(parent_index);
+            }
             const tinygltf::Node& node = model_.nodes[index];
             warnAboutRotation(index, node);
             const glm::dmat4 world = parent_world * localTransform(node);
@@ -1119,14 +1204,14 @@ private:
             });
             stack.push_back(Frame{index, world, 0});
         };
-        enter(root, parent);
+        enter(root, parent, -1);
         while (!stack.empty()) {
             Frame& top = stack.back();
             const std::vector<int>& children = model_.nodes[top.index].children;
             if (top.next_child < children.size()) {
                 const int child = children[top.next_child++];
                 const glm::dmat4 world = top.world;  // `top` moves when the stack grows
-                enter(child, world);
+                enter(child, world, top.index);
             } else {
                 on_path_[top.index] = false;
                 stack.pop_back();
@@ -2404,11 +2489,6 @@ private:
     }
 
     // ---------------------------------------------------------------- lights
-
-    std::string nodeLabel(int index) const {
-        const std::string& name = model_.nodes[size_t(index)].name;
-        return "node " + std::to_string(index) + (name.empty() ? "" : " " + quoted(name));
-    }
 
     template <typename OrientationOfPath>
     void addNodeLight(int nodeIndex, const glm::dmat4& world, const OrientationOfPath& orientation) {

@@ -469,6 +469,58 @@ TEST(GltfLoader, DefaultSceneChosenAndAllRootsWithoutScenes) {
     EXPECT_EQ(all.triangles.size(), 2u);
 }
 
+TEST(GltfLoader, ANodeListedTwiceIsLoadedOnceWithAWarning) {
+    // glTF wants each of a scene's root nodes, and each of a node's children, listed once. A root
+    // listed twice was loaded twice: its light shone twice as brightly and its meshes lay on
+    // themselves, without a word.
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array({{{"type", "point"}, {"intensity", 683.0}}});
+    const json prim = unitTrianglePrimitive(b);
+    const int lamp = b.addMeshNode(prim, {{"name", "Lamp"}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    const int leg = b.addMeshNode(prim, {{"name", "Leg"}, {"translation", {0, 0, 5}}});
+    const int table = b.addNode({{"name", "Table"}, {"children", {leg, leg}}});
+    b.setScene({lamp, table, lamp, lamp});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "twice.gltf"));
+    EXPECT_EQ(scene.lights.size(), 1u);
+    EXPECT_EQ(scene.triangles.size(), 2u);
+    const auto warnings = [&](const char* a, const char* b) {
+        return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(), [&](const std::string& w) {
+            return w.find(a) != std::string::npos && w.find(b) != std::string::npos;
+        });
+    };
+    EXPECT_EQ(warnings("node 0 'Lamp'", "3 times"), 1) << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warnings("node 1 'Leg'", "'Table'"), 1) << testing::PrintToString(scene.stats.warnings);
+}
+
+TEST(GltfLoader, ANodeWithTwoParentsIsLoadedUnderEachWithAWarning) {
+    // glTF allows a node one parent. A node that two nodes list as their child, or a root that a
+    // node also lists, sits at two places: it is loaded at each, as before, and now said.
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const int gear = b.addMeshNode(prim, {{"name", "Gear"}});
+    const int left = b.addNode({{"name", "Left"}, {"children", {gear}}});
+    const int right = b.addNode({{"name", "Right"}, {"translation", {10, 0, 0}}, {"children", {gear}}});
+    const int lone = b.addMeshNode(prim, {{"name", "Lone"}, {"translation", {0, 10, 0}}});
+    const int holder = b.addNode({{"translation", {0, 0, 10}}, {"children", {lone}}});
+    b.setScene({left, right, lone, holder});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "parents.gltf"));
+    EXPECT_EQ(scene.triangles.size(), 4u);
+    EXPECT_NEAR(scene.bounds_max.x, 11.0f, kEps);
+    EXPECT_NEAR(scene.bounds_max.z, 10.0f, kEps);
+    const auto warned = [&](std::initializer_list<const char*> parts) {
+        return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(), [&](const std::string& w) {
+            return std::all_of(parts.begin(), parts.end(),
+                               [&](const char* p) { return w.find(p) != std::string::npos; });
+        });
+    };
+    EXPECT_EQ(warned({"node 0 'Gear'", "node 1 'Left'", "node 2 'Right'"}), 1)
+        << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warned({"node 3 'Lone'", "root", "node 4"}), 1) << testing::PrintToString(scene.stats.warnings);
+}
+
 // ------------------------------------------------------------------------------------ errors
 
 TEST(GltfLoaderErrors, IndexOutOfRangeNamesFileMeshAndIndex) {
