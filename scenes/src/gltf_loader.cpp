@@ -454,6 +454,7 @@ private:
     /// parent node's index; and the other parents of the nodes reached under several.
     std::vector<int> first_parent_;
     std::map<int, std::vector<int>> other_parents_;
+    std::set<size_t> unknown_type_lights_;  ///< lights of a type not supported, already warned about
     std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
     uint64_t collapsed_triangles_ = 0;  ///< triangles flat in float but not in double (dropDegenerateTriangles)
@@ -2510,7 +2511,7 @@ private:
     /// Photometric glTF units to the renderer's radiometric ones: candela (lm/sr) / 683 =
     /// W/sr for point and spot, lux (lm/m^2) / 683 = W/m^2 for directional. The colour is a
     /// per-channel multiplier on the intensity (KHR_lights_punctual). Nothing, with a warning,
-    /// for a directional or spot light without a direction.
+    /// for a light of another type and for a directional or spot light without a direction.
     template <typename OrientationOfPath>
     std::optional<PunctualLight> convertLight(const tinygltf::Light& src, size_t lightIndex, int nodeIndex,
                                               const glm::dmat4& world, const OrientationOfPath& orientationOfPath) {
@@ -2519,7 +2520,16 @@ private:
         if (src.type == "directional") light.type = LightType::Directional;
         else if (src.type == "spot") light.type = LightType::Spot;
         else if (src.type == "point") light.type = LightType::Point;
-        else fail("light " + quoted(src.name) + ": unknown type " + quoted(src.type));
+        else {
+            // The extension's schema takes any string, so that later types do not break older
+            // loaders: such a light is left out, named once however many nodes place it.
+            if (unknown_type_lights_.insert(lightIndex).second) {
+                warn("light " + std::to_string(lightIndex) + (src.name.empty() ? "" : " " + quoted(src.name)) +
+                     " (on " + nodeLabel(nodeIndex) + "): type " + quoted(src.type) +
+                     " is none of KHR_lights_punctual's (directional, point, spot); skipped");
+            }
+            return std::nullopt;
+        }
 
         light.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
         // The node's -Z in world space, through the whole world matrix (a mirror turns it). Where a

@@ -1502,6 +1502,32 @@ TEST(GltfLoaderLights, AZeroScaleKeepsTheDirectionOfTheNodesRotation) {
     EXPECT_EQ(said, 1) << testing::PrintToString(scene.stats.warnings);
 }
 
+TEST(GltfLoaderLights, ALightOfAnUnknownTypeIsSkippedWithAWarning) {
+    // KHR_lights_punctual's schema takes any string as a light's type, for types to come; one
+    // such light refused the whole file ("unknown type 'area'", exit 3). It is now left out and
+    // named, once however many nodes place it, and the rest of the scene loads.
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "Bulb"}, {"type", "point"}, {"intensity", 683.0}}, {{"name", "Panel"}, {"type", "area"}}});
+    const auto light = [](int index) { return json{{"KHR_lights_punctual", {{"light", index}}}}; };
+    const int bulb = b.addNode({{"extensions", light(0)}});
+    const int panel = b.addNode({{"name", "Ceiling panel"}, {"extensions", light(1)}});
+    const int again = b.addNode({{"translation", {1, 0, 0}}, {"extensions", light(1)}});
+    b.setScene({bulb, panel, again});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "area.gltf"));
+    ASSERT_EQ(scene.lights.size(), 1u);
+    EXPECT_EQ(scene.lights[0].name, "Bulb");
+    const auto named = std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(),
+                                     [](const std::string& w) {
+                                         return w.find("'Panel'") != std::string::npos &&
+                                                w.find("'area'") != std::string::npos &&
+                                                w.find("skipped") != std::string::npos;
+                                     });
+    EXPECT_EQ(named, 1) << testing::PrintToString(scene.stats.warnings);
+}
+
 TEST(GltfLoaderLights, SpotConesClampedToValidRange) {
     TempDir dir;
     GltfBuilder b;
