@@ -169,6 +169,16 @@ TEST(ExploreFreeSpace, AClosedRoomBesideALargeGroundPlaneIsExploredFromItsCamera
     expectPointsFillTheRoom(e, "closed room beside a 10 km ground plane");
 }
 
+/// The surface the exploring camera's waypoints (32 points, seed 7) see, as the bake estimates
+/// it for the grid fit.
+SeenSurface seenByExploringCamera(const Scene& scene) {
+    const Tracer tracer(scene);
+    const CameraPath path = exploringCameraPath(tracer, scene, 32, 7).value();
+    std::vector<glm::vec3> viewpoints;
+    for (const CameraPose& pose : path.waypoints()) viewpoints.push_back(pose.position);
+    return surfaceSeenFrom(tracer, viewpoints, 4096, 0);
+}
+
 TEST(GridFit, ARoomBesideALargeGroundPlaneIsFittedToWhatItsCamerasSee) {
     // The whole visible surface (1e8 m^2 of ground) in the voxel budget gave 27 m voxels, so every
     // lookup from the room's camera was refused (each bounce shorter than its voxel).
@@ -176,11 +186,7 @@ TEST(GridFit, ARoomBesideALargeGroundPlaneIsFittedToWhatItsCamerasSee) {
     RoomOptions options{false, true, true, false};
     options.ground_half = 5000.0f;
     const Scene scene = loadRoom(dir, options);
-    const Tracer tracer(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 32, 7).value();
-    std::vector<glm::vec3> viewpoints;
-    for (const CameraPose& pose : path.waypoints()) viewpoints.push_back(pose.position);
-    const SeenSurface seen = surfaceSeenFrom(tracer, viewpoints, 4096, 0);
+    const SeenSurface seen = seenByExploringCamera(scene);
     const glm::vec3 size = kRoomMax - kRoomMin;
     const double room_area = 2.0 * (size.x * size.y + size.x * size.z + size.y * size.z);  // 94 m^2, inside
     EXPECT_NEAR(seen.area, room_area, 1e-3 * room_area);  // every wall's triangles are hit; the ground never
@@ -205,11 +211,7 @@ TEST(GridFit, ARoomItsCamerasSeeWholeKeepsTheWholeSurfaceFit) {
     // camera sees all of it, and its fit is the one without the estimate, bit for bit.
     test::TempDir dir;
     const Scene scene = loadRoom(dir, {false, true, true, true});
-    const Tracer tracer(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 32, 7).value();
-    std::vector<glm::vec3> viewpoints;
-    for (const CameraPose& pose : path.waypoints()) viewpoints.push_back(pose.position);
-    const SeenSurface seen = surfaceSeenFrom(tracer, viewpoints, 4096, 0);
+    const SeenSurface seen = seenByExploringCamera(scene);
     EXPECT_GT(seen.fraction, 0.9);  // the cube's floor-facing side is hidden
     const HashGridParameters grid{};
     const GridFit whole = fitLevelBias(scene, grid, kDefaultVoxelBudget);
@@ -230,12 +232,7 @@ TEST(GridFit, AFinelyMeshedRoomWoundOutwardsKeepsTheWholeSurfaceFit) {
     RoomOptions options{false, false, true, false};
     options.split = 100;
     const Scene scene = loadRoom(dir, options);
-    const Tracer tracer(scene);
-    const CameraPath path = exploringCameraPath(tracer, scene, 32, 7).value();
-    std::vector<glm::vec3> viewpoints;
-    for (const CameraPose& pose : path.waypoints()) viewpoints.push_back(pose.position);
-    const SeenSurface seen = surfaceSeenFrom(tracer, viewpoints, 4096, 0);
-    std::printf("[seen] finely meshed room wound outwards: %.4f of the surface seen\n", seen.fraction);
+    const SeenSurface seen = seenByExploringCamera(scene);
     EXPECT_GT(seen.fraction, 0.9);
     const HashGridParameters grid{};
     const GridFit whole = fitLevelBias(scene, grid, kDefaultVoxelBudget);
