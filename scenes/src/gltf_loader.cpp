@@ -1123,13 +1123,11 @@ private:
         }
     }
 
-    /// Depth-first over the hierarchy under `root` with an explicit stack, not recursion, so a
-    /// crafted chain of 20,000 nested nodes cannot overflow the call stack.
     /// glTF's rotations are unit quaternions; exporters write them so to a few digits. Another
     /// length is normalised (a zero one is no rotation) and said, as is an array of another size.
     void warnAboutRotation(int index, const tinygltf::Node& node) {
         if (node.matrix.size() == 16 || node.rotation.empty()) return;
-        const std::string label = "node " + std::to_string(index) + (node.name.empty() ? "" : " " + quoted(node.name));
+        const std::string label = nodeLabel(index);
         if (node.rotation.size() != 4) {
             warn(label + ": rotation has " + std::to_string(node.rotation.size()) + " numbers, glTF wants 4; ignored");
             return;
@@ -1160,6 +1158,8 @@ private:
         return o;
     }
 
+    /// Depth-first over the hierarchy under `root` with an explicit stack, not recursion, so a
+    /// crafted chain of 20,000 nested nodes cannot overflow the call stack.
     void visitNode(int root, const glm::dmat4& parent) {
         struct Frame {
             int index;
@@ -2517,6 +2517,8 @@ private:
                                               const glm::dmat4& world, const OrientationOfPath& orientationOfPath) {
         PunctualLight light;
         light.name = src.name;
+        const std::string label = "light " + std::to_string(lightIndex) +
+                                  (src.name.empty() ? "" : " " + quoted(src.name)) + " on " + nodeLabel(nodeIndex);
         if (src.type == "directional") light.type = LightType::Directional;
         else if (src.type == "spot") light.type = LightType::Spot;
         else if (src.type == "point") light.type = LightType::Point;
@@ -2524,8 +2526,7 @@ private:
             // The extension's schema takes any string, so that later types do not break older
             // loaders: such a light is left out, named once however many nodes place it.
             if (unknown_type_lights_.insert(lightIndex).second) {
-                warn("light " + std::to_string(lightIndex) + (src.name.empty() ? "" : " " + quoted(src.name)) +
-                     " (on " + nodeLabel(nodeIndex) + "): type " + quoted(src.type) +
+                warn(label + ": type " + quoted(src.type) +
                      " is none of KHR_lights_punctual's (directional, point, spot); skipped");
             }
             return std::nullopt;
@@ -2542,8 +2543,6 @@ private:
         } else if (light.type != LightType::Point) {
             const WorldOrientation orientation = orientationOfPath();
             const glm::dvec3 oriented = orientation.rotation * glm::dvec3(0.0, 0.0, -1.0);
-            const std::string label = "light " + std::to_string(lightIndex) +
-                                      (src.name.empty() ? "" : " " + quoted(src.name)) + " on " + nodeLabel(nodeIndex);
             if (orientation.singular_node >= 0) {
                 warn(label + ": the node's -Z axis has no direction in world space (a scale of zero), and the " +
                      "matrix of " + nodeLabel(orientation.singular_node) +
