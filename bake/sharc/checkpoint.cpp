@@ -62,6 +62,11 @@ const Value* findNamed(const std::vector<std::pair<std::string, Value>>& list, c
     return nullptr;
 }
 
+/// "seed: checkpoint \"3\", this bake \"4\"": one setting that differs.
+std::string differenceLine(const std::string& key, const std::string& stored, const std::string& current) {
+    return key + ": checkpoint \"" + stored + "\", this bake \"" + current + "\"";
+}
+
 /// "seed: checkpoint 3, this bake 4" for every setting that differs, or "". Cache-neutral
 /// settings are left out (neutralDifferences).
 std::string settingDifferences(const BakeSettingsText& stored, const BakeSettingsText& current) {
@@ -73,7 +78,7 @@ std::string settingDifferences(const BakeSettingsText& stored, const BakeSetting
         if (!old) {
             add(key + ": not in the checkpoint, this bake \"" + value + "\"");
         } else if (*old != value) {
-            add(key + ": checkpoint \"" + *old + "\", this bake \"" + value + "\"");
+            add(differenceLine(key, *old, value));
         }
     }
     for (const auto& [key, value] : stored) {
@@ -89,8 +94,7 @@ std::vector<std::string> neutralDifferences(const BakeSettingsText& stored, cons
     std::vector<std::string> differences;
     for (const auto& [key, value] : current) {
         const std::string* old = isCacheNeutralSetting(key) ? findNamed(stored, key) : nullptr;
-        if (old && *old != value)
-            differences.push_back(key + ": checkpoint \"" + *old + "\", this bake \"" + value + "\"");
+        if (old && *old != value) differences.push_back(differenceLine(key, *old, value));
     }
     return differences;
 }
