@@ -35,7 +35,7 @@ void runCompare(const CompareOptions& o) {
     }
     if (error.scale_is_fallback) {
         std::fprintf(stderr,
-                     "warning: %s has no positive finite mean (black, or NaN/Inf pixels): the measures' epsilons "
+                     "warning: %s has no positive finite mean (black, or no finite pixel): the measures' epsilons "
                      "fall back to an absolute 0.01, so they depend on the images' units\n",
                      o.reference_path.c_str());
     }
