@@ -159,9 +159,17 @@ void UpdateWavefront::advance(uint32_t bounce, const DepositLevels& levels, cons
     // batch at once (sample_batch.h). Two pairs for the shading, two for the next direction.
     static_assert(PathTracer::kDimensionsPerBounce == 4, "dimension .. dimension + 3 are this bounce's");
     const uint32_t dimension = PathTracer::kFirstBounceDimension + bounce * PathTracer::kDimensionsPerBounce;
+    // The hits' triangles, then their vertices, start loading while the samples are drawn:
+    // in a large scene each is a cache miss, and these overlap where the shading's would not.
+    const Scene& scene = tracer_.scene();
     sample_paths_.clear();
     for (size_t i = 0; i < count; ++i) {
-        if (found_[i]) sample_paths_.push_back(active_[i]);
+        if (!found_[i]) continue;
+        sample_paths_.push_back(active_[i]);
+        prefetchSurfaceTriangle(scene, hits_[i].triangle);
+    }
+    for (size_t i = 0; i < count; ++i) {
+        if (found_[i]) prefetchSurfaceVertices(scene, hits_[i].triangle);
     }
     drawSamples(dimension, &Path::u_select_resample, &Path::u_light_point);
 

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "tracing/surface.h"
 
+#include "support/prefetch.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -86,6 +88,20 @@ SurfaceHit interpolate(const Scene& scene, uint32_t triangle, float b1, float b2
 }
 
 }  // namespace
+
+void prefetchSurfaceTriangle(const Scene& scene, uint32_t triangle) {
+    prefetchObjectForRead(&scene.triangles[triangle]);
+    prefetchForRead(&scene.triangle_materials[triangle]);
+}
+
+void prefetchSurfaceVertices(const Scene& scene, uint32_t triangle) {
+    const glm::uvec3 tri = scene.triangles[triangle];
+    for (const uint32_t vertex : {tri.x, tri.y, tri.z}) {
+        prefetchObjectForRead(&scene.positions[vertex]);
+        if (!scene.normals.empty()) prefetchObjectForRead(&scene.normals[vertex]);
+        if (!scene.textures.empty() && !scene.texcoords0.empty()) prefetchObjectForRead(&scene.texcoords0[vertex]);
+    }
+}
 
 SurfaceHit makeSurfaceHit(const Scene& scene, const RayHit& hit, glm::vec3 ray_direction) {
     SurfaceHit s = interpolate(scene, hit.triangle, hit.u, hit.v);

@@ -28,6 +28,15 @@ struct SurfaceHit {
 /// Builds the hit from barycentrics. ray_direction is the direction the ray travelled.
 SurfaceHit makeSurfaceHit(const Scene& scene, const RayHit& hit, glm::vec3 ray_direction);
 
+/// Starts loading what makeSurfaceHit() reads of `triangle` first: its vertex indices and its
+/// material index. Wavefront loops call it for a whole batch of hits, then
+/// prefetchSurfaceVertices() for the same batch, so the misses of a large scene overlap.
+void prefetchSurfaceTriangle(const Scene& scene, uint32_t triangle);
+
+/// Starts loading the vertex attributes makeSurfaceHit() interpolates (positions, normals and
+/// texture coordinates where the scene has them). Reads the triangle's indices.
+void prefetchSurfaceVertices(const Scene& scene, uint32_t triangle);
+
 /// Surface point on a triangle from barycentrics (b1, b2) of vertices 1 and 2, oriented along
 /// the winding's normal (used for light sampling, where there is no incoming ray).
 SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, float b2);
