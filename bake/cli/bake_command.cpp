@@ -13,6 +13,7 @@
 #include "sharc/coverage.h"
 #include "sharc/grid_fit.h"
 #include "sharc/hit_rate.h"
+#include "sharc/light_leaks.h"
 #include "sharc/voxel_materials.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
@@ -565,6 +566,17 @@ Json hitRateJson(const HitRatePrediction& p) {
             {"views", views}};
 }
 
+Json lightLeaksJson(const LightLeakReport& r) {
+    Json leaks = Json::array();
+    for (const EmitterLeak& leak : r.leaks) {
+        leaks.push_back({{"material", leak.material_label},
+                         {"area_share", jsonNumber(leak.area_share)},
+                         {"median_gap", jsonNumber(leak.median_gap)},
+                         {"voxel_size", jsonNumber(leak.voxel_size)}});
+    }
+    return {{"emissive_materials", r.emissive_materials}, {"points", r.points}, {"leaks", leaks}};
+}
+
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
 /// `unreached_area`: the share of the surface no update path reached (see warnAndStop).
 void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
@@ -894,6 +906,7 @@ private:
         grid_decision_ = decideGrid(job_, scene_, seen_ ? &*seen_ : nullptr);
         for (const std::string& warning : grid_decision_.warnings)
             std::fprintf(stderr, "warning: %s\n", warning.c_str());
+        findEmitterLeaks();
         if (autoCapacity()) chooseAutoCapacity();
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
                                          SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
@@ -1081,6 +1094,31 @@ private:
             addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, 2048, job_.settings.seed));
     }
 
+    /// Emitters nearer another surface than a voxel is wide, seen from the scene's own cameras
+    /// (render's automatic camera without any; the roaming camera's waypoints for a box or
+    /// points region of a scene without cameras): said before baking, so the artist can move them.
+    void findEmitterLeaks() {
+        std::vector<glm::vec3> cameras;
+        for (const Camera& camera : scene_.cameras) cameras.push_back(camera.position);
+        const ViewRegion::Kind region = job_.settings.view_region.kind;
+        if (cameras.empty() && region != ViewRegion::Kind::Points && region != ViewRegion::Kind::Box) {
+            cameras.push_back(automaticCamera(*tracer_, glm::radians(kAutomaticCameraFovDegrees)).position);
+        }
+        if (cameras.empty()) {
+            for (const CameraPose& pose : camera_path_->waypoints()) cameras.push_back(pose.position);
+        }
+        light_leaks_ = findLightLeaks(*tracer_, job_.settings.sharc.grid, cameras, 256, job_.settings.seed);
+        constexpr size_t kLeaksNamed = 5;  // a city of lit windows would fill the log
+        for (size_t i = 0; i < light_leaks_.leaks.size() && i < kLeaksNamed; ++i)
+            std::fprintf(stderr, "warning: %s\n", LightLeakReport::describe(light_leaks_.leaks[i]).c_str());
+        if (light_leaks_.leaks.size() > kLeaksNamed) {
+            std::fprintf(stderr,
+                         "warning: %zu more emissive materials leak light the same way (--stats-json lists "
+                         "them under light_leaks)\n",
+                         light_leaks_.leaks.size() - kLeaksNamed);
+        }
+    }
+
     double raysPerSecond() const {
         const UpdateCounters& c = baker_->counters();
         return double(c.segments + c.shadow_rays) / std::max(baker_->seconds().update, 1e-9);
@@ -1215,6 +1253,7 @@ private:
             {"levels_covered", grid_decision_.levelsCovered()},
             {"predicted_hit_rate", hitRateJson(prediction_)},
             {"stability", stabilityJson(stability_)},
+            {"light_leaks", lightLeaksJson(light_leaks_)},
         });
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
@@ -1310,6 +1349,7 @@ private:
     std::string gpu_warning_;               ///< fp16 clipping of the written cache at its GPU radiance scale
     std::vector<uint32_t> written_levels_;  ///< the levels of the cache file's voxels
     StabilityReport stability_;
+    LightLeakReport light_leaks_;  ///< emitters sharing voxels with a surface behind them
     double finish_seconds_ = 0.0;
 };
 

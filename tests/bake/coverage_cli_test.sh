@@ -18,7 +18,10 @@ cornell="$scenes/cornell_box/cornell_box.gltf"
 expect 0 "default bake" "$sharcbake" bake "$cornell" -o "$work/cornell.sharc" --stats-json "$work/cornell.json"
 says "$work/out.txt" "Views: free space" "the bake names the view region"
 says "$work/out.txt" "predicted hit rate: " "the bake prints its predicted hit rate"
-[ -s "$work/err.txt" ] && fail "the default bake warned: $(cat "$work/err.txt")"
+# Its one warning is the light 1 mm below the ceiling, which shares its voxels (docs/baking.md).
+says "$work/err.txt" "warning: emissive material 'light': 100% of its area shares voxels" "the light leak is warned about"
+grep -v "warning: emissive material 'light'" "$work/err.txt" > "$work/other_warnings.txt"
+[ -s "$work/other_warnings.txt" ] && fail "the default bake warned: $(cat "$work/other_warnings.txt")"
 expect 0 "info" "$sharcbake" info "$work/cornell.sharc"
 says "$work/out.txt" "levels_covered: 1-" "info shows the levels the file covers"
 says "$work/out.txt" "view_region: free space" "info shows the region"
@@ -77,7 +80,10 @@ for units in unit mm km; do
     scene="$work/$units/cornell_box.gltf"
     [ "$units" = unit ] && scene="$cornell"
     expect 0 "bake in $units" "$sharcbake" bake "$scene" -o "$work/$units.sharc" $small --stats-json "$work/$units.json"
-    [ -s "$work/err.txt" ] && fail "the $units bake warned: $(cat "$work/err.txt")"
+    # The light leak in any units: the check keys in the scene's own units, like the bake.
+    says "$work/err.txt" "warning: emissive material 'light': 100% of its area shares voxels" "$units: the light leak is warned about"
+    grep -v "warning: emissive material 'light'" "$work/err.txt" > "$work/other_warnings.txt"
+    [ -s "$work/other_warnings.txt" ] && fail "the $units bake warned: $(cat "$work/other_warnings.txt")"
 done
 python3 - "$work/unit.json" "$work/mm.json" "$work/km.json" <<'PY' || failures=$((failures + 1))
 import json, sys

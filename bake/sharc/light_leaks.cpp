@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sharc/light_leaks.h"
+
+#include "tracing/sampling.h"
+#include "tracing/surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace sharcbake {
+namespace {
+
+/// A probe passes at most this many emissive surfaces (the emitter itself, stacked emitters)
+/// before it gives up.
+constexpr int kMaxEmissiveCrossings = 4;
+
+std::string materialLabel(const Scene& scene, uint32_t material) {
+    const std::string& name = scene.materials[material].name;
+    return name.empty() ? "material #" + std::to_string(material) : "material '" + name + "'";
+}
+
+/// The camera nearest `point`: the one whose voxels there are finest.
+glm::vec3 nearestCamera(glm::vec3 point, const std::vector<glm::vec3>& cameras) {
+    glm::vec3 nearest = cameras.front();
+    float nearest2 = std::numeric_limits<float>::infinity();
+    for (const glm::vec3& camera : cameras) {
+        const glm::vec3 d = point - camera;
+        if (glm::dot(d, d) < nearest2) {
+            nearest2 = glm::dot(d, d);
+            nearest = camera;
+        }
+    }
+    return nearest;
+}
+
+Float3 toFloat3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
+
+/// `steps` float32 steps at `point`'s largest coordinate: a distance that moves it in any units.
+float floatSteps(glm::vec3 point, float steps) {
+    const float largest = std::max({std::abs(point.x), std::abs(point.y), std::abs(point.z), 1e-30f});
+    return steps * largest * 0x1p-23f;
+}
+
+/// The nearest surface behind an emitter that could share its voxels.
+struct SurfaceBehind {
+    bool found = false;
+    float gap = 0.0f;  ///< distance from the emitter
+    glm::vec3 position{0.0f};
+    glm::vec3 key_normal{0.0f};  ///< geometric normal towards the emitter, as a ray from it sees it
+};
+
+/// The nearest surface behind the emitter at `point` (its emitting side faces `emitting`): not
+/// emissive, seen from a side light reaches, with its key normal in the emitter's octant. Not
+/// found when there is none within `reach` or another surface hides it.
+SurfaceBehind surfaceBehind(const Tracer& tracer, glm::vec3 point, glm::vec3 emitting, float reach) {
+    const Scene& scene = tracer.scene();
+    const uint32_t octant = normalBits(toFloat3(emitting));
+    // From just in front of the emitter, so that a surface flush with it is found too: the
+    // emitter's own hit (and any other emitter's) is passed over.
+    const float lead = std::max(reach * 1e-3f, floatSteps(point, 16.0f));
+    const glm::vec3 start = point + emitting * lead;
+    glm::vec3 origin = start;
+    for (int crossing = 0; crossing <= kMaxEmissiveCrossings; ++crossing) {
+        const float travelled = glm::dot(origin - start, -emitting);
+        const float t_max = reach + lead - travelled;
+        if (!(t_max > 0.0f)) break;
+        RayHit ray_hit;
+        if (!tracer.intersect(Ray{origin, -emitting, t_max}, ray_hit)) break;
+        const SurfaceHit hit = makeSurfaceHit(scene, ray_hit, -emitting);
+        const Material& m = scene.materials[hit.material];
+        if (m.isEmissive()) {
+            // Just past it, by a few float steps rather than offsetRayOrigin's fixed offset near
+            // the origin, which in a scene in kilometres would step past a ceiling 1 mm behind.
+            origin = hit.position - emitting * floatSteps(hit.position, 4.0f);
+            continue;
+        }
+        const bool lit_side = hit.front_face || m.double_sided;
+        if (lit_side && normalBits(toFloat3(hit.geometric_normal)) == octant) {
+            return SurfaceBehind{true, std::max(0.0f, glm::dot(hit.position - start, -emitting) - lead), hit.position,
+                                 hit.geometric_normal};
+        }
+        break;  // the nearest non-emissive surface hides whatever lies further back
+    }
+    return SurfaceBehind{};
+}
+
+float median(std::vector<float> values) {
+    if (values.empty()) return 0.0f;
+    const size_t middle = values.size() / 2;
+    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(middle), values.end());
+    return values[middle];
+}
+
+}  // namespace
+
+std::string LightLeakReport::describe(const EmitterLeak& leak) {
+    char text[640];
+    std::snprintf(text, sizeof text,
+                  "emissive %s: %.0f%% of its area shares voxels (%.3g units wide, from the scene's nearest "
+                  "camera) with another surface facing the same way %.3g units behind it (median), so renders "
+                  "through the cache show the emitter's light on that surface around it (a light leak, brighter "
+                  "than path tracing). Move the emitter at least %.3g away from the surface, or remove the surface "
+                  "behind it",
+                  leak.material_label.c_str(), 100.0 * leak.area_share, double(leak.voxel_size),
+                  double(leak.median_gap), double(leak.voxel_size));
+    return text;
+}
+
+LightLeakReport findLightLeaks(const Tracer& tracer, const HashGridParameters& grid,
+                               const std::vector<glm::vec3>& cameras, uint32_t points_per_material, uint32_t seed) {
+    LightLeakReport report;
+    const Scene& scene = tracer.scene();
+    if (cameras.empty() || points_per_material == 0) return report;
+    // Each emissive material's triangles, with their cumulative areas for sampling by area.
+    std::vector<std::vector<uint32_t>> triangles(scene.materials.size());
+    std::vector<std::vector<double>> cumulative(scene.materials.size());
+    for (uint32_t t = 0; t < uint32_t(scene.triangles.size()); ++t) {
+        const uint32_t material = scene.triangle_materials[t];
+        if (!scene.materials[material].isEmissive()) continue;
+        const glm::uvec3 tri = scene.triangles[t];
+        const glm::vec3 p0 = scene.positions[tri.x], p1 = scene.positions[tri.y], p2 = scene.positions[tri.z];
+        const double area = 0.5 * double(glm::length(glm::cross(p1 - p0, p2 - p0)));
+        if (!(area > 0.0) || !std::isfinite(area)) continue;
+        triangles[material].push_back(t);
+        cumulative[material].push_back((cumulative[material].empty() ? 0.0 : cumulative[material].back()) + area);
+    }
+    const HashGridKeyer keyer(grid);
+    for (uint32_t material = 0; material < uint32_t(scene.materials.size()); ++material) {
+        if (triangles[material].empty()) continue;
+        ++report.emissive_materials;
+        const Material& m = scene.materials[material];
+        const double total = cumulative[material].back();
+        uint32_t tested = 0, leaking = 0;
+        std::vector<float> gaps, voxels;
+        for (uint32_t i = 0; i < points_per_material; ++i) {
+            const uint32_t stream = hashCombine(hashCombine(seed, material), i);
+            // Stratified over the material's area, uniform within the triangle.
+            const double target = (double(i) + double(bitsToUnitFloat(hashCombine(stream, 0)))) / points_per_material *
+                                  total;
+            const std::vector<double>& sums = cumulative[material];
+            const size_t k = std::min(size_t(std::upper_bound(sums.begin(), sums.end(), target) - sums.begin()),
+                                      sums.size() - 1);
+            const uint32_t t = triangles[material][k];
+            float b1 = bitsToUnitFloat(hashCombine(stream, 1)), b2 = bitsToUnitFloat(hashCombine(stream, 2));
+            if (b1 + b2 > 1.0f) {
+                b1 = 1.0f - b1;
+                b2 = 1.0f - b2;
+            }
+            const EmitterPoint e = makeEmitterPoint(scene, t, b1, b2);
+            if (!(e.emission.x > 0.0f || e.emission.y > 0.0f || e.emission.z > 0.0f)) continue;  // a dark texel
+            ++tested;
+            // Both points keyed as SHaRC keys them from the nearest camera: the same key is the
+            // same voxel, and then the surface beside the emitter takes on its light.
+            const glm::vec3 camera = nearestCamera(e.position, cameras);
+            const float voxel = keyer.voxelSizeAt(keyer.levelOf(glm::dot(e.position - camera, e.position - camera)));
+            if (!(voxel > 0.0f) || !std::isfinite(voxel)) continue;
+            bool leaks = false;
+            for (const float side : {1.0f, -1.0f}) {
+                if (side < 0.0f && !m.double_sided) break;
+                const glm::vec3 emitting = e.face_normal * side;
+                const SurfaceBehind behind = surfaceBehind(tracer, e.position, emitting, voxel);
+                if (!behind.found) continue;
+                const uint64_t emitter_key = keyer.key(toFloat3(e.position), toFloat3(emitting), toFloat3(camera));
+                if (keyer.key(toFloat3(behind.position), toFloat3(behind.key_normal), toFloat3(camera)) != emitter_key)
+                    continue;
+                leaks = true;
+                gaps.push_back(behind.gap);
+                break;
+            }
+            if (leaks) {
+                ++leaking;
+                voxels.push_back(voxel);
+            }
+        }
+        report.points += tested;
+        if (tested == 0) continue;
+        const double share = double(leaking) / double(tested);
+        if (share < kLeakAreaShare) continue;
+        report.leaks.push_back(
+            EmitterLeak{material, materialLabel(scene, material), share, median(gaps), median(voxels)});
+    }
+    std::stable_sort(report.leaks.begin(), report.leaks.end(),
+                     [](const EmitterLeak& a, const EmitterLeak& b) { return a.area_share > b.area_share; });
+    return report;
+}
+
+}  // namespace sharcbake
