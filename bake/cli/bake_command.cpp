@@ -1091,7 +1091,7 @@ private:
         finish_seconds_ = secondsSince(finish_start);
         stability_ = makeStabilityReport(cache, baker_->counters(), scene_.bounds_min, scene_.bounds_max, levels_);
         if (lights_->hasLights())
-            addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, 2048, job_.settings.seed));
+            addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, &*lights_, 2048, job_.settings.seed));
     }
 
     /// Emitters nearer another surface than a voxel is wide, seen from the scene's own cameras

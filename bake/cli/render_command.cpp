@@ -417,7 +417,7 @@ private:
     /// would have taken an hour with no word said.
     void warnAboutLongPaths() const {
         if (!lights_->hasLights() || !(o_.debug_view.empty() || o_.debug_view == "bounces")) return;
-        const SceneReflectance reflectance = estimateSceneReflectance(*tracer_);
+        const SceneReflectance reflectance = estimateSceneReflectance(*tracer_, &*lights_);
         if (!(reflectance.reflectance > kStiffReflectance)) return;
         if (reflectance.unbounded()) {
             std::fprintf(stderr,

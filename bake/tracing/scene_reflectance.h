@@ -13,10 +13,13 @@
 
 namespace sharcbake {
 
+class LightSampler;
+
 struct SceneReflectance {
     /// Mean over surface points, spread by area, of the surface's albedo (light arriving along its
-    /// normal) times the chance that a cosine-distributed reflected ray hits the scene again: the
-    /// side of the surface where that product is larger (inside a closed room, the inner one).
+    /// normal) times the chance that a cosine-distributed reflected ray hits the scene again: of
+    /// the side light reaches where it reaches one only (the outside of a closed solid under a
+    /// sky), else of the side where that product is larger (inside a closed room, the inner one).
     double reflectance = 0.0;
     uint32_t points = 0;  ///< points sampled (0: an empty scene)
 
@@ -35,8 +38,11 @@ struct SceneReflectance {
 inline constexpr double kStiffReflectance = 0.98;
 
 /// Estimates SceneReflectance from `points` area-spread surface points, kDirectionsPerSide rays
-/// from each side of each. Deterministic: the same scene, count and seed give the same value on
-/// any thread count. Costs about a millisecond per thousand points.
-SceneReflectance estimateSceneReflectance(const Tracer& tracer, uint32_t points = 2048, uint32_t seed = 0);
+/// from each side of each, and a few light samples from `lights` to tell which sides light
+/// reaches (without `lights`, every point takes its larger side). Deterministic: the same scene,
+/// count and seed give the same value on any thread count. Costs about a millisecond per
+/// thousand points.
+SceneReflectance estimateSceneReflectance(const Tracer& tracer, const LightSampler* lights, uint32_t points = 2048,
+                                          uint32_t seed = 0);
 
 }  // namespace sharcbake

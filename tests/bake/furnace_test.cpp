@@ -219,30 +219,67 @@ TEST(Determinism, BakeIsIdenticalForAnyThreadCount) {
 // How long light stays in a scene: in a closed furnace every reflected ray hits a wall again, so
 // the scene sends back exactly what its walls reflect, rho (Lambertian walls), and light makes
 // 1 / (1 - rho) bounces; out of doors most reflected light leaves.
+/// estimateSceneReflectance with the scene's own lights.
+SceneReflectance reflectanceOf(const Scene& scene) {
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);
+    return estimateSceneReflectance(tracer, &lights);
+}
+
 TEST(SceneReflectance, ClosedFurnacesKeepWhatTheirWallsReflect) {
     for (const auto& [name, rho] :
          std::map<std::string, double>{{"furnace_rho050", 0.5}, {"furnace_rho090", 0.9}, {"furnace_rho099", 0.99}}) {
         const Scene scene = loadGltf(scenePath(name));
-        const Tracer tracer(scene);
-        const SceneReflectance r = estimateSceneReflectance(tracer);
+        const SceneReflectance r = reflectanceOf(scene);
         EXPECT_GT(r.points, 1000u) << name;
         EXPECT_NEAR(r.reflectance, rho, 0.002) << name;
         EXPECT_FALSE(r.unbounded()) << name;
         // Deterministic, whatever the threads do.
-        EXPECT_EQ(estimateSceneReflectance(tracer).reflectance, r.reflectance) << name;
+        EXPECT_EQ(reflectanceOf(scene).reflectance, r.reflectance) << name;
     }
     const Scene outdoor = loadGltf(scenePath("outdoor"));
-    const SceneReflectance open = estimateSceneReflectance(Tracer(outdoor));
+    const SceneReflectance open = reflectanceOf(outdoor);
     EXPECT_LT(open.reflectance, 0.5);
     EXPECT_LT(open.bounces(), 2.0);
 
     // A white furnace (every wall's base colour 1): light never leaves, and says so.
     Scene white = loadGltf(scenePath("furnace_rho050"));
     for (Material& m : white.materials) m.base_color = glm::vec3(1.0f);
-    const SceneReflectance closed = estimateSceneReflectance(Tracer(white));
+    const SceneReflectance closed = reflectanceOf(white);
     EXPECT_TRUE(closed.unbounded()) << closed.reflectance;
     EXPECT_NE(closed.describe().find("never leaves"), std::string::npos) << closed.describe();
     EXPECT_TRUE(std::isinf(closed.bounces()) || closed.bounces() > 1e4);
+}
+
+// The same closed white box, dark inside and lit by a sky: light reaches only its outside, which
+// sends nothing back onto the scene. Taking each point's larger side read its inside (albedo 1,
+// every ray hits the box again) and said the radiance had no finite value: every white CAD part
+// under a sky (a closed STL mesh converted with a white material) was called unbounded.
+TEST(SceneReflectance, AClosedWhiteSolidUnderASkyReflectsOnlyFromItsOutside) {
+    // A unit cube, white and double-sided (as Blender and assimp write materials), alone under a
+    // uniform sky.
+    Scene solid;
+    Material white;
+    white.base_color = glm::vec3(1.0f);
+    white.metallic = 0.0f;
+    white.double_sided = true;
+    solid.materials.push_back(white);
+    for (int corner = 0; corner < 8; ++corner) {
+        solid.positions.emplace_back(float(corner & 1), float((corner >> 1) & 1), float((corner >> 2) & 1));
+    }
+    // Two triangles per face, wound outwards.
+    solid.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                       {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    solid.triangle_materials.assign(solid.triangles.size(), 0);
+    solid.bounds_min = glm::vec3(0.0f);
+    solid.bounds_max = glm::vec3(1.0f);
+    solid.sky.uniform = glm::vec3(1.0f);
+    const SceneReflectance outside = reflectanceOf(solid);
+    EXPECT_LT(outside.reflectance, 0.01) << "a convex solid's outside sends nothing back onto it";
+    EXPECT_FALSE(outside.unbounded());
+    // Without the lights to tell the sides apart, the larger side, as before: its inside.
+    const Tracer tracer(solid);
+    EXPECT_TRUE(estimateSceneReflectance(tracer, nullptr).unbounded());
 }
 
 }  // namespace
