@@ -56,11 +56,16 @@ namespace {
 /// Directions from each viewpoint for the surface it sees (seenTriangleArea).
 constexpr uint32_t kDirectionsPerViewpoint = 256;
 
-/// The share of the visible surface whose sides are seen from a viewpoint, from `points` spread by
-/// area. Unbiased, but a part of the surface too small to receive a point (a room beside a 10 km
-/// ground plane) reads as 0.
-double seenShareOfPoints(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints,
-                         const std::vector<SurfacePoint>& points) {
+/// What points spread by area say of the visible surface's sides (shares of visibleSurfaceArea).
+struct PointSides {
+    double seen = 0.0;                 ///< sides seen from a viewpoint
+    double unseen_double_sided = 0.0;  ///< sides of double-sided surfaces seen from none
+};
+
+/// Which sides of `points` are seen from a viewpoint. Unbiased, but a part of the surface too
+/// small to receive a point (a room beside a 10 km ground plane) reads as 0.
+PointSides seenSidesOfPoints(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints,
+                             const std::vector<SurfacePoint>& points) {
     // Both ways (visibleBothWays): a ray slipping through a shared edge would count a point of a
     // 10 km ground plane as seen from inside a closed room (1/4096 of the plane's area).
     const auto seenFromAny = [&](glm::vec3 position, glm::vec3 side) {
@@ -69,31 +74,40 @@ double seenShareOfPoints(const Tracer& tracer, const std::vector<glm::vec3>& vie
             return glm::dot(v - origin, side) > 0.0f && visibleBothWays(tracer, origin, v);
         });
     };
-    // Sides seen and sides there, summed over the points: integers, so the sums do not depend on
-    // how the points are split between threads. A single-sided surface is one side
-    // (visibleSurfaceArea counts it once), seen from either: paths shade its back too, and a
-    // room modelled from a cube, its normals out, is seen from inside on the backs of its walls.
-    using Counts = std::pair<uint64_t, uint64_t>;
+    // Sides seen, double-sided sides unseen and sides there, summed over the points: integers, so
+    // the sums do not depend on how the points are split between threads. A single-sided surface
+    // is one side (visibleSurfaceArea counts it once), seen from either: paths shade its back too,
+    // and a room modelled from a cube, its normals out, is seen from inside on the backs of its
+    // walls.
+    struct Counts {
+        uint64_t seen = 0, unseen_double_sided = 0, sides = 0;
+    };
     const Counts counts = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, points.size()), Counts{0, 0},
+        tbb::blocked_range<size_t>(0, points.size()), Counts{},
         [&](const tbb::blocked_range<size_t>& range, Counts sum) {
             for (size_t i = range.begin(); i != range.end(); ++i) {
                 const SurfacePoint& p = points[i];
                 if (p.double_sided) {
-                    sum.first += seenFromAny(p.position, p.normal);
-                    sum.first += seenFromAny(p.position, -p.normal);
-                    sum.second += 2;
+                    const uint64_t seen = uint64_t(seenFromAny(p.position, p.normal)) +
+                                          uint64_t(seenFromAny(p.position, -p.normal));
+                    sum.seen += seen;
+                    sum.unseen_double_sided += 2 - seen;
+                    sum.sides += 2;
                 } else {
-                    sum.first += seenFromAny(p.position, p.normal) || seenFromAny(p.position, -p.normal);
-                    sum.second += 1;
+                    sum.seen += seenFromAny(p.position, p.normal) || seenFromAny(p.position, -p.normal);
+                    sum.sides += 1;
                 }
             }
             return sum;
         },
         [](Counts a, Counts b) {
-            return Counts{a.first + b.first, a.second + b.second};
+            return Counts{a.seen + b.seen, a.unseen_double_sided + b.unseen_double_sided, a.sides + b.sides};
         });
-    return counts.second > 0 ? double(counts.first) / double(counts.second) : 0.0;
+    PointSides result;
+    if (counts.sides == 0) return result;
+    result.seen = double(counts.seen) / double(counts.sides);
+    result.unseen_double_sided = double(counts.unseen_double_sided) / double(counts.sides);
+    return result;
 }
 
 /// The visible area of the triangles that rays from the viewpoints hit (each side once): exact for
@@ -140,9 +154,10 @@ SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& 
     // by area (a fine mesh) and triangles hit by rays from the viewpoints (a small part of a
     // scene made of a few large triangles).
     const double total = visibleSurfaceArea(scene);
-    seen.area = std::min(total, std::max(seenShareOfPoints(tracer, viewpoints, points) * total,
-                                         seenTriangleArea(tracer, viewpoints)));
+    const PointSides sides = seenSidesOfPoints(tracer, viewpoints, points);
+    seen.area = std::min(total, std::max(sides.seen * total, seenTriangleArea(tracer, viewpoints)));
     seen.fraction = total > 0.0 ? seen.area / total : 1.0;
+    seen.unseen_double_sided_area = sides.unseen_double_sided * total;
     return seen;
 }
 
@@ -154,6 +169,10 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     if (seen && seen->samples > 0 && seen->area > 0.0 && seen->fraction < kFitToSeenBelow) {
         fit.surface_area = seen->area;
         fit.fitted_to_seen = true;
+    } else if (seen && seen->samples > 0 && seen->unseen_double_sided_area > 0.0 &&
+               seen->unseen_double_sided_area < fit.surface_area) {
+        fit.surface_area -= seen->unseen_double_sided_area;
+        fit.unseen_sides_left_out = seen->unseen_double_sided_area;
     }
     const double budget = double(std::max<uint64_t>(voxel_budget, 1));
     double size = std::sqrt(fit.surface_area / budget);
@@ -178,6 +197,11 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
                       "%.3g units^2 of surface the cameras' free space sees (%.2g%% of the scene's %.3g; the rest is "
                       "out of its sight)",
                       fit.surface_area, 100.0 * fit.surface_area / fit.scene_surface_area, fit.scene_surface_area);
+    } else if (fit.unseen_sides_left_out > 0.0) {
+        std::snprintf(surface, sizeof surface,
+                      "%.3g units^2 of visible surface (the scene's %.3g less the sides of double-sided surfaces no "
+                      "camera's free space sees)",
+                      fit.surface_area, fit.scene_surface_area);
     } else {
         std::snprintf(surface, sizeof surface, "%.3g units^2 of visible surface", fit.surface_area);
     }

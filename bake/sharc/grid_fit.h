@@ -38,7 +38,10 @@ double visibleSurfaceArea(const Scene& scene);
 struct SeenSurface {
     double area = 0.0;      ///< world units squared, both sides of double-sided surfaces counted
     double fraction = 1.0;  ///< of visibleSurfaceArea
-    uint32_t samples = 0;   ///< surface points tested
+    /// The sides of double-sided surfaces that no viewpoint sees (the outside of a closed room of
+    /// double-sided walls, the underside of a ground plane), world units squared.
+    double unseen_double_sided_area = 0.0;
+    uint32_t samples = 0;  ///< surface points tested
 };
 
 /// Estimates SeenSurface from `samples` points spread over the surface by area: a point's side
@@ -62,6 +65,9 @@ struct GridFit {
     double estimated_voxels = 0.0;       ///< surface_area / finest_voxel_size^2 (flat surfaces)
     bool limited_by_range = false;       ///< the 17-bit grid range forced larger voxels
     bool fitted_to_seen = false;         ///< surface_area is the part the viewpoints see (SeenSurface)
+    /// Sides of double-sided surfaces no viewpoint sees, left out of surface_area (where it is not
+    /// fitted to the seen part alone).
+    double unseen_sides_left_out = 0.0;
     double scene_surface_area = 0.0;     ///< visibleSurfaceArea, seen or not
     std::string reason;                  ///< one line for the bake's output
 };
@@ -70,7 +76,10 @@ struct GridFit {
 /// so that level 1 holds the scene's visible surface in about `voxel_budget` voxels, and never
 /// finer than the 17-bit grid allows around the scene's farthest coordinate. With `seen` below
 /// kFitToSeenBelow of that surface, level 1 holds the seen part instead: the roaming camera never
-/// reaches the rest, and a 4 m room beside a 10 km ground plane keeps voxels for the room.
+/// reaches the rest, and a 4 m room beside a 10 km ground plane keeps voxels for the room. Above
+/// it, the sides of double-sided surfaces `seen` says no viewpoint sees are left out: a closed room
+/// of double-sided walls (Blender's default material) gets the voxels of the same room
+/// single-sided, not voxels sqrt(2) wider for outer sides no camera reaches.
 GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
                      const SeenSurface* seen = nullptr);
 
