@@ -127,6 +127,16 @@ void parseImageSize(const std::string& text, const std::string& option_name, std
 /// "cache") will be black; punctual lights that give none are named with the reason.
 void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* result);
 
+/// Point and spot lights further than this (the median over lights of each one's median distance
+/// to the surfaces around it, scene units) suggest a scene in millimetres: a lamp in metres hangs
+/// within a few metres of a surface.
+inline constexpr float kFarPunctualLightDistance = 100.0f;
+
+/// A warning (empty when there is nothing to say) for point and spot lights as far from the
+/// surfaces around them as in a scene modelled in millimetres, where their inverse-square
+/// falloff, unlike everything else, depends on the units and makes them 10^6 times too dim.
+std::string checkPunctualLightUnits(const Tracer& tracer);
+
 /// Options that choose the sky, shared by render and bake.
 struct SkyOptions {
     std::string uniform;  ///< "r,g,b" or empty

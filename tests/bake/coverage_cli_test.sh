@@ -99,6 +99,31 @@ for name, s, k in (("mm", mm, 1000.0), ("km", km, 0.001)):
         sys.exit(1)
 PY
 
+# Point lights fall off with the squared distance in the scene's units: the mm room's lamp is
+# 10^6 times dimmer, and render says why; the same lamp in metres says nothing.
+lamp() {  # lamp SCENE_GLTF OUT_GLTF HEIGHT
+    python3 - "$1" "$2" "$3" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+g.setdefault("extensionsUsed", []).append("KHR_lights_punctual")
+g.setdefault("extensions", {})["KHR_lights_punctual"] = {"lights": [{"type": "point", "intensity": 100.0}]}
+g["nodes"].append({"name": "lamp", "translation": [0.0, float(sys.argv[3]), 0.0],
+                   "extensions": {"KHR_lights_punctual": {"light": 0}}})
+g["scenes"][0]["nodes"].append(len(g["nodes"]) - 1)
+json.dump(g, open(sys.argv[2], "w"))
+PY
+}
+mkdir -p "$work/unit"
+cp "$scenes/cornell_box/cornell_box.bin" "$work/unit/"
+lamp "$cornell" "$work/unit/lamp.gltf" 0.5
+lamp "$work/mm/cornell_box.gltf" "$work/mm/lamp.gltf" 500
+expect 0 "render the lamp in metres" "$sharcbake" render "$work/unit/lamp.gltf" -o "$work/lamp.exr" --resolution 8 --spp 1 -q
+grep -q "point and spot lights" "$work/err.txt" && fail "the lamp in metres was called too far: $(cat "$work/err.txt")"
+expect 0 "render the lamp in millimetres" "$sharcbake" render "$work/mm/lamp.gltf" -o "$work/lamp.exr" --resolution 8 --spp 1 -q
+says "$work/err.txt" "warning: the scene's point and spot lights are a median .* units from the surfaces" \
+    "a lamp in a millimetre scene is warned about"
+says "$work/err.txt" "10^6 times too dim" "the warning says what millimetres do to it"
+
 # A level bias given by hand that does not fit the units: a warning naming the fix.
 expect 0 "the room shrunk to 1 mm with the SDK's level bias" "$sharcbake" bake "$work/km/cornell_box.gltf" -o "$work/x.sharc" \
     --iterations 2 --resolution 64x64 --level-bias 0
