@@ -34,11 +34,21 @@ uint64_t voxelIndex(const std::vector<CacheVoxel>& voxels, uint64_t key) {
     return it != voxels.end() && it->key == key ? uint64_t(it - voxels.begin()) : kNoVoxel;
 }
 
-/// Adds a batch of points: their keys (two sides x every level) are looked up in parallel, then
-/// added in point order, so the sums do not depend on the thread count.
+/// Which sides of the points a pass keys.
+enum class Sides : uint8_t {
+    /// The front, and the back of double-sided materials: the sides glTF shows.
+    Shown,
+    /// The back of single-sided materials, into voxels no shown side reached: a room modelled
+    /// from a cube, its normals out, is seen from inside on the backs of its walls.
+    HiddenIntoEmptyVoxels,
+};
+
+/// Adds a batch of points: their keys (the pass's sides x every level) are looked up in parallel,
+/// then added in point order, so the sums do not depend on the thread count. A hidden pass adds
+/// only to voxels whose sums are still empty (`shown_points`: the shown pass's counts).
 void addBatch(const Scene& scene, const CacheData& data, const std::vector<uint32_t>& levels,
-              const std::vector<SurfacePoint>& points, size_t begin, size_t end, std::vector<VoxelSums>& sums,
-              glm::dvec3& factor_sum) {
+              const std::vector<SurfacePoint>& points, size_t begin, size_t end, Sides sides,
+              const std::vector<uint64_t>* shown_points, std::vector<VoxelSums>& sums, glm::dvec3& factor_sum) {
     const HashGridParameters grid = data.gridParameters();
     const size_t per_point = 2 * levels.size();
     std::vector<uint64_t> voxel(per_point * (end - begin), kNoVoxel);
@@ -46,13 +56,18 @@ void addBatch(const Scene& scene, const CacheData& data, const std::vector<uint3
     tbb::parallel_for(tbb::blocked_range<size_t>(begin, end), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const SurfacePoint& p = points[i];
+            if (sides == Sides::HiddenIntoEmptyVoxels && p.double_sided) continue;
             const SurfaceHit hit = makeSurfacePoint(scene, p.triangle, p.barycentrics.x, p.barycentrics.y);
             const ShadingMaterial material = evaluateMaterial(scene, hit);
-            values[i - begin] = {material.emission, demodulationFactor(material)};
+            // A single-sided surface emits from its front only.
+            const glm::vec3 emission = sides == Sides::Shown ? material.emission : glm::vec3(0.0f);
+            values[i - begin] = {emission, demodulationFactor(material)};
             // The back of a single-sided surface is not meant to be seen (glTF culls it): counting
-            // it would mix, at coarse levels, the outside of a room's wall into the voxel of the
-            // opposite wall's inside, which faces the same way.
-            for (size_t side = 0; side < (p.double_sided ? 2u : 1u); ++side) {
+            // it where a shown side reached would mix, at coarse levels, the outside of a room's
+            // wall into the voxel of the opposite wall's inside, which faces the same way.
+            const size_t first = sides == Sides::Shown ? 0 : 1;
+            const size_t last = sides == Sides::Shown ? (p.double_sided ? 2u : 1u) : 2u;
+            for (size_t side = first; side < last; ++side) {
                 const Float3 normal = toFloat3(side == 0 ? p.normal : -p.normal);
                 for (size_t l = 0; l < levels.size(); ++l) {
                     const uint64_t key = hashGridKeyAtLevel(toFloat3(p.position), normal, levels[l], grid);
@@ -63,10 +78,11 @@ void addBatch(const Scene& scene, const CacheData& data, const std::vector<uint3
     });
     for (size_t i = begin; i < end; ++i) {
         const std::array<glm::vec3, 2>& v = values[i - begin];
-        factor_sum += glm::dvec3(v[1]);
+        if (sides == Sides::Shown) factor_sum += glm::dvec3(v[1]);
         for (size_t k = 0; k < per_point; ++k) {
             const uint64_t index = voxel[(i - begin) * per_point + k];
             if (index == kNoVoxel) continue;
+            if (shown_points && (*shown_points)[size_t(index)] > 0) continue;
             VoxelSums& s = sums[size_t(index)];
             s.emission += glm::dvec3(v[0]);
             s.demodulation += glm::dvec3(v[1]);
@@ -109,8 +125,15 @@ std::vector<CacheVoxelMaterial> computeVoxelMaterials(const Scene& scene, const 
     std::vector<VoxelSums> sums(data.voxels.size());
     glm::dvec3 factor_sum{0.0};
     for (size_t begin = 0; begin < points.size(); begin += kPointsPerBatch) {
-        addBatch(scene, data, levels, points, begin, std::min(points.size(), begin + kPointsPerBatch), sums,
-                 factor_sum);
+        addBatch(scene, data, levels, points, begin, std::min(points.size(), begin + kPointsPerBatch), Sides::Shown,
+                 nullptr, sums, factor_sum);
+    }
+    // Voxels the shown sides left empty may be the insides of rooms wound outwards.
+    std::vector<uint64_t> shown_points(sums.size());
+    for (size_t i = 0; i < sums.size(); ++i) shown_points[i] = sums[i].points;
+    for (size_t begin = 0; begin < points.size(); begin += kPointsPerBatch) {
+        addBatch(scene, data, levels, points, begin, std::min(points.size(), begin + kPointsPerBatch),
+                 Sides::HiddenIntoEmptyVoxels, &shown_points, sums, factor_sum);
     }
     VoxelMaterialStats local;
     local.points = points.size();

@@ -35,7 +35,9 @@ struct VoxelMaterialStats {
 /// @brief One VoxelMaterial per voxel of `data` (same order): means, by area, over the surface
 /// points that key into the voxel. Points are spread over the scene by area (about
 /// `points_per_voxel` per voxel, at most 2^23 in all), keyed on their front side, and on both
-/// sides for double-sided materials (the back of a single-sided surface is not meant to be seen).
+/// sides for double-sided materials (the back of a single-sided surface is not meant to be seen);
+/// voxels those leave empty then take the backs of single-sided surfaces (without emission, which
+/// is one-sided): the inside of a room wound outwards, which its cameras see on the backs.
 /// The same scene and cache give the same result for any thread count.
 std::vector<CacheVoxelMaterial> computeVoxelMaterials(const Scene& scene, const CacheData& data,
                                                       VoxelMaterialStats* stats = nullptr,

@@ -8,6 +8,7 @@
 #include "sharc/voxel_materials.h"
 #include "sharc/baker.h"
 #include "sharc/camera_path.h"
+#include "sharc/coverage.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
 #include "sharcbake/scene_loader.h"
@@ -19,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -103,6 +105,84 @@ TEST(VoxelMaterials, ADemodulatingEngineReadsThePlainRadianceOfABakedCornellBox)
         EXPECT_GT(read_sum[c] / plain_sum[c], 0.99) << "channel " << c;
         EXPECT_LT(read_sum[c] / plain_sum[c], 1.06) << "channel " << c;
     }
+}
+
+/// A 4 x 3 x 5 room of single-sided walls wound outwards (a cube scaled up in Blender, normals
+/// out), grey, with a lamp facing down under its ceiling: its cameras see the backs of the walls.
+Scene roomWoundOutwards() {
+    Scene scene;
+    Material wall;
+    wall.name = "wall";
+    wall.base_color = glm::vec3(0.5f, 0.4f, 0.3f);
+    wall.metallic = 0.0f;
+    Material lamp = wall;
+    lamp.name = "lamp";
+    lamp.emissive = glm::vec3(1.0f);
+    lamp.emissive_strength = 5.0f;
+    scene.materials = {wall, lamp};
+    const glm::vec3 lo(-2.0f, 0.0f, -2.5f), hi(2.0f, 3.0f, 2.5f);
+    for (int corner = 0; corner < 8; ++corner) {
+        scene.positions.emplace_back(corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z);
+    }
+    // Two triangles per face, wound outwards.
+    scene.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                       {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    scene.triangle_materials.assign(scene.triangles.size(), 0);
+    // The lamp, 10 cm under the ceiling, facing down (counter-clockwise seen from below).
+    const uint32_t base = uint32_t(scene.positions.size());
+    for (const glm::vec2 d :
+         {glm::vec2(-0.5f, -0.5f), glm::vec2(-0.5f, 0.5f), glm::vec2(0.5f, -0.5f), glm::vec2(0.5f, 0.5f)}) {
+        scene.positions.emplace_back(d.x, 2.9f, d.y);
+    }
+    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 1));
+    scene.triangles.push_back(glm::uvec3(base + 2, base + 3, base + 1));
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, 1u);
+    scene.bounds_min = lo;
+    scene.bounds_max = hi;
+    return scene;
+}
+
+TEST(VoxelMaterials, ARoomWoundOutwardsTakesItsMaterialsFromTheBacksOfItsWalls) {
+    // Keyed on the walls' fronts alone, no point reached a voxel of the room's inside: every
+    // voxel took the scene's mean factor. The backs now fill the voxels the fronts leave empty.
+    const TestBakeScene bake(roomWoundOutwards());
+    BakeSettings settings;
+    settings.width = settings.height = 64;
+    settings.sharc.grid.capacity = 1u << 18;
+    settings.sharc.grid.level_bias = 2.0f;
+    const std::unique_ptr<Baker> baker = bake.makeBaker(settings);
+    for (uint32_t i = 0; i < 8; ++i) baker->runIteration();
+    CacheData data = toCacheData(baker->cache());
+    ASSERT_GT(data.voxels.size(), 500u);
+    VoxelMaterialStats stats;
+    data.voxel_materials = computeVoxelMaterials(bake.scene, data, &stats);
+    // Before: 6888 of 23051 voxels took the scene's mean and 15603 a coarser voxel's; now those
+    // are the slivers no point lands in.
+    EXPECT_EQ(stats.voxels_from_scene_mean, 0u);
+    EXPECT_LT(stats.voxels_from_coarser, data.voxels.size() / 4)
+        << stats.voxels_from_coarser << " from coarser, of " << data.voxels.size();
+    // The finest voxels of the -X wall, seen from inside (+X), hold the wall's factor; the backs
+    // carry no emission (it is one-sided).
+    const glm::vec3 wall_factor = demodulationFactor(
+        evaluateMaterial(bake.scene, makeSurfacePoint(bake.scene, 0, 0.3f, 0.3f)));
+    const HashGridParameters grid = data.gridParameters();
+    const uint32_t finest = levelsPresent(data).front();
+    uint32_t wall_voxels = 0;
+    for (size_t i = 0; i < data.voxels.size(); ++i) {
+        const HashGridCell cell = decodeHashGridKey(data.voxels[i].key);
+        const Float3 centre = voxelCenter(data.voxels[i].key, grid);
+        if (cell.level != finest || cell.normal_bits != normalBits(Float3{1.0f, 0.0f, 0.0f}) || !(centre.x < -1.9f) ||
+            std::abs(centre.y - 1.5f) > 1.0f || std::abs(centre.z) > 1.5f) {
+            continue;  // away from the wall's middle, where floor, ceiling and the other walls meet it
+        }
+        ++wall_voxels;
+        const CacheVoxelMaterial& m = data.voxel_materials[i];
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(m.demodulation[c], wall_factor[c], 1e-5f) << c;
+            EXPECT_EQ(m.emission[c], 0.0f) << c;
+        }
+    }
+    EXPECT_GT(wall_voxels, 20u);
 }
 
 }  // namespace
