@@ -215,13 +215,22 @@ glm::vec3 vec3Or(const std::vector<double>& v, glm::vec3 fallback) {
     return glm::vec3(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
 }
 
-std::string numberText(float v) {
+/// Doubles too, so that a value of the JSON is named as the file gives it: 1e+39, not the inf
+/// that float32 makes of it.
+std::string numberText(double v) {
     char text[32];
-    std::snprintf(text, sizeof text, "%g", double(v));
+    std::snprintf(text, sizeof text, "%g", v);
     return text;
 }
 
-std::string vec3Text(glm::vec3 v) {
+/// The largest float32. glTF's numbers are JSON doubles; the scene is float32, so a value beyond
+/// this has no float (it would be infinity).
+constexpr double kLargestFloat = std::numeric_limits<float>::max();
+
+bool fitsFloat(double v) { return std::abs(v) <= kLargestFloat; }
+
+template <typename T>
+std::string vec3Text(glm::vec<3, T> v) {
     // Appended, not "(" + ...: GCC 12 warns about that form (-Wrestrict, a false positive).
     std::string text = "(";
     text += numberText(v.x);
@@ -2008,9 +2017,41 @@ private:
         readMaterialExtensions(src, m, label);
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness"))
             readSpecularGlossiness(*ext, m, label);
+        leaveOutEmissionBeyondFloat(src, m, label);
         clampToGltfRanges(m, label);
         if (extension(src.extensions, "KHR_materials_unlit")) makeUnlit(m);
         return m;
+    }
+
+    /// Emission is traced in float32, as emissiveFactor x emissiveStrength x texture (at most 1).
+    /// A factor or strength beyond float32's range, or a product of the two beyond it (each
+    /// finite: a factor of 2 times a strength of 3e38), has no float value: read, it was infinity
+    /// or a fallback (a strength of 1e39 was loaded as 1), wrong by orders of magnitude either way.
+    /// Clamped to the largest float, the light would still overflow at its first bounce and the
+    /// bake would drop it as NaN/Inf. So the material's emission is left out, with a warning
+    /// naming the field and the value as the file gives it.
+    void leaveOutEmissionBeyondFloat(const tinygltf::Material& src, Material& m, const std::string& label) {
+        const glm::dvec3 factor = src.emissiveFactor.size() == 3
+                                      ? glm::dvec3(src.emissiveFactor[0], src.emissiveFactor[1], src.emissiveFactor[2])
+                                      : glm::dvec3(0.0);
+        const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_emissive_strength");
+        const double strength = ext ? number(*ext, "emissiveStrength").value_or(1.0) : 1.0;
+        const std::string factor_text = "emissiveFactor " + vec3Text(factor);
+        const std::string strength_text = "emissiveStrength " + numberText(strength);
+        std::string beyond;
+        if (!fitsFloat(factor.x) || !fitsFloat(factor.y) || !fitsFloat(factor.z)) {
+            beyond = factor_text;
+        } else if (!fitsFloat(strength)) {
+            beyond = strength_text;
+        } else {
+            const double brightest = std::max({factor.x, factor.y, factor.z}) * strength;
+            if (!fitsFloat(brightest)) beyond = factor_text + " x " + strength_text + " = " + numberText(brightest);
+        }
+        if (beyond.empty()) return;
+        warn(label + ": " + beyond + " is beyond float32's range (at most " + numberText(kLargestFloat) +
+             "), so the material's emission is left out; scale the scene's emission down");
+        m.emissive = glm::vec3(0.0f);
+        m.emissive_strength = 1.0f;
     }
 
     /// Factors outside the ranges glTF gives them are clamped into them, with one warning per

@@ -985,6 +985,54 @@ TEST(GltfLoaderMaterials, MalformedValuesAreSaidAndReplaced) {
     expectVec3Near(scene.bounds_max, {1, 1, 0});
 }
 
+TEST(GltfLoaderMaterials, EmissionBeyondFloat32IsLeftOutNamingFieldAndValue) {
+    // glTF's numbers are doubles; emission is traced in float32. An emissiveStrength of 1e39 was
+    // loaded as 1 with a warning that it was "clamped" (float32 made it infinity, and the
+    // fallback for infinity is 1): 39 orders of magnitude off. A factor of 1e39 became 0 with a
+    // warning naming "inf", and a product overflowing float32 (each factor finite) was kept as an
+    // infinite emission, which the bake drops as NaN/Inf. 1e37 fits and is kept as it is.
+    TempDir dir;
+    GltfBuilder b;
+    const auto emissive = [&](const std::string& name, json factor, double strength) {
+        json prim = unitTrianglePrimitive(b);
+        prim["material"] = b.addMaterial(
+            {{"name", name},
+             {"emissiveFactor", factor},
+             {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", strength}}}}}});
+        const int material = prim["material"];
+        return b.addMeshNode(prim, {{"translation", {2 * material, 0, 0}}});  // side by side
+    };
+    const int strong = emissive("Strong", {1.0, 1.0, 1.0}, 1e39);
+    const int wide = emissive("Wide", {1e39, 0.5, 0.0}, 1.0);
+    const int product = emissive("Product", {2.0, 1.0, 0.5}, 3e38);
+    const int bright = emissive("Bright", {1.0, 0.5, 0.25}, 1e37);
+    b.doc["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+    b.setScene({strong, wide, product, bright});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "beyond_float.gltf"));
+    ASSERT_EQ(scene.materials.size(), 4u);
+    for (size_t i = 0; i < 3; ++i) {
+        SCOPED_TRACE(scene.materials[i].name);
+        EXPECT_FALSE(scene.materials[i].isEmissive());
+        expectVec3Near(scene.materials[i].emissive, {0, 0, 0});
+    }
+    EXPECT_TRUE(scene.materials[3].isEmissive());
+    EXPECT_EQ(scene.materials[3].emissive_strength, 1e37f);
+    expectVec3Near(scene.materials[3].emissive, {1.0f, 0.5f, 0.25f});
+    const auto said = [&](const std::string& text) {
+        return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(),
+                             [&](const std::string& w) { return w.find(text) != std::string::npos; });
+    };
+    const std::string beyond =
+        " is beyond float32's range (at most 3.40282e+38), so the material's emission is left out";
+    EXPECT_EQ(said("material 0 'Strong': emissiveStrength 1e+39" + beyond), 1)
+        << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(said("material 1 'Wide': emissiveFactor (1e+39, 0.5, 0)" + beyond), 1);
+    EXPECT_EQ(said("material 2 'Product': emissiveFactor (2, 1, 0.5) x emissiveStrength 3e+38 = 6e+38" + beyond), 1);
+    EXPECT_EQ(said("'Bright'"), 0);
+    EXPECT_EQ(said("clamped"), 0);
+    EXPECT_EQ(said("inf"), 0);
+}
+
 TEST(GltfLoaderMaterials, SceneWithoutMaterialsGetsDefault) {
     TempDir dir;
     GltfBuilder b;
