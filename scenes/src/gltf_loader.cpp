@@ -257,6 +257,13 @@ bool isFinite(const glm::vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
+bool isFinite(const glm::dmat4& m) {
+    for (int column = 0; column < 4; ++column)
+        for (int row = 0; row < 4; ++row)
+            if (!std::isfinite(m[column][row])) return false;
+    return true;
+}
+
 /// A texture reference as found in core glTF (TextureInfo) or inside extension JSON.
 struct TextureSlot {
     int index = -1;
@@ -463,7 +470,9 @@ private:
     /// parent node's index; and the other parents of the nodes reached under several.
     std::vector<int> first_parent_;
     std::map<int, std::vector<int>> other_parents_;
-    std::set<size_t> unknown_type_lights_;  ///< lights of a type not supported, already warned about
+    /// Lights skipped for what they are, not where (a type not supported, an intensity beyond
+    /// float32), already warned about: named once however many nodes place them.
+    std::set<size_t> unusable_lights_;
     std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
     uint64_t collapsed_triangles_ = 0;  ///< triangles flat in float but not in double (dropDegenerateTriangles)
@@ -2552,7 +2561,8 @@ private:
     /// Photometric glTF units to the renderer's radiometric ones: candela (lm/sr) / 683 =
     /// W/sr for point and spot, lux (lm/m^2) / 683 = W/m^2 for directional. The colour is a
     /// per-channel multiplier on the intensity (KHR_lights_punctual). Nothing, with a warning,
-    /// for a light of another type and for a directional or spot light without a direction.
+    /// for a light of another type, one whose intensity or place has no float32 value, and a
+    /// directional or spot light without a direction.
     template <typename OrientationOfPath>
     std::optional<PunctualLight> convertLight(const tinygltf::Light& src, size_t lightIndex, int nodeIndex,
                                               const glm::dmat4& world, const OrientationOfPath& orientationOfPath) {
@@ -2566,14 +2576,56 @@ private:
         else {
             // The extension's schema takes any string, so that later types do not break older
             // loaders: such a light is left out, named once however many nodes place it.
-            if (unknown_type_lights_.insert(lightIndex).second) {
+            if (unusable_lights_.insert(lightIndex).second) {
                 warn(label + ": type " + quoted(src.type) +
                      " is none of KHR_lights_punctual's (directional, point, spot); skipped");
             }
             return std::nullopt;
         }
 
-        light.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        // A negative colour or intensity would take light away; out of the extension's ranges, they
+        // are clamped into them (colour [0, 1], intensity at least 0) with a warning. Read as the
+        // file's doubles, so that the warning names a colour of 1e39 as that, not as float32's inf.
+        const glm::dvec3 given_colour = src.color.size() < 3 ? glm::dvec3(1.0)
+                                                             : glm::dvec3(src.color[0], src.color[1], src.color[2]);
+        const auto clampedColour = [](double c) { return std::isnan(c) ? 1.0 : std::clamp(c, 0.0, 1.0); };
+        const glm::dvec3 colour(clampedColour(given_colour.x), clampedColour(given_colour.y),
+                                clampedColour(given_colour.z));
+        const double intensity = std::isnan(src.intensity) ? 1.0 : std::max(src.intensity, 0.0);
+        // An intensity whose radiometric value has no float32 would be an infinite light: its
+        // power, and the brightest radiance the bake's fixed point is scaled to, infinite too.
+        const double radiometric = intensity / kLumensPerWatt;
+        if (!fitsFloat(radiometric)) {
+            if (unusable_lights_.insert(lightIndex).second) {
+                warn(label + ": intensity " + numberText(src.intensity) + " (" + numberText(radiometric) +
+                     " after dividing by 683 lm/W) is beyond float32's range (at most " + numberText(kLargestFloat) +
+                     "); skipped");
+            }
+            return std::nullopt;
+        }
+        if (colour != given_colour || intensity != src.intensity) {
+            warn(label + ": colour " + vec3Text(given_colour) + " and intensity " + numberText(src.intensity) +
+                 " clamped into KHR_lights_punctual's ranges (colour [0, 1], intensity at least 0): " +
+                 vec3Text(colour) + ", " + numberText(intensity));
+        }
+
+        // Where the light is must have a float32 value: a translation beyond float32's range
+        // (1e39), or scales along the path whose product overflows a double (1e200 under 1e200,
+        // which leaves the matrix infinity and NaN), would put the light at infinity or NaN, where
+        // it lights nothing and says nothing.
+        if (!isFinite(world)) {
+            warn(label +
+                 ": the node's world transform is not finite (the scales and translations along its path "
+                 "overflow a double); skipped");
+            return std::nullopt;
+        }
+        const glm::dvec3 position(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        if (!fitsFloat(position.x) || !fitsFloat(position.y) || !fitsFloat(position.z)) {
+            warn(label + ": the node's transform puts the light at " + vec3Text(position) +
+                 ", beyond float32's range (at most " + numberText(kLargestFloat) + "); skipped");
+            return std::nullopt;
+        }
+        light.position = glm::vec3(position);
         // The node's -Z in world space, through the whole world matrix (a mirror turns it). Where a
         // scale of zero collapses that axis (how some tools hide an object), the rotations along
         // the node's path orient the light, as glTF says; a singular matrix has none.
@@ -2597,17 +2649,7 @@ private:
             }
             light.direction = glm::vec3(glm::normalize(oriented));
         }
-        // A negative colour or intensity would take light away; out of the extension's ranges, they
-        // are clamped into them (colour [0, 1], intensity at least 0) with a warning.
-        const glm::vec3 given_colour = vec3Or(src.color, glm::vec3(1.0f));
-        const glm::vec3 colour = clampedFactor(given_colour, 0.0f, 1.0f, 1.0f);
-        const double intensity = std::isfinite(src.intensity) ? std::max(src.intensity, 0.0) : 1.0;
-        if (colour != given_colour || intensity != src.intensity) {
-            warn("light " + quoted(src.name) + ": colour " + vec3Text(given_colour) + " and intensity " +
-                 numberText(float(src.intensity)) + " clamped into KHR_lights_punctual's ranges (colour [0, 1], " +
-                 "intensity at least 0): " + vec3Text(colour) + ", " + numberText(float(intensity)));
-        }
-        light.intensity = colour * static_cast<float>(intensity / kLumensPerWatt);
+        light.intensity = glm::vec3(colour) * static_cast<float>(radiometric);
         light.range = src.range > 0.0 ? static_cast<float>(src.range) : 0.0f;
         if (light.type == LightType::Spot) setSpotCone(src, light);
         return light;

@@ -1611,6 +1611,83 @@ TEST(GltfLoaderLights, NegativeColourAndIntensityAreClampedWithAWarning) {
     EXPECT_EQ(warnings, 2u);
 }
 
+TEST(GltfLoaderLights, ValuesBeyondFloat32AreNamedAsTheFileGivesThem) {
+    // glTF's numbers are doubles; lights are float32. An intensity whose W/sr has no float32 made
+    // an infinite light (its power, and the brightest radiance the bake's fixed point is scaled
+    // to, infinite too): it is skipped, named once however many nodes place it. A colour of 1e39
+    // clamps to 1 as any colour above 1 does; its warning named it "inf".
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "Blinding"}, {"type", "point"}, {"intensity", 1e45}},
+         {{"name", "Vivid"}, {"type", "point"}, {"intensity", 683.0}, {"color", {1e39, 0.5, 0.25}}},
+         {{"name", "Strong"}, {"type", "point"}, {"intensity", 1e40}}});
+    const auto light = [](int index) { return json{{"KHR_lights_punctual", {{"light", index}}}}; };
+    const int blinding = b.addNode({{"extensions", light(0)}});
+    const int again = b.addNode({{"translation", {1, 0, 0}}, {"extensions", light(0)}});
+    const int vivid = b.addNode({{"extensions", light(1)}});
+    const int strong = b.addNode({{"extensions", light(2)}});
+    b.setScene({blinding, again, vivid, strong});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "intense.gltf"));
+    ASSERT_EQ(scene.lights.size(), 2u) << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(scene.lights[0].name, "Vivid");
+    expectVec3Near(scene.lights[0].intensity, {1.0f, 0.5f, 0.25f});
+    EXPECT_EQ(scene.lights[1].name, "Strong");
+    EXPECT_FLOAT_EQ(scene.lights[1].intensity.x, float(1e40 / 683.0));
+    const auto said = [&](const std::string& text) {
+        return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(),
+                             [&](const std::string& w) { return w.find(text) != std::string::npos; });
+    };
+    EXPECT_EQ(said("light 0 'Blinding' on node 0: intensity 1e+45 (1.46413e+42 after dividing by 683 lm/W) is "
+                   "beyond float32's range (at most 3.40282e+38); skipped"),
+              1)
+        << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(said("light 1 'Vivid' on node 2: colour (1e+39, 0.5, 0.25) and intensity 683 clamped into "
+                   "KHR_lights_punctual's ranges (colour [0, 1], intensity at least 0): (1, 0.5, 0.25), 683"),
+              1);
+    EXPECT_EQ(said("inf"), 0);
+}
+
+TEST(GltfLoaderLights, ANodeTransformBeyondFloat32SkipsTheLightNamingLightAndNode) {
+    // A light at infinity or NaN (a translation beyond float32's range, or scales along the path
+    // overflowing a double) was kept: its distance to every point was infinite or NaN, so it lit
+    // nothing and nothing said why. It is skipped, naming the light and its node.
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "Far bulb"}, {"type", "point"}, {"intensity", 683.0}},
+         {{"name", "Huge spot"}, {"type", "spot"}, {"intensity", 683.0}, {"spot", json::object()}},
+         {{"name", "Far sun"}, {"type", "directional"}, {"intensity", 683.0}},
+         {{"name", "Bulb"}, {"type", "point"}, {"intensity", 683.0}}});
+    const auto light = [](int index) { return json{{"KHR_lights_punctual", {{"light", index}}}}; };
+    std::vector<int> roots;
+    roots.push_back(b.addNode({{"name", "Far away"}, {"translation", {1e39, 0, 0}}, {"extensions", light(0)}}));
+    // 1e200 under 1e200: the world matrix overflows a double (infinity, and NaN where it meets 0).
+    const int spot = b.addNode({{"name", "Spot holder"}, {"scale", {1e200, 1e200, 1e200}}, {"extensions", light(1)}});
+    roots.push_back(b.addNode({{"scale", {1e200, 1e200, 1e200}}, {"children", {spot}}}));
+    const int sun = b.addNode({{"name", "Sun holder"}, {"translation", {0, -1e39, 0}}, {"extensions", light(2)}});
+    roots.push_back(sun);
+    roots.push_back(b.addNode({{"translation", {1, 2, 3}}, {"extensions", light(3)}}));
+    b.setScene(roots);
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "far_lights.gltf"));
+    ASSERT_EQ(scene.lights.size(), 1u) << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(scene.lights[0].name, "Bulb");
+    expectVec3Near(scene.lights[0].position, {1, 2, 3});
+    const auto said = [&](const std::string& text) {
+        return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(),
+                             [&](const std::string& w) { return w.find(text) != std::string::npos; });
+    };
+    EXPECT_EQ(said("light 0 'Far bulb' on node 0 'Far away': the node's transform puts the light at (1e+39, 0, 0), "
+                   "beyond float32's range (at most 3.40282e+38); skipped"),
+              1)
+        << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(said("light 1 'Huge spot' on node 1 'Spot holder': the node's world transform is not finite"), 1);
+    EXPECT_EQ(said("light 2 'Far sun' on node 3 'Sun holder': the node's transform puts the light at (0, -1e+39, 0)"),
+              1);
+}
+
 TEST(GltfLoaderLights, MissingLightIndexIsAnError) {
     TempDir dir;
     GltfBuilder b;
