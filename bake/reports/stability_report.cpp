@@ -33,10 +33,18 @@ void addWarnings(StabilityReport& r) {
                                     r.capacity ? 100.0 * double(r.occupied_slots) / double(r.capacity) : 0.0));
     }
     if (r.clamped_deposits > 0) {
-        r.warnings.push_back(format("%.0f deposits exceeded the fixed-point ceiling and were clamped, removing "
-                                    "%.3g%% of the deposited energy (a radiance far above the brightest emitter: "
-                                    "check for extreme emission or path weights)",
-                                    double(r.clamped_deposits), 100.0 * r.share(r.clamped_energy)));
+        // The scale puts the brightest radiance the scene's emission, sky and punctual lights give
+        // at 2^40 steps, whatever its magnitude in float32 (chooseRadianceScale), and one deposit
+        // holds 2^62: only radiance 2^22 times that brightest one is clamped, never bright emission.
+        r.warnings.push_back(
+            format("%.0f deposits carried radiance above %.3g, the most one deposit holds (2^62 fixed-point steps "
+                   "at scale %g, which puts %.3g, at least the brightest radiance the scene's emission, sky and "
+                   "punctual lights give, at 2^40 steps), ",
+                   double(r.clamped_deposits), r.radiance_scale > 0.0 ? 0x1p62 / r.radiance_scale : 0.0,
+                   r.radiance_scale, r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0) +
+            format("and were clamped, removing %.3g%% of the deposited energy: something made radiance 2^22 times "
+                   "what the lights give (a punctual light almost touching a surface, or an extreme path weight)",
+                   100.0 * r.share(r.clamped_energy)));
     }
     if (r.deposits > 0 && double(r.sub_step_deposits) > kSubStepWarningShare * double(r.deposits)) {
         // The scale puts the brightest radiance the scene can make at 2^40 steps (chooseRadianceScale).
@@ -52,9 +60,11 @@ void addWarnings(StabilityReport& r) {
                    r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0));
     }
     if (r.saturated_sums > 0) {
-        r.warnings.push_back(format("%.0f deposits met a voxel sum already at its 72-bit ceiling (2^72 fixed-point "
-                                    "units in one iteration); those voxels are darker than they should be",
-                                    double(r.saturated_sums)));
+        r.warnings.push_back(format(
+            "%.0f deposits met a voxel sum already at its 72-bit ceiling (2^72 fixed-point "
+            "steps in one iteration, a summed radiance of %.3g at scale %g); those voxels are "
+            "darker than they should be",
+            double(r.saturated_sums), r.radiance_scale > 0.0 ? 0x1p72 / r.radiance_scale : 0.0, r.radiance_scale));
     }
     if (r.non_finite_dropped > 0) {
         r.warnings.push_back(format("%.0f NaN/Inf radiance values were dropped (a material, light or sky produced "

@@ -167,9 +167,15 @@ double SharcCache::chooseRadianceScale(double max_radiance) {
     // The brightest radiance maps to 2^40: 40 bits of precision below it (and dithered rounding
     // beyond that), 2^22 times above it for one deposit (multi-bounce radiance exceeds emission:
     // L = Le/(1-rho) in a furnace), and 2^32 deposits that bright in a voxel's 72-bit sum.
-    const double magnitude = (std::isfinite(max_radiance) && max_radiance > 0.0) ? max_radiance : 1.0;
-    const int exponent = std::clamp(40 - int(std::ceil(std::log2(magnitude))), -60, 100);
-    return std::ldexp(1.0, exponent);
+    // Deposits are float32, so the scale follows the estimate across float32's whole range: from
+    // its smallest value (2^-149) to its largest (below 2^128), where one deposit's 2^62 steps
+    // still hold 2^22 times the largest float. (A floor at 2^-60 held radiance up to 2^122 = 5.3e36
+    // and clamped an emitter of 1e37 47% low.) An estimate beyond float32 (a punctual light's
+    // 1 cm one can be) takes the largest float's scale; none at all (no light, NaN) takes 1's.
+    constexpr double kLargestFloat = std::numeric_limits<float>::max();
+    constexpr double kSmallestFloat = std::numeric_limits<float>::denorm_min();
+    const double magnitude = max_radiance > 0.0 ? std::clamp(max_radiance, kSmallestFloat, kLargestFloat) : 1.0;
+    return std::ldexp(1.0, 40 - int(std::ceil(std::log2(magnitude))));
 }
 
 SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)

@@ -219,7 +219,8 @@ public:
     void restoreNumerics(const NumericsCounters& numerics) { numerics_ = numerics; }
 
     /// The power-of-two fixed-point scale that maps `max_radiance` (the brightest emission or
-    /// sky in the scene) to 2^40.
+    /// sky in the scene) to 2^40, for any radiance float32 holds: from 2^-149 * 2^189 to
+    /// (almost) 2^128 * 2^-88.
     static double chooseRadianceScale(double max_radiance);
 
 private:

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Extreme radiance: emitters from 1e-6 to 1e7, and a tiny, very bright emitter beside a dim,
+// Extreme radiance: emitters from 1e-35 to 1e37, and a tiny, very bright emitter beside a dim,
 // large one. No integer wrap, no fp saturation, energy conserved, every clamp counted.
 #include "stability_support.h"
 
@@ -8,12 +8,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
 
 namespace sharcbake::stability {
 namespace {
 
-/// Furnace rho = 0.5 (L = 2 Le) at emission levels 13 decades apart: the fixed-point scale
-/// follows the brightest emission, so every level must give the same relative answer.
+/// Furnace rho = 0.5 (L = 2 Le) at emission levels 72 decades apart: the fixed-point scale
+/// follows the brightest emission, so every level must give the same relative answer. 1e37 came
+/// out 73% low (the scale stopped at 2^-60, where a deposit holds at most 2^122 = 5.3e36), 1e-35
+/// as 0 (the scale stopped at 2^100, where its deposits were 1e-5 of a step, below the dither).
 class EmissionSweep : public ::testing::TestWithParam<float> {};
 
 TEST_P(EmissionSweep, FurnaceGivesTwiceTheEmissionAtAnyMagnitude) {
@@ -34,10 +39,11 @@ TEST_P(EmissionSweep, FurnaceGivesTwiceTheEmissionAtAnyMagnitude) {
     EXPECT_EQ(report.clamped_deposits, 0u);
     EXPECT_EQ(report.saturated_sums, 0u);
     EXPECT_EQ(report.non_finite_dropped, 0u);
+    EXPECT_EQ(report.sub_step_deposits, 0u);
     EXPECT_TRUE(cacheIsFinite(bake.cache()));
 }
 
-INSTANTIATE_TEST_SUITE_P(Extreme, EmissionSweep, ::testing::Values(1e-6f, 1e-3f, 1.0f, 1e3f, 1e7f),
+INSTANTIATE_TEST_SUITE_P(Extreme, EmissionSweep, ::testing::Values(1e-35f, 1e-6f, 1e-3f, 1.0f, 1e3f, 1e7f, 1e37f),
                          [](const auto& info) {
                              const int decade = int(std::lround(std::log10(double(info.param))));
                              return std::string("Le_1e") + (decade < 0 ? "m" : "") + std::to_string(std::abs(decade));
@@ -137,6 +143,47 @@ TEST(FixedPoint, RadianceFarBelowOneStepIsKeptOnAverage) {
     SharcCache steps(oneVoxelSettings(), scale);
     steps.commit(std::vector<Deposit>(100, Deposit{kKey, glm::vec3(float(1.5 / scale)), 1}));
     EXPECT_EQ(steps.numerics().sub_step_deposits, 0u);
+}
+
+/// The scale follows the brightest radiance across float32's whole range, so a voxel holds it
+/// exactly at any magnitude. With the scale held to [2^-60, 2^100], 1e37 was stored 47% low
+/// (clamped at 2^62 steps of 2^60: 5.3e36) and a denormal 1e-40 as 0 (1e-10 of a step).
+TEST(FixedPoint, RadianceAcrossFloat32sRangeIsStoredExactly) {
+    for (const float radiance : {1e-40f, 1e-30f, 1e30f, 1e37f, std::numeric_limits<float>::max()}) {
+        SCOPED_TRACE(radiance);
+        SharcCache cache(oneVoxelSettings(), SharcCache::chooseRadianceScale(radiance));
+        cache.commit(std::vector<Deposit>(10, Deposit{kKey, glm::vec3(radiance), 1}));
+        cache.resolve(0);
+        const ResolvedEntry* e = cache.findResolved(kKey);
+        ASSERT_NE(e, nullptr);
+        EXPECT_EQ(e->mean.x, radiance);
+        EXPECT_EQ(cache.numerics().clamped_deposits, 0u);
+        EXPECT_EQ(cache.numerics().sub_step_deposits, 0u);
+    }
+    // An estimate beyond float32 (a punctual light's 1 cm one can be) takes the largest float's
+    // scale; it took 1's, where every deposit above 2^22 was clamped.
+    EXPECT_EQ(SharcCache::chooseRadianceScale(std::numeric_limits<double>::infinity()),
+              SharcCache::chooseRadianceScale(std::numeric_limits<float>::max()));
+    EXPECT_EQ(SharcCache::chooseRadianceScale(1e300), SharcCache::chooseRadianceScale(1e39));
+}
+
+/// A clamp happens only where radiance is 2^22 times the brightest the scale was chosen for;
+/// the warning says so with the figures, instead of blaming "extreme emission" (which the scale
+/// follows).
+TEST(FixedPoint, ClampedDepositsAreExplainedWithTheCeilingAndTheScale) {
+    const double scale = SharcCache::chooseRadianceScale(1.0);  // 1 at 2^40 steps: one deposit holds 2^22
+    SharcCache cache(oneVoxelSettings(), scale);
+    cache.commit(std::vector<Deposit>(3, Deposit{kKey, glm::vec3(float(std::ldexp(1.0, 23))), 1}));
+    EXPECT_EQ(cache.numerics().clamped_deposits, 3u);
+    const StabilityReport report = makeStabilityReport(cache, UpdateCounters{}, glm::vec3(0.0f), glm::vec3(1.0f), {1});
+    const std::string expected =
+        "3 deposits carried radiance above 4.19e+06, the most one deposit holds (2^62 fixed-point steps at scale "
+        "1.09951e+12, which puts 1, at least the brightest radiance the scene's emission, sky and punctual lights "
+        "give, at 2^40 steps), and were clamped, removing 50% of the deposited energy";
+    const bool warned = std::any_of(report.warnings.begin(), report.warnings.end(), [&](const std::string& w) {
+        return w.find(expected) != std::string::npos && w.find("extreme emission") == std::string::npos;
+    });
+    EXPECT_TRUE(warned) << testing::PrintToString(report.warnings);
 }
 
 /// 1024 deposits of 2^52 fixed-point units (2^12 times the brightest emission) sum to 2^62;
