@@ -53,6 +53,32 @@ float spotAttenuation(const PunctualLight& light, glm::vec3 light_to_point) {
     return t * t;
 }
 
+/// luminance() in double, for a colour whose float32 luminance may overflow.
+double luminanceInDouble(glm::vec3 c) {
+    return double(0.2126f) * double(c.x) + double(0.7152f) * double(c.y) + double(0.0722f) * double(c.z);
+}
+
+/// A light's selection power: its float32 product, or where that overflows, the same product in
+/// double. Scenes whose powers fit float32, all ordinary ones, keep their float32 powers.
+double selectionPower(float in_float, double in_double) {
+    return std::isfinite(in_float) ? double(in_float) : in_double;
+}
+
+/// The powers as Distribution1D's float32 weights, which count infinity as no power: a 1e37
+/// emitter of 100 m^2 (power 1.6e39) was never chosen. Selection depends only on the powers'
+/// ratios, so where one is beyond float32, all are scaled by one power of two (exact) until the
+/// largest fits.
+std::vector<float> selectionWeights(std::vector<double> powers) {
+    double largest = 0.0;
+    for (const double p : powers)
+        if (std::isfinite(p)) largest = std::max(largest, p);
+    if (largest > double(std::numeric_limits<float>::max())) {
+        const int shift = std::ilogb(largest) - 126;  // the largest lands in [2^126, 2^127)
+        for (double& p : powers) p = std::ldexp(p, -shift);
+    }
+    return std::vector<float>(powers.begin(), powers.end());
+}
+
 }  // namespace
 
 glm::vec2 directionToEquirect(glm::vec3 d) {
@@ -69,7 +95,7 @@ glm::vec3 equirectToDirection(glm::vec2 uv) {
 }
 
 LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
-    std::vector<float> powers;  // one per entry: light selection is proportional to power
+    std::vector<double> powers;  // one per entry: light selection is proportional to power
     const glm::vec3 extent = scene.bounds_max - scene.bounds_min;
     const float radius = std::max(0.5f * glm::length(extent), 1e-3f);
     // Lights at infinity deliver their power through the scene's bounding disk.
@@ -78,14 +104,14 @@ LightSampler::LightSampler(const Scene& scene) : scene_(scene) {
     addPunctualLights(disk_area, powers);
     addSky(disk_area, powers);
     if (entries_.empty()) return;
-    selection_ = Distribution1D(powers);
+    selection_ = Distribution1D(selectionWeights(std::move(powers)));
     for (size_t e = 0; e < entries_.size(); ++e) {
         if (entries_[e].kind == Kind::Triangle) triangle_pmf_[entries_[e].index] = selection_.pmf(e);
         if (entries_[e].kind == Kind::Sky) sky_pmf_ = selection_.pmf(e);
     }
 }
 
-void LightSampler::addAreaLights(std::vector<float>& powers) {
+void LightSampler::addAreaLights(std::vector<double>& powers) {
     // Power = pi * area * luminance(mean emitted radiance) per emitting side.
     std::vector<glm::vec3> texture_means(scene_.textures.size(), glm::vec3(-1.0f));
     for (uint32_t t = 0; t < scene_.triangles.size(); ++t) {
@@ -100,7 +126,8 @@ void LightSampler::addAreaLights(std::vector<float>& powers) {
         const glm::uvec3 tri = scene_.triangles[t];
         const float area = 0.5f * glm::length(glm::cross(scene_.positions[tri.y] - scene_.positions[tri.x],
                                                          scene_.positions[tri.z] - scene_.positions[tri.x]));
-        const float power = kPi * area * luminance(emission) * (m.double_sided ? 2.0f : 1.0f);
+        const float sides = m.double_sided ? 2.0f : 1.0f;
+        const float power = kPi * area * luminance(emission) * sides;
         if (!(power > 0.0f)) continue;
         if (triangle_area_.empty()) {
             triangle_area_.assign(scene_.triangles.size(), 0.0f);
@@ -108,38 +135,40 @@ void LightSampler::addAreaLights(std::vector<float>& powers) {
         }
         triangle_area_[t] = area;
         entries_.push_back({Kind::Triangle, t});
-        powers.push_back(power);
+        powers.push_back(selectionPower(power, double(kPi) * double(area) * luminanceInDouble(emission) * sides));
         ++emissive_triangle_count_;
     }
 }
 
-void LightSampler::addPunctualLights(float disk_area, std::vector<float>& powers) {
+void LightSampler::addPunctualLights(float disk_area, std::vector<double>& powers) {
     for (uint32_t i = 0; i < scene_.lights.size(); ++i) {
         const PunctualLight& light = scene_.lights[i];
         const float lum = luminance(light.intensity);
-        float power = 0.0f;
+        // The power per unit of luminance: the solid angle it shines into, or the area it lights.
+        float spread = 0.0f;
         switch (light.type) {
-            case LightType::Point: power = 4.0f * kPi * lum; break;
+            case LightType::Point: spread = 4.0f * kPi; break;
             case LightType::Spot: {
                 // The solid angle of a cone halfway between the two (1 - cos stays exact for
                 // narrow cones, whose power would otherwise round to zero and drop the light).
                 const float one_minus_cos_mid = 0.5f * (oneMinusCos(light.inner_cone_angle) +
                                                         oneMinusCos(light.outer_cone_angle));
-                power = 2.0f * kPi * one_minus_cos_mid * lum;
+                spread = 2.0f * kPi * one_minus_cos_mid;
                 break;
             }
-            case LightType::Directional: power = lum * disk_area; break;
+            case LightType::Directional: spread = disk_area; break;
         }
+        const float power = spread * lum;
         if (!(power > 0.0f)) {
             dark_lights_.push_back(i);
             continue;
         }
         entries_.push_back({Kind::Punctual, i});
-        powers.push_back(power);
+        powers.push_back(selectionPower(power, double(spread) * luminanceInDouble(light.intensity)));
     }
 }
 
-void LightSampler::addSky(float disk_area, std::vector<float>& powers) {
+void LightSampler::addSky(float disk_area, std::vector<double>& powers) {
     if (scene_.sky.isBlack()) return;
     float mean_luminance = luminance(scene_.sky.uniform);
     if (scene_.sky.map) {
@@ -179,7 +208,8 @@ void LightSampler::addSky(float disk_area, std::vector<float>& powers) {
     if (mean_luminance > 0.0f) {
         has_sky_ = true;
         entries_.push_back({Kind::Sky, 0});
-        powers.push_back(kPi * mean_luminance * disk_area);
+        powers.push_back(
+            selectionPower(kPi * mean_luminance * disk_area, double(kPi) * double(mean_luminance) * double(disk_area)));
     }
 }
 

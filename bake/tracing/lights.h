@@ -60,10 +60,11 @@ private:
         uint32_t index;  ///< triangle index or light index
     };
 
-    /// The constructor's parts: each adds its lights to entries_ and their powers to `powers`.
-    void addAreaLights(std::vector<float>& powers);
-    void addPunctualLights(float disk_area, std::vector<float>& powers);
-    void addSky(float disk_area, std::vector<float>& powers);
+    /// The constructor's parts: each adds its lights to entries_ and their powers to `powers`
+    /// (float32 products, in double only where those overflow: selectionPower).
+    void addAreaLights(std::vector<double>& powers);
+    void addPunctualLights(float disk_area, std::vector<double>& powers);
+    void addSky(float disk_area, std::vector<double>& powers);
 
     bool sampleTriangle(uint32_t triangle, float pmf, const SurfaceHit& at, glm::vec2 u,
                         LightSample& out) const;

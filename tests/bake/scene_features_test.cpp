@@ -768,5 +768,58 @@ TEST(PunctualLights, RangeWindowsTheInverseSquareLawAsTheExtensionRecommends) {
     }
 }
 
+/// Appends a one-sided emissive square at height y (side `side`, centred on the Y axis) that
+/// faces the origin, with a material of its own emitting `emission`.
+void addEmissiveSquare(Scene& scene, float y, float side, float emission) {
+    Material m;
+    m.emissive = glm::vec3(1.0f);
+    m.emissive_strength = emission;
+    const uint32_t material = uint32_t(scene.materials.size());
+    scene.materials.push_back(m);
+    const uint32_t base = uint32_t(scene.positions.size());
+    const float h = 0.5f * side;
+    for (glm::vec2 c : {glm::vec2(-h, -h), glm::vec2(h, -h), glm::vec2(h, h), glm::vec2(-h, h)})
+        scene.positions.push_back(glm::vec3(c.x, y, c.y));
+    // Counter-clockwise seen from the origin: the front faces it.
+    if (y > 0.0f) {
+        scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));
+        scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
+    } else {
+        scene.triangles.push_back(glm::uvec3(base, base + 2, base + 1));
+        scene.triangles.push_back(glm::uvec3(base, base + 3, base + 2));
+    }
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, material);
+}
+
+// Next-event estimation chooses a light in proportion to its power, pi x area x luminance. A
+// 1e37 emitter of 100 m^2 has a power beyond float32 (1.6e39): it was infinity, which the
+// selection reads as no power, so the brightest light in the scene was never chosen and every
+// shadow ray went to a light 37 orders of magnitude dimmer.
+TEST(LightSelection, APowerBeyondFloat32StillChoosesTheBrightestLight) {
+    Scene scene;
+    addEmissiveSquare(scene, 1.0f, 10.0f, 1e37f);  // the ceiling: 1e37 over 100 m^2
+    addEmissiveSquare(scene, -1.0f, 1.0f, 1.0f);   // the floor: 1 over 1 m^2
+    scene.bounds_min = glm::vec3(-5.0f, -1.0f, -5.0f);
+    scene.bounds_max = glm::vec3(5.0f, 1.0f, 5.0f);
+    const LightSampler lights(scene);
+    SurfaceHit at;
+    at.shading_normal = at.geometric_normal = at.face_normal = glm::vec3(0.0f, 1.0f, 0.0f);
+    int ceiling = 0, floor = 0;
+    for (int i = 0; i < 64; ++i) {
+        LightSample sample;
+        ASSERT_TRUE(lights.sample(at, (float(i) + 0.5f) / 64.0f, glm::vec2(0.3f, 0.4f), sample)) << i;
+        (sample.wi.y > 0.0f ? ceiling : floor) += 1;
+    }
+    EXPECT_EQ(ceiling, 64);
+    EXPECT_EQ(floor, 0);
+    // Its power is the two triangles' pi x 50 x 1e37 each: the ceiling's pdf for a hit straight
+    // above, 1 m away, is its selection probability (all but 1e-38 of it) over its 100 m^2.
+    SurfaceHit above;
+    above.position = glm::vec3(0.0f, 1.0f, 0.0f);
+    above.face_normal = glm::vec3(0.0f, -1.0f, 0.0f);
+    above.triangle = 0;
+    EXPECT_FLOAT_EQ(lights.pdfEmitter(glm::vec3(0.0f), above), 0.5f / 50.0f);
+}
+
 }  // namespace
 }  // namespace sharcbake
