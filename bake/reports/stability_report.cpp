@@ -67,9 +67,22 @@ void addWarnings(StabilityReport& r) {
             double(r.saturated_sums), r.radiance_scale > 0.0 ? 0x1p72 / r.radiance_scale : 0.0, r.radiance_scale));
     }
     if (r.non_finite_dropped > 0) {
-        r.warnings.push_back(format("%.0f NaN/Inf radiance values were dropped (a material, light or sky produced "
-                                    "them); the cache holds none",
-                                    double(r.non_finite_dropped)));
+        // Radiance within 2^20 of float32's largest overflows where a path sums it with other light
+        // or carries it over a bounce or two: then the scene's brightness, not a material, made them.
+        const double brightest = r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0;
+        if (brightest > double(std::numeric_limits<float>::max()) * 0x1p-20) {
+            r.warnings.push_back(
+                format("%.0f NaN/Inf radiance values were dropped (the cache holds none): the "
+                       "scene's brightest radiance, up to %.3g, is within 2^20 of float32's "
+                       "largest (%.3g), and radiance that adds to it or carries it overflows; "
+                       "scale the scene's emission down",
+                       double(r.non_finite_dropped), brightest, double(std::numeric_limits<float>::max())));
+        } else {
+            r.warnings.push_back(
+                format("%.0f NaN/Inf radiance values were dropped (a material, light or sky "
+                       "produced them); the cache holds none",
+                       double(r.non_finite_dropped)));
+        }
     }
     if (r.orphan_sums > 0) {
         r.warnings.push_back(format("%.0f voxel sums had radiance but no sample and were dropped (a bug in the "

@@ -206,6 +206,27 @@ TEST(FixedPoint, ClampedDepositsAreExplainedWithTheCeilingAndTheScale) {
     EXPECT_TRUE(warned) << testing::PrintToString(report.warnings);
 }
 
+/// Emission near float32's largest value overflows where a path adds light to it or carries it:
+/// the warning said "a material, light or sky produced them", and now names the brightness.
+TEST(FixedPoint, NonFiniteRadianceNearFloat32sLargestIsBlamedOnTheBrightness) {
+    UpdateCounters update;
+    update.non_finite = 2;
+    const auto warning = [&](double brightest) {
+        const SharcCache cache(oneVoxelSettings(), SharcCache::chooseRadianceScale(brightest));
+        const StabilityReport report = makeStabilityReport(cache, update, glm::vec3(0.0f), glm::vec3(1.0f), {1});
+        for (const std::string& w : report.warnings)
+            if (w.find("NaN/Inf") != std::string::npos) return w;
+        return std::string("(none)");
+    };
+    EXPECT_EQ(warning(3e38),
+              "2 NaN/Inf radiance values were dropped (the cache holds none): the scene's brightest radiance, up to "
+              "3.4e+38, is within 2^20 of float32's largest (3.4e+38), and radiance that adds to it or carries it "
+              "overflows; scale the scene's emission down");
+    EXPECT_EQ(warning(1.0),
+              "2 NaN/Inf radiance values were dropped (a material, light or sky produced them); the "
+              "cache holds none");
+}
+
 /// 1024 deposits of 2^52 fixed-point units (2^12 times the brightest emission) sum to 2^62;
 /// 2^12 deposits of 2^62 sum to 2^74, past the 64-bit word: the carry keeps it exact up to 2^72.
 TEST(FixedPoint, SumsPastSixtyFourBitsCarryInsteadOfWrapping) {
