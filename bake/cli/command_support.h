@@ -104,7 +104,7 @@ private:
 
 /// A glTF camera of the scene by name or index, or the first when `selector` is empty; when the
 /// scene has none, the automatic camera with `fov_degrees` (automaticCamera: from outside, or from
-/// inside a scene closed around its centre when `tracer` is given). Throws
+/// inside a room closed around the scene's centre when `tracer` is given). Throws
 /// CommandError(kExitUsage) naming `option_name` and the cameras there are.
 Camera sceneCamera(const Scene& scene, const std::string& selector, const std::string& option_name, float fov_degrees,
                    const Tracer* tracer = nullptr);

@@ -261,8 +261,9 @@ private:
     void setUp() {
         scene_ = loadSceneForCommand(o_.scene_path, o_.sky, o_.quiet, o_.limits);
         checkOutputs(scene_.source_files);  // the buffers and textures the scene read
-        // The automatic camera looks into a scene closed around its centre from inside, which
-        // takes the tracer; with any other camera the options are checked before the build.
+        // The automatic camera looks into a room closed around the scene's centre from inside, and
+        // telling a room from a closed model takes the tracer; with any other camera the options
+        // are checked before the build.
         const bool automatic = o_.look_at.empty() && o_.camera.empty() && scene_.cameras.empty();
         const auto build_start = std::chrono::steady_clock::now();
         if (automatic) tracer_.emplace(scene_);
@@ -654,7 +655,7 @@ void registerRenderCommand(CLI::App& app) {
                     "glTF camera (default: the first): by its node's name (Blender's object name), else by the glTF "
                     "camera's own name, else by its index, #N or N. A name two cameras share is refused with "
                     "both listed. A scene without cameras gets an automatic one: framing it from outside, or, "
-                    "closed around its centre (a room), looking across it from inside");
+                    "closed around its centre and lit from within (a room), looking across it from inside");
     cmd->add_option("--look-at", options->look_at,
                     "Camera from eye and target: \"ex,ey,ez,tx,ty,tz\" (overrides --camera)");
     cmd->add_option("--up", options->up, "Up vector for --look-at")->capture_default_str();

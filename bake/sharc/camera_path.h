@@ -87,11 +87,16 @@ float framingDistance(const Scene& scene, float yfov);
 /// Named "automatic".
 Camera automaticCamera(const Scene& scene, float yfov);
 
-/// The same, unless the scene is closed around the centre of its bounds (a room without a camera:
-/// the centre is free space and no probe ray from it leaves the scene). From outside such a scene
-/// the camera sees only the outer sides of its walls, which nothing lights and the bake never
-/// reaches; it then stands at the centre, looking level along the horizontal axis with the most
-/// room. Named "automatic" either way.
+/// The same, unless the scene is a room closed around the centre of its bounds (the centre is free
+/// space, no probe ray from it leaves the scene, and the camera outside cannot see it) and that
+/// closed space is a place to look from: single-sided faces around it face it, or light reaches
+/// into it (an emitter or a punctual light inside, seen from it or from what it sees; walls wound
+/// away from it then count as free space around it, as a cube scaled into a room has them). From
+/// outside such a scene the camera sees only the outer sides of its walls, which nothing lights
+/// and the bake never reaches; it then stands near the wall behind the centre, looking level along
+/// the horizontal axis with the most room. The inside of a closed double-sided model lit from
+/// outside (Blender's default material, under the sky) looks just as closed, but is dark: it is
+/// framed from outside. Named "automatic" either way.
 Camera automaticCamera(const Tracer& tracer, float yfov);
 
 /// The automatic camera's vertical field of view unless the user gives one (render's --fov), in

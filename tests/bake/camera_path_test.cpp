@@ -61,11 +61,13 @@ struct RoomOptions {
     float ground_half = 0.0f;  ///< > 0: a ground plane this far out each way, facing up, under the room
     bool box_outside = false;  ///< a closed 2 m box (wound outwards) 4 m beyond the +X wall: nothing reaches it
     uint32_t split = 1;        ///< each wall split into split x split quads (a finely meshed room)
+    bool lamp = false;         ///< a small emissive panel (30 cm) under the ceiling, facing down
 };
 
 constexpr glm::vec3 kRoomMin{-2.0f, 0.0f, -2.5f}, kRoomMax{2.0f, 3.0f, 2.5f};
 constexpr glm::vec3 kCubeMin{0.5f, 0.0f, -1.5f}, kCubeMax{1.5f, 1.0f, -0.5f};
 constexpr glm::vec3 kOutsideMin{6.0f, 0.0f, -1.0f}, kOutsideMax{8.0f, 2.0f, 1.0f};
+constexpr glm::vec3 kLampCenter{-1.0f, 2.9f, 1.0f};
 
 Scene loadRoom(const test::TempDir& dir, const RoomOptions& options) {
     test::GltfBuilder gltf;
@@ -84,10 +86,26 @@ Scene loadRoom(const test::TempDir& dir, const RoomOptions& options) {
     }
     const int material = gltf.addMaterial(
         {{"pbrMetallicRoughness", {{"metallicFactor", 0.0}}}, {"doubleSided", options.double_sided}});
-    const int mesh = gltf.addMesh(
-        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
-                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
-                                {"material", material}}}));
+    nlohmann::json primitives = nlohmann::json::array(
+        {{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
+          {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
+          {"material", material}}});
+    if (options.lamp) {
+        std::vector<float> lamp;
+        for (const glm::vec2 corner : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1), glm::vec2(-1, 1)}) {
+            const glm::vec3 p = kLampCenter + 0.15f * glm::vec3(corner.x, 0.0f, corner.y);
+            lamp.insert(lamp.end(), {p.x, p.y, p.z});
+        }
+        const std::vector<uint32_t> lamp_indices{0, 1, 2, 0, 2, 3};  // facing -Y, at the floor
+        const int emissive = gltf.addMaterial(
+            {{"emissiveFactor", {1.0, 1.0, 1.0}},
+             {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 20.0}}}}},
+             {"doubleSided", options.double_sided}});
+        primitives.push_back({{"attributes", {{"POSITION", gltf.addPositions(lamp)}}},
+                              {"indices", gltf.addData(lamp_indices, test::kUnsignedInt, "SCALAR")},
+                              {"material", emissive}});
+    }
+    const int mesh = gltf.addMesh(primitives);
     std::vector<int> roots{gltf.addNode({{"mesh", mesh}})};
     if (options.camera) {
         gltf.doc["cameras"] = nlohmann::json::array(
@@ -587,6 +605,136 @@ TEST(AutomaticCamera, LooksIntoAClosedRoomFromInsideAndAtAnOpenSceneFromOutside)
     const Camera framing = automaticCamera(table, 0.8f);
     EXPECT_EQ(outside.position, framing.position);
     EXPECT_EQ(outside.forward, framing.forward);
+}
+
+/// A UV sphere as Blender makes one (32 segments, 16 rings), wound outwards.
+void addSphere(std::vector<float>& positions, std::vector<uint32_t>& indices, glm::vec3 center, float radius) {
+    constexpr uint32_t kSegments = 32, kRings = 16;
+    const uint32_t base = uint32_t(positions.size() / 3);
+    const auto add = [&](glm::vec3 p) { positions.insert(positions.end(), {p.x, p.y, p.z}); };
+    add(center + glm::vec3(0.0f, radius, 0.0f));      // base: the north pole
+    add(center - glm::vec3(0.0f, radius, 0.0f));      // base + 1: the south pole
+    for (uint32_t ring = 1; ring < kRings; ++ring) {  // base + 2 + (ring - 1) * kSegments + segment
+        const float polar = kPi * float(ring) / float(kRings);
+        for (uint32_t segment = 0; segment < kSegments; ++segment) {
+            // A third of a segment off the axes: no probe from the centre grazes an edge, where
+            // Embree's test (not watertight) may let it through.
+            const float azimuth = 2.0f * kPi * (float(segment) + 0.3f) / float(kSegments);
+            add(center + radius * glm::vec3(std::sin(polar) * std::cos(azimuth), std::cos(polar),
+                                            std::sin(polar) * std::sin(azimuth)));
+        }
+    }
+    const auto vertex = [&](uint32_t ring, uint32_t segment) {
+        return base + 2 + (ring - 1) * kSegments + segment % kSegments;
+    };
+    for (uint32_t segment = 0; segment < kSegments; ++segment) {
+        indices.insert(indices.end(), {base, vertex(1, segment + 1), vertex(1, segment)});
+        indices.insert(indices.end(), {base + 1, vertex(kRings - 1, segment), vertex(kRings - 1, segment + 1)});
+        for (uint32_t ring = 1; ring + 1 < kRings; ++ring) {
+            const uint32_t a = vertex(ring, segment), b = vertex(ring, segment + 1);
+            const uint32_t c = vertex(ring + 1, segment), d = vertex(ring + 1, segment + 1);
+            indices.insert(indices.end(), {a, b, d, a, d, c});
+        }
+    }
+}
+
+/// A lone 1 m UV sphere at (0, 1.2, 0), double-sided as Blender's default material and assimp's
+/// PLY material make it, optionally standing on a 10 m ground plane, under a white sky.
+Scene loadLoneSphere(const test::TempDir& dir, bool ground) {
+    test::GltfBuilder gltf;
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    addSphere(positions, indices, {0.0f, 1.2f, 0.0f}, 1.0f);
+    if (ground) {
+        const uint32_t base = uint32_t(positions.size() / 3);
+        for (const glm::vec2 corner : {glm::vec2(-5, -5), glm::vec2(-5, 5), glm::vec2(5, 5), glm::vec2(5, -5)}) {
+            positions.insert(positions.end(), {corner.x, 0.0f, corner.y});
+        }
+        for (const uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) indices.push_back(base + k);  // facing +Y
+    }
+    const int material = gltf.addMaterial({{"doubleSided", true}});
+    const int mesh = gltf.addMesh(
+        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
+                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
+                                {"material", material}}}));
+    gltf.setScene({gltf.addNode({{"mesh", mesh}})});
+    Scene scene = loadGltf(gltf.writeEmbedded(dir, ground ? "sphere_on_plane.gltf" : "sphere.gltf"));
+    scene.sky.uniform = glm::vec3(1.0f);
+    return scene;
+}
+
+void expectFramedFromOutside(const Scene& scene, const char* what) {
+    const Tracer tracer(scene);
+    const Camera automatic = automaticCamera(tracer, glm::radians(kAutomaticCameraFovDegrees));
+    const Camera framing = automaticCamera(scene, glm::radians(kAutomaticCameraFovDegrees));
+    EXPECT_EQ(automatic.position, framing.position) << what;
+    EXPECT_EQ(automatic.forward, framing.forward) << what;
+    // The bake predicts its hit rate from the same view.
+    const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
+    ASSERT_EQ(views.size(), 1u) << what;
+    EXPECT_EQ(views.front().camera.position, framing.position) << what;
+}
+
+TEST(AutomaticCamera, FramesAClosedDoubleSidedModelLitFromOutside) {
+    // The centre of a lone double-sided sphere's bounds is free (double-sided faces do not vote),
+    // no probe ray from it leaves, and the camera outside cannot see it: it passed for a room, and
+    // render's camera stood inside the sphere. Nothing lights that inside: the image was black,
+    // and the bake predicted a 0% hit rate from it.
+    test::TempDir dir;
+    const Scene sphere = loadLoneSphere(dir, false);
+    expectFramedFromOutside(sphere, "a lone sphere under the sky");
+    expectFramedFromOutside(loadLoneSphere(dir, true), "a sphere on a ground plane under the sky");
+    // Lit by lamps around it instead of the sky, it is still looked at from outside.
+    Scene lamps = sphere;
+    lamps.sky = Sky{};
+    for (const glm::vec3 position : {glm::vec3(3.0f, 3.0f, 0.0f), glm::vec3(-3.0f, 1.0f, 2.0f)}) {
+        PunctualLight lamp;
+        lamp.position = position;
+        lamp.intensity = glm::vec3(10.0f);
+        lamps.lights.push_back(lamp);
+    }
+    PunctualLight sun;
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(glm::vec3(-1.0f, -2.0f, -0.5f));
+    sun.intensity = glm::vec3(3.0f);
+    lamps.lights.push_back(sun);
+    expectFramedFromOutside(lamps, "a lone sphere lit by lamps and the sun");
+}
+
+TEST(AutomaticCamera, LooksFromInsideAClosedDoubleSidedRoomLitFromWithin) {
+    // The same closed double-sided walls (Blender's default, a cube scaled into a room, wound
+    // outwards) around a room with furniture: a lamp inside says it is a room, under a sky or not.
+    test::TempDir dir;
+    RoomOptions options{true, false, false, true};
+    options.lamp = true;
+    Scene room = loadRoom(dir, options);
+    room.sky.uniform = glm::vec3(1.0f);
+    const auto expectInside = [](const Scene& scene, const char* what) {
+        const Tracer tracer(scene);
+        const Camera view = automaticCamera(tracer, glm::radians(kAutomaticCameraFovDegrees));
+        EXPECT_TRUE(inside(view.position, kRoomMin, kRoomMax))
+            << what << ": " << view.position.x << ", " << view.position.y << ", " << view.position.z;
+        EXPECT_FALSE(inside(view.position, kCubeMin, kCubeMax)) << what;
+        EXPECT_FLOAT_EQ(view.forward.y, 0.0f) << what;
+    };
+    expectInside(room, "a 30 cm emissive panel under the ceiling");
+    // A point light in place of the panel (Blender's lamps are punctual lights).
+    Scene bulb = loadRoom(dir, {true, false, false, true});
+    PunctualLight light;
+    light.position = kLampCenter;
+    light.intensity = glm::vec3(5.0f);
+    bulb.lights.push_back(light);
+    expectInside(bulb, "a point light under the ceiling");
+    // Single-sided walls wound outwards (the scaled cube with backface culling on) put the centre
+    // inside a solid by their winding; the lamp says it is a room all the same.
+    RoomOptions single_sided{false, false, false, true};
+    single_sided.lamp = true;
+    expectInside(loadRoom(dir, single_sided), "single-sided walls wound outwards, with the panel");
+    // With neither, only the sky lights the room, from outside: it is framed from outside,
+    // where the sky lights its walls, as the sphere is.
+    Scene unlit = loadRoom(dir, {true, false, false, true});
+    unlit.sky.uniform = glm::vec3(1.0f);
+    expectFramedFromOutside(unlit, "a closed double-sided room without lights inside");
 }
 
 }  // namespace
