@@ -233,6 +233,7 @@ public:
         setUp();
         render();
         warnAboutNonFiniteSamples();
+        warnAboutBlackImage();
         warnAboutHitRate();
         if (o_.debug_view == "bounces") rampBounces();
         writeImages();
@@ -448,6 +449,22 @@ private:
                      (unsigned long long)counts_.non_finite_samples, samples,
                      100.0 * double(counts_.non_finite_samples) / samples,
                      o_.debug_view.empty() ? " (counted as black): the image is too dark where they fell" : "");
+    }
+
+    /// A scene with lights can still render black: from a camera inside a closed object, or in a
+    /// part of the scene none of its light reaches. Nothing else says so (warnWhenUnlit is quiet,
+    /// the scene has lights), and the user sees a black picture with no word of why.
+    void warnAboutBlackImage() const {
+        if (!o_.debug_view.empty() || !lights_->hasLights()) return;
+        for (const glm::vec3& p : image_.pixels) {
+            if (p != glm::vec3(0.0f)) return;
+        }
+        const std::string camera = camera_.index >= 0 ? cameraLabel(camera_) : "camera '" + camera_.name + "'";
+        std::fprintf(stderr,
+                     "warning: every pixel of the image is black: no light reaches what %s at (%g, %g, %g) "
+                     "sees. It may stand inside a closed object, or every light may be behind walls from it; "
+                     "--camera or --look-at choose another view\n",
+                     camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z);
     }
 
     void warnAboutHitRate() const {

@@ -3,7 +3,8 @@
 # A default bake serves every view: SHaRC's exact lookups from cameras at 0.25x to 8x the glTF
 # camera's distance all hit; the same scene in millimetres or kilometres gets the same grid (in its
 # units), the same voxel count and hit rate, and no warning; a level bias that does not fit the
-# units is warned about; the automatic camera sees a lone floor, which has nothing to look up; a
+# units is warned about; the automatic camera sees a lone floor, which has nothing to look up, and
+# frames a closed double-sided box under the sky from outside (a black image is warned about); a
 # room beside a 10 km ground plane is served from its own camera.
 # Usage: coverage_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
@@ -202,6 +203,37 @@ expect 0 "the floor's primary hits" "$sharcbake" render "$work/floor.gltf" -o "$
     --spp 1 --no-png --cache "$work/floor.sharc" --debug-view cache
 hits=$(sed -n "s/.* of \([0-9]*\) primary hits.*/\1/p" "$work/out.txt")
 [ "${hits:-0}" -ge 100 ] || fail "the automatic camera sees the floor in ${hits:-0} of 1024 pixels (edge-on?)"
+# A closed double-sided box and no camera (Blender's default material), under the sky: the centre
+# of its bounds is closed all round, as in a room, but nothing lights the inside. The automatic
+# camera stood there and the image was black, with no word said; it frames the box from outside.
+python3 - "$work/box.gltf" <<'PY'
+import base64, json, struct, sys
+lo, hi = (-1.0, 0.0, -0.6), (1.0, 1.6, 0.6)
+corners = [(hi[0] if c & 1 else lo[0], hi[1] if c & 2 else lo[1], hi[2] if c & 4 else lo[2]) for c in range(8)]
+faces = [(0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3), (0, 2, 3, 1), (4, 5, 7, 6)]
+indices = [i for a, b, c, d in faces for i in (a, b, c, a, c, d)]
+data = b"".join(struct.pack("<3f", *p) for p in corners) + struct.pack("<36H", *indices)
+g = {"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+     "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+     "materials": [{"doubleSided": True, "pbrMetallicRoughness": {"metallicFactor": 0}}],
+     "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+     "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 96}, {"buffer": 0, "byteOffset": 96, "byteLength": 72}],
+     "accessors": [{"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3", "min": list(lo), "max": list(hi)},
+                   {"bufferView": 1, "componentType": 5123, "count": 36, "type": "SCALAR"}]}
+json.dump(g, open(sys.argv[1], "w"))
+PY
+expect 0 "render a closed double-sided box under the sky" "$sharcbake" render "$work/box.gltf" -o "$work/box.exr" \
+    --resolution 32 --spp 1 --no-png --sky 1,1,1
+says "$work/out.txt" "Camera: 'automatic' at (" "the automatic camera's pose is printed"
+eye=$(sed -n "s/^Camera: 'automatic' at (\([^)]*\)).*/\1/p" "$work/out.txt")
+echo "$eye" | awk -F', ' '{ exit ($1 > -1 && $1 < 1 && $2 > 0 && $2 < 1.6 && $3 > -0.6 && $3 < 0.6) }' ||
+    fail "the automatic camera stands inside the box, at ($eye)"
+grep -q "every pixel of the image is black" "$work/err.txt" && fail "the box renders black: $(cat "$work/err.txt")"
+# From inside the box the image is black, and render says so and why.
+expect 0 "render from inside the box" "$sharcbake" render "$work/box.gltf" -o "$work/box.exr" --resolution 32 \
+    --spp 1 --no-png --sky 1,1,1 --look-at 0,0.8,0,0,0.8,-1
+says "$work/err.txt" "warning: every pixel of the image is black: no light reaches what camera '--look-at' at (0, 0.8, 0)" \
+    "a black image from inside a closed object is warned about"
 # A closed 4 m room with its camera beside a 10 km ground plane under a sky (a building on its
 # site). Fitted to the whole surface, the grid had 28 m voxels: SHaRC's tests refused every lookup
 # from the room's camera, and the bake said "no first bounce hits a surface". The grid now fits
