@@ -697,6 +697,17 @@ GridDecision decideGrid(BakeJob& job, const Scene& scene, const SeenSurface* see
 /// The cache's metadata: everything that reproduces the bake, and nothing that varies between
 /// runs (timings go to --stats-json), so the same scene, settings and seed give the same file
 /// byte for byte. "iterations" is filled in after the bake.
+/// The fixed-point radiance scale (a power of two) as the metadata records it: std::to_string's
+/// fixed notation, exact for the scales of 1 and more ordinary scenes get (caches baked before
+/// keep their bytes), and all its digits below 1, where six decimals read 0 for any scene brighter
+/// than about 1e18 and a resume could not tell two such scales apart.
+std::string radianceScaleText(double radiance_scale) {
+    if (radiance_scale >= 1.0) return std::to_string(radiance_scale);
+    char text[40];
+    std::snprintf(text, sizeof text, "%.17g", radiance_scale);
+    return text;
+}
+
 /// What a finished bake adds to its settings: the iterations done and the table's final size.
 struct BakeOutcome {
     uint32_t iterations = 0;
@@ -727,7 +738,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job
         {"update_stride", std::to_string(settings.update_stride)},
         {"max_bounces", std::to_string(settings.path.max_bounces)},
         {"camera", camera_description},
-        {"radiance_scale", std::to_string(radiance_scale)},
+        {"radiance_scale", radianceScaleText(radiance_scale)},
         {"scene_scale", std::to_string(settings.sharc.grid.scene_scale)},
         {"log_base", std::to_string(settings.sharc.grid.logarithm_base)},
         {"level_bias", std::to_string(settings.sharc.grid.level_bias)},

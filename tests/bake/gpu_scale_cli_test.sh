@@ -48,4 +48,22 @@ PY
 
 expect 1 "scale 0 is refused" "$sharcbake" bake "$scene" -o "$work/zero.sharc" $small --gpu-radiance-scale 0
 expect 1 "a negative scale is refused" "$sharcbake" bake "$scene" -o "$work/neg.sharc" $small --gpu-radiance-scale -2
+# The fixed-point radiance scale in the metadata: a light of 1e20 makes it 2^-27, which six
+# decimals wrote as 0.000000; ordinary scenes (scale 1 and more) keep their bytes.
+mkdir -p "$work/bright"
+cp "$scenes/cornell_box/cornell_box.bin" "$work/bright/"
+python3 - "$scene" "$work/bright/cornell_box.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+for m in g["materials"]:
+    if m.get("emissiveFactor", [0, 0, 0]) != [0, 0, 0]:
+        m.setdefault("extensions", {})["KHR_materials_emissive_strength"] = {"emissiveStrength": 1e20}
+g.setdefault("extensionsUsed", []).append("KHR_materials_emissive_strength")
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "bake a 1e20 light" "$sharcbake" bake "$work/bright/cornell_box.gltf" -o "$work/bright.sharc" $small
+expect 0 "info of the bright cache" "$sharcbake" info "$work/bright.sharc"
+says "$work/out.txt" "radiance_scale: [0-9.]*e-[0-9]*$" "a scale below 1 keeps its digits"
+expect 0 "info of the plain cache" "$sharcbake" info "$work/plain.sharc"
+says "$work/out.txt" "radiance_scale: [0-9]*\.000000$" "a scale of 1 or more is written as before"
 finish gpu_scale_cli_test
