@@ -276,7 +276,8 @@ struct TextureSlot {
 struct ImageDecoding {
     struct NotDecoded {
         std::string why;
-        bool ktx2 = false;  ///< skipped on purpose (KHR_texture_basisu), not broken
+        bool ktx2 = false;     ///< skipped on purpose (KHR_texture_basisu), not broken
+        bool missing = false;  ///< no file of its URI beside the scene: `why` says where it was looked for
     };
     uint32_t max_side = 0;  ///< --max-texture-size
     std::map<int, NotDecoded> not_decoded;
@@ -513,7 +514,34 @@ private:
         /// The files the images' URIs name (canonical; not those a buffer names too), read from
         /// `json` when an empty file first asks for them.
         std::optional<std::set<std::filesystem::path>> image_files;
+        /// The folder as tinygltf writes it before a URI (tinygltfBaseDir, or the base_dir it is
+        /// given): the paths it tries that do not start with it are in the current directory.
+        std::string search_dir;
     };
+
+    /// The folder tinygltf joins a file's URIs to when it reads the file itself: its path up to
+    /// the last '/' or '\', empty for a bare name (tinygltf's GetBaseDir).
+    static std::string tinygltfBaseDir(const std::string& path) {
+        const size_t separator = path.find_last_of("/\\");
+        return separator == std::string::npos ? std::string() : path.substr(0, separator);
+    }
+
+    /// tinygltf looks for a URI's file in the scene's folder, then in the current directory:
+    /// what loaded (and what the folder check refused) would depend on where sharcbake runs. Only
+    /// the paths it builds from the scene's folder exist for it.
+    static bool existsBesideScene(const std::string& path, void* user) {
+        return uriStart(*static_cast<const FileAccess*>(user), path) && tinygltf::FileExists(path, nullptr);
+    }
+
+    /// Where the URI starts in a path tinygltf built from the scene's folder; nothing for the
+    /// paths it tries in the current directory.
+    static std::optional<size_t> uriStart(const FileAccess& access, const std::string& path) {
+        const std::string& dir = access.search_dir;
+        if (dir.empty()) return 0;
+        const std::string prefix = dir.back() == '/' ? dir : dir + '/';
+        if (path.rfind(prefix, 0) != 0) return std::nullopt;
+        return prefix.size();
+    }
 
     /// What readAndRecordFile hands tinygltf for an empty image file, which tinygltf would refuse
     /// before the image loader sees it (this version as a missing image, with its own "File
@@ -525,12 +553,16 @@ private:
         return size == int(sizeof kEmptyImageFile) && std::memcmp(bytes, kEmptyImageFile, sizeof kEmptyImageFile) == 0;
     }
 
-    /// The file a relative URI names in the scene's folder, decoded as tinygltf decodes it ('+'
-    /// is a space to it, "%2B" a plus).
-    static std::filesystem::path uriFile(const FileAccess& access, std::string uri) {
+    /// A URI decoded as tinygltf decodes it ('+' is a space to it, "%2B" a plus).
+    static std::string tinygltfDecodedUri(std::string uri) {
         for (size_t at = uri.find('+'); at != std::string::npos; at = uri.find('+', at)) uri.replace(at, 1, "%20");
+        return uriDecode(uri);
+    }
+
+    /// The file a relative URI names in the scene's folder, decoded as tinygltf decodes it.
+    static std::filesystem::path uriFile(const FileAccess& access, const std::string& uri) {
         std::error_code error;
-        return std::filesystem::weakly_canonical(access.folder / uriDecode(uri), error);
+        return std::filesystem::weakly_canonical(access.folder / tinygltfDecodedUri(uri), error);
     }
 
     /// True when `path` is the file of one of the scene's images and of none of its buffers.
@@ -732,9 +764,9 @@ private:
         // with tinygltf's URI decoding and its handling of missing images.
         image_decoding_.max_side = limits_.max_texture_size;
         parser.SetImageLoader(&loadImageBounded, &image_decoding_);
-        parser.SetFsCallbacks(tinygltf::FsCallbacks{&tinygltf::FileExists, &tinygltf::ExpandFilePath,
-                                                    &readAndRecordFile, &tinygltf::WriteWholeFile,
-                                                    &access});
+        access.search_dir = tinygltfBaseDir(path_);
+        parser.SetFsCallbacks(tinygltf::FsCallbacks{&existsBesideScene, &tinygltf::ExpandFilePath, &readAndRecordFile,
+                                                    &tinygltf::WriteWholeFile, &access});
         std::ifstream in(path_, std::ios::binary);
         const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         checkJsonNesting(bytes);
@@ -762,6 +794,7 @@ private:
             for (const auto& [index, why] : rewritten->refused_image_uris)
                 image_decoding_.not_decoded.emplace(index, ImageDecoding::NotDecoded{why, false});
             const std::string base_dir = std::filesystem::path(path_).parent_path().string();
+            access.search_dir = base_dir;
             if (rewritten->bytes.size() > std::numeric_limits<unsigned int>::max())
                 fail("more than 4 GiB once decompressed; tinygltf cannot parse it");
             const unsigned int size = static_cast<unsigned int>(rewritten->bytes.size());
@@ -774,9 +807,11 @@ private:
             ok = glb ? parser.LoadBinaryFromFile(&model_, &err, &warnings, path_)
                      : parser.LoadASCIIFromFile(&model_, &err, &warnings, path_);
         }
+        if (ok) recordMissingImages(access);
+        const std::set<std::string> superseded = tinygltfLinesAboutMissingImages();
         std::istringstream lines(warnings);
         for (std::string line; std::getline(lines, line);)
-            if (!line.empty()) warn("tinygltf: " + line);
+            if (!line.empty() && !superseded.count(line)) warn("tinygltf: " + line);
         if (ok) {
             // A parse that succeeds can still report errors it recovered from (a baseColorFactor of
             // 2 numbers: the default is kept); they were dropped unsaid.
@@ -795,12 +830,40 @@ private:
         warnAboutUndecodedImages();
     }
 
-    /// One warning per image that could not be decoded, used by a texture or not, saying why.
-    /// KTX2 images are skipped on purpose (KHR_texture_basisu): their textures say so.
+    /// Images whose file is not beside the scene: tinygltf leaves them without texels, and says
+    /// only "File not found".
+    void recordMissingImages(const FileAccess& access) {
+        for (size_t index = 0; index < model_.images.size(); ++index) {
+            const tinygltf::Image& image = model_.images[index];
+            if (image.uri.empty() || image.uri.rfind("data:", 0) == 0 || !image.image.empty()) continue;
+            std::error_code error;
+            if (std::filesystem::exists(uriFile(access, image.uri), error)) continue;  // tinygltf says why not read
+            const std::string where = "not found beside the scene (looked in " + access.folder.string() + ")";
+            image_decoding_.not_decoded.emplace(int(index), ImageDecoding::NotDecoded{where, false, true});
+        }
+    }
+
+    /// tinygltf's warnings about the images recordMissingImages found, which its warning replaces.
+    std::set<std::string> tinygltfLinesAboutMissingImages() const {
+        std::set<std::string> lines;
+        for (const auto& [index, undecoded] : image_decoding_.not_decoded) {
+            if (!undecoded.missing) continue;
+            const tinygltf::Image& image = model_.images[size_t(index)];
+            lines.insert("File not found : " + tinygltfDecodedUri(image.uri));
+            lines.insert("Failed to load external 'uri' for image[" + std::to_string(index) + "] name = [" +
+                         image.name + "]");
+        }
+        return lines;
+    }
+
+    /// One warning per image that was not found or could not be decoded, used by a texture or
+    /// not, saying why. KTX2 images are skipped on purpose (KHR_texture_basisu): their textures
+    /// say so.
     void warnAboutUndecodedImages() {
         for (const auto& [index, undecoded] : image_decoding_.not_decoded) {
-            if (!undecoded.ktx2)
-                warn(imageLabel(index) + " cannot be decoded: " + undecoded.why + "; textures using it are ignored");
+            if (undecoded.ktx2) continue;
+            const std::string problem = undecoded.missing ? " " : " cannot be decoded: ";
+            warn(imageLabel(index) + problem + undecoded.why + "; textures using it are ignored");
         }
     }
 
@@ -2426,13 +2489,15 @@ private:
             return -1;
         }
         if (const auto it = image_decoding_.not_decoded.find(source); it != image_decoding_.not_decoded.end()) {
-            warn(what + ": " + imageLabel(source) +
-                 (it->second.ktx2 ? " is " + it->second.why : " could not be decoded") + "; texture ignored");
+            const std::string problem = it->second.ktx2      ? " is " + it->second.why
+                                        : it->second.missing ? std::string(" not found")
+                                                             : std::string(" could not be decoded");
+            warn(what + ": " + imageLabel(source) + problem + "; texture ignored");
             return -1;
         }
         Texture tex;
         tex.name = imageName(model_.images[static_cast<size_t>(source)], source);
-        if (!setTexels(source, srgb, tex)) {  // a missing file: tinygltf has warned, the image has no pixels
+        if (!setTexels(source, srgb, tex)) {  // a file tinygltf did not read (outside the folder): it said why
             warn(what + ": image " + std::to_string(source) + " could not be decoded; texture ignored");
             return -1;
         }

@@ -45,6 +45,17 @@ std::string loadErrorOf(F&& load) {
     return {};
 }
 
+/// Warnings that contain every one of `parts`.
+size_t warningsWith(const Scene& scene, const std::vector<std::string>& parts) {
+    size_t n = 0;
+    for (const std::string& w : scene.stats.warnings) {
+        bool all = true;
+        for (const std::string& part : parts) all = all && w.find(part) != std::string::npos;
+        n += all ? 1 : 0;
+    }
+    return n;
+}
+
 glm::vec3 geometricNormal(const Scene& s, size_t tri) {
     const glm::uvec3 t = s.triangles[tri];
     return glm::normalize(glm::cross(s.positions[t.y] - s.positions[t.x], s.positions[t.z] - s.positions[t.x]));
@@ -1310,17 +1321,6 @@ std::vector<uint8_t> ktx2Bytes() {
     return {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n', 0, 0, 0, 0, 1, 0, 0, 0};
 }
 
-/// Warnings that contain every one of `parts`.
-size_t warningsWith(const Scene& scene, const std::vector<std::string>& parts) {
-    size_t n = 0;
-    for (const std::string& w : scene.stats.warnings) {
-        bool all = true;
-        for (const std::string& part : parts) all = all && w.find(part) != std::string::npos;
-        n += all ? 1 : 0;
-    }
-    return n;
-}
-
 TEST(GltfLoaderImages, UndecodableImageWarnsAndDropsOnlyItsTextures) {
     TempDir dir;
     GltfBuilder b;
@@ -1405,6 +1405,66 @@ TEST(GltfLoaderImages, EmptyImageFileWarnsAndDropsItsTextures) {
     // The file was read: it is one of the scene's files (and the scene's hash changes when it is filled).
     EXPECT_NE(std::find(scene.source_files.begin(), scene.source_files.end(), dir.file("empty.png")),
               scene.source_files.end());
+}
+
+/// Makes `folder` the current directory until destroyed.
+class InFolder {
+public:
+    explicit InFolder(const std::string& folder) : previous_(std::filesystem::current_path()) {
+        std::filesystem::current_path(folder);
+    }
+    ~InFolder() {
+        std::error_code error;
+        std::filesystem::current_path(previous_, error);
+    }
+    InFolder(const InFolder&) = delete;
+    InFolder& operator=(const InFolder&) = delete;
+
+private:
+    std::filesystem::path previous_;
+};
+
+// tinygltf looks for a URI's file beside the scene, then in the current directory: a scene moved
+// away from its textures was told it read outside its folder when the current directory held a
+// file of that name (the sandbox refused it), and "File not found" elsewhere. Only the scene's
+// folder is searched, and the warning says where.
+TEST(GltfLoaderImages, AMissingImageIsNotFoundBesideTheSceneWhateverTheCurrentDirectory) {
+    TempDir dir;
+    std::filesystem::create_directories(dir.file("moved"));
+    std::filesystem::create_directories(dir.file("tex dir"));
+    const std::vector<uint8_t> png = tinyPng();
+    test::writeFile(dir.file("tex dir/checker.png"), png.data(), png.size());
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);                       // image 0, texture 0: a good PNG
+    b.doc["images"].push_back({{"uri", "tex dir/checker.png"}});  // image 1, as assimp writes it
+    b.doc["textures"].push_back({{"source", 1}});                 // texture 1
+    prim["material"] = b.addMaterial(
+        {{"pbrMetallicRoughness",
+          {{"baseColorTexture", {{"index", 1}}}, {"metallicRoughnessTexture", {{"index", 0}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    const std::string path = b.writeGlb(dir, "moved/scene.glb");
+    const std::string folder = std::filesystem::canonical(dir.file("moved")).string();
+
+    const auto expectNotFound = [&](const std::string& scene_path, const std::string& current) {
+        InFolder in(current);
+        const Scene scene = loadGltf(scene_path);
+        SCOPED_TRACE("current directory " + current + ", scene " + scene_path);
+        EXPECT_FALSE(scene.materials.at(0).base_color_texture.isSet());
+        EXPECT_TRUE(scene.materials.at(0).metallic_roughness_texture.isSet());
+        EXPECT_EQ(warningsWith(scene, {"image 1 'tex dir/checker.png' not found beside the scene (looked in " + folder +
+                                       "); textures using it are ignored"}),
+                  1u)
+            << ::testing::PrintToString(scene.stats.warnings);
+        EXPECT_EQ(warningsWith(scene, {"texture 1: image 1 'tex dir/checker.png' not found; texture ignored"}), 1u);
+        EXPECT_EQ(warningsWith(scene, {"outside the scene's folder"}), 0u);
+        EXPECT_EQ(warningsWith(scene, {"decoded"}), 0u);
+        EXPECT_EQ(warningsWith(scene, {"tinygltf"}), 0u) << "the loader's warning, not tinygltf's lines";
+        EXPECT_EQ(scene.source_files, std::vector<std::string>{scene_path});
+    };
+    expectNotFound(path, dir.file(""));  // the current directory holds "tex dir/checker.png"
+    expectNotFound("moved/scene.glb", dir.file(""));
+    expectNotFound(path, dir.file("moved"));
+    expectNotFound(path, dir.file("tex dir"));
 }
 
 /// A triangle whose base colour texture is texture 0 = `texture`, over a PNG (image 0) and a
