@@ -517,6 +517,9 @@ private:
         /// The folder as tinygltf writes it before a URI (tinygltfBaseDir, or the base_dir it is
         /// given): the paths it tries that do not start with it are in the current directory.
         std::string search_dir;
+        /// Paths tinygltf asked for that name no file, each with the '\' of its URI read as '/'
+        /// (withForwardSlashes).
+        std::map<std::string, std::string> slashed_paths;
     };
 
     /// The folder tinygltf joins a file's URIs to when it reads the file itself: its path up to
@@ -543,6 +546,21 @@ private:
         return prefix.size();
     }
 
+    /// assimp copies an MTL file's Windows paths into the URI unchanged ("textures\wall.png"), and
+    /// '\' is a letter of file names on other systems: where the path as written names no file, the
+    /// one with the URI's '\' read as '/' is used (readAndRecordFile keeps it to the scene's folder).
+    static std::string withForwardSlashes(const std::string& path, void* user) {
+        auto& access = *static_cast<FileAccess*>(user);
+        const std::optional<size_t> uri = uriStart(access, path);
+        std::error_code error;
+        if (!uri || path.find('\\', *uri) == std::string::npos || std::filesystem::exists(path, error)) return path;
+        std::string slashed = path;
+        std::replace(slashed.begin() + std::ptrdiff_t(*uri), slashed.end(), '\\', '/');
+        if (!std::filesystem::exists(slashed, error)) return path;
+        access.slashed_paths.emplace(path, slashed);
+        return slashed;
+    }
+
     /// What readAndRecordFile hands tinygltf for an empty image file, which tinygltf would refuse
     /// before the image loader sees it (this version as a missing image, with its own "File
     /// read error" lines; others fail the parse): not an image of any format, so that
@@ -559,10 +577,17 @@ private:
         return uriDecode(uri);
     }
 
-    /// The file a relative URI names in the scene's folder, decoded as tinygltf decodes it.
+    /// The file a relative URI names in the scene's folder, decoded as tinygltf decodes it, and
+    /// with '\' read as '/' where that names a file and the URI as written none (withForwardSlashes).
     static std::filesystem::path uriFile(const FileAccess& access, const std::string& uri) {
+        std::string decoded = tinygltfDecodedUri(uri);
         std::error_code error;
-        return std::filesystem::weakly_canonical(access.folder / tinygltfDecodedUri(uri), error);
+        if (decoded.find('\\') != std::string::npos && !std::filesystem::exists(access.folder / decoded, error)) {
+            std::string slashed = decoded;
+            std::replace(slashed.begin(), slashed.end(), '\\', '/');
+            if (std::filesystem::exists(access.folder / slashed, error)) decoded = std::move(slashed);
+        }
+        return std::filesystem::weakly_canonical(access.folder / decoded, error);
     }
 
     /// True when `path` is the file of one of the scene's images and of none of its buffers.
@@ -765,7 +790,7 @@ private:
         image_decoding_.max_side = limits_.max_texture_size;
         parser.SetImageLoader(&loadImageBounded, &image_decoding_);
         access.search_dir = tinygltfBaseDir(path_);
-        parser.SetFsCallbacks(tinygltf::FsCallbacks{&existsBesideScene, &tinygltf::ExpandFilePath, &readAndRecordFile,
+        parser.SetFsCallbacks(tinygltf::FsCallbacks{&existsBesideScene, &withForwardSlashes, &readAndRecordFile,
                                                     &tinygltf::WriteWholeFile, &access});
         std::ifstream in(path_, std::ios::binary);
         const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -807,7 +832,10 @@ private:
             ok = glb ? parser.LoadBinaryFromFile(&model_, &err, &warnings, path_)
                      : parser.LoadASCIIFromFile(&model_, &err, &warnings, path_);
         }
-        if (ok) recordMissingImages(access);
+        if (ok) {
+            recordMissingImages(access);
+            warnAboutWindowsPaths(access);
+        }
         const std::set<std::string> superseded = tinygltfLinesAboutMissingImages();
         std::istringstream lines(warnings);
         for (std::string line; std::getline(lines, line);)
@@ -840,6 +868,18 @@ private:
             if (std::filesystem::exists(uriFile(access, image.uri), error)) continue;  // tinygltf says why not read
             const std::string where = "not found beside the scene (looked in " + access.folder.string() + ")";
             image_decoding_.not_decoded.emplace(int(index), ImageDecoding::NotDecoded{where, false, true});
+        }
+    }
+
+    /// One warning per file read with its URI's '\' taken as '/' (withForwardSlashes).
+    void warnAboutWindowsPaths(const FileAccess& access) {
+        for (const auto& [written, read] : access.slashed_paths) {
+            const std::string file = std::filesystem::path(read).lexically_normal().string();
+            if (std::find(scene_.source_files.begin(), scene_.source_files.end(), file) == scene_.source_files.end())
+                continue;  // refused (outside the scene's folder): tinygltf's warning says so
+            const size_t uri = uriStart(access, written).value_or(0);
+            warn("file " + quoted(written.substr(uri)) + " not found; read " + quoted(read.substr(uri)) +
+                 ", taking '\\' as a folder separator (a Windows path; glTF URIs use '/')");
         }
     }
 

@@ -1467,6 +1467,48 @@ TEST(GltfLoaderImages, AMissingImageIsNotFoundBesideTheSceneWhateverTheCurrentDi
     expectNotFound(path, dir.file("tex dir"));
 }
 
+// assimp copies an MTL's Windows path into the URI as written (`map_Kd tex dir\checker.png`), and
+// '\' is a letter of file names here: where no file has the name as written, '\' is read as '/',
+// and the file must still be inside the scene's folder.
+TEST(GltfLoaderImages, AWindowsPathIsReadWithForwardSlashesInsideTheScenesFolder) {
+    TempDir dir;
+    std::filesystem::create_directories(dir.file("scene/tex dir"));
+    const std::vector<uint8_t> png = tinyPng();
+    test::writeFile(dir.file("scene/tex dir/checker.png"), png.data(), png.size());
+    test::writeFile(dir.file("secret.png"), png.data(), png.size());
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);
+    b.doc["images"].push_back({{"uri", "tex dir\\checker.png"}});  // image 1: there with '/'
+    b.doc["images"].push_back({{"uri", "..\\secret.png"}});        // image 2: outside the folder
+    b.doc["images"].push_back({{"uri", "tex dir\\absent.png"}});   // image 3: nowhere
+    for (int image = 1; image <= 3; ++image) b.doc["textures"].push_back({{"source", image}});
+    prim["material"] = b.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 1}}}}},
+                                      {"emissiveFactor", {1, 1, 1}},
+                                      {"emissiveTexture", {{"index", 2}}},
+                                      {"normalTexture", {{"index", 3}}}});
+    b.setScene({b.addMeshNode(prim)});
+    const std::string path = b.writeEmbedded(dir, "scene/scene.gltf");
+    InFolder in(dir.file("scene/tex dir"));  // holds a checker.png too: never read
+    const Scene scene = loadGltf(path);
+
+    const Material& m = scene.materials.at(0);
+    ASSERT_TRUE(m.base_color_texture.isSet()) << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(scene.textures.at(size_t(m.base_color_texture.texture)).width, 2);
+    EXPECT_EQ(
+        warningsWith(scene, {"'tex dir\\checker.png'", "read 'tex dir/checker.png'", "'\\' as a folder separator"}), 1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_NE(std::find(scene.source_files.begin(), scene.source_files.end(), dir.file("scene/tex dir/checker.png")),
+              scene.source_files.end());
+    // The sandbox holds for the path read with '/'.
+    EXPECT_FALSE(m.emissive_texture.isSet());
+    EXPECT_EQ(warningsWith(scene, {"secret.png", "outside the scene's folder"}), 1u);
+    EXPECT_EQ(std::find(scene.source_files.begin(), scene.source_files.end(), dir.file("secret.png")),
+              scene.source_files.end());
+    // Found neither way: not found, as written.
+    EXPECT_FALSE(m.normal_texture.isSet());
+    EXPECT_EQ(warningsWith(scene, {"image 3 'tex dir\\absent.png' not found beside the scene"}), 1u);
+}
+
 /// A triangle whose base colour texture is texture 0 = `texture`, over a PNG (image 0) and a
 /// KTX2 image (image 1, in a bufferView as a GLB holds it), with KHR_texture_basisu used or
 /// required.
