@@ -108,6 +108,64 @@ std::string parserMessage(std::string err) {
     return printable(err);
 }
 
+/// Which other 3D format a file that is not glTF is in ("an OBJ file", ...), from its first bytes,
+/// or where they say nothing from its extension; nothing for glTF or JSON (the parser judges
+/// those) and for anything else. Converters' inputs reach sharcbake by mistake, and the JSON
+/// parser's error would not say what they are (a binary STL's: "JSON nested too deep").
+std::optional<std::string> otherModelFormat(const std::string& bytes, const std::string& path) {
+    const auto startsWith = [&](std::string_view prefix) { return bytes.compare(0, prefix.size(), prefix) == 0; };
+    if (startsWith("glTF")) return std::nullopt;
+    const size_t text = startsWith("\xEF\xBB\xBF") ? 3 : 0;  // a UTF-8 byte order mark
+    const size_t first = bytes.find_first_not_of(" \t\r\n", text);
+    if (first != std::string::npos && bytes[first] == '{') return std::nullopt;
+    // Binary formats first: an STL header is free text, and may start with "solid".
+    if (startsWith("Kaydara FBX Binary")) return "an FBX file";
+    if (bytes.size() >= 84) {
+        uint32_t triangles = 0;
+        std::memcpy(&triangles, bytes.data() + 80, 4);
+        if (triangles > 0 && bytes.size() == 84 + 50 * uint64_t(triangles)) return "an STL file";
+    }
+    if (startsWith("ply\n") || startsWith("ply\r\n")) return "a PLY file";
+    if (startsWith("solid")) return "an STL file";
+    if (startsWith("; FBX")) return "an FBX file";
+    if (bytes.compare(first == std::string::npos ? 0 : first, 1, "<") == 0 &&
+        bytes.substr(0, 4096).find("<COLLADA") != std::string::npos)
+        return "a Collada file";
+    // OBJ: the first line that is not blank or a comment starts with one of its statements.
+    std::istringstream lines(bytes.substr(0, 4096));
+    for (std::string line; std::getline(lines, line);) {
+        std::istringstream words(line);
+        std::string word;
+        if (!(words >> word) || word[0] == '#') continue;
+        static const std::set<std::string> kObjStatements = {"v", "vt", "vn", "vp", "f",      "l",
+                                                             "p", "o",  "g",  "s",  "mtllib", "usemtl"};
+        if (kObjStatements.count(word)) return "an OBJ file";
+        break;
+    }
+    std::string extension = std::filesystem::path(path).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    static const std::map<std::string, std::string> kByExtension = {{".obj", "an OBJ file"},
+                                                                    {".stl", "an STL file"},
+                                                                    {".ply", "a PLY file"},
+                                                                    {".dae", "a Collada file"},
+                                                                    {".fbx", "an FBX file"}};
+    if (const auto it = kByExtension.find(extension); it != kByExtension.end()) return it->second;
+    return std::nullopt;
+}
+
+/// `path` as one word of a shell command: in single quotes unless it holds only characters no
+/// shell reads specially.
+std::string shellWord(const std::string& path) {
+    const bool plain = !path.empty() && std::all_of(path.begin(), path.end(), [](unsigned char c) {
+        return std::isalnum(c) || std::string_view("/._+-").find(char(c)) != std::string_view::npos;
+    });
+    if (plain) return path;
+    std::string quoted = "'";
+    for (const char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
 /// The glTF version this loader reads (glTF 2.0, "Asset": a 2.x loader reads any 2.y file
 /// unless its minVersion asks for more).
 constexpr unsigned kGltfMajorVersion = 2;
@@ -794,6 +852,11 @@ private:
                                                     &tinygltf::WriteWholeFile, &access});
         std::ifstream in(path_, std::ios::binary);
         const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        if (const std::optional<std::string> format = otherModelFormat(bytes, path_)) {
+            const std::string glb = std::filesystem::path(path_).replace_extension(".glb").string();
+            fail(*format + ", not glTF 2.0: convert it, e.g. `assimp export " + shellWord(path_) + " " +
+                 shellWord(glb) + " -f glb2` or Blender's glTF exporter");
+        }
         checkJsonNesting(bytes);
         std::string err;
         std::string warnings;

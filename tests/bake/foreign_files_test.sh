@@ -3,7 +3,7 @@
 # Files from other tools: Blender's camera names (node = object, camera = camera data) and
 # cameras without names through render --camera and the bake's hit-rate lines; glTF versions
 # other than 2.0; messages that name the real cause (a spot cone, a camera's aspect ratio, a
-# buffer's data: URI).
+# buffer's data: URI); other 3D formats given for a glTF file.
 # Usage: foreign_files_test.sh SHARCBAKE WORK_DIR
 set -u
 sharcbake=$1
@@ -152,5 +152,15 @@ expect 3 "a data: URI shorter than its byteLength" "$sharcbake" render "$work/lo
 says "$work/err.txt" "buffer 1: data: URI data:application/octet-stream;base64,AAECAwQFBgcICQoLDA0ODxA... holds 2048 bytes, but the buffer's byteLength is 2052" \
     "the message names the buffer and both sizes"
 [ "$(wc -c < "$work/err.txt")" -lt 400 ] || fail "the data: URI message is $(wc -c < "$work/err.txt") bytes long"
+
+# --- Other 3D formats: named, with how to convert them, as invalid input (exit 3).
+printf 'mtllib room.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > "$work/room.obj"
+expect 3 "bake an OBJ file" "$sharcbake" bake "$work/room.obj" -o "$work/room.sharc"
+says "$work/err.txt" "room.obj: an OBJ file, not glTF 2.0: convert it, e.g. \`assimp export $work/room.obj $work/room.glb -f glb2\` or Blender's glTF exporter" \
+    "the OBJ file is named as one, with the command that converts it"
+python3 -c "import struct, sys; sys.stdout.buffer.write(b' ' * 80 + struct.pack('<I', 40) + b'[' * 2000)" > "$work/part.stl"
+expect 3 "render a binary STL file" "$sharcbake" render "$work/part.stl" -o "$work/part.png"
+says "$work/err.txt" "part.stl: an STL file, not glTF 2.0" "the binary STL is named as one"
+grep -q "JSON" "$work/err.txt" && fail "the binary STL gets the JSON parser's error: $(cat "$work/err.txt")"
 
 finish foreign_files_test

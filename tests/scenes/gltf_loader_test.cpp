@@ -666,6 +666,52 @@ TEST(GltfLoaderErrors, UnknownRequiredExtension) {
     EXPECT_NE(msg.find("KHR_texture_basisu"), std::string::npos) << msg;
 }
 
+// Other 3D formats given by mistake are named from their first bytes, with how to convert them:
+// the JSON parser's error said nothing of the kind (a binary STL's: "JSON nested more than 256
+// levels deep").
+TEST(GltfLoaderErrors, OtherModelFormatsAreNamedWithHowToConvertThem) {
+    TempDir dir;
+    // A binary STL whose header starts with "solid", as some exporters write it, and whose
+    // triangles' bytes read as '[' to a JSON scanner.
+    std::string binary_stl = "solid written by a CAD tool";
+    binary_stl.resize(80, ' ');
+    const uint32_t triangles = 300;
+    binary_stl.append(reinterpret_cast<const char*>(&triangles), 4);
+    binary_stl.append(50 * triangles, '[');
+    const std::vector<std::array<std::string, 3>> files = {
+        {"room.obj", "# Blender v3.4 OBJ File\nmtllib room.mtl\no Room\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+         "an OBJ file"},
+        {"bare.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "an OBJ file"},
+        {"part.stl", "solid part\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n", "an STL file"},
+        {"part_bin.stl", binary_stl, "an STL file"},
+        {"part_bin.dat", binary_stl, "an STL file"},  // by its size: 84 + 50 bytes a triangle
+        {"scan.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "a PLY file"},
+        {"room.dae",
+         "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<COLLADA "
+         "xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" version=\"1.4.1\">\n",
+         "a Collada file"},
+        {"rig.fbx", std::string("Kaydara FBX Binary  \0\x1a\0", 23) + std::string(64, '['), "an FBX file"},
+        {"rig_ascii.fbx", "; FBX 7.4.0 project file\n; Created by Blender FBX Exporter\n", "an FBX file"},
+    };
+    for (const auto& [name, bytes, kind] : files) {
+        test::writeFile(dir.file(name), bytes);
+        const std::string msg = loadErrorOf([&] { loadGltf(dir.file(name)); });
+        EXPECT_NE(msg.find(dir.file(name) + ": " + kind + ", not glTF 2.0: convert it, e.g. `assimp export " +
+                           dir.file(name)),
+                  std::string::npos)
+            << msg;
+        EXPECT_NE(msg.find(" -f glb2` or Blender's glTF exporter"), std::string::npos) << msg;
+    }
+    // The bytes decide, not the name: glTF named .obj loads, and text that is none of these gets
+    // the parser's error.
+    GltfBuilder b;
+    b.setScene({b.addMeshNode(unitTrianglePrimitive(b))});
+    EXPECT_EQ(loadGltf(b.writeEmbedded(dir, "misnamed.obj")).triangles.size(), 1u);
+    EXPECT_EQ(loadGltf(b.writeGlb(dir, "misnamed.stl")).triangles.size(), 1u);
+    test::writeFile(dir.file("notes.gltf"), "vertex shader notes\n");
+    EXPECT_NE(loadErrorOf([&] { loadGltf(dir.file("notes.gltf")); }).find("glTF parse failed"), std::string::npos);
+}
+
 // glTF 2.0 requires asset.version; a 2.x loader reads 2.y files unless minVersion asks for more.
 TEST(GltfLoaderErrors, VersionsOtherThanGltf2AreRefusedNamingTheVersion) {
     TempDir dir;
