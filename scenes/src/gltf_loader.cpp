@@ -30,6 +30,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -70,6 +71,11 @@ const std::array<const char*, 14> kSupportedRequiredExtensions = {"KHR_lights_pu
 /// them: KHR_texture_basisu's KTX2 images are not decoded, its textures' PNG or JPEG `source` is
 /// read. Required, they are refused (the scene has no image sharcbake can read).
 const std::array<const char*, 1> kFallbackOnlyExtensions = {"KHR_texture_basisu"};
+
+/// Extensions that change nothing a path tracer reads, so ignoring them is not worth a warning.
+/// FB_ngon_encoding (assimp lists it in every file and puts it on every primitive) only says in
+/// which order a polygon's triangles were written, for tools that rebuild the polygon.
+const std::array<const char*, 1> kExtensionsThatChangeNothing = {"FB_ngon_encoding"};
 
 /// The scene is traced as world-space triangles, so an instanced mesh is copied per instance.
 /// A few kilobytes of instance transforms can ask for billions of triangles: beyond this many
@@ -1013,15 +1019,87 @@ private:
     }
 
     /// Extensions that are only "used" may be ignored by a loader, but some change what the
-    /// scene looks like (instancing, transmission), so say so.
+    /// scene looks like (instancing, transmission), so say so: of those an object of the file
+    /// carries. Converters list some that nothing carries (assimp keeps the list of the file it
+    /// converted), and those ignore nothing.
     void warnAboutIgnoredExtensions() {
+        std::optional<std::set<std::string>> carried;
         for (const std::string& ext : model_.extensionsUsed) {
             const auto is = [&](const char* s) { return ext == s; };
-            const bool known = std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(),
-                                           is) ||
-                               std::any_of(kFallbackOnlyExtensions.begin(), kFallbackOnlyExtensions.end(), is);
-            if (!known) warn("extension " + quoted(ext) + " is not supported and is ignored");
+            const bool known =
+                std::any_of(kSupportedRequiredExtensions.begin(), kSupportedRequiredExtensions.end(), is) ||
+                std::any_of(kFallbackOnlyExtensions.begin(), kFallbackOnlyExtensions.end(), is) ||
+                std::any_of(kExtensionsThatChangeNothing.begin(), kExtensionsThatChangeNothing.end(), is);
+            if (known) continue;
+            if (!carried) carried = carriedExtensions();
+            if (carried->count(ext)) warn("extension " + quoted(ext) + " is not supported and is ignored");
         }
+    }
+
+    /// The names of the extensions the file's objects carry in their `extensions`, also inside
+    /// another extension's object (a texture reference of KHR_materials_specular's has its own).
+    std::set<std::string> carriedExtensions() const {
+        std::set<std::string> names;
+        std::function<void(const tinygltf::Value&)> inside = [&](const tinygltf::Value& value) {
+            if (value.IsArray()) {
+                for (size_t i = 0; i < value.ArrayLen(); ++i) inside(value.Get(int(i)));
+            } else if (value.IsObject()) {
+                for (const std::string& key : value.Keys()) {
+                    const tinygltf::Value& member = value.Get(key);
+                    if (key == "extensions" && member.IsObject())
+                        for (const std::string& name : member.Keys()) names.insert(name);
+                    inside(member);
+                }
+            }
+        };
+        const auto add = [&](const tinygltf::ExtensionMap& extensions) {
+            for (const auto& [name, value] : extensions) {
+                names.insert(name);
+                inside(value);
+            }
+        };
+        add(model_.extensions);
+        add(model_.asset.extensions);
+        for (const tinygltf::Scene& scene : model_.scenes) add(scene.extensions);
+        for (const tinygltf::Node& node : model_.nodes) add(node.extensions);
+        for (const tinygltf::Mesh& mesh : model_.meshes) {
+            add(mesh.extensions);
+            for (const tinygltf::Primitive& primitive : mesh.primitives) add(primitive.extensions);
+        }
+        for (const tinygltf::Material& material : model_.materials) {
+            add(material.extensions);
+            add(material.pbrMetallicRoughness.extensions);
+            add(material.pbrMetallicRoughness.baseColorTexture.extensions);
+            add(material.pbrMetallicRoughness.metallicRoughnessTexture.extensions);
+            add(material.normalTexture.extensions);
+            add(material.occlusionTexture.extensions);
+            add(material.emissiveTexture.extensions);
+        }
+        for (const tinygltf::Texture& texture : model_.textures) add(texture.extensions);
+        for (const tinygltf::Image& image : model_.images) add(image.extensions);
+        for (const tinygltf::Sampler& sampler : model_.samplers) add(sampler.extensions);
+        for (const tinygltf::Camera& camera : model_.cameras) {
+            add(camera.extensions);
+            add(camera.perspective.extensions);
+            add(camera.orthographic.extensions);
+        }
+        for (const tinygltf::Light& light : model_.lights) {
+            add(light.extensions);
+            add(light.spot.extensions);
+        }
+        for (const tinygltf::Accessor& accessor : model_.accessors) add(accessor.extensions);
+        for (const tinygltf::BufferView& view : model_.bufferViews) add(view.extensions);
+        for (const tinygltf::Buffer& buffer : model_.buffers) add(buffer.extensions);
+        for (const tinygltf::Skin& skin : model_.skins) add(skin.extensions);
+        for (const tinygltf::Animation& animation : model_.animations) {
+            add(animation.extensions);
+            for (const tinygltf::AnimationChannel& channel : animation.channels) {
+                add(channel.extensions);
+                add(channel.target_extensions);
+            }
+            for (const tinygltf::AnimationSampler& sampler : animation.samplers) add(sampler.extensions);
+        }
+        return names;
     }
 
     // ---------------------------------------------------------------- accessors

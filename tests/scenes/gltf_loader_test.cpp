@@ -771,7 +771,9 @@ TEST(GltfLoaderErrors, Gltf1FileIsRefusedAsGltf1) {
 TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {
     TempDir dir;
     GltfBuilder b;
-    const int node = b.addMeshNode(unitTrianglePrimitive(b));
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial({{"extensions", {{"KHR_materials_sheen", {{"sheenColorFactor", {1, 1, 1}}}}}}});
+    const int node = b.addMeshNode(prim);
     b.setScene({node});
     b.doc["extensionsUsed"] = {"KHR_materials_sheen"};
     const Scene scene = loadGltf(b.writeEmbedded(dir, "sheen.gltf"));
@@ -1358,6 +1360,28 @@ TEST(GltfLoaderMaterials, SpecularTexturesAndEmissiveTextureReferenced) {
     EXPECT_NE(m.specular_texture.texture, m.specular_color_texture.texture);  // linear vs sRGB
     EXPECT_FLOAT_EQ(m.specular, 1.0f);
     EXPECT_EQ(scene.textures.size(), 2u);
+}
+
+// assimp lists FB_ngon_encoding in every file it writes and puts it on every primitive: a note of
+// how its polygons were triangulated, which changes nothing here. And a file can list extensions
+// that no object carries (assimp keeps the list of the file it converted): nothing is ignored.
+TEST(GltfLoader, ExtensionsThatChangeNothingAreNotWarnedAbout) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);
+    prim["extensions"] = {{"FB_ngon_encoding", json::object()}};
+    // An unknown extension where the loader reads nothing of it: inside a known one's texture.
+    prim["material"] = b.addMaterial(
+        {{"extensions",
+          {{"KHR_materials_specular",
+            {{"specularTexture", {{"index", 0}, {"extensions", {{"EXT_nested_example", {{"level", 2}}}}}}}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    b.doc["extensionsUsed"] = {"KHR_materials_specular", "FB_ngon_encoding", "KHR_materials_volume",
+                               "EXT_nested_example"};
+    const Scene scene = loadGltf(b.writeGlb(dir, "assimp.glb"));
+    EXPECT_EQ(warningsWith(scene, {"FB_ngon_encoding"}), 0u) << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"KHR_materials_volume"}), 0u);
+    EXPECT_EQ(warningsWith(scene, {"extension 'EXT_nested_example' is not supported and is ignored"}), 1u);
 }
 
 // ------------------------------------------------------------------ images that cannot be decoded
