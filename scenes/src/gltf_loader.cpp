@@ -507,6 +507,7 @@ public:
         removeRepeatedChildren();
         for (int root : uniqueRootNodes()) visitNode(root, glm::dmat4(1.0));
         warnAboutSeveralParents();
+        warnAboutPrimitivesWithoutMaterial();
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
         settleAlphaModes();
         computeBounds();
@@ -522,6 +523,9 @@ private:
     tinygltf::Model model_;
     Scene scene_;
     int default_material_ = -1;
+    /// The (mesh, primitive) pairs given the default material, and the label of the first the walk reached.
+    std::set<std::pair<int, size_t>> primitives_without_material_;
+    std::string first_without_material_;
     ImageDecoding image_decoding_;
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
     /// colour and as data is two Scene textures over one copy of its 8-bit texels.
@@ -1681,7 +1685,7 @@ private:
         dropDegenerateTriangles(geo);
         if (geo.normals.empty()) makeFlatShaded(geo);
         else repairNormals(geo, label);
-        const uint32_t material = materialForPrimitive(prim, label);
+        const uint32_t material = materialForPrimitive(prim, meshIndex, primIndex, label);
         if (const TextureRef& map = scene_.materials[material].normal_texture; map.isSet()) {
             if (geo.tangents.empty()) {
                 computeTangents(geo, transformedUvs(map.texcoord == 1 ? geo.uv1 : geo.uv0, map.transform), label);
@@ -2224,7 +2228,8 @@ private:
 
     // ---------------------------------------------------------------- materials
 
-    uint32_t materialForPrimitive(const tinygltf::Primitive& prim, const std::string& label) {
+    uint32_t materialForPrimitive(const tinygltf::Primitive& prim, int meshIndex, size_t primIndex,
+                                  const std::string& label) {
         if (prim.material >= 0) {
             if (static_cast<size_t>(prim.material) >= model_.materials.size())
                 fail(label + ": material " + std::to_string(prim.material) + " does not exist");
@@ -2233,11 +2238,28 @@ private:
         if (default_material_ < 0) {
             default_material_ = static_cast<int>(scene_.materials.size());
             scene_.materials.push_back(defaultMaterial());
-            warn(label + " has no material: glTF's default applies, a white metal (metallicFactor 1, "
-                 "roughnessFactor 1), which reflects differently from the grey diffuse Blender shows for a mesh "
-                 "without a material; assign a material to say what it is");
+            first_without_material_ = label;
         }
+        primitives_without_material_.emplace(meshIndex, primIndex);
         return static_cast<uint32_t>(default_material_);
+    }
+
+    /// One warning for every primitive without a material: an export without materials
+    /// (Blender's Materials: None) leaves the whole scene white metal, not one mesh.
+    void warnAboutPrimitivesWithoutMaterial() {
+        if (primitives_without_material_.empty()) return;
+        std::string which = first_without_material_ + " has no material";
+        if (primitives_without_material_.size() > 1) {
+            std::set<int> meshes;
+            for (const auto& [mesh, primitive] : primitives_without_material_) meshes.insert(mesh);
+            which = std::to_string(primitives_without_material_.size()) + " primitives in " +
+                    std::to_string(meshes.size()) + (meshes.size() == 1 ? " mesh" : " meshes") +
+                    " have no material (first: " + first_without_material_ + ")";
+        }
+        warn(which +
+             ": glTF's default applies, a white metal (metallicFactor 1, roughnessFactor 1), which reflects "
+             "differently from the grey diffuse Blender shows for a mesh without a material; assign a material to "
+             "say what it is");
     }
 
     void convertMaterials() {

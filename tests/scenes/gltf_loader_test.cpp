@@ -930,6 +930,23 @@ TEST(GltfLoaderMaterials, MeshWithoutAMaterialIsWarnedAbout) {
     EXPECT_FLOAT_EQ(scene.materials.back().metallic, 1.0f);  // glTF's default, kept
 }
 
+// A Blender export with Materials = None leaves every mesh without one: the warning counts them all.
+TEST(GltfLoaderMaterials, PrimitivesWithoutAMaterialAreCountedInOneWarning) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    json with_material = prim;
+    with_material["material"] = b.addMaterial({{"pbrMetallicRoughness", {{"metallicFactor", 0}}}});
+    const int walls = b.addNode({{"mesh", b.addMesh(json::array({with_material, prim, prim}), "walls")}});
+    const int lamp = b.addMesh(json::array({prim}), "lamp");  // placed twice: its primitive counts once
+    b.setScene({walls, b.addNode({{"mesh", lamp}}), b.addNode({{"mesh", lamp}, {"translation", {0, 0, 1}}})});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "no_materials.gltf"));
+    EXPECT_EQ(warningsWith(scene, {"3 primitives in 2 meshes have no material (first: mesh 0 'walls' primitive 1): "
+                                   "glTF's default applies, a white metal"}),
+              1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"no material"}), 1u);
+}
 
 TEST(GltfLoaderMaterials, FactorsAndExtensionsParsed) {
     TempDir dir;
