@@ -4,6 +4,8 @@
 #include "tracing/sampling.h"
 #include "tracing/surface.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +13,10 @@
 
 namespace sharcbake {
 namespace {
+
+/// Points for all emissive materials together, and the fewest one material gets.
+constexpr uint64_t kPointBudget = 1u << 16;
+constexpr uint32_t kMinPointsPerMaterial = 16;
 
 /// A probe passes at most this many emissive surfaces (the emitter itself, stacked emitters)
 /// before it gives up.
@@ -93,6 +99,58 @@ float median(std::vector<float> values) {
     return values[middle];
 }
 
+/// One material's points tested, and where they leak, the gaps and voxel widths.
+struct MaterialPoints {
+    uint32_t tested = 0, leaking = 0;
+    std::vector<float> gaps, voxels;
+};
+
+/// Tests `count` points of one emissive material, stratified over its triangles' area
+/// (`cumulative`: their running area sums) and uniform within each.
+MaterialPoints testMaterial(const Tracer& tracer, const HashGridKeyer& keyer, const std::vector<glm::vec3>& cameras,
+                            uint32_t material, const std::vector<uint32_t>& triangles,
+                            const std::vector<double>& cumulative, uint32_t count, uint32_t seed) {
+    const Scene& scene = tracer.scene();
+    const Material& m = scene.materials[material];
+    const double total = cumulative.back();
+    MaterialPoints result;
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t stream = hashCombine(seed, i);
+        const double target = (double(i) + double(bitsToUnitFloat(hashCombine(stream, 0)))) / count * total;
+        const size_t k =
+            std::min(size_t(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()),
+                     cumulative.size() - 1);
+        float b1 = bitsToUnitFloat(hashCombine(stream, 1)), b2 = bitsToUnitFloat(hashCombine(stream, 2));
+        if (b1 + b2 > 1.0f) {
+            b1 = 1.0f - b1;
+            b2 = 1.0f - b2;
+        }
+        const EmitterPoint e = makeEmitterPoint(scene, triangles[k], b1, b2);
+        if (!(e.emission.x > 0.0f || e.emission.y > 0.0f || e.emission.z > 0.0f)) continue;  // a dark texel
+        ++result.tested;
+        // Both points keyed as SHaRC keys them from the nearest camera: the same key is the same
+        // voxel, and then the surface beside the emitter takes on its light.
+        const glm::vec3 camera = nearestCamera(e.position, cameras);
+        const float voxel = keyer.voxelSizeAt(keyer.levelOf(glm::dot(e.position - camera, e.position - camera)));
+        if (!(voxel > 0.0f) || !std::isfinite(voxel)) continue;
+        for (const float side : {1.0f, -1.0f}) {
+            if (side < 0.0f && !m.double_sided) break;
+            const glm::vec3 emitting = e.face_normal * side;
+            const SurfaceBehind behind = surfaceBehind(tracer, e.position, emitting, voxel);
+            if (!behind.found) continue;
+            const uint64_t emitter_key = keyer.key(toFloat3(e.position), toFloat3(emitting), toFloat3(camera));
+            if (keyer.key(toFloat3(behind.position), toFloat3(behind.key_normal), toFloat3(camera)) != emitter_key) {
+                continue;
+            }
+            ++result.leaking;
+            result.gaps.push_back(behind.gap);
+            result.voxels.push_back(voxel);
+            break;
+        }
+    }
+    return result;
+}
+
 }  // namespace
 
 std::string LightLeakReport::describe(const EmitterLeak& leak) {
@@ -126,60 +184,30 @@ LightLeakReport findLightLeaks(const Tracer& tracer, const HashGridParameters& g
         triangles[material].push_back(t);
         cumulative[material].push_back((cumulative[material].empty() ? 0.0 : cumulative[material].back()) + area);
     }
-    const HashGridKeyer keyer(grid);
+    std::vector<uint32_t> emissive;
     for (uint32_t material = 0; material < uint32_t(scene.materials.size()); ++material) {
-        if (triangles[material].empty()) continue;
-        ++report.emissive_materials;
-        const Material& m = scene.materials[material];
-        const double total = cumulative[material].back();
-        uint32_t tested = 0, leaking = 0;
-        std::vector<float> gaps, voxels;
-        for (uint32_t i = 0; i < points_per_material; ++i) {
-            const uint32_t stream = hashCombine(hashCombine(seed, material), i);
-            // Stratified over the material's area, uniform within the triangle.
-            const double target = (double(i) + double(bitsToUnitFloat(hashCombine(stream, 0)))) / points_per_material *
-                                  total;
-            const std::vector<double>& sums = cumulative[material];
-            const size_t k = std::min(size_t(std::upper_bound(sums.begin(), sums.end(), target) - sums.begin()),
-                                      sums.size() - 1);
-            const uint32_t t = triangles[material][k];
-            float b1 = bitsToUnitFloat(hashCombine(stream, 1)), b2 = bitsToUnitFloat(hashCombine(stream, 2));
-            if (b1 + b2 > 1.0f) {
-                b1 = 1.0f - b1;
-                b2 = 1.0f - b2;
-            }
-            const EmitterPoint e = makeEmitterPoint(scene, t, b1, b2);
-            if (!(e.emission.x > 0.0f || e.emission.y > 0.0f || e.emission.z > 0.0f)) continue;  // a dark texel
-            ++tested;
-            // Both points keyed as SHaRC keys them from the nearest camera: the same key is the
-            // same voxel, and then the surface beside the emitter takes on its light.
-            const glm::vec3 camera = nearestCamera(e.position, cameras);
-            const float voxel = keyer.voxelSizeAt(keyer.levelOf(glm::dot(e.position - camera, e.position - camera)));
-            if (!(voxel > 0.0f) || !std::isfinite(voxel)) continue;
-            bool leaks = false;
-            for (const float side : {1.0f, -1.0f}) {
-                if (side < 0.0f && !m.double_sided) break;
-                const glm::vec3 emitting = e.face_normal * side;
-                const SurfaceBehind behind = surfaceBehind(tracer, e.position, emitting, voxel);
-                if (!behind.found) continue;
-                const uint64_t emitter_key = keyer.key(toFloat3(e.position), toFloat3(emitting), toFloat3(camera));
-                if (keyer.key(toFloat3(behind.position), toFloat3(behind.key_normal), toFloat3(camera)) != emitter_key)
-                    continue;
-                leaks = true;
-                gaps.push_back(behind.gap);
-                break;
-            }
-            if (leaks) {
-                ++leaking;
-                voxels.push_back(voxel);
-            }
-        }
-        report.points += tested;
-        if (tested == 0) continue;
-        const double share = double(leaking) / double(tested);
+        if (!triangles[material].empty()) emissive.push_back(material);
+    }
+    report.emissive_materials = uint32_t(emissive.size());
+    if (emissive.empty()) return report;
+    // A city of lit windows, each its own material, shares a budget: fewer points each.
+    const uint32_t points = std::min(points_per_material,
+                                     std::max(kMinPointsPerMaterial, uint32_t(kPointBudget / emissive.size())));
+    const HashGridKeyer keyer(grid);
+    std::vector<MaterialPoints> results(emissive.size());
+    tbb::parallel_for(size_t(0), emissive.size(), [&](size_t j) {
+        const uint32_t material = emissive[j];
+        results[j] = testMaterial(tracer, keyer, cameras, material, triangles[material], cumulative[material], points,
+                                  hashCombine(seed, material));
+    });
+    for (size_t j = 0; j < emissive.size(); ++j) {
+        const MaterialPoints& r = results[j];
+        report.points += r.tested;
+        if (r.tested == 0) continue;
+        const double share = double(r.leaking) / double(r.tested);
         if (share < kLeakAreaShare) continue;
         report.leaks.push_back(
-            EmitterLeak{material, materialLabel(scene, material), share, median(gaps), median(voxels)});
+            EmitterLeak{emissive[j], materialLabel(scene, emissive[j]), share, median(r.gaps), median(r.voxels)});
     }
     std::stable_sort(report.leaks.begin(), report.leaks.end(),
                      [](const EmitterLeak& a, const EmitterLeak& b) { return a.area_share > b.area_share; });

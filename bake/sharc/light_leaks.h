@@ -38,7 +38,8 @@ struct LightLeakReport {
 /// A material is reported when at least this share of its emissive area leaks.
 inline constexpr double kLeakAreaShare = 0.05;
 
-/// Tests `points_per_material` area-spread points of every emissive material (front side, and
+/// Tests `points_per_material` area-spread points of every emissive material (fewer where many
+/// materials emit: 65,536 in all, at least 16 each; front side, and
 /// the back too where the material is double-sided): a ray from the point into the surface's
 /// back finds the nearest surface that is not emissive, seen from a side that light reaches (the
 /// front, or either side of a double-sided material), and whose key normal falls in the
