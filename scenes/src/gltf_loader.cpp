@@ -2290,8 +2290,11 @@ private:
         }
         readAlpha(src, m, label);
         readMaterialExtensions(src, m, label);
-        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness"))
+        if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness")) {
+            const Material fallback = m;
             readSpecularGlossiness(*ext, m, label);
+            warnWhenFallbackDiffers(fallback, m, label);
+        }
         leaveOutEmissionBeyondFloat(src, m, label);
         clampToGltfRanges(m, label);
         if (extension(src.extensions, "KHR_materials_unlit")) makeUnlit(m);
@@ -2413,6 +2416,44 @@ private:
                 m.roughness = 1.0f;
             }
         }
+    }
+
+    /// A specular-glossiness material is read as the extension says, but viewers without the
+    /// extension show its pbrMetallicRoughness fallback. Where the two disagree (assimp writes
+    /// OBJ's `Ks 0.5` as specular 0.5, ten times a dielectric's F0, and its fallback as a plain
+    /// dielectric; `Tr 1` as an opaque diffuse and a transparent fallback) the render differs from
+    /// what the user saw: one warning, with both values. Factors only; textures are not compared.
+    void warnWhenFallbackDiffers(const Material& fallback, const Material& used, const std::string& label) {
+        constexpr float kDielectricF0 = 0.04f;
+        const auto maxOf = [](glm::vec3 v) { return std::max({v.x, v.y, v.z}); };
+        const float fallback_f0 = maxOf(glm::mix(glm::vec3(kDielectricF0), fallback.base_color, fallback.metallic));
+        const float used_f0 = maxOf(used.specular_color) * kDielectricF0;
+        const float fallback_diffuse = maxOf(fallback.base_color) * (1.0f - fallback.metallic);
+        const float used_diffuse = maxOf(used.base_color);
+        std::string differences;
+        char text[96];
+        if (std::abs(fallback_f0 - used_f0) > 0.15f) {
+            std::snprintf(text, sizeof text, "specular reflectance (F0) %.3g against %.3g", double(used_f0),
+                          double(fallback_f0));
+            differences += text;
+        }
+        if (std::abs(fallback_diffuse - used_diffuse) > 0.25f) {
+            std::snprintf(text, sizeof text, "%sdiffuse %.3g against %.3g", differences.empty() ? "" : ", ",
+                          double(used_diffuse), double(fallback_diffuse));
+            differences += text;
+        }
+        if (std::abs(fallback.base_alpha - used.base_alpha) > 0.5f) {
+            std::snprintf(text, sizeof text, "%salpha %.3g against %.3g", differences.empty() ? "" : ", ",
+                          double(used.base_alpha), double(fallback.base_alpha));
+            differences += text;
+        }
+        if (differences.empty()) return;
+        warn(label +
+             ": KHR_materials_pbrSpecularGlossiness and its pbrMetallicRoughness fallback (what viewers "
+             "without the extension show) describe different materials: " +
+             differences +
+             " (extension against fallback); the extension is used, as glTF asks. Check the material in the tool "
+             "that wrote it");
     }
 
     /// A texture whose G is 1 - glossiness x A of `texture` (metallic-roughness form: G

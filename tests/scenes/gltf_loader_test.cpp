@@ -1201,8 +1201,11 @@ TEST(SpecularGlossiness, FactorsBecomeADielectricWithThatF0AndRoughness) {
     // specular factor itself.
     const float r = (m.ior - 1.0f) / (m.ior + 1.0f);
     expectVec3Near(glm::min(r * r * m.specular_color, glm::vec3(1.0f)), {0.1f, 0.2f, 0.3f}, 1e-6f);
-    for (const std::string& w : scene.stats.warnings)
-        EXPECT_EQ(w.find("pbrSpecularGlossiness"), std::string::npos) << w;
+    // Read, not ignored; its fallback here (a red metal) is another material, which is said.
+    for (const std::string& w : scene.stats.warnings) {
+        EXPECT_EQ(w.find("not supported"), std::string::npos) << w;
+        if (w.find("pbrSpecularGlossiness") != std::string::npos) EXPECT_NE(w.find("fallback"), std::string::npos) << w;
+    }
 
     // Absent factors are the extension's defaults: white diffuse, white specular, glossiness 1.
     GltfBuilder d;
@@ -1214,6 +1217,40 @@ TEST(SpecularGlossiness, FactorsBecomeADielectricWithThatF0AndRoughness) {
     EXPECT_EQ(white.metallic, 0.0f);
     EXPECT_EQ(white.roughness, 0.0f);
     expectVec3Near(glm::min(0.04f * white.specular_color, glm::vec3(1.0f)), {1, 1, 1}, 1e-6f);
+}
+
+TEST(SpecularGlossiness, AFallbackThatDescribesAnotherMaterialIsWarnedAbout) {
+    // assimp writes OBJ's `Ks 0.5` as specularFactor 0.5 (F0 0.5, ten times a dielectric's) and
+    // its fallback as a plain dielectric, and `Tr 1` as an opaque diffuse over a transparent
+    // fallback: viewers without the extension show another material than the render.
+    const auto load = [](const json& fallback, const json& extension, const char* name) {
+        TempDir dir;
+        GltfBuilder b;
+        json prim = unitTrianglePrimitive(b);
+        prim["material"] = b.addMaterial({{"name", name},
+                                          {"pbrMetallicRoughness", fallback},
+                                          {"extensions", {{"KHR_materials_pbrSpecularGlossiness", extension}}}});
+        b.setScene({b.addMeshNode(prim)});
+        b.doc["extensionsUsed"] = {"KHR_materials_pbrSpecularGlossiness"};
+        std::string found;
+        for (const std::string& w : loadGltf(b.writeEmbedded(dir, std::string(name) + ".gltf")).stats.warnings) {
+            if (w.find("fallback") != std::string::npos) found += w;
+        }
+        return found;
+    };
+    const json dielectric = {{"baseColorFactor", {0.6, 0.6, 0.6, 1}}, {"metallicFactor", 0}};
+    const std::string ks = load(dielectric,
+                                {{"diffuseFactor", {0.6, 0.6, 0.6, 1}}, {"specularFactor", {0.5, 0.5, 0.5}}}, "ks");
+    EXPECT_NE(ks.find("material 0 'ks'"), std::string::npos) << ks;
+    EXPECT_NE(ks.find("specular reflectance (F0) 0.5 against 0.04"), std::string::npos) << ks;
+    EXPECT_NE(ks.find("the extension is used"), std::string::npos) << ks;
+    const std::string tr = load({{"baseColorFactor", {0.6, 0.6, 0.6, 0}}, {"metallicFactor", 0}},
+                                {{"diffuseFactor", {0.6, 0.6, 0.6, 1}}, {"specularFactor", {0.04, 0.04, 0.04}}}, "tr");
+    EXPECT_NE(tr.find("alpha 1 against 0"), std::string::npos) << tr;
+    // A fallback that agrees (what careful exporters write) says nothing.
+    EXPECT_EQ(load(dielectric, {{"diffuseFactor", {0.6, 0.6, 0.6, 1}}, {"specularFactor", {0.04, 0.04, 0.04}}},
+                   "agrees"),
+              "");
 }
 
 TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha) {
