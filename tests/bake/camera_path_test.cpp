@@ -318,6 +318,20 @@ Scene loadTable(const test::TempDir& dir, bool camera) {
     return scene;
 }
 
+/// One mesh of `positions` and `indices` with a double-sided material (Blender's default), written
+/// to `name` in `dir` and loaded.
+Scene loadDoubleSidedMesh(const test::TempDir& dir, const std::vector<float>& positions,
+                          const std::vector<uint32_t>& indices, const std::string& name) {
+    test::GltfBuilder gltf;
+    const int material = gltf.addMaterial({{"doubleSided", true}});
+    const int mesh = gltf.addMesh(
+        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
+                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
+                                {"material", material}}}));
+    gltf.setScene({gltf.addNode({{"mesh", mesh}})});
+    return loadGltf(gltf.writeEmbedded(dir, name));
+}
+
 TEST(ExploreFreeSpace, TheInsideOfAClosedDoubleSidedObjectIsNotExplored) {
     // Blender's default material is double-sided. A closed T of two boxes without a camera: the
     // centre of its bounds lies inside the bar, and with no single-sided face to vote, its inside
@@ -325,18 +339,11 @@ TEST(ExploreFreeSpace, TheInsideOfAClosedDoubleSidedObjectIsNotExplored) {
     constexpr glm::vec3 kBarMin{0.0f, 0.8f, 0.0f}, kBarMax{3.0f, 2.0f, 1.0f};
     constexpr glm::vec3 kStemMin{1.0f, 0.0f, 0.0f}, kStemMax{2.0f, 0.8f, 1.0f};
     test::TempDir dir;
-    test::GltfBuilder gltf;
     std::vector<float> positions;
     std::vector<uint32_t> indices;
     addBox(positions, indices, kBarMin, kBarMax, false);
     addBox(positions, indices, kStemMin, kStemMax, false);
-    const int material = gltf.addMaterial({{"doubleSided", true}});
-    const int mesh = gltf.addMesh(
-        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
-                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
-                                {"material", material}}}));
-    gltf.setScene({gltf.addNode({{"mesh", mesh}})});
-    const Scene scene = loadGltf(gltf.writeEmbedded(dir, "t.gltf"));
+    const Scene scene = loadDoubleSidedMesh(dir, positions, indices, "t.gltf");
     const Explored e = explore(scene);
     ASSERT_TRUE(e.has_path);
     EXPECT_GE(e.result.points.size(), 16u);
@@ -641,7 +648,6 @@ void addSphere(std::vector<float>& positions, std::vector<uint32_t>& indices, gl
 /// A lone 1 m UV sphere at (0, 1.2, 0), double-sided as Blender's default material and assimp's
 /// PLY material make it, optionally standing on a 10 m ground plane, under a white sky.
 Scene loadLoneSphere(const test::TempDir& dir, bool ground) {
-    test::GltfBuilder gltf;
     std::vector<float> positions;
     std::vector<uint32_t> indices;
     addSphere(positions, indices, {0.0f, 1.2f, 0.0f}, 1.0f);
@@ -652,13 +658,7 @@ Scene loadLoneSphere(const test::TempDir& dir, bool ground) {
         }
         for (const uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) indices.push_back(base + k);  // facing +Y
     }
-    const int material = gltf.addMaterial({{"doubleSided", true}});
-    const int mesh = gltf.addMesh(
-        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
-                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
-                                {"material", material}}}));
-    gltf.setScene({gltf.addNode({{"mesh", mesh}})});
-    Scene scene = loadGltf(gltf.writeEmbedded(dir, ground ? "sphere_on_plane.gltf" : "sphere.gltf"));
+    Scene scene = loadDoubleSidedMesh(dir, positions, indices, ground ? "sphere_on_plane.gltf" : "sphere.gltf");
     scene.sky.uniform = glm::vec3(1.0f);
     return scene;
 }
