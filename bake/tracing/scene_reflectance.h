@@ -17,9 +17,10 @@ class LightSampler;
 
 struct SceneReflectance {
     /// Mean over surface points, spread by area, of the surface's albedo (light arriving along its
-    /// normal) times the chance that a cosine-distributed reflected ray hits the scene again: of
-    /// the side light reaches where it reaches one only (the outside of a closed solid under a
-    /// sky), else of the side where that product is larger (inside a closed room, the inner one).
+    /// normal) times the chance that a cosine-distributed reflected ray hits the scene again, of
+    /// the side where that product is larger (inside a closed room, the inner one) among the sides
+    /// light reaches, directly or after bounces; points no light reaches on either side (the
+    /// inside of a closed solid under a sky) take no part.
     double reflectance = 0.0;
     uint32_t points = 0;  ///< points sampled (0: an empty scene)
 

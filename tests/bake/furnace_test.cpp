@@ -282,5 +282,45 @@ TEST(SceneReflectance, AClosedWhiteSolidUnderASkyReflectsOnlyFromItsOutside) {
     EXPECT_TRUE(estimateSceneReflectance(tracer, nullptr).unbounded());
 }
 
+/// Appends the quad corner, corner + u, corner + u + v, corner + v, its front along u x v, with
+/// `material`.
+void addQuad(Scene& scene, glm::vec3 corner, glm::vec3 u, glm::vec3 v, uint32_t material) {
+    const uint32_t base = uint32_t(scene.positions.size());
+    scene.positions.insert(scene.positions.end(), {corner, corner + u, corner + u + v, corner + v});
+    scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));
+    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, material);
+}
+
+TEST(SceneReflectance, AWhiteRoomLitThroughAWindowKeepsItsLight) {
+    // A 4 x 3 x 5 room of white single-sided walls (either winding: both sides reflect), a 1.4 x 1 m window in its back wall,
+    // under a sky. The walls' outsides get far more of the sky than their insides, which the
+    // window lights; weighting the sides by the light reaching them directly read R 0.0085 (no
+    // warning; the cached render came out 81% dark). Light passed on from the walls the window
+    // lights reaches the rest of the inside.
+    Scene room;
+    Material white;
+    white.base_color = glm::vec3(1.0f);
+    white.metallic = 0.0f;
+    room.materials.push_back(white);
+    const glm::vec3 x(4, 0, 0), y(0, 3, 0), z(0, 0, 5);
+    const glm::vec3 lo(-2, 0, -2.5f);
+    addQuad(room, lo, z, x, 0);      // floor
+    addQuad(room, lo + y, x, z, 0);  // ceiling
+    addQuad(room, lo, y, z, 0);      // left
+    addQuad(room, lo + x, z, y, 0);  // right
+    addQuad(room, lo + z, x, y, 0);  // front
+    // The back wall around a window from x = -1.4 to 0, y = 1 to 2.
+    addQuad(room, lo, glm::vec3(0, 1, 0), x, 0);
+    addQuad(room, lo + glm::vec3(0, 2, 0), glm::vec3(0, 1, 0), x, 0);
+    addQuad(room, lo + glm::vec3(0, 1, 0), glm::vec3(0, 1, 0), glm::vec3(0.6f, 0, 0), 0);
+    addQuad(room, lo + glm::vec3(2, 1, 0), glm::vec3(0, 1, 0), glm::vec3(2, 0, 0), 0);
+    room.bounds_min = lo;
+    room.bounds_max = lo + x + y + z;
+    room.sky.uniform = glm::vec3(1.0f);
+    const SceneReflectance r = reflectanceOf(room);
+    EXPECT_GT(r.reflectance, kStiffReflectance) << "light through a window stays in a white room";
+}
+
 }  // namespace
 }  // namespace sharcbake
