@@ -3057,11 +3057,24 @@ private:
 
     // ---------------------------------------------------------------- sky
 
-    /// sharcbake's own convention: root extras {"sharcbake": {"sky_radiance": [r, g, b]}} gives
-    /// a uniform sky radiance (linear, W/(m^2 sr)); glTF has no standard way to say this.
+    /// sharcbake's keys in the extras: the root's, else the loaded scene's, where Blender writes
+    /// the custom properties of its scene. Null where neither has any.
+    const tinygltf::Value* sharcbakeExtras() const {
+        if (model_.extras.IsObject() && model_.extras.Has("sharcbake")) return &model_.extras.Get("sharcbake");
+        if (model_.scenes.empty()) return nullptr;
+        int s = model_.defaultScene;
+        if (s < 0 || static_cast<size_t>(s) >= model_.scenes.size()) s = 0;
+        const tinygltf::Value& extras = model_.scenes[size_t(s)].extras;
+        return extras.IsObject() && extras.Has("sharcbake") ? &extras.Get("sharcbake") : nullptr;
+    }
+
+    /// sharcbake's own convention: extras {"sharcbake": {"sky_radiance": [r, g, b]}} (the root's
+    /// or the scene's) gives a uniform sky radiance (linear, W/(m^2 sr)); glTF has no standard way
+    /// to say this.
     void readSky() {
-        if (!model_.extras.IsObject() || !model_.extras.Has("sharcbake")) return;
-        const tinygltf::Value& ours = model_.extras.Get("sharcbake");
+        const tinygltf::Value* extras = sharcbakeExtras();
+        if (!extras) return;
+        const tinygltf::Value& ours = *extras;
         if (!ours.IsObject() || !ours.Has("sky_radiance")) return;
         const std::optional<glm::vec3> sky = vecValue<3>(ours, "sky_radiance");
         if (!sky || !isFinite(*sky) || sky->x < 0.0f || sky->y < 0.0f || sky->z < 0.0f)
@@ -3072,8 +3085,9 @@ private:
     /// Root extras {"sharcbake": {"expected_radiance": L or [r, g, b]}}: the radiance every
     /// surface has (scenes/README.md, furnace rooms), so error can be measured exactly.
     void readKnownRadiance() {
-        if (!model_.extras.IsObject() || !model_.extras.Has("sharcbake")) return;
-        const tinygltf::Value& ours = model_.extras.Get("sharcbake");
+        const tinygltf::Value* extras = sharcbakeExtras();
+        if (!extras) return;
+        const tinygltf::Value& ours = *extras;
         if (!ours.IsObject() || !ours.Has("expected_radiance")) return;
         std::optional<glm::vec3> known = vecValue<3>(ours, "expected_radiance");
         if (!known) {

@@ -2046,6 +2046,19 @@ TEST(GltfLoaderSky, UniformRadianceFromRootExtras) {
     EXPECT_NE(msg.find("sky_radiance"), std::string::npos) << msg;
 }
 
+TEST(GltfLoaderSky, BlendersSceneCustomPropertiesGiveTheSkyToo) {
+    // Blender 3.4 writes a scene's custom properties to scenes[i].extras, not the root's: the sky
+    // set there was dropped ("sky black"), with only the generic "no lights" warning.
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({});
+    b.doc["scenes"][0]["extras"] = {{"sharcbake", {{"sky_radiance", {0.25, 0.5, 1.0}}}}};
+    expectVec3Near(loadGltf(b.writeEmbedded(dir, "scene_sky.gltf")).sky.uniform, {0.25f, 0.5f, 1.0f});
+    // The root's keys win where both have them.
+    b.doc["extras"] = {{"sharcbake", {{"sky_radiance", {2.0, 2.0, 2.0}}}}};
+    expectVec3Near(loadGltf(b.writeEmbedded(dir, "both_sky.gltf")).sky.uniform, {2.0f, 2.0f, 2.0f});
+}
+
 TEST(GltfLoaderKnownAnswer, ExpectedRadianceFromRootExtras) {
     TempDir dir;
     GltfBuilder b;
