@@ -325,8 +325,9 @@ std::string checkPunctualLightUnits(const Tracer& tracer) {
                   "the scene's point and spot lights are a median %.3g units from the surfaces around them. glTF's "
                   "units are metres, and these lights fall off with the squared distance (their intensity is in "
                   "candela), so they light this scene as lamps %.3g m away would: if it was modelled in "
-                  "millimetres (CAD, some exporters' unit settings), they are 10^6 times too dim. Scale it to "
-                  "metres (a 0.001 scale on its root node, or the exporter's unit setting); emissive surfaces, the "
+                  "millimetres (CAD, some exporters' unit settings), they are 10^6 times too dim (in "
+                  "centimetres 10^4). Scale it to metres (a 0.001 or 0.01 scale on its root node, or the "
+                  "exporter's unit setting); emissive surfaces, the "
                   "sky and the grid do not depend on the units, these lights do",
                   double(distance), double(distance));
     return text;

@@ -129,8 +129,9 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
 
 /// Point and spot lights further than this (the median over lights of each one's median distance
 /// to the surfaces around it, scene units) suggest a scene in millimetres: a lamp in metres hangs
-/// within a few metres of a surface.
-inline constexpr float kFarPunctualLightDistance = 100.0f;
+/// within a few metres of a surface (a lighthouse's beacon 60 m over the sea reads 124; a 3 m
+/// room's lamp in millimetres about 1500).
+inline constexpr float kFarPunctualLightDistance = 300.0f;
 
 /// A warning (empty when there is nothing to say) for point and spot lights as far from the
 /// surfaces around them as in a scene modelled in millimetres, where their inverse-square
