@@ -60,7 +60,8 @@ struct SurfaceBehind {
 /// The nearest surface behind the emitter at `point` (its emitting side faces `emitting`): not
 /// emissive, seen from a side light reaches, with its key normal in the emitter's octant. Not
 /// found when there is none within `reach` or another surface hides it.
-SurfaceBehind surfaceBehind(const Tracer& tracer, glm::vec3 point, glm::vec3 emitting, float reach) {
+SurfaceBehind surfaceBehind(const Tracer& tracer, glm::vec3 point, glm::vec3 emitting, float reach,
+                            bool pass_emitters = true) {
     const Scene& scene = tracer.scene();
     const uint32_t octant = normalBits(toFloat3(emitting));
     // From just in front of the emitter, so that a surface flush with it is found too: the
@@ -77,6 +78,7 @@ SurfaceBehind surfaceBehind(const Tracer& tracer, glm::vec3 point, glm::vec3 emi
         const SurfaceHit hit = makeSurfaceHit(scene, ray_hit, -emitting);
         const Material& m = scene.materials[hit.material];
         if (m.isEmissive()) {
+            if (!pass_emitters) break;
             // Just past it, by a few float steps rather than offsetRayOrigin's fixed offset near
             // the origin, which in a scene in kilometres would step past a ceiling 1 mm behind.
             origin = hit.position - emitting * floatSteps(hit.position, 4.0f);
@@ -90,6 +92,33 @@ SurfaceBehind surfaceBehind(const Tracer& tracer, glm::vec3 point, glm::vec3 emi
         break;  // the nearest non-emissive surface hides whatever lies further back
     }
     return SurfaceBehind{};
+}
+
+/// Offsets in the emitter's plane, in voxel widths, where the surface behind it is looked for
+/// beside it: eight directions at two distances.
+constexpr int kBesideDirections = 8;
+constexpr float kBesideRadii[] = {0.5f, 1.0f};
+
+/// Whether the surface behind the emitter point `point` shows beside the emitter within the
+/// voxel keyed `key` (as the nearest camera `camera` keys it): a probe from in front of the
+/// emitter's plane, a little aside, meets that surface first, not an emitter. A screen that
+/// exactly covers the face of its own body hides the face: the voxel holds the screen alone, and
+/// nothing around it takes on its light.
+bool showsBeside(const Tracer& tracer, const HashGridKeyer& keyer, glm::vec3 point, glm::vec3 emitting, float voxel,
+                 float gap, uint64_t key, glm::vec3 camera) {
+    const Frame frame(emitting);
+    for (const float radius : kBesideRadii) {
+        for (int k = 0; k < kBesideDirections; ++k) {
+            const float angle = 6.2831853f * float(k) / float(kBesideDirections);
+            const glm::vec3 aside = point + voxel * radius * (std::cos(angle) * frame.t + std::sin(angle) * frame.b);
+            const SurfaceBehind beside = surfaceBehind(tracer, aside, emitting, gap + voxel, false);
+            if (beside.found &&
+                keyer.key(toFloat3(beside.position), toFloat3(beside.key_normal), toFloat3(camera)) == key) {
+                return true;
+            }
+        }
+    }
+    return false;
 }
 
 float median(std::vector<float> values) {
@@ -142,6 +171,7 @@ MaterialPoints testMaterial(const Tracer& tracer, const HashGridKeyer& keyer, co
             if (keyer.key(toFloat3(behind.position), toFloat3(behind.key_normal), toFloat3(camera)) != emitter_key) {
                 continue;
             }
+            if (!showsBeside(tracer, keyer, e.position, emitting, voxel, behind.gap, emitter_key, camera)) continue;
             ++result.leaking;
             result.gaps.push_back(behind.gap);
             result.voxels.push_back(voxel);
@@ -157,10 +187,10 @@ std::string LightLeakReport::describe(const EmitterLeak& leak) {
     char text[640];
     std::snprintf(text, sizeof text,
                   "emissive %s: %.0f%% of its area shares voxels (%.3g units wide, from the scene's nearest "
-                  "camera) with another surface facing the same way %.3g units behind it (median), so renders "
-                  "through the cache show the emitter's light on that surface around it (a light leak, brighter "
-                  "than path tracing). Move the emitter at least %.3g away from the surface, or remove the surface "
-                  "behind it",
+                  "camera) with a surface facing the same way %.3g units behind it (median) that shows around its "
+                  "edge, so renders through the cache show the emitter's light on that surface around it (a light "
+                  "leak, brighter than path tracing). Move the emitter at least %.3g away from the surface, or "
+                  "remove the surface behind it",
                   leak.material_label.c_str(), 100.0 * leak.area_share, double(leak.voxel_size),
                   double(leak.median_gap), double(leak.voxel_size));
     return text;

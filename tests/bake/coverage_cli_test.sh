@@ -20,7 +20,7 @@ expect 0 "default bake" "$sharcbake" bake "$cornell" -o "$work/cornell.sharc" --
 says "$work/out.txt" "Views: free space" "the bake names the view region"
 says "$work/out.txt" "predicted hit rate: " "the bake prints its predicted hit rate"
 # Its one warning is the light 1 mm below the ceiling, which shares its voxels (docs/baking.md).
-says "$work/err.txt" "warning: emissive material 'light': 100% of its area shares voxels" "the light leak is warned about"
+says "$work/err.txt" "warning: emissive material 'light': [0-9]*% of its area shares voxels" "the light leak is warned about"
 grep -v "warning: emissive material 'light'" "$work/err.txt" > "$work/other_warnings.txt"
 [ -s "$work/other_warnings.txt" ] && fail "the default bake warned: $(cat "$work/other_warnings.txt")"
 expect 0 "info" "$sharcbake" info "$work/cornell.sharc"
@@ -82,7 +82,7 @@ for units in unit mm km; do
     [ "$units" = unit ] && scene="$cornell"
     expect 0 "bake in $units" "$sharcbake" bake "$scene" -o "$work/$units.sharc" $small --stats-json "$work/$units.json"
     # The light leak in any units: the check keys in the scene's own units, like the bake.
-    says "$work/err.txt" "warning: emissive material 'light': 100% of its area shares voxels" "$units: the light leak is warned about"
+    says "$work/err.txt" "warning: emissive material 'light': [0-9]*% of its area shares voxels" "$units: the light leak is warned about"
     grep -v "warning: emissive material 'light'" "$work/err.txt" > "$work/other_warnings.txt"
     [ -s "$work/other_warnings.txt" ] && fail "the $units bake warned: $(cat "$work/other_warnings.txt")"
 done
