@@ -5,6 +5,7 @@
 #include "sharcbake/runtime.h"
 #include "sharcbake/sdk_target.h"
 
+#include <cstdio>
 #include <cstring>
 #include <new>
 #include <string>
@@ -79,9 +80,19 @@ void fillReport(const sharcbake::GpuRadianceReport& r, uint64_t inserted, uint64
     out->fitting_radiance_scale = r.fitting_radiance_scale;
 }
 
-/// A known target, or an unknown one refused with a message (the C++ API maps unknown values to
-/// the default; a C caller passing garbage should hear about it).
+/// A known target and build flags, or unknown ones refused with a message (the C++ API maps
+/// unknown targets to the default and has no flag word; a C caller passing garbage, or flags of an
+/// SDK build this library does not know, should hear about it, not get buffers for another build).
 bool knownTarget(const sharcbake_gpu_options& o, char* message, size_t message_size) {
+    constexpr uint32_t kKnownFlags = SHARCBAKE_BUILD_SH_ENCODING | SHARCBAKE_BUILD_COMPACT_KEYS |
+                                     SHARCBAKE_BUILD_MATERIAL_DEMODULATION | SHARCBAKE_BUILD_SEPARATE_EMISSIVE;
+    if ((o.build_flags & ~kKnownFlags) != 0) {
+        char text[96];
+        std::snprintf(text, sizeof text, "unknown build_flags bits 0x%x (known: SHARCBAKE_BUILD_*, 0x%x)",
+                      unsigned(o.build_flags & ~kKnownFlags), unsigned(kKnownFlags));
+        copyMessage(text, message, message_size);
+        return false;
+    }
     if (sharcbake::isKnownSharcSdkTarget(sharcbake::SharcSdkTarget(o.sdk_target))) return true;
     copyMessage("unknown sdk_target " + std::to_string(o.sdk_target), message, message_size);
     return false;

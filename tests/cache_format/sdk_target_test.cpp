@@ -938,6 +938,14 @@ TEST(SdkTargetC, BuffersInsertListsAndReleases) {
     EXPECT_EQ(report.inserted, 500u);
     EXPECT_EQ(list_keys[0], sharcSdkKey(cache.data.voxels[0].key, SharcSdkTarget::kSdk1_6));
 
+    // Flags of an SDK build this library does not know are refused, not read as another build.
+    o.build_flags = 0xFFFFFFF0u;
+    EXPECT_EQ(sharcbake_cache_gpu_buffers_ex(c, &o, keys.data(), resolved.data(), &report, message, sizeof message),
+              SHARCBAKE_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(message).find("build_flags"), std::string::npos) << message;
+    EXPECT_EQ(sharcbake_cache_gpu_insert_list(c, &o, list_keys.data(), values.data(), &report, nullptr, 0),
+              SHARCBAKE_INVALID_ARGUMENT);
+    o.build_flags = 0;
     o.sdk_target = 99;
     EXPECT_EQ(sharcbake_cache_gpu_buffers_ex(c, &o, keys.data(), resolved.data(), &report, message, sizeof message),
               SHARCBAKE_INVALID_ARGUMENT);
