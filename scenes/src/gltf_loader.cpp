@@ -508,6 +508,7 @@ public:
         for (int root : uniqueRootNodes()) visitNode(root, glm::dmat4(1.0));
         warnAboutSeveralParents();
         warnAboutPrimitivesWithoutMaterial();
+        warnAboutFlatEmitters();
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
         settleAlphaModes();
         computeBounds();
@@ -525,6 +526,8 @@ private:
     int default_material_ = -1;
     /// The (mesh, primitive) pairs given the default material, and the label of the first the walk reached.
     std::set<std::pair<int, size_t>> primitives_without_material_;
+    /// Per material: triangles read, and those left once degenerate ones were dropped.
+    std::map<uint32_t, std::pair<size_t, size_t>> triangles_by_material_;
     std::string first_without_material_;
     ImageDecoding image_decoding_;
     /// (glTF texture index, decode as sRGB) -> Scene::textures index; a texture used both as
@@ -1682,10 +1685,16 @@ private:
                 warn(label + ": skinned node without JOINTS_0 and WEIGHTS_0; mesh used in its bind pose");
             transformToWorld(geo, world, label);
         }
+        const size_t triangles_read = geo.triangles.size();
         dropDegenerateTriangles(geo);
         if (geo.normals.empty()) makeFlatShaded(geo);
         else repairNormals(geo, label);
         const uint32_t material = materialForPrimitive(prim, meshIndex, primIndex, label);
+        if (triangles_read > 0) {
+            std::pair<size_t, size_t>& counts = triangles_by_material_[material];
+            counts.first += triangles_read;
+            counts.second += geo.triangles.size();
+        }
         if (const TextureRef& map = scene_.materials[material].normal_texture; map.isSet()) {
             if (geo.tangents.empty()) {
                 computeTangents(geo, transformedUvs(map.texcoord == 1 ? geo.uv1 : geo.uv0, map.transform), label);
@@ -1988,6 +1997,18 @@ private:
     static glm::dvec3 triangleCross(const PrimitiveGeometry& geo, const glm::uvec3& t) {
         const glm::dvec3 a(geo.positions[t.x]);
         return glm::cross(glm::dvec3(geo.positions[t.y]) - a, glm::dvec3(geo.positions[t.z]) - a);
+    }
+
+    /// An emissive material all of whose triangles had no area gives no light: a lamp modelled as
+    /// a line or a point (a collapsed plane) would otherwise leave only "no emissive surfaces".
+    void warnAboutFlatEmitters() {
+        for (const auto& [material, counts] : triangles_by_material_) {
+            const Material& m = scene_.materials[material];
+            if (!m.isEmissive() || counts.second > 0) continue;
+            warn("material " + std::to_string(material) + (m.name.empty() ? "" : " " + quoted(m.name)) +
+                 " emits light, but all " + std::to_string(counts.first) +
+                 " of its triangles have no area (dropped as degenerate): it gives no light");
+        }
     }
 
     /// Drops triangles with a repeated index or (numerically) zero area: they cannot be hit

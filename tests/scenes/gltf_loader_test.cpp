@@ -226,6 +226,31 @@ TEST(GltfLoader, DegenerateTrianglesDroppedAndCounted) {
     expectVec3Near(scene.bounds_max, {1, 1, 0});
 }
 
+TEST(GltfLoader, AnEmitterOnlyOnTrianglesWithoutAreaIsNamed) {
+    // A lamp modelled as a collapsed plane: its triangles are dropped, and "no emissive surfaces"
+    // alone read as if its emission had not been loaded.
+    TempDir dir;
+    GltfBuilder b;
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0});
+    const std::vector<uint16_t> lamp = {0, 1, 2};   // collinear
+    const std::vector<uint16_t> floor = {0, 1, 3};  // a real triangle, not emissive
+    const int emissive = b.addMaterial({{"name", "lamp"}, {"emissiveFactor", {1, 1, 1}}});
+    const int plain = b.addMaterial({{"name", "floor"}});
+    b.setScene({b.addMeshNode({{"attributes", {{"POSITION", pos}}},
+                               {"indices", b.addData(lamp, test::kUnsignedShort, "SCALAR")},
+                               {"material", emissive}}),
+                b.addMeshNode({{"attributes", {{"POSITION", pos}}},
+                               {"indices", b.addData(floor, test::kUnsignedShort, "SCALAR")},
+                               {"material", plain}})});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "flat_lamp.gltf"));
+    std::string named;
+    for (const std::string& w : scene.stats.warnings) {
+        if (w.find("no area") != std::string::npos) named += w;
+    }
+    EXPECT_NE(named.find("'lamp' emits light, but all 1 of its triangles have no area"), std::string::npos) << named;
+    EXPECT_EQ(named.find("'floor'"), std::string::npos) << named;
+}
+
 // A model placed far from the origin by its node: its triangles have area in the file's double
 // precision transforms, and rounding the world positions to float collapses the small ones. They
 // are counted apart from triangles modelled flat, and one warning says why and what to do.
