@@ -382,6 +382,18 @@ bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
         landed.emplace_back(at, surface.geometric_normal);
         return false;
     };
+    // The inside of a glowing object (a closed emissive model, double-sided) is lit by its own
+    // walls: no room, whose lamps are a part of what surrounds the centre. Where most of what the
+    // centre sees emits, the view from there is a white wall and the object is framed from outside.
+    uint32_t emitting = 0;
+    for (uint32_t i = 0; i < kEnclosureRays; ++i) {
+        const glm::vec3 d = sphericalFibonacciDirection(i, kEnclosureRays);
+        RayHit hit;
+        if (!tracer.intersect(Ray{center, d}, hit)) continue;
+        const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
+        if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) ++emitting;
+    }
+    if (2 * emitting > kEnclosureRays) return false;
     for (uint32_t i = 0; i < kEnclosureRays; ++i) {
         if (rayFindsLight(center, sphericalFibonacciDirection(i, kEnclosureRays))) return true;
     }

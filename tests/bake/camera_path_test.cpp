@@ -699,6 +699,13 @@ TEST(AutomaticCamera, FramesAClosedDoubleSidedModelLitFromOutside) {
     sun.intensity = glm::vec3(3.0f);
     lamps.lights.push_back(sun);
     expectFramedFromOutside(lamps, "a lone sphere lit by lamps and the sun");
+
+    // A glowing sphere (double-sided emission) lights its own inside: no room either. From inside,
+    // the view was a white wall and the render ran 300 times longer.
+    Scene glowing = loadLoneSphere(dir, false);
+    glowing.sky = Sky{};
+    for (Material& m : glowing.materials) m.emissive = glm::vec3(1.0f, 0.5f, 0.2f);
+    expectFramedFromOutside(glowing, "a lone glowing sphere");
 }
 
 TEST(AutomaticCamera, LooksFromInsideAClosedDoubleSidedRoomLitFromWithin) {
