@@ -50,11 +50,13 @@ void addWarnings(StabilityReport& r) {
         // The scale puts the brightest radiance the scene can make at 2^40 steps (chooseRadianceScale).
         r.warnings.push_back(
             format("%.3g%% of deposits carried less than one fixed-point step (radiance below "
-                   "%.3g, where the brightest emitter's %.3g is 2^40 steps): dithered rounding "
-                   "keeps them on average, but the voxels they feed hold a few steps at most and "
-                   "read as noise or 0; the scene's radiance spans more than the fixed point "
-                   "holds: turn its brightest emitter down, or bake its dim part as a scene of "
-                   "its own",
+                   "%.3g, where the brightest radiance the scene's lights give, %.3g, is 2^40 steps): "
+                   "dithered rounding keeps them on average, but the voxels they feed hold a few steps "
+                   "at most and read as noise or 0. The scene's radiance spans more than the fixed point "
+                   "holds: a small, very bright emitter (or a punctual light, whose radiance counts as "
+                   "seen from 1 cm) sets the scale far above what these surfaces receive. Give such an "
+                   "emitter more area and less radiance (the same power), or bake the dim part as a "
+                   "scene of its own",
                    100.0 * double(r.sub_step_deposits) / double(r.deposits),
                    r.radiance_scale > 0.0 ? 1.0 / r.radiance_scale : 0.0,
                    r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0));
