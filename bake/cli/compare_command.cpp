@@ -44,7 +44,9 @@ void runCompare(const CompareOptions& o) {
                            {"relative_mse", jsonNumber(error.relative_mse)},
                            {"mean_relative_error", jsonNumber(error.mean_relative_error)},
                            {"relative_bias", jsonNumber(error.relative_bias)},
-                           {"non_finite_pixels", error.non_finite_pixels}};
+                           {"non_finite_pixels", error.non_finite_pixels},
+                           {"error_scale", jsonNumber(error.scale)},
+                           {"error_scale_is_fallback", error.scale_is_fallback}};
         std::fputs(jsonText(json).c_str(), stdout);
     } else {
         std::printf("relative MSE %.6g, mean relative error %.4f%%, bias %+.4f%%, non-finite pixels %llu\n",
