@@ -360,13 +360,6 @@ bool givesLight(const PunctualLight& light) {
 bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
     const Scene& scene = tracer.scene();
     const bool sky = !scene.sky.isBlack();
-    // A ray that misses everything may have slipped between the two triangles of a shared edge
-    // (Embree's test is not watertight): it leaves the scene only if the ray back from beyond
-    // the bounds reaches its origin too, as exploreFreeSpace's connections are tested.
-    const float beyond_bounds = 2.0f * glm::length(scene.bounds_max - scene.bounds_min) + 1.0f;
-    const auto leavesScene = [&](glm::vec3 from, glm::vec3 d) {
-        return !tracer.occluded(Ray{from, d}) && visibleOneWay(tracer, from + beyond_bounds * d, from);
-    };
     // Where light could land: the centre and points just off the surfaces around it, on the
     // side facing it.
     std::vector<glm::vec3> receivers;
@@ -374,7 +367,7 @@ bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
     // Whether the ray that left `from` along `d` meets light: the sky, or an emitter's lit side.
     const auto rayFindsLight = [&](glm::vec3 from, glm::vec3 d) {
         RayHit hit;
-        if (!tracer.intersect(Ray{from, d}, hit)) return sky && leavesScene(from, d);
+        if (!tracer.intersect(Ray{from, d}, hit)) return sky && leavesScene(tracer, from, d);
         const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
         if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) return true;
         const glm::vec3 at = offsetRayOrigin(surface.position, surface.geometric_normal);
@@ -407,7 +400,7 @@ bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
         if (!givesLight(light)) continue;
         for (const glm::vec3& at : receivers) {
             const bool reached = light.type == LightType::Directional
-                                     ? leavesScene(at, -light.direction)
+                                     ? leavesScene(tracer, at, -light.direction)
                                      : (light.range <= 0.0f || glm::distance(at, light.position) < light.range) &&
                                            visibleBothWays(tracer, at, light.position);
             if (reached) return true;

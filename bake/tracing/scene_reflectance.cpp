@@ -49,15 +49,10 @@ struct SideShare {
 class LightTests {
 public:
     LightTests(const Tracer& tracer, const LightSampler& lights)
-        : tracer_(tracer),
-          lights_(lights),
-          sky_(lights.hasSky()),
-          beyond_bounds_(2.0f * glm::length(tracer.scene().bounds_max - tracer.scene().bounds_min) + 1.0f) {}
+        : tracer_(tracer), lights_(lights), sky_(lights.hasSky()) {}
 
-    /// A ray from `from` along `d` leaves the scene (and a sky lights it, where there is one).
-    bool escapes(glm::vec3 from, glm::vec3 d) const {
-        return sky_ && !tracer_.occluded(Ray{from, d}) && visibleOneWay(tracer_, from + beyond_bounds_ * d, from);
-    }
+    /// A ray from `from` along `d` leaves the scene and a sky lights it.
+    bool escapes(glm::vec3 from, glm::vec3 d) const { return sky_ && leavesScene(tracer_, from, d); }
 
     /// Of `samples` light samples drawn at `hit` (seen through `bsdf`), one is unblocked.
     bool sampleReaches(const SurfaceHit& hit, const GltfBsdf& bsdf, uint32_t samples, uint32_t stream) const {
@@ -82,7 +77,6 @@ private:
     const Tracer& tracer_;
     const LightSampler& lights_;
     bool sky_;
-    float beyond_bounds_;
 };
 
 /// The unnormalised normal of a triangle's front (its winding).

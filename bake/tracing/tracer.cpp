@@ -201,6 +201,12 @@ bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
     return !tracer.occluded(Ray{a, d / length, length});
 }
 
+bool leavesScene(const Tracer& tracer, glm::vec3 from, glm::vec3 d) {
+    const Scene& scene = tracer.scene();
+    const float beyond_bounds = 2.0f * glm::length(scene.bounds_max - scene.bounds_min) + 1.0f;
+    return !tracer.occluded(Ray{from, d}) && visibleOneWay(tracer, from + beyond_bounds * d, from);
+}
+
 bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
     return visibleOneWay(tracer, a, b) && visibleOneWay(tracer, b, a);
 }

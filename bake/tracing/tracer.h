@@ -104,6 +104,12 @@ bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
 /// differently, so it does not slip through the same edge.
 bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
 
+/// True when a ray from `from` along unit `d` leaves the scene: nothing blocks it, and the ray
+/// back from beyond the bounds reaches `from` too (a ray that meets a shared edge can slip
+/// between its two triangles, as visibleBothWays says; from inside a closed mesh it would seem to
+/// escape).
+bool leavesScene(const Tracer& tracer, glm::vec3 from, glm::vec3 d);
+
 /// The largest distance offsetRayOrigin moves an origin anywhere in the bounds: at the coordinate
 /// farthest from 0 on any axis (`far_coordinate`, as max |bounds|).
 float largestRayOffset(float far_coordinate);
