@@ -19,8 +19,12 @@ double floatSpacing(double x) {
 }
 
 std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
-    char text[512];
-    std::snprintf(text, sizeof text, pattern, a, b, c, d);
+    // Sized by a first pass: a fixed buffer cut the longest warnings short.
+    const int length = std::snprintf(nullptr, 0, pattern, a, b, c, d);
+    if (length <= 0) return {};
+    std::string text(size_t(length) + 1, '\0');
+    std::snprintf(text.data(), text.size(), pattern, a, b, c, d);
+    text.resize(size_t(length));
     return text;
 }
 
