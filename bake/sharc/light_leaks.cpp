@@ -184,16 +184,16 @@ MaterialPoints testMaterial(const Tracer& tracer, const HashGridKeyer& keyer, co
 }  // namespace
 
 std::string LightLeakReport::describe(const EmitterLeak& leak) {
+    // The material's name goes in outside the buffer: a long one would cut the advice short.
     char text[640];
     std::snprintf(text, sizeof text,
-                  "emissive %s: %.0f%% of its area shares voxels (%.3g units wide, from the scene's nearest "
-                  "camera) with a surface facing the same way %.3g units behind it (median) that shows around its "
-                  "edge, so renders through the cache show the emitter's light on that surface around it (a light "
-                  "leak, brighter than path tracing). Move the emitter at least %.3g away from the surface, or "
-                  "remove the surface behind it",
-                  leak.material_label.c_str(), 100.0 * leak.area_share, double(leak.voxel_size),
-                  double(leak.median_gap), double(leak.voxel_size));
-    return text;
+                  ": %.0f%% of its area shares voxels (%.3g units wide, from the scene's nearest camera) with a "
+                  "surface facing the same way %.3g units behind it (median) that shows around its edge, so renders "
+                  "through the cache show the emitter's light on that surface around it (a light leak, brighter "
+                  "than path tracing). Move the emitter at least %.3g away from the surface, or remove the surface "
+                  "behind it",
+                  100.0 * leak.area_share, double(leak.voxel_size), double(leak.median_gap), double(leak.voxel_size));
+    return "emissive " + leak.material_label + text;
 }
 
 LightLeakReport findLightLeaks(const Tracer& tracer, const HashGridParameters& grid,

@@ -81,6 +81,11 @@ TEST(LightLeaks, ALampJustBelowACeilingSharesItsVoxels) {
     const std::string text = LightLeakReport::describe(leak);
     EXPECT_NE(text.find("material 'lamp'"), std::string::npos) << text;
     EXPECT_NE(text.find("light leak"), std::string::npos) << text;
+    // A long material name (exporters write paths into them) does not cut the advice short.
+    EmitterLeak named = leak;
+    named.material_label = "material '" + std::string(300, 'x') + "'";
+    const std::string long_text = LightLeakReport::describe(named);
+    EXPECT_NE(long_text.find("remove the surface behind it"), std::string::npos) << long_text;
 }
 
 TEST(LightLeaks, AFlushLampIsFoundAndAVoxelAwayIsNot) {
