@@ -906,8 +906,7 @@ private:
         tracer_.emplace(scene_);
         lights_.emplace(scene_);
         warnWhenUnlit(scene_, *lights_, "cache");
-        const std::string light_units = checkPunctualLightUnits(*tracer_);
-        if (!light_units.empty()) std::fprintf(stderr, "warning: %s\n", light_units.c_str());
+        warnAboutPunctualLightUnits(*tracer_);
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
         // The automatic grid fits what the roaming camera's positions (and the scene's cameras) see.
         if (job_.level_bias_auto) {

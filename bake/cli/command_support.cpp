@@ -5,6 +5,7 @@
 #include "sharcbake/cache_file.h"
 #include "sharcbake/scene_loader.h"
 #include "support/fnv1a.h"
+#include "support/median.h"
 #include "tracing/lights.h"
 #include "tracing/sampling.h"
 
@@ -296,7 +297,7 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
                  what.c_str(), result);
 }
 
-std::string checkPunctualLightUnits(const Tracer& tracer) {
+void warnAboutPunctualLightUnits(const Tracer& tracer) {
     const Scene& scene = tracer.scene();
     // Each point or spot light's median distance to the surfaces around it (rays in 64 directions
     // that hit), then the median over the lights.
@@ -311,26 +312,21 @@ std::string checkPunctualLightUnits(const Tracer& tracer) {
                 distances.push_back(hit.t);
             }
         }
-        if (distances.empty()) continue;
-        std::nth_element(distances.begin(), distances.begin() + std::ptrdiff_t(distances.size() / 2), distances.end());
-        light_distances.push_back(distances[distances.size() / 2]);
+        if (!distances.empty()) light_distances.push_back(median(std::move(distances)));
     }
-    if (light_distances.empty()) return {};
-    std::nth_element(light_distances.begin(), light_distances.begin() + std::ptrdiff_t(light_distances.size() / 2),
-                     light_distances.end());
-    const float distance = light_distances[light_distances.size() / 2];
-    if (!(distance > kFarPunctualLightDistance)) return {};
-    char text[640];
-    std::snprintf(text, sizeof text,
-                  "the scene's point and spot lights are a median %.3g units from the surfaces around them. glTF's "
-                  "units are metres, and these lights fall off with the squared distance (their intensity is in "
-                  "candela), so they light this scene as lamps %.3g m away would: if it was modelled in "
-                  "millimetres (CAD, some exporters' unit settings), they are 10^6 times too dim (in "
-                  "centimetres 10^4). Scale it to metres (a 0.001 or 0.01 scale on its root node, or the "
-                  "exporter's unit setting); emissive surfaces, the "
-                  "sky and the grid do not depend on the units, these lights do",
-                  double(distance), double(distance));
-    return text;
+    if (light_distances.empty()) return;
+    const float distance = median(std::move(light_distances));
+    if (!(distance > kFarPunctualLightDistance)) return;
+    std::fprintf(
+        stderr,
+        "warning: the scene's point and spot lights are a median %.3g units from the surfaces around them. glTF's "
+        "units are metres, and these lights fall off with the squared distance (their intensity is in "
+        "candela), so they light this scene as lamps %.3g m away would: if it was modelled in "
+        "millimetres (CAD, some exporters' unit settings), they are 10^6 times too dim (in "
+        "centimetres 10^4). Scale it to metres (a 0.001 or 0.01 scale on its root node, or the "
+        "exporter's unit setting); emissive surfaces, the "
+        "sky and the grid do not depend on the units, these lights do\n",
+        double(distance), double(distance));
 }
 
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect, int& width,

@@ -133,10 +133,10 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
 /// room's lamp in millimetres about 1500).
 inline constexpr float kFarPunctualLightDistance = 300.0f;
 
-/// A warning (empty when there is nothing to say) for point and spot lights as far from the
-/// surfaces around them as in a scene modelled in millimetres, where their inverse-square
-/// falloff, unlike everything else, depends on the units and makes them 10^6 times too dim.
-std::string checkPunctualLightUnits(const Tracer& tracer);
+/// Warns (stderr) of point and spot lights as far from the surfaces around them as in a scene
+/// modelled in millimetres, where their inverse-square falloff, unlike everything else, depends
+/// on the units and makes them 10^6 times too dim.
+void warnAboutPunctualLightUnits(const Tracer& tracer);
 
 /// Options that choose the sky, shared by render and bake.
 struct SkyOptions {

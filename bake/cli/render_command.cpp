@@ -281,8 +281,7 @@ private:
         lights_.emplace(scene_);
         build_seconds_ = secondsSince(build_start);
         warnWhenUnlit(scene_, *lights_, "image");
-        const std::string light_units = checkPunctualLightUnits(*tracer_);
-        if (!light_units.empty()) std::fprintf(stderr, "warning: %s\n", light_units.c_str());
+        warnAboutPunctualLightUnits(*tracer_);
         warnAboutRayOffset();
         warnAboutLongPaths();
         scene_hash_ = sceneContentHash(scene_.source_files);

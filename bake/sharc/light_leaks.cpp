@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/light_leaks.h"
 
+#include "support/median.h"
 #include "tracing/sampling.h"
 #include "tracing/surface.h"
 
@@ -119,13 +120,6 @@ bool showsBeside(const Tracer& tracer, const HashGridKeyer& keyer, glm::vec3 poi
         }
     }
     return false;
-}
-
-float median(std::vector<float> values) {
-    if (values.empty()) return 0.0f;
-    const size_t middle = values.size() / 2;
-    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(middle), values.end());
-    return values[middle];
 }
 
 /// One material's points tested, and where they leak, the gaps and voxel widths.
