@@ -1111,11 +1111,8 @@ private:
     /// points region of a scene without cameras): said before baking, so the artist can move them.
     void findEmitterLeaks() {
         std::vector<glm::vec3> cameras;
-        for (const Camera& camera : scene_.cameras) cameras.push_back(camera.position);
-        const ViewRegion::Kind region = job_.settings.view_region.kind;
-        if (cameras.empty() && region != ViewRegion::Kind::Points && region != ViewRegion::Kind::Box) {
-            cameras.push_back(automaticCamera(*tracer_, glm::radians(kAutomaticCameraFovDegrees)).position);
-        }
+        for (const PredictionView& view : declaredViews(*tracer_, job_.settings.view_region))
+            cameras.push_back(view.camera.position);
         if (cameras.empty()) {
             for (const CameraPose& pose : camera_path_->waypoints()) cameras.push_back(pose.position);
         }

@@ -36,16 +36,13 @@ const ViewHitRate* HitRatePrediction::worst() const {
     return worst;
 }
 
-std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
-                                            uint32_t seed) {
+std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion& region) {
     const Scene& scene = tracer.scene();
     std::vector<PredictionView> views;
-    std::vector<glm::vec3> starts;
     for (const Camera& c : scene.cameras) {
         PredictionView view{c, true};
         view.camera.name = cameraLabel(c);  // "camera 'Persp'", or "camera #3" without names
         views.push_back(view);
-        starts.push_back(c.position);
     }
     // Without a camera of its own, the scene is looked at first from where render's automatic
     // camera puts it (with render's default field of view).
@@ -54,6 +51,15 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
         view.camera.name = "automatic camera (render's view of a scene without cameras)";
         views.push_back(view);
     }
+    return views;
+}
+
+std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
+                                            uint32_t seed) {
+    const Scene& scene = tracer.scene();
+    std::vector<PredictionView> views = declaredViews(tracer, region);
+    std::vector<glm::vec3> starts;
+    for (const Camera& c : scene.cameras) starts.push_back(c.position);
     std::vector<glm::vec3> points;
     switch (region.kind) {
     case ViewRegion::Kind::FreeSpace:

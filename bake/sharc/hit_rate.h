@@ -44,6 +44,10 @@ struct HitRatePrediction {
     const ViewHitRate* worst() const;
 };
 
+/// The scene's own views: its glTF cameras, or without any, render's automatic camera (unless the
+/// region is points or a box, which name where cameras go). Declared.
+std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion& region);
+
 /// Views to predict from: the scene's glTF cameras (declared; without any, render's automatic
 /// camera, unless the region is points or a box), and `samples` viewpoints of the region looking
 /// in hashed directions: free-space points reachable from the cameras for
