@@ -287,6 +287,10 @@ std::string numberText(double v) {
     return text;
 }
 
+/// The F0 of a dielectric of ior 1.5, ((1.5 - 1) / (1.5 + 1))^2: what specular-glossiness's
+/// specular colour is measured against.
+constexpr float kDielectricF0 = 0.04f;
+
 /// The largest float32. glTF's numbers are JSON doubles; the scene is float32, so a value beyond
 /// this has no float (it would be infinity).
 constexpr double kLargestFloat = std::numeric_limits<float>::max();
@@ -1304,13 +1308,16 @@ private:
 
     // ---------------------------------------------------------------- scene graph
 
-    /// The default scene's roots, else scene 0's, else every node that is nobody's child.
+    /// The scene loaded: the default one, else scene 0. The file must have scenes.
+    const tinygltf::Scene& loadedScene() const {
+        int s = model_.defaultScene;
+        if (s < 0 || static_cast<size_t>(s) >= model_.scenes.size()) s = 0;
+        return model_.scenes[static_cast<size_t>(s)];
+    }
+
+    /// The loaded scene's roots, else every node that is nobody's child.
     std::vector<int> rootNodes() const {
-        if (!model_.scenes.empty()) {
-            int s = model_.defaultScene;
-            if (s < 0 || static_cast<size_t>(s) >= model_.scenes.size()) s = 0;
-            return model_.scenes[s].nodes;
-        }
+        if (!model_.scenes.empty()) return loadedScene().nodes;
         std::vector<bool> isChild(model_.nodes.size(), false);
         for (const tinygltf::Node& n : model_.nodes)
             for (int c : n.children)
@@ -2411,7 +2418,6 @@ private:
     /// colour and whose F0 is the specular colour (KHR_materials_specular's colour, divided by
     /// the 0.04 of ior 1.5), roughness 1 - glossiness.
     void readSpecularGlossiness(const tinygltf::Value& ext, Material& m, const std::string& label) {
-        constexpr float kDielectricF0 = 0.04f;  // ((1.5 - 1) / (1.5 + 1))^2
         const std::optional<glm::vec4> diffuse = vecValue<4>(ext, "diffuseFactor");
         m.base_color = diffuse ? glm::vec3(*diffuse) : glm::vec3(1.0f);
         m.base_alpha = diffuse ? std::clamp(diffuse->w, 0.0f, 1.0f) : 1.0f;
@@ -2445,7 +2451,6 @@ private:
     /// dielectric; `Tr 1` as an opaque diffuse and a transparent fallback) the render differs from
     /// what the user saw: one warning, with both values. Factors only; textures are not compared.
     void warnWhenFallbackDiffers(const Material& fallback, const Material& used, const std::string& label) {
-        constexpr float kDielectricF0 = 0.04f;
         const auto maxOf = [](glm::vec3 v) { return std::max({v.x, v.y, v.z}); };
         const float fallback_f0 = maxOf(glm::mix(glm::vec3(kDielectricF0), fallback.base_color, fallback.metallic));
         const float used_f0 = maxOf(used.specular_color) * kDielectricF0;
@@ -3083,9 +3088,7 @@ private:
     const tinygltf::Value* sharcbakeExtras() const {
         if (model_.extras.IsObject() && model_.extras.Has("sharcbake")) return &model_.extras.Get("sharcbake");
         if (model_.scenes.empty()) return nullptr;
-        int s = model_.defaultScene;
-        if (s < 0 || static_cast<size_t>(s) >= model_.scenes.size()) s = 0;
-        const tinygltf::Value& extras = model_.scenes[size_t(s)].extras;
+        const tinygltf::Value& extras = loadedScene().extras;
         return extras.IsObject() && extras.Has("sharcbake") ? &extras.Get("sharcbake") : nullptr;
     }
 
