@@ -53,11 +53,6 @@ float spotAttenuation(const PunctualLight& light, glm::vec3 light_to_point) {
     return t * t;
 }
 
-/// luminance() in double, for a colour whose float32 luminance may overflow.
-double luminanceInDouble(glm::vec3 c) {
-    return double(0.2126f) * double(c.x) + double(0.7152f) * double(c.y) + double(0.0722f) * double(c.z);
-}
-
 /// A light's selection power: its float32 product, or where that overflows, the same product in
 /// double. Scenes whose powers fit float32, all ordinary ones, keep their float32 powers.
 double selectionPower(float in_float, double in_double) {

@@ -221,7 +221,13 @@ inline float powerHeuristic(float pdf_a, float pdf_b) {
     return a2 / (a2 + b2);
 }
 
-inline float luminance(glm::vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+inline constexpr float kLuminanceRed = 0.2126f, kLuminanceGreen = 0.7152f, kLuminanceBlue = 0.0722f;
+inline float luminance(glm::vec3 c) { return kLuminanceRed * c.x + kLuminanceGreen * c.y + kLuminanceBlue * c.z; }
+/// luminance() in double, for a colour whose float32 luminance may overflow.
+inline double luminanceInDouble(glm::vec3 c) {
+    return double(kLuminanceRed) * double(c.x) + double(kLuminanceGreen) * double(c.y) +
+           double(kLuminanceBlue) * double(c.z);
+}
 inline float maxComponent(glm::vec3 c) { return std::max(c.x, std::max(c.y, c.z)); }
 inline bool isFiniteColor(glm::vec3 c) {
     return std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z);
