@@ -140,6 +140,25 @@ extern "C" void onStopSignal(int signal) {
     }
 }
 
+/// SIGINT and SIGTERM set g_stop_signal while one lives; the handlers before it come back after.
+class StopSignalHandlers {
+public:
+    StopSignalHandlers()
+        : interrupt_(std::signal(SIGINT, onStopSignal)), terminate_(std::signal(SIGTERM, onStopSignal)) {
+        g_stop_signal = 0;
+    }
+    ~StopSignalHandlers() {
+        std::signal(SIGINT, interrupt_);
+        std::signal(SIGTERM, terminate_);
+    }
+    StopSignalHandlers(const StopSignalHandlers&) = delete;
+    StopSignalHandlers& operator=(const StopSignalHandlers&) = delete;
+
+private:
+    void (*interrupt_)(int);
+    void (*terminate_)(int);
+};
+
 void parseSize(const std::string& text, const char* option, int& width, int& height) {
     char x = 0;
     std::istringstream in(text);
@@ -829,6 +848,10 @@ private:
     void runPhases() {
         // --stats-json -: stdout carries the JSON alone, what is printed for people goes to stderr.
         HumanOutputOnStderr stats_on_stdout(isStandardOutput(o_.stats_json));
+        // From before the checkpoint is locked: a signal while the scene loads and the bake is
+        // set up (seconds for a large scene) stops it at the first iteration, with the lock
+        // released and a checkpoint to resume, not with a lock left behind.
+        stop_signals_.emplace();
         prepareOutputs();
         setUp();
         if (!o_.quiet) printPlan();
@@ -1017,9 +1040,6 @@ private:
     /// The iterations, until --iterations, a signal, --time-budget or --target-error stops them;
     /// then the report's last measures and the checkpoint of the end.
     void iterate() {
-        g_stop_signal = 0;
-        auto previous_interrupt_handler = std::signal(SIGINT, onStopSignal);
-        auto previous_terminate_handler = std::signal(SIGTERM, onStopSignal);
         bake_start_ = std::chrono::steady_clock::now();
         {
             Progress progress("Baking", "iterations", o_.iterations - std::min(o_.iterations, first_iteration_),
@@ -1058,8 +1078,7 @@ private:
         // Whatever stopped the bake, the checkpoint holds its end: an interrupted bake continues
         // from here, a finished one can be extended with a larger --iterations.
         if (!checkpoint_path_.empty()) saveCheckpointNow();
-        std::signal(SIGINT, previous_interrupt_handler);
-        std::signal(SIGTERM, previous_terminate_handler);
+        stop_signals_.reset();  // a signal from here on ends the process at once
         bake_seconds_ = bakeSeconds();
     }
 
@@ -1325,6 +1344,7 @@ private:
     const int threads_;
     const std::string checkpoint_path_;
     const std::string report_csv_;
+    std::optional<StopSignalHandlers> stop_signals_;
     std::optional<CheckpointLock> checkpoint_lock_;
 
     BakeJob job_;

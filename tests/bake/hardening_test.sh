@@ -210,6 +210,21 @@ wait "$first"
 [ -e "$work/l.ckpt.lock" ] && fail "the checkpoint lock was left behind"
 expect 0 "the first bake's checkpoint resumes" "$sharcbake" bake "$furnace" -o "$work/l1.sharc" --resume "$work/l.ckpt" --iterations 4 --resolution 16x16 -q
 
+# 16b. SIGTERM the moment the checkpoint is locked, while the scene loads and the bake is set up:
+# the bake stops at its first iteration, releases the lock and leaves a checkpoint that resumes.
+rm -f "$work/s.ckpt"
+"$sharcbake" bake "$furnace" -o "$work/s.sharc" --checkpoint "$work/s.ckpt" --iterations 1000000 --resolution 16x16 -q \
+    >"$work/s.out" 2>&1 &
+early=$!
+tries=0
+while [ ! -e "$work/s.ckpt.lock" ] && [ $tries -lt 1000 ]; do sleep 0.01; tries=$((tries + 1)); done
+kill -TERM "$early"
+wait "$early"
+[ $? -eq 143 ] || fail "SIGTERM during setup: the bake did not stop cleanly"
+[ -e "$work/s.ckpt.lock" ] && fail "SIGTERM during setup: the checkpoint lock was left behind"
+says "$work/s.out" "terminated (SIGTERM)" "SIGTERM during setup: the message says so"
+expect 0 "SIGTERM during setup: the checkpoint resumes" "$sharcbake" bake "$furnace" -o "$work/s.sharc" --resume "$work/s.ckpt" --iterations 2 --resolution 16x16 -q
+
 # 11. The occupancy view bounds the file's bucket size before scanning buckets per pixel.
 python3 - "$work/a.sharc" "$work/bucket.sharc" <<'PY' || fail "could not craft the cache"
 import struct, sys, zlib
