@@ -193,6 +193,17 @@ std::string workLeftOut(const Scene& scene, const LightSampler& lights) {
     return list.empty() ? "nothing" : list;
 }
 
+/// How lights are chosen (lights.h): by power, or by shares measured per grid cell.
+nlohmann::json lightSelectionJson(const SpatialLightSelection& s) {
+    return {{"by_where_light_arrives", s.active()},
+            {"groups", s.groups},
+            {"cells", {s.cells.x, s.cells.y, s.cells.z}},
+            {"cell_size", jsonNumber(s.cell_size)},
+            {"learned_slots", s.learned_slots},
+            {"shadow_rays", s.shadow_rays},
+            {"seconds", jsonNumber(s.seconds)}};
+}
+
 /// Parses --shard "i/N" (0 <= i < N).
 void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
     char slash = 0;
@@ -927,7 +938,7 @@ private:
         }
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);
-        lights_.emplace(scene_);
+        lights_.emplace(*tracer_);
         warnWhenUnlit(scene_, *lights_, "cache");
         warnAboutPunctualLightUnits(*tracer_);
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
@@ -1009,6 +1020,7 @@ private:
         if (autoCapacity()) {
             std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text_.c_str(), capacity_choice_.seconds);
         }
+        std::printf("Light selection: %s\n", lights_->spatialSelection().describe().c_str());
         std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
                     baker_->pathsPerIteration(), job_.settings.width, job_.settings.height, job_.settings.update_stride,
@@ -1282,6 +1294,7 @@ private:
             {"predicted_hit_rate", hitRateJson(prediction_)},
             {"stability", stabilityJson(stability_)},
             {"light_leaks", lightLeaksJson(light_leaks_)},
+            {"light_selection", lightSelectionJson(lights_->spatialSelection())},
         });
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }

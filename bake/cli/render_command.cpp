@@ -278,7 +278,7 @@ private:
         warnAboutCameraFit(chosen, camera_, width_, height_);
 
         if (!tracer_) tracer_.emplace(scene_);
-        lights_.emplace(scene_);
+        lights_.emplace(*tracer_);
         build_seconds_ = secondsSince(build_start);
         warnWhenUnlit(scene_, *lights_, "image");
         warnAboutPunctualLightUnits(*tracer_);

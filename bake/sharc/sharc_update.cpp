@@ -244,10 +244,10 @@ void UpdateWavefront::shadeSurface(Path& path, const RayHit& ray_hit, uint32_t b
     path.key = levels.key(hit.position, hit.geometric_normal, camera);
 
     path.emitted = emittedRadiance(hit, path.material);
-    path.emission_weight =
-        maxComponent(path.emitted) > 0.0f
-            ? emissionMisWeight(lights_, bounce, path.previous_bsdf_pdf, path.previous_position, hit)
-            : 0.0f;
+    path.emission_weight = maxComponent(path.emitted) > 0.0f
+                               ? emissionMisWeight(lights_, bounce, path.previous_bsdf_pdf, path.previous_position,
+                                                   path.previous_shading_normal, hit)
+                               : 0.0f;
 
     // Cache resampling: with a random depth in [1, depth] (or, resampling at the end, once
     // `depth` vertices wait), the path may end on this voxel's resolved value.
@@ -328,9 +328,10 @@ void UpdateWavefront::depositSkyMiss(Path& path, uint32_t bounce, UpdateCounters
     if (!lights_.hasSky()) return;
     // SharcUpdateMiss, with the BSDF-sampling MIS weight: the previous vertex's own next-event
     // estimate already holds the light-sampling share of the sky.
-    const float weight =
-        bounce == 0 ? 1.0f
-                    : powerHeuristic(path.previous_bsdf_pdf, lights_.pdfSky(path.previous_shading_normal, path.ray.direction));
+    const float weight = bounce == 0 ? 1.0f
+                                     : powerHeuristic(path.previous_bsdf_pdf,
+                                                      lights_.pdfSky(path.previous_position,
+                                                                     path.previous_shading_normal, path.ray.direction));
     path.history.propagate(finiteOrZero(lights_.skyRadiance(path.ray.direction) * weight, counters.non_finite),
                            path.deposits);
     ++counters.sky_misses;

@@ -16,18 +16,8 @@ ShadowQuery prepareDirectLight(const LightSampler& lights, const SurfaceHit& hit
     const GltfBsdf::Evaluation e = bsdf.evaluate(wo, light.wi);
     if (maxComponent(e.f_cos) <= 0.0f) return query;
 
-    Ray shadow{offsetRayOrigin(hit.position, hit.geometric_normal), light.wi, light.distance};
-    if (std::isfinite(light.distance)) {
-        // Aim from the offset origin at the light point itself. Going `distance` along wi from
-        // the offset origin would end up to one offset beyond the light and hit the emitter,
-        // wherever the offset is not small against the distance: near the light, and
-        // everywhere in a scene modelled at millimetre scale (the offset is absolute there).
-        const glm::vec3 to_light = hit.position + light.wi * light.distance - shadow.origin;
-        const float length = glm::length(to_light);
-        if (!(length > 0.0f)) return query;
-        shadow.direction = to_light / length;
-        shadow.t_max = length * (1.0f - 1e-4f);
-    }
+    Ray shadow;
+    if (!shadowRayTo(hit.position, hit.geometric_normal, light.wi, light.distance, shadow)) return query;
     const float weight = light.is_delta ? 1.0f : powerHeuristic(light.pdf, e.pdf);
     query.ray = shadow;
     query.unoccluded = e.f_cos * light.radiance * (weight / light.pdf);
@@ -45,9 +35,9 @@ glm::vec3 estimateDirectLight(const Tracer& tracer, const LightSampler& lights, 
 }
 
 float emissionMisWeight(const LightSampler& lights, uint32_t bounce, float previous_bsdf_pdf,
-                        glm::vec3 previous_position, const SurfaceHit& emitter) {
+                        glm::vec3 previous_position, glm::vec3 previous_shading_normal, const SurfaceHit& emitter) {
     if (bounce == 0) return 1.0f;
-    return powerHeuristic(previous_bsdf_pdf, lights.pdfEmitter(previous_position, emitter));
+    return powerHeuristic(previous_bsdf_pdf, lights.pdfEmitter(previous_position, previous_shading_normal, emitter));
 }
 
 glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
@@ -69,9 +59,11 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
         if (!tracer_.intersect(ray, ray_hit)) {
             if (lights_.hasSky()) {
                 const glm::vec3 sky = lights_.skyRadiance(ray.direction);
-                const float weight = bounce == 0 ? 1.0f
-                                                 : powerHeuristic(previous_bsdf_pdf,
-                                                                  lights_.pdfSky(previous_shading_normal, ray.direction));
+                const float weight = bounce == 0
+                                         ? 1.0f
+                                         : powerHeuristic(previous_bsdf_pdf,
+                                                          lights_.pdfSky(previous_position, previous_shading_normal,
+                                                                         ray.direction));
                 result += throughput * sky * weight;
             }
             break;
@@ -82,8 +74,9 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
 
         const glm::vec3 emitted = emittedRadiance(hit, material);
         const bool emits = maxComponent(emitted) > 0.0f;
-        const float emission_weight =
-            emits ? emissionMisWeight(lights_, bounce, previous_bsdf_pdf, previous_position, hit) : 0.0f;
+        const float emission_weight = emits ? emissionMisWeight(lights_, bounce, previous_bsdf_pdf, previous_position,
+                                                                previous_shading_normal, hit)
+                                            : 0.0f;
         if (emits) result += throughput * emitted * emission_weight;
 
         // A cached value is the full outgoing radiance, emission included. The emission's

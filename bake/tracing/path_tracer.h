@@ -84,7 +84,7 @@ inline float russianRouletteSurvival(glm::vec3 throughput, glm::vec3 albedo) {
 /// MIS weight of emission found by a BSDF-sampled ray, against next-event estimation of the
 /// same emitter. 1 at the primary hit, where no light was sampled.
 float emissionMisWeight(const LightSampler& lights, uint32_t bounce, float previous_bsdf_pdf,
-                        glm::vec3 previous_position, const SurfaceHit& emitter);
+                        glm::vec3 previous_position, glm::vec3 previous_shading_normal, const SurfaceHit& emitter);
 
 /// What a path asks a radiance cache for at a secondary hit. The cache decides whether the
 /// hit is eligible (segment long enough, cone footprint wide enough) and what it returns.

@@ -3,6 +3,7 @@
 #include "tracing/surface.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -192,6 +193,21 @@ glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
         result[axis] = std::abs(p) < kRayOffsetOriginRegion ? p + kRayOffsetNearOrigin * normal[axis] : stepped;
     }
     return result;
+}
+
+bool shadowRayTo(glm::vec3 position, glm::vec3 normal, glm::vec3 wi, float distance, Ray& out) {
+    out = Ray{offsetRayOrigin(position, normal), wi, distance};
+    if (!std::isfinite(distance)) return true;
+    // Aim from the offset origin at the light point itself. Going `distance` along wi from the
+    // offset origin would end up to one offset beyond the light and hit the emitter, wherever the
+    // offset is not small against the distance: near the light, and everywhere in a scene
+    // modelled at millimetre scale (the offset is absolute there).
+    const glm::vec3 to_light = position + wi * distance - out.origin;
+    const float length = glm::length(to_light);
+    if (!(length > 0.0f)) return false;
+    out.direction = to_light / length;
+    out.t_max = length * (1.0f - 1e-4f);
+    return true;
 }
 
 bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {

@@ -96,6 +96,11 @@ glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal);
 inline constexpr float kRayOffsetOriginRegion = 1.0f / 32.0f;
 inline constexpr float kRayOffsetNearOrigin = 1.0f / 65536.0f;
 
+/// The shadow ray from a surface point, leaving the side `normal` faces, towards a light sample
+/// in direction `wi` at `distance` (infinite for the sky and directional lights): it stops just
+/// short of the light point. False where the light point is the origin itself.
+bool shadowRayTo(glm::vec3 position, glm::vec3 normal, glm::vec3 wi, float distance, Ray& out);
+
 /// True when nothing blocks the segment from `a` to `b` (a ray from `a`; true when they coincide).
 bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
 /// Unblocked from `a` to `b` and from `b` to `a`. Embree's triangle test is not watertight: a ray

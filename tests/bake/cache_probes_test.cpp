@@ -29,7 +29,7 @@ struct ShortBake {
     ShortBake(const std::string& name, uint32_t iterations, float scene_scale = 5.0f, int resolution = 96) {
         scene = loadGltf(scenePath(name));
         tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
+        lights = std::make_unique<LightSampler>(*tracer);
         path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
         BakeSettings settings;
         settings.width = settings.height = resolution;

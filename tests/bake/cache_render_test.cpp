@@ -97,7 +97,7 @@ protected:
     static void SetUpTestSuite() {
         scene_ = new Scene(loadGltf(scenePath("furnace_rho090")));
         tracer_ = new Tracer(*scene_);
-        lights_ = new LightSampler(*scene_);
+        lights_ = new LightSampler(*tracer_);
         const CameraPath path = exploringCameraPath(*tracer_, *scene_, 16, 3).value();
         BakeSettings settings;
         settings.width = settings.height = 128;

@@ -34,7 +34,7 @@ struct FurnaceCase {
 
 Image renderScene(const Scene& scene, int resolution, uint32_t spp, uint32_t seed) {
     const Tracer tracer(scene);
-    const LightSampler lights(scene);
+    const LightSampler lights(tracer);
     const PathTracer path_tracer(tracer, lights, PathTracerSettings{});
     TraceCounters counters;
     const Camera& camera = scene.cameras.at(0);
@@ -222,7 +222,7 @@ TEST(Determinism, BakeIsIdenticalForAnyThreadCount) {
 /// estimateSceneReflectance with the scene's own lights.
 SceneReflectance reflectanceOf(const Scene& scene) {
     const Tracer tracer(scene);
-    const LightSampler lights(scene);
+    const LightSampler lights(tracer);
     return estimateSceneReflectance(tracer, &lights);
 }
 

@@ -715,7 +715,8 @@ TEST(SkyMap, LightSamplingReachesEveryDirectionTheMapLights) {
                     glm::vec2(u < 0.0f ? u + 1.0f : u, (float(sun_y + dy) + inset) / float(map.height)));
                 if (!(maxComponent(lights.skyRadiance(direction)) > 0.0f)) continue;
                 ++lit;
-                EXPECT_GT(lights.pdfSky(normal, direction), 0.0f) << "cell " << dx << ", " << dy << " inset " << inset;
+                EXPECT_GT(lights.pdfSky(glm::vec3(0.0f), normal, direction), 0.0f)
+                    << "cell " << dx << ", " << dy << " inset " << inset;
             }
         }
     }
@@ -727,7 +728,7 @@ TEST(SkyMap, LightSamplingReachesEveryDirectionTheMapLights) {
         for (int i = 0; i < 2 * kSteps; ++i) {
             const glm::vec2 uv((float(i) + 0.5f) / float(2 * kSteps), (float(j) + 0.5f) / float(kSteps));
             const double sin_theta = std::sin(kPi * double(uv.y));
-            integral += double(lights.pdfSky(normal, equirectToDirection(uv))) * sin_theta *
+            integral += double(lights.pdfSky(glm::vec3(0.0f), normal, equirectToDirection(uv))) * sin_theta *
                         (2.0 * kPi / (2 * kSteps)) * (kPi / kSteps);
         }
     }
@@ -818,7 +819,7 @@ TEST(LightSelection, APowerBeyondFloat32StillChoosesTheBrightestLight) {
     above.position = glm::vec3(0.0f, 1.0f, 0.0f);
     above.face_normal = glm::vec3(0.0f, -1.0f, 0.0f);
     above.triangle = 0;
-    EXPECT_FLOAT_EQ(lights.pdfEmitter(glm::vec3(0.0f), above), 0.5f / 50.0f);
+    EXPECT_FLOAT_EQ(lights.pdfEmitter(glm::vec3(0.0f), glm::vec3(0.0f, 1.0f, 0.0f), above), 0.5f / 50.0f);
 }
 
 }  // namespace

@@ -32,7 +32,7 @@ struct TestBakeScene {
     explicit TestBakeScene(const std::string& name) : TestBakeScene(loadGltf(scenePath(name))) {}
     explicit TestBakeScene(Scene loaded) : scene(std::move(loaded)) {
         tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
+        lights = std::make_unique<LightSampler>(*tracer);
         path = std::make_unique<CameraPath>(exploringCameraPath(*tracer, scene, 16, 3).value());
     }
     TestBakeScene(const TestBakeScene&) = delete;

@@ -234,7 +234,7 @@ double measurePairsPerSecond(const Tracer& tracer, const std::vector<RayPair>& p
 BakeScene::BakeScene(Scene scene_in, uint32_t explore_points, uint32_t seed)
     : scene(std::move(scene_in)),
       tracer(scene),
-      lights(scene),
+      lights(tracer),
       camera_path(exploredCameraPath(tracer, scene, explore_points, seed)) {}
 
 BakeSettings benchBakeSettings(int width, int height, uint32_t capacity) {

@@ -94,7 +94,7 @@ INSTANTIATE_TEST_SUITE_P(Stability, ExtremeScale,
 TEST(ExtremeScale, UnitSceneMatchesThePathTracer) {
     Scene scene = loadGltf(scenePath("two_rooms"));
     const Tracer tracer(scene);
-    const LightSampler lights(scene);
+    const LightSampler lights(tracer);
     const std::vector<SurfacePoint> room_b = areaSamples(scene, 8000, [](glm::vec3 p) { return p.x > 0.1f; });
     const double reference = referenceMean(tracer, lights, room_b, 32).x;
     std::printf("[stability] two_rooms room B after %u iterations: %g, path tracer %g\n", kIterations, unitScene().mean,

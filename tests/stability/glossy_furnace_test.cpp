@@ -52,7 +52,7 @@ struct ImageStats {
 
 ImageStats renderFurnace(const Scene& scene, uint32_t seed) {
     const Tracer tracer(scene);
-    const LightSampler lights(scene);
+    const LightSampler lights(tracer);
     const PathTracer path_tracer(tracer, lights, PathTracerSettings{});
     TraceCounters counters;
     const int size = 24;

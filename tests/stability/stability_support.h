@@ -70,7 +70,7 @@ class SmallBake {
 public:
     SmallBake(Scene scene_in, const BakeConfig& config) : scene(std::move(scene_in)), config_(config) {
         tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
+        lights = std::make_unique<LightSampler>(*tracer);
         std::optional<CameraPath> explored = exploringCameraPath(*tracer, scene, config.explore_points, 3);
         if (!explored) {  // degenerate scenes: a camera where the first start would have been
             const glm::vec3 start = scene.cameras.empty() ? 0.5f * (scene.bounds_min + scene.bounds_max)
@@ -85,7 +85,7 @@ public:
     SmallBake(Scene scene_in, const BakeConfig& config, std::vector<CameraPose> poses)
         : scene(std::move(scene_in)), config_(config) {
         tracer = std::make_unique<Tracer>(scene);
-        lights = std::make_unique<LightSampler>(scene);
+        lights = std::make_unique<LightSampler>(*tracer);
         path = std::make_unique<CameraPath>(std::move(poses), false, 1, 0.0f, 3);
         makeBaker(*path);
     }

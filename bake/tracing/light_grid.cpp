@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "tracing/light_grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sharcbake {
+
+LightSelectionGrid::LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest)
+    : origin_(bounds_min) {
+    const glm::vec3 extent = glm::max(bounds_max - bounds_min, glm::vec3(0.0f));
+    const float longest = std::max({extent.x, extent.y, extent.z});
+    cell_size_ = longest > 0.0f && std::isfinite(longest) ? longest / float(std::max(cells_along_longest, 1u)) : 1.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float cells = std::ceil(extent[axis] / cell_size_);
+        dimensions_[axis] = uint32_t(std::clamp(cells, 1.0f, float(std::max(cells_along_longest, 1u))));
+    }
+    first_.assign(size_t(slotCount()) + 1, 0u);
+}
+
+uint32_t LightSelectionGrid::directionOf(glm::vec3 normal) {
+    const glm::vec3 a = glm::abs(normal);
+    int axis = 0;  // NaN compares false: +X
+    if (a.y > a[axis]) axis = 1;
+    if (a.z > a[axis]) axis = 2;
+    return uint32_t(axis) * 2u + (normal[axis] < 0.0f ? 1u : 0u);
+}
+
+uint32_t LightSelectionGrid::cellOf(glm::vec3 p) const {
+    glm::uvec3 cell;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float at = std::floor((p[axis] - origin_[axis]) / cell_size_);
+        // NaN and points outside take the nearest cell (the comparisons are false for NaN).
+        cell[axis] = at >= float(dimensions_[axis]) ? dimensions_[axis] - 1 : at > 0.0f ? uint32_t(at) : 0u;
+    }
+    return (cell.z * dimensions_.y + cell.y) * dimensions_.x + cell.x;
+}
+
+void LightSelectionGrid::setWeights(const std::vector<std::vector<std::pair<uint32_t, double>>>& weights_per_slot) {
+    shares_.clear();
+    slots_with_shares_ = 0;
+    for (uint32_t slot = 0; slot < slotCount(); ++slot) {
+        first_[slot] = uint32_t(shares_.size());
+        if (slot >= weights_per_slot.size()) continue;
+        std::vector<std::pair<uint32_t, double>> weights;
+        double total = 0.0;
+        for (const auto& [group, weight] : weights_per_slot[slot]) {
+            if (!(weight > 0.0) || !std::isfinite(weight)) continue;
+            weights.emplace_back(group, weight);
+            total += weight;
+        }
+        if (!(total > 0.0) || !std::isfinite(total)) continue;
+        std::sort(weights.begin(), weights.end());
+        double cumulative = 0.0;
+        for (const auto& [group, weight] : weights) {
+            cumulative += weight;
+            shares_.push_back({group, float(weight / total), float(cumulative / total)});
+        }
+        shares_.back().cumulative = 1.0f;  // u < 1 always finds a share
+        ++slots_with_shares_;
+    }
+    first_[slotCount()] = uint32_t(shares_.size());
+}
+
+const LightSelectionGrid::Share& LightSelectionGrid::pick(uint32_t slot, float u, float& remapped) const {
+    const Share* begin = shares_.data() + first_[slot];
+    const Share* end = shares_.data() + first_[slot + 1];
+    const Share* chosen = std::upper_bound(begin, end - 1, u,
+                                           [](float value, const Share& share) { return value < share.cumulative; });
+    const float below = chosen == begin ? 0.0f : (chosen - 1)->cumulative;
+    remapped = chosen->probability > 0.0f ? std::min((u - below) / chosen->probability, 0x1.fffffep-1f) : 0.0f;
+    remapped = std::max(remapped, 0.0f);
+    return *chosen;
+}
+
+float LightSelectionGrid::probability(uint32_t slot, uint32_t group) const {
+    const Share* begin = shares_.data() + first_[slot];
+    const Share* end = shares_.data() + first_[slot + 1];
+    const Share* found = std::lower_bound(begin, end, group,
+                                          [](const Share& share, uint32_t value) { return share.group < value; });
+    return found != end && found->group == group ? found->probability : 0.0f;
+}
+
+}  // namespace sharcbake

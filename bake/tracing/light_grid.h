@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: Apache-2.0
+/// @file light_grid.h
+/// @brief A coarse grid over the scene whose cells each say which groups of lights reach the
+/// surfaces inside them, and in what shares: the spatial half of light selection (lights.h).
+///
+/// Selection by power alone spends most shadow rays on lights a point cannot see: in a flat of
+/// several rooms each lamp lights its own room, and a sun outside takes nearly every sample of
+/// the rooms it never reaches. The grid holds, per slot (a cell and one of six directions the
+/// surface faces: a floor and the ceiling above it see different lights, and the underside of
+/// the ground none of the sun), a sparse distribution over light groups measured by shadow rays
+/// before any path is traced; slots where nothing was measured hold none.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace sharcbake {
+
+class LightSelectionGrid {
+public:
+    struct Share {
+        uint32_t group = 0;
+        float probability = 0.0f;
+        float cumulative = 0.0f;  ///< the cell's probabilities up to and including this share
+    };
+
+    LightSelectionGrid() = default;
+    /// Cubic cells over the bounds, `cells_along_longest` along the longest axis (at least one
+    /// along each axis), none holding shares yet.
+    LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest);
+
+    /// Slots per cell: +X, -X, +Y, -Y, +Z, -Z, by a normal's largest component.
+    static constexpr uint32_t kDirections = 6;
+
+    glm::uvec3 dimensions() const { return dimensions_; }
+    uint32_t cellCount() const { return dimensions_.x * dimensions_.y * dimensions_.z; }
+    uint32_t slotCount() const { return cellCount() * kDirections; }
+    float cellSize() const { return cell_size_; }
+    /// The cell holding `p`; points outside the bounds take the nearest cell.
+    uint32_t cellOf(glm::vec3 p) const;
+    /// The slot of a surface at `p` facing `normal` (any length; not finite counts as +X).
+    uint32_t slotOf(glm::vec3 p, glm::vec3 normal) const { return cellOf(p) * kDirections + directionOf(normal); }
+    static uint32_t directionOf(glm::vec3 normal);
+
+    /// Sets every slot's shares from its weights per group ((group, weight) in any order, a group
+    /// at most once). A slot whose weights are all 0 (or not finite) holds no shares.
+    void setWeights(const std::vector<std::vector<std::pair<uint32_t, double>>>& weights_per_slot);
+
+    bool hasShares(uint32_t slot) const { return first_[slot] != first_[slot + 1]; }
+    uint32_t slotsWithShares() const { return slots_with_shares_; }
+    /// The share `u` in [0, 1) falls in (the slot must have shares); `remapped` gets u rescaled
+    /// to [0, 1) within it, so one random number can be reused.
+    const Share& pick(uint32_t slot, float u, float& remapped) const;
+    /// The probability the slot gives `group`: 0 where it lists none.
+    float probability(uint32_t slot, uint32_t group) const;
+
+private:
+    glm::vec3 origin_{0.0f};
+    float cell_size_ = 1.0f;
+    glm::uvec3 dimensions_{1u};
+    std::vector<uint32_t> first_ =
+        std::vector<uint32_t>(kDirections + 1, 0u);  ///< slot s's shares are shares_[first_[s], first_[s + 1])
+    std::vector<Share> shares_;                      ///< sorted by group within each slot
+    uint32_t slots_with_shares_ = 0;
+};
+
+}  // namespace sharcbake

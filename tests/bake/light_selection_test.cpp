@@ -1,0 +1,265 @@
+// SPDX-License-Identifier: Apache-2.0
+// Light selection by where light arrives: the grid's shares, and a sampler that spends its
+// shadow rays on the lights a point can see while its estimates stay unbiased.
+#include "sharcbake/scene_loader.h"
+#include "tracing/light_grid.h"
+#include "tracing/lights.h"
+#include "tracing/sampling.h"
+#include "tracing/tracer.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <random>
+
+namespace sharcbake {
+namespace {
+
+TEST(LightSelectionGrid, CellsAreCubesAlongTheLongestAxisAndOutsidePointsTakeTheNearest) {
+    const LightSelectionGrid grid(glm::vec3(0.0f), glm::vec3(8.0f, 2.0f, 0.0f), 16);
+    EXPECT_EQ(grid.dimensions(), glm::uvec3(16u, 4u, 1u));
+    EXPECT_EQ(grid.slotCount(), 16u * 4u * 6u);
+    EXPECT_FLOAT_EQ(grid.cellSize(), 0.5f);
+    EXPECT_EQ(grid.cellOf(glm::vec3(0.25f, 0.25f, 0.0f)), 0u);
+    EXPECT_EQ(grid.cellOf(glm::vec3(1.25f, 0.75f, 0.0f)), 16u + 2u);
+    EXPECT_EQ(grid.cellOf(glm::vec3(-5.0f, -5.0f, -5.0f)), 0u);
+    EXPECT_EQ(grid.cellOf(glm::vec3(100.0f, 100.0f, 100.0f)), grid.cellCount() - 1);
+    EXPECT_EQ(grid.cellOf(glm::vec3(std::numeric_limits<float>::quiet_NaN())), 0u);
+    // Slots: the six directions by a normal's largest component.
+    EXPECT_EQ(grid.slotOf(glm::vec3(1.25f, 0.75f, 0.0f), glm::vec3(0.1f, -0.9f, 0.3f)), (16u + 2u) * 6u + 3u);
+    EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(1.0f, 0.0f, 0.0f)), 0u);
+    EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(-1.0f, 0.5f, 0.0f)), 1u);
+    EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(0.0f, 0.0f, -2.0f)), 5u);
+    EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(std::numeric_limits<float>::quiet_NaN())), 0u);
+}
+
+TEST(LightSelectionGrid, SharesAreTheWeightsNormalisedAndPickedInProportion) {
+    LightSelectionGrid grid(glm::vec3(0.0f), glm::vec3(2.0f, 1.0f, 1.0f), 2);
+    ASSERT_EQ(grid.slotCount(), 12u);
+    grid.setWeights({{{7, 3.0}, {2, 1.0}, {5, 0.0}}, {{1, 0.0}, {4, -1.0}}});
+    EXPECT_EQ(grid.slotsWithShares(), 1u);
+    ASSERT_TRUE(grid.hasShares(0));
+    EXPECT_FALSE(grid.hasShares(1));  // no positive weight: selection by power there
+    EXPECT_FLOAT_EQ(grid.probability(0, 7), 0.75f);
+    EXPECT_FLOAT_EQ(grid.probability(0, 2), 0.25f);
+    EXPECT_EQ(grid.probability(0, 5), 0.0f);
+    EXPECT_EQ(grid.probability(0, 3), 0.0f);
+    int sevens = 0;
+    constexpr int kDraws = 4000;
+    for (int i = 0; i < kDraws; ++i) {
+        float remapped = -1.0f;
+        const float u = (float(i) + 0.5f) / float(kDraws);
+        const LightSelectionGrid::Share& share = grid.pick(0, u, remapped);
+        sevens += share.group == 7;
+        EXPECT_GE(remapped, 0.0f);
+        EXPECT_LT(remapped, 1.0f);
+    }
+    EXPECT_EQ(sevens, 3000);
+    float remapped = 0.0f;
+    EXPECT_EQ(grid.pick(0, 0x1.fffffep-1f, remapped).group, 7u);
+}
+
+/// An inward-facing box [lo, hi] of grey walls.
+void addRoom(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t material) {
+    const uint32_t base = uint32_t(scene.positions.size());
+    for (int i = 0; i < 8; ++i)
+        scene.positions.push_back(glm::vec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
+    // Quads (a, b, c, d) wound to face into the box.
+    const int faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    for (const auto& f : faces) {
+        scene.triangles.push_back(glm::uvec3(base + f[0], base + f[1], base + f[2]));
+        scene.triangles.push_back(glm::uvec3(base + f[0], base + f[2], base + f[3]));
+        scene.triangle_materials.insert(scene.triangle_materials.end(), 2, material);
+    }
+    scene.bounds_min = glm::min(scene.bounds_min, lo);
+    scene.bounds_max = glm::max(scene.bounds_max, hi);
+}
+
+/// Two closed rooms side by side, 5 cm apart: room A (x < 0) has a bright ceiling panel, room
+/// B (x > 0.05) only a dim bulb. By power, a point in B would pick the panel it cannot see 99%
+/// of the time.
+Scene twoRoomsOneBright() {
+    Scene scene;
+    scene.bounds_min = glm::vec3(std::numeric_limits<float>::max());
+    scene.bounds_max = glm::vec3(-std::numeric_limits<float>::max());
+    Material wall;
+    wall.name = "wall";
+    wall.base_color = glm::vec3(0.7f);
+    wall.metallic = 0.0f;
+    scene.materials.push_back(wall);
+    Material panel = wall;
+    panel.name = "panel";
+    panel.emissive = glm::vec3(1.0f);
+    panel.emissive_strength = 50.0f;
+    scene.materials.push_back(panel);
+    addRoom(scene, glm::vec3(-2.0f, 0.0f, -1.0f), glm::vec3(0.0f, 2.0f, 1.0f), 0);
+    addRoom(scene, glm::vec3(0.05f, 0.0f, -1.0f), glm::vec3(2.05f, 2.0f, 1.0f), 0);
+    const uint32_t base = uint32_t(scene.positions.size());
+    for (const glm::vec2 d :
+         {glm::vec2(-1.3f, -0.3f), glm::vec2(-0.7f, -0.3f), glm::vec2(-0.7f, 0.3f), glm::vec2(-1.3f, 0.3f)})
+        scene.positions.push_back(glm::vec3(d.x, 1.95f, d.y));
+    // Facing down (-Y): counter-clockwise seen from below.
+    scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));
+    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, 1u);
+    PunctualLight bulb;
+    bulb.name = "bulb";
+    bulb.position = glm::vec3(1.05f, 1.0f, 0.0f);
+    bulb.intensity = glm::vec3(0.02f);
+    scene.lights.push_back(bulb);
+    return scene;
+}
+
+const glm::vec3 kUp(0.0f, 1.0f, 0.0f);
+
+SurfaceHit floorPoint(glm::vec3 position) {
+    SurfaceHit hit;
+    hit.position = position;
+    hit.geometric_normal = hit.shading_normal = hit.face_normal = glm::vec3(0.0f, 1.0f, 0.0f);
+    return hit;
+}
+
+/// The mean and variance of the one-sample direct-light estimate (radiance x cosine / pdf,
+/// occlusion tested) at a floor point.
+std::pair<double, double> directLightEstimate(const Tracer& tracer, const LightSampler& lights, glm::vec3 at,
+                                              uint32_t samples) {
+    const SurfaceHit hit = floorPoint(at);
+    double sum = 0.0, sum2 = 0.0;
+    for (uint32_t i = 0; i < samples; ++i) {
+        PixelSampler sampler(3u, 0u, i);
+        const glm::vec2 u_select = sampler.next2D();
+        const glm::vec2 u = sampler.next2D();
+        LightSample light;
+        double value = 0.0;
+        if (lights.sample(hit, u_select.x, u, light)) {
+            const float cosine = glm::dot(hit.geometric_normal, light.wi);
+            Ray shadow;
+            if (cosine > 0.0f && shadowRayTo(hit.position, hit.geometric_normal, light.wi, light.distance, shadow) &&
+                !tracer.occluded(shadow))
+                value = double(luminance(light.radiance)) * double(cosine) / double(light.pdf);
+        }
+        sum += value;
+        sum2 += value * value;
+    }
+    const double mean = sum / samples;
+    return {mean, sum2 / samples - mean * mean};
+}
+
+TEST(SpatialLightSelection, APointPicksTheLightsItsRoomSees) {
+    const Scene scene = twoRoomsOneBright();
+    const Tracer tracer(scene);
+    const LightSampler by_power(scene);
+    const LightSampler learned(tracer);
+    const SpatialLightSelection& spatial = learned.spatialSelection();
+    EXPECT_EQ(spatial.groups, 2u);  // the panel (one piece of two triangles) and the bulb
+    ASSERT_TRUE(spatial.active());
+    EXPECT_GT(spatial.shadow_rays, 10000u);
+    const size_t bulb = learned.entryCount() - 1;  // area lights come first, then punctual ones
+    const glm::vec3 in_b(1.5f, 0.0f, 0.4f), in_a(-1.5f, 0.0f, 0.4f);
+    EXPECT_LT(by_power.selectionPmf(bulb, in_b, kUp), 0.01f);
+    // Room B's cells list only the bulb: all but the power share picks it.
+    EXPECT_GT(learned.selectionPmf(bulb, in_b, kUp), 0.75f);
+    // Room A sees both; the panel gives it far more.
+    EXPECT_LT(learned.selectionPmf(bulb, in_a, kUp), 0.05f);
+    // Every point's probabilities sum to one.
+    for (const glm::vec3 at : {in_a, in_b, glm::vec3(0.02f, 1.0f, 0.0f), glm::vec3(50.0f, -3.0f, 0.0f)}) {
+        double total = 0.0;
+        for (size_t e = 0; e < learned.entryCount(); ++e) total += learned.selectionPmf(e, at, kUp);
+        EXPECT_NEAR(total, 1.0, 1e-5) << at.x;
+    }
+}
+
+TEST(SpatialLightSelection, EstimatesStayUnbiasedWithFarLessNoiseWhereAPowerfulLightIsHidden) {
+    const Scene scene = twoRoomsOneBright();
+    const Tracer tracer(scene);
+    const LightSampler by_power(scene);
+    const LightSampler learned(tracer);
+    constexpr uint32_t kSamples = 1u << 17;
+    for (const glm::vec3 at :
+         {glm::vec3(1.5f, 0.0f, 0.4f), glm::vec3(-1.5f, 0.0f, 0.4f), glm::vec3(0.3f, 0.0f, -0.6f)}) {
+        const auto [power_mean, power_variance] = directLightEstimate(tracer, by_power, at, kSamples);
+        const auto [learned_mean, learned_variance] = directLightEstimate(tracer, learned, at, kSamples);
+        ASSERT_GT(power_mean, 0.0);
+        // Within 3 standard errors of the power estimate (the noisier), and 2% besides.
+        const double tolerance = 3.0 * std::sqrt(power_variance / kSamples) + 0.02 * power_mean;
+        EXPECT_NEAR(learned_mean, power_mean, tolerance) << "at x = " << at.x;
+        std::printf("[light selection] x %+.1f: mean %.5g (by power %.5g), variance %.3g (by power %.3g)\n",
+                    double(at.x), learned_mean, power_mean, learned_variance, power_variance);
+        if (at.x > 0.05f) {
+            // Room B: by power, 99% of picks go to the hidden panel.
+            EXPECT_LT(learned_variance * 20.0, power_variance) << "at x = " << at.x;
+        }
+    }
+}
+
+TEST(SpatialLightSelection, TheEmitterAndSkyPdfsMatchWhatSampleReturns) {
+    Scene scene = twoRoomsOneBright();
+    // Open room A's floor to a sky below (its two floor triangles removed) so the sky is a light.
+    scene.triangles.erase(scene.triangles.begin() + 4, scene.triangles.begin() + 6);
+    scene.triangle_materials.erase(scene.triangle_materials.begin() + 4, scene.triangle_materials.begin() + 6);
+    scene.sky.uniform = glm::vec3(0.3f);
+    const Tracer tracer(scene);
+    const LightSampler lights(tracer);
+    ASSERT_TRUE(lights.spatialSelection().active());
+    ASSERT_TRUE(lights.hasSky());
+    uint32_t emitter_checks = 0, sky_checks = 0;
+    for (const glm::vec3 at :
+         {glm::vec3(-1.0f, 1.0f, 0.2f), glm::vec3(-0.2f, 0.5f, 0.5f), glm::vec3(1.0f, 0.5f, 0.0f)}) {
+        SurfaceHit hit = floorPoint(at);
+        hit.geometric_normal = hit.shading_normal = glm::vec3(0.0f, -1.0f, 0.0f);  // a point facing down at the sky
+        for (uint32_t i = 0; i < 512; ++i) {
+            PixelSampler sampler(5u, 1u, i);
+            const glm::vec2 u_select = sampler.next2D();
+            LightSample light;
+            if (!lights.sample(hit, u_select.x, sampler.next2D(), light) || light.is_delta) continue;
+            if (std::isfinite(light.distance)) {
+                RayHit ray_hit;
+                ASSERT_TRUE(tracer.intersect(Ray{at, light.wi}, ray_hit));
+                const SurfaceHit emitter = makeSurfaceHit(scene, ray_hit, light.wi);
+                if (scene.triangle_materials[emitter.triangle] != 1u) continue;  // occluded on the way
+                EXPECT_NEAR(lights.pdfEmitter(at, hit.shading_normal, emitter), light.pdf, 1e-3f * light.pdf);
+                ++emitter_checks;
+            } else {
+                EXPECT_NEAR(lights.pdfSky(at, hit.shading_normal, light.wi), light.pdf, 1e-4f * light.pdf);
+                ++sky_checks;
+            }
+        }
+    }
+    EXPECT_GT(emitter_checks, 50u);
+    EXPECT_GT(sky_checks, 50u);
+}
+
+TEST(SpatialLightSelection, OneGroupOfLightsSelectsByPowerAsBefore) {
+    const Scene scene = loadGltf(std::string(SHARCBAKE_SCENES_DIR) + "/cornell_box/cornell_box.gltf");
+    const Tracer tracer(scene);
+    const LightSampler by_power(scene);
+    const LightSampler learned(tracer);
+    EXPECT_EQ(learned.spatialSelection().groups, 1u);  // the ceiling light, two triangles of one piece
+    EXPECT_FALSE(learned.spatialSelection().active());
+    EXPECT_EQ(learned.spatialSelection().describe(), "by power (the lights make one group)");
+    for (size_t e = 0; e < learned.entryCount(); ++e)
+        EXPECT_EQ(learned.selectionPmf(e, glm::vec3(0.1f), kUp), by_power.selectionPmf(e, glm::vec3(0.1f), kUp));
+}
+
+TEST(SpatialLightSelection, TheSameOnAnyThreadCount) {
+    const Scene scene = twoRoomsOneBright();
+    const Tracer tracer(scene);
+    const LightSampler many(tracer);
+    std::optional<LightSampler> one;
+    tbb::task_arena(1).execute([&] { one.emplace(tracer); });
+    EXPECT_EQ(one->spatialSelection().shadow_rays, many.spatialSelection().shadow_rays);
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> coordinate(-2.5f, 2.5f);
+    for (int i = 0; i < 2000; ++i) {
+        const glm::vec3 at(coordinate(rng), coordinate(rng) + 1.0f, coordinate(rng));
+        for (size_t e = 0; e < many.entryCount(); ++e)
+            ASSERT_EQ(one->selectionPmf(e, at, kUp), many.selectionPmf(e, at, kUp));
+    }
+}
+
+}  // namespace
+}  // namespace sharcbake
