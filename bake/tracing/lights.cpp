@@ -146,7 +146,10 @@ LightSampler::LightSampler(const Tracer& tracer) : LightSampler(tracer.scene()) 
 }
 
 void LightSampler::groupLights() {
-    if (entries_.size() < 2) return;
+    if (entries_.size() < 2) {
+        spatial_.groups = uint32_t(entries_.size());
+        return;
+    }
     // Emitters are grouped by connected piece (triangles sharing a vertex or its position: a lamp
     // exported with split vertices is still one piece); a piece wider than two cells of a coarse
     // grid (a strip of lights along a corridor, a glowing enclosure) is split by those cells.
@@ -330,7 +333,9 @@ std::string SpatialLightSelection::describe() const {
     char text[256];
     if (!active()) {
         std::snprintf(text, sizeof text, "by power (%s)",
-                      groups < 2 ? "the lights make one group" : "no shadow ray reached a light");
+                      groups == 0   ? "no lights"
+                      : groups == 1 ? "the lights make one group"
+                                    : "no shadow ray reached a light");
     } else {
         std::snprintf(text, sizeof text,
                       "by where light arrives: %u groups measured in %u of %ux%ux%u cells %.3g wide x 6 directions "

@@ -15,6 +15,7 @@
 #include <limits>
 #include <optional>
 #include <random>
+#include <string>
 
 namespace sharcbake {
 namespace {
@@ -243,6 +244,22 @@ TEST(SpatialLightSelection, OneGroupOfLightsSelectsByPowerAsBefore) {
     EXPECT_EQ(learned.spatialSelection().describe(), "by power (the lights make one group)");
     for (size_t e = 0; e < learned.entryCount(); ++e)
         EXPECT_EQ(learned.selectionPmf(e, glm::vec3(0.1f), kUp), by_power.selectionPmf(e, glm::vec3(0.1f), kUp));
+}
+
+TEST(SpatialLightSelection, TheLineSaysWhySelectionStaysByPower) {
+    Scene dark = twoRoomsOneBright();
+    dark.lights.clear();
+    dark.materials[1].emissive = glm::vec3(0.0f);
+    const Tracer dark_tracer(dark);
+    EXPECT_EQ(LightSampler(dark_tracer).spatialSelection().describe(), "by power (no lights)");
+    Scene bulb_only = twoRoomsOneBright();
+    bulb_only.materials[1].emissive = glm::vec3(0.0f);
+    const Tracer bulb_tracer(bulb_only);
+    EXPECT_EQ(LightSampler(bulb_tracer).spatialSelection().describe(), "by power (the lights make one group)");
+    const Scene scene = twoRoomsOneBright();
+    const Tracer tracer(scene);
+    const std::string learned = LightSampler(tracer).spatialSelection().describe();
+    EXPECT_EQ(learned.rfind("by where light arrives: 2 groups measured in ", 0), 0u) << learned;
 }
 
 TEST(SpatialLightSelection, TheSameOnAnyThreadCount) {
