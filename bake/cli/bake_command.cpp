@@ -193,17 +193,6 @@ std::string workLeftOut(const Scene& scene, const LightSampler& lights) {
     return list.empty() ? "nothing" : list;
 }
 
-/// How lights are chosen (lights.h): by power, or by shares measured per grid cell.
-nlohmann::json lightSelectionJson(const SpatialLightSelection& s) {
-    return {{"by_where_light_arrives", s.active()},
-            {"groups", s.groups},
-            {"cells", {s.cells.x, s.cells.y, s.cells.z}},
-            {"cell_size", jsonNumber(s.cell_size)},
-            {"learned_slots", s.learned_slots},
-            {"shadow_rays", s.shadow_rays},
-            {"seconds", jsonNumber(s.seconds)}};
-}
-
 /// Parses --shard "i/N" (0 <= i < N).
 void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
     char slash = 0;

@@ -579,4 +579,16 @@ void describeScene(const Scene& scene) {
     }
 }
 
+/// How lights are chosen (lights.h): by power, or by shares measured per grid cell.
+Json lightSelectionJson(const SpatialLightSelection& s) {
+    return {{"by_where_light_arrives", s.active()},
+            {"groups", s.groups},
+            {"grouped_by_region", s.grouped_by_region},
+            {"cells", {s.cells.x, s.cells.y, s.cells.z}},
+            {"cell_size", jsonNumber(s.cell_size)},
+            {"learned_slots", s.learned_slots},
+            {"shadow_rays", s.shadow_rays},
+            {"seconds", jsonNumber(s.seconds)}};
+}
+
 }  // namespace sharcbake

@@ -23,6 +23,7 @@
 namespace sharcbake {
 
 class LightSampler;
+struct SpatialLightSelection;
 
 /// Exit codes, documented in `sharcbake --help` and the README.
 enum ExitCode : int {
@@ -174,6 +175,9 @@ Json provenanceJson(const char* output_kind, const Scene& scene, const std::stri
 
 /// A camera's pose and field of view.
 Json cameraJson(const Camera& camera);
+
+/// How lights are chosen (lights.h), as the stats JSONs of bake and render give it.
+Json lightSelectionJson(const SpatialLightSelection& selection);
 
 /// True if `text` is a number in JSON's grammar ("12", "-0.5", "1e-3"; not "+1", " 1" or "0x1").
 bool isJsonNumber(std::string_view text);

@@ -33,6 +33,9 @@ public:
 
     /// Slots per cell: +X, -X, +Y, -Y, +Z, -Z, by a normal's largest component.
     static constexpr uint32_t kDirections = 6;
+    /// A slot keeps its largest shares, this many at most: picking among a few hundred lamps that
+    /// all reach a hall costs more than it gains over power.
+    static constexpr size_t kMostShares = 64;
 
     glm::uvec3 dimensions() const { return dimensions_; }
     uint32_t cellCount() const { return dimensions_.x * dimensions_.y * dimensions_.z; }
@@ -45,7 +48,8 @@ public:
     static uint32_t directionOf(glm::vec3 normal);
 
     /// Sets every slot's shares from its weights per group ((group, weight) in any order, a group
-    /// at most once). A slot whose weights are all 0 (or not finite) holds no shares.
+    /// at most once), the kMostShares largest. A slot whose weights are all 0 (or not finite)
+    /// holds no shares.
     void setWeights(const std::vector<std::vector<std::pair<uint32_t, double>>>& weights_per_slot);
 
     bool hasShares(uint32_t slot) const { return first_[slot] != first_[slot + 1]; }
@@ -59,6 +63,7 @@ public:
 private:
     glm::vec3 origin_{0.0f};
     float cell_size_ = 1.0f;
+    float inverse_cell_size_ = 1.0f;
     glm::uvec3 dimensions_{1u};
     std::vector<uint32_t> first_ =
         std::vector<uint32_t>(kDirections + 1, 0u);  ///< slot s's shares are shares_[first_[s], first_[s + 1])

@@ -43,6 +43,12 @@ constexpr uint32_t kLearningPoints = 1u << 18;
 constexpr uint32_t kPointsPerCell = 16;
 constexpr uint32_t kSamplesPerPoint = 32;
 constexpr uint32_t kLearningSeed = 0x11947u;
+/// Lights drawn per group in advance, which the measuring samples pick among.
+constexpr uint32_t kDrawsPerGroup = 64;
+/// A slot keeps its shares only where power's relative variance there (see below) is at least
+/// this: in the benchmark's open scene every lit slot falls below it and every shadowed one
+/// (1.6) above; rooms lit by a lamp of their own lie far above (10 and more).
+constexpr double kPowerCloseEnough = 1.0;
 
 glm::vec3 textureMean(const Texture& texture) {
     glm::dvec3 sum(0.0);
@@ -164,13 +170,16 @@ void LightSampler::groupLights() {
     };
     {
         // Joined through shared vertex indices, then through equal positions (sorted together).
-        std::unordered_map<uint32_t, uint32_t> first_with_vertex;
-        std::vector<std::pair<std::array<float, 3>, uint32_t>> positions;
+        std::vector<uint32_t> first_with_vertex(scene_.positions.size(), kNoEntry);
+        std::vector<std::pair<std::array<float, 3>, uint32_t>> positions;  // one per vertex used
         for (uint32_t i = 0; i < emitters.size(); ++i) {
             const glm::uvec3 tri = scene_.triangles[entries_[emitters[i]].index];
             for (const uint32_t v : {tri.x, tri.y, tri.z}) {
-                const auto [it, inserted] = first_with_vertex.emplace(v, i);
-                if (!inserted) parent[root(i)] = root(it->second);
+                if (first_with_vertex[v] != kNoEntry) {
+                    parent[root(i)] = root(first_with_vertex[v]);
+                    continue;
+                }
+                first_with_vertex[v] = i;
                 const glm::vec3 p = scene_.positions[v];
                 positions.push_back({{p.x, p.y, p.z}, i});
             }
@@ -221,8 +230,10 @@ void LightSampler::groupLights() {
     {
         std::vector<uint64_t> distinct(keys);
         std::sort(distinct.begin(), distinct.end());
-        if (size_t(std::unique(distinct.begin(), distinct.end()) - distinct.begin()) > kMostLightGroups)
+        if (size_t(std::unique(distinct.begin(), distinct.end()) - distinct.begin()) > kMostLightGroups) {
             keys = cell_keys;
+            spatial_.grouped_by_region = true;
+        }
     }
     std::unordered_map<uint64_t, uint32_t> group_of_key;
     uint32_t groups = 0;
@@ -275,12 +286,33 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
     // too; each sample's contribution is divided by the probability it was drawn with.
     const uint32_t groups = spatial_.groups;
     std::vector<float> draw_weights(groups);
+    std::vector<double> group_power(groups, 0.0);  // the share power selection gives each group
     for (uint32_t g = 0; g < groups; ++g) {
-        double power = 0.0;
-        for (uint32_t i = group_first_[g]; i < group_first_[g + 1]; ++i) power += selection_.pmf(group_entries_[i]);
-        draw_weights[g] = float(0.5 / double(groups) + 0.5 * power);
+        for (uint32_t i = group_first_[g]; i < group_first_[g + 1]; ++i)
+            group_power[g] += selection_.pmf(group_entries_[i]);
+        draw_weights[g] = float(0.5 / double(groups) + 0.5 * group_power[g]);
     }
     const Distribution1D group_draw(draw_weights);
+    // Each group's members drawn once by power, kDrawsPerGroup of them (stratified), emitter
+    // points placed on the triangles among them: the samples below pick among these instead of
+    // searching a group of a million emissive triangles and fetching one at random each time.
+    struct Draw {
+        uint32_t member = 0;
+        EmitterPoint point;  ///< for a triangle
+    };
+    std::vector<Draw> draws(size_t(groups) * kDrawsPerGroup);
+    tbb::parallel_for(uint32_t(0), groups, [&](uint32_t g) {
+        for (uint32_t k = 0; k < kDrawsPerGroup; ++k) {
+            Draw& draw = draws[size_t(g) * kDrawsPerGroup + k];
+            draw.member = uint32_t(group_selection_[g].sampleDiscrete((float(k) + 0.5f) / float(kDrawsPerGroup)));
+            const Entry& entry = entries_[group_entries_[group_first_[g] + draw.member]];
+            if (entry.kind != Kind::Triangle) continue;
+            const uint32_t stream = hashCombine(hashCombine(kLearningSeed ^ 0xd7a3u, g), k);
+            const glm::vec2 b = sampleUniformTriangle(
+                glm::vec2(bitsToUnitFloat(hashUint32(stream)), bitsToUnitFloat(hashCombine(stream, 1u))));
+            draw.point = makeEmitterPoint(scene_, entry.index, b.x, b.y);
+        }
+    });
 
     std::vector<std::vector<std::pair<uint32_t, double>>> weights(grid_.slotCount());
     std::vector<uint32_t> rays(grid_.cellCount(), 0u);
@@ -300,10 +332,16 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
                 at.geometric_normal = at.shading_normal = (s & 1u) ? -p.normal : p.normal;
                 float within_group = 0.0f;
                 const size_t g = group_draw.sampleDiscrete(u_group, &within_group);
-                const size_t member = group_selection_[g].sampleDiscrete(within_group);
+                const Draw& draw = draws[g * kDrawsPerGroup +
+                                         std::min(uint32_t(within_group * float(kDrawsPerGroup)), kDrawsPerGroup - 1)];
+                const uint32_t member = draw.member;
                 const uint32_t e = group_entries_[group_first_[g] + member];
                 LightSample light;
-                if (!sampleEntry(e, 1.0f, at, u, light)) continue;
+                const bool sampled = entries_[e].kind == Kind::Triangle
+                                         ? lightFromEmitterPoint(draw.point, triangle_area_[entries_[e].index], 1.0f,
+                                                                 at, light)
+                                         : sampleEntry(e, 1.0f, at, u, light);
+                if (!sampled) continue;
                 const float cosine = glm::dot(at.geometric_normal, light.wi);
                 const double drawn = double(group_draw.pmf(g)) * double(group_selection_[g].pmf(member));
                 const double value = double(luminance(light.radiance)) * double(cosine) / (double(light.pdf) * drawn);
@@ -324,23 +362,46 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
             }
         }
     });
+    // Where power picks about as the measured shares would, it stays: one selection for the
+    // whole scene keeps a pixel's light samples stratified across the cells its samples land
+    // in, which shares changing from cell to cell break (under an open sky, shares everywhere
+    // left path tracing twice as noisy as power). The measure: the variance of a one-sample
+    // estimate of the slot's light with groups picked by power, relative to its square,
+    // sum(c_g^2 / p_g) / C^2 - 1 for the measured contributions c_g (0 where power is exact; a
+    // lit floor under sun and sky 0.04, a shadowed one 1.6, the dim of two rooms 10).
+    std::vector<uint8_t> lit(weights.size(), 0);
+    tbb::parallel_for(size_t(0), weights.size(), [&](size_t slot) {
+        double total = 0.0, second_moment = 0.0;
+        for (const auto& [group, weight] : weights[slot]) total += weight;
+        if (!(total > 0.0)) return;
+        ++lit[slot];
+        for (const auto& [group, weight] : weights[slot]) {
+            const double share = weight / total;
+            second_moment += group_power[group] > 0.0 ? share * share / group_power[group] : kInfinity;
+        }
+        if (second_moment - 1.0 < kPowerCloseEnough) weights[slot].clear();
+    });
     grid_.setWeights(weights);
     spatial_.learned_slots = grid_.slotsWithShares();
+    for (const uint8_t l : lit) spatial_.lit_slots += l;
     for (const uint32_t r : rays) spatial_.shadow_rays += r;
 }
 
 std::string SpatialLightSelection::describe() const {
-    char text[256];
+    char text[320];
     if (!active()) {
         std::snprintf(text, sizeof text, "by power (%s)",
-                      groups == 0   ? "no lights"
-                      : groups == 1 ? "the lights make one group"
-                                    : "no shadow ray reached a light");
+                      groups == 0      ? "no lights"
+                      : groups == 1    ? "the lights make one group"
+                      : lit_slots == 0 ? "no shadow ray found light reaching a surface"
+                                       : "it picks about as the shadow rays measured, everywhere");
     } else {
         std::snprintf(text, sizeof text,
-                      "by where light arrives: %u groups measured in %u of %ux%ux%u cells %.3g wide x 6 directions "
-                      "(%llu shadow rays, %.2f s); %.0f%% of picks by power",
-                      groups, learned_slots, cells.x, cells.y, cells.z, double(cell_size),
+                      "by where light arrives in %u of %u (cell, direction) slots (a %ux%ux%u grid of %.3g-wide "
+                      "cells; %u light groups%s; %llu shadow rays, %.2f s), by power elsewhere and in %.0f%% of picks "
+                      "everywhere",
+                      learned_slots, cells.x * cells.y * cells.z * 6u, cells.x, cells.y, cells.z, double(cell_size),
+                      groups, grouped_by_region ? ", lights grouped by region: too many to measure one by one" : "",
                       static_cast<unsigned long long>(shadow_rays), seconds, 100.0 * double(kPowerShare));
     }
     return text;
@@ -456,15 +517,18 @@ bool LightSampler::sample(const SurfaceHit& at, float u_select, glm::vec2 u, Lig
         return sampleEntry(e, selection_.pmf(e), at, u, out);
     }
     size_t e;
+    float group_share;  // what the slot gives e's group (slotSelectionPmf's lookup, without the search)
     if (u_select < kPowerShare) {
         e = selection_.sampleDiscrete(std::min(u_select / kPowerShare, kOneMinusEpsilon));
+        group_share = grid_.probability(slot, entry_group_[e]);
     } else {
         float within_share = 0.0f;
         const LightSelectionGrid::Share& share =
             grid_.pick(slot, std::min((u_select - kPowerShare) / (1.0f - kPowerShare), kOneMinusEpsilon), within_share);
         e = group_entries_[group_first_[share.group] + group_selection_[share.group].sampleDiscrete(within_share)];
+        group_share = share.probability;
     }
-    return sampleEntry(e, slotSelectionPmf(e, slot), at, u, out);
+    return sampleEntry(e, mixedPmf(e, group_share), at, u, out);
 }
 
 float LightSampler::selectionPmf(size_t entry, glm::vec3 at, glm::vec3 normal) const {
@@ -473,8 +537,11 @@ float LightSampler::selectionPmf(size_t entry, glm::vec3 at, glm::vec3 normal) c
 
 float LightSampler::slotSelectionPmf(size_t entry, uint32_t slot) const {
     if (!spatial_.active() || !grid_.hasShares(slot)) return selection_.pmf(entry);
-    const float by_region = grid_.probability(slot, entry_group_[entry]) * entry_pmf_in_group_[entry];
-    return kPowerShare * selection_.pmf(entry) + (1.0f - kPowerShare) * by_region;
+    return mixedPmf(entry, grid_.probability(slot, entry_group_[entry]));
+}
+
+float LightSampler::mixedPmf(size_t entry, float group_share) const {
+    return kPowerShare * selection_.pmf(entry) + (1.0f - kPowerShare) * (group_share * entry_pmf_in_group_[entry]);
 }
 
 bool LightSampler::sampleEntry(size_t e, float pmf, const SurfaceHit& at, glm::vec2 u, LightSample& out) const {
@@ -489,7 +556,11 @@ bool LightSampler::sampleEntry(size_t e, float pmf, const SurfaceHit& at, glm::v
 bool LightSampler::sampleTriangle(uint32_t triangle, float pmf, const SurfaceHit& at, glm::vec2 u,
                                   LightSample& out) const {
     const glm::vec2 b = sampleUniformTriangle(u);
-    const EmitterPoint point = makeEmitterPoint(scene_, triangle, b.x, b.y);
+    return lightFromEmitterPoint(makeEmitterPoint(scene_, triangle, b.x, b.y), triangle_area_[triangle], pmf, at, out);
+}
+
+bool LightSampler::lightFromEmitterPoint(const EmitterPoint& point, float area, float pmf, const SurfaceHit& at,
+                                         LightSample& out) {
     const glm::vec3 to_light = point.position - at.position;
     const float distance2 = glm::dot(to_light, to_light);
     if (!(distance2 > 0.0f)) return false;
@@ -500,7 +571,7 @@ bool LightSampler::sampleTriangle(uint32_t triangle, float pmf, const SurfaceHit
     out.wi = wi;
     out.distance = distance;
     out.radiance = point.emission;
-    out.pdf = pmf * distance2 / (triangle_area_[triangle] * std::abs(cos_light));
+    out.pdf = pmf * distance2 / (area * std::abs(cos_light));
     out.is_delta = false;
     return out.pdf > 0.0f && std::isfinite(out.pdf);
 }

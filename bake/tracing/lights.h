@@ -33,10 +33,12 @@ class Tracer;
 
 /// How LightSampler(const Tracer&) learned where light arrives (all 0 where it did not).
 struct SpatialLightSelection {
-    uint32_t groups = 0;         ///< lights grouped: each punctual light, the sky, emitters by region
+    uint32_t groups = 0;             ///< lights grouped: each punctual light, the sky, emitters by piece
+    bool grouped_by_region = false;  ///< too many pieces and lights: grouped by coarse cells instead
     glm::uvec3 cells{0u};        ///< the grid's cells along each axis
     float cell_size = 0.0f;      ///< world units
-    uint32_t learned_slots = 0;  ///< (cell, direction) slots whose surfaces some light reached
+    uint32_t lit_slots = 0;      ///< (cell, direction) slots whose surfaces some light reached
+    uint32_t learned_slots = 0;  ///< of those, the slots that select by their measured shares
     uint64_t shadow_rays = 0;
     double seconds = 0.0;
     bool active() const { return learned_slots > 0; }
@@ -101,10 +103,15 @@ private:
     void addSky(float disk_area, std::vector<double>& powers);
 
     float slotSelectionPmf(size_t entry, uint32_t slot) const;
+    /// The probability of `entry` where the slot gives its group `group_share`.
+    float mixedPmf(size_t entry, float group_share) const;
     /// Samples entry `e` as if it had been picked with probability `pmf`.
     bool sampleEntry(size_t e, float pmf, const SurfaceHit& at, glm::vec2 u, LightSample& out) const;
     bool sampleTriangle(uint32_t triangle, float pmf, const SurfaceHit& at, glm::vec2 u,
                         LightSample& out) const;
+    /// The light from a point on an emissive triangle of `area` picked with probability `pmf`.
+    static bool lightFromEmitterPoint(const EmitterPoint& point, float area, float pmf, const SurfaceHit& at,
+                                      LightSample& out);
     bool samplePunctual(const PunctualLight& light, float pmf, const SurfaceHit& at,
                         LightSample& out) const;
     bool sampleSky(float pmf, const SurfaceHit& at, glm::vec2 u, LightSample& out) const;
