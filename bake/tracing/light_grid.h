@@ -23,7 +23,7 @@ public:
     struct Share {
         uint32_t group = 0;
         float probability = 0.0f;
-        float cumulative = 0.0f;  ///< the cell's probabilities up to and including this share
+        float cumulative = 0.0f;  ///< the slot's probabilities up to and including this share
     };
 
     LightSelectionGrid() = default;

@@ -52,9 +52,9 @@ public:
     explicit LightSampler(const Scene& scene);
     /// Selection by power and by where light arrives: before any path is traced, shadow rays
     /// from points spread over the surfaces measure how much each group of lights gives each
-    /// cell of a coarse grid (and each direction a surface there faces), and a shading point picks
-    /// by its slot's shares most of the time (a quarter of the time by power, so no light that
-    /// reaches a point is ever left out).
+    /// cell of a coarse grid (and each direction a surface there faces). Where power would pick
+    /// about as well, it stays; elsewhere a shading point picks by its slot's shares most of the
+    /// time (a quarter of the time by power, so no light that reaches a point is ever left out).
     /// A scene whose lights make one group selects as by power. The same scene gives the same
     /// selection on any thread count.
     explicit LightSampler(const Tracer& tracer);
