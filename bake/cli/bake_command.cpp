@@ -65,6 +65,7 @@ struct BakeOptions {
     uint32_t update_stride = 5;
     std::string resolution = "1280x720";
     uint32_t max_bounces = 8;
+    std::string light_selection = "auto";  ///< "auto" (lights.h: by where light arrives) or "power"
     uint32_t propagation_depth = 2;
     std::string resampling = "random";
     std::string history = "ramp:8";
@@ -126,6 +127,7 @@ struct BakeJob {
     bool scene_scale_auto = true;
     bool capacity_auto = false;
     uint64_t voxel_budget = kDefaultVoxelBudget;  ///< what an auto level bias fits to
+    bool light_selection_by_power = false;        ///< --light-selection power
 };
 
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
@@ -525,6 +527,7 @@ BakeJob bakeJobFromOptions(const BakeOptions& o) {
     job.scene_path = o.scene_path;
     job.sky = o.sky;
     job.settings = settingsFromOptions(o);
+    job.light_selection_by_power = o.light_selection == "power";
     job.camera.source = o.camera_source;
     job.camera.path_file = o.camera_path;
     job.camera.explore_points = o.explore_points;
@@ -756,6 +759,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job
         {"resolution", std::to_string(settings.width) + "x" + std::to_string(settings.height)},
         {"update_stride", std::to_string(settings.update_stride)},
         {"max_bounces", std::to_string(settings.path.max_bounces)},
+        {"light_selection", job.light_selection_by_power ? "power" : "auto"},
         {"camera", camera_description},
         {"radiance_scale", radianceScaleText(radiance_scale)},
         {"scene_scale", std::to_string(settings.sharc.grid.scene_scale)},
@@ -927,7 +931,11 @@ private:
         }
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);
-        lights_.emplace(*tracer_);
+        if (job_.light_selection_by_power) {
+            lights_.emplace(scene_);
+        } else {
+            lights_.emplace(*tracer_);
+        }
         warnWhenUnlit(scene_, *lights_, "cache");
         warnAboutPunctualLightUnits(*tracer_);
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
@@ -1009,7 +1017,9 @@ private:
         if (autoCapacity()) {
             std::printf("Capacity %s, pre-pass %.2f s\n", capacity_choice_text_.c_str(), capacity_choice_.seconds);
         }
-        std::printf("Light selection: %s\n", lights_->spatialSelection().describe().c_str());
+        std::printf("Light selection: %s\n", job_.light_selection_by_power
+                                                 ? "by power (--light-selection power)"
+                                                 : lights_->spatialSelection().describe().c_str());
         std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
         std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
                     baker_->pathsPerIteration(), job_.settings.width, job_.settings.height, job_.settings.update_stride,
@@ -1594,6 +1604,14 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--resolution", o->resolution, "Virtual camera image size WxH")->capture_default_str();
     cmd->add_option("--max-bounces", o->max_bounces, "Surface interactions per update path")
         ->capture_default_str()->check(CLI::Range(1u, 1024u));
+    cmd->add_option("--light-selection", o->light_selection,
+                    "How each path vertex picks the light it samples. auto: mostly by how much of each light "
+                    "reaches its part of the scene, measured with shadow rays before the first path (by power "
+                    "where that gains nothing; nothing is measured when the lights make one group); power: by "
+                    "power alone, with no set-up (what earlier versions did; lamps a point cannot see take their share "
+                    "of its samples)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "power"}));
     cmd->add_option("--propagation-depth", o->propagation_depth,
                     "Path vertices that receive the radiance found after them (SHARC_PROPAGATION_DEPTH); cache "
                     "resampling ends a path at a random depth up to this, so deeper paths carry more bounces per "

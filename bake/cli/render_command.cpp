@@ -39,6 +39,7 @@ namespace {
 constexpr float kRayOffsetWarningShare = 0.01f;
 
 struct RenderOptions {
+    std::string light_selection = "auto";  ///< as bake's --light-selection
     std::string scene_path;
     std::string output_path;
     std::string camera;       // name or index
@@ -278,7 +279,11 @@ private:
         warnAboutCameraFit(chosen, camera_, width_, height_);
 
         if (!tracer_) tracer_.emplace(scene_);
-        lights_.emplace(*tracer_);
+        if (o_.light_selection == "power") {
+            lights_.emplace(scene_);
+        } else {
+            lights_.emplace(*tracer_);
+        }
         light_selection_seconds_ = lights_->spatialSelection().seconds;
         build_seconds_ = secondsSince(build_start);
         warnWhenUnlit(scene_, *lights_, "image");
@@ -699,6 +704,12 @@ void registerRenderCommand(CLI::App& app) {
                     "much earlier)")
         ->capture_default_str();
     cmd->add_option("--seed", options->seed, "Random seed")->capture_default_str();
+    cmd->add_option("--light-selection", options->light_selection,
+                    "How each path vertex picks the light it samples: auto (mostly by how much of each light "
+                    "reaches its part of the scene, measured with shadow rays first) or power (by power alone, no "
+                    "set-up); see bake --help")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "power"}));
     cmd->add_option("--threads", options->threads, "Worker threads (0 = all cores)")->capture_default_str();
     addSkyOptions(*cmd, options->sky);
     addSceneLimitOptions(*cmd, options->limits);

@@ -32,6 +32,23 @@ done
 expect 0 "bake" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/cornell.sharc" --iterations 4 \
     --resolution 64x64 --stats-json "$work/bake.json"
 [ -s "$work/cornell.sharc" ] || { echo "FAIL: bake did not write the cache"; failures=$((failures + 1)); }
+# --light-selection: the outdoor scene's sun and sky are two groups, so auto measures them and
+# power does not; the plan says which, the cache records it, and the two caches differ.
+outdoor="$scenes/outdoor/outdoor.gltf"
+expect 0 "bake --light-selection auto" "$sharcbake" bake "$outdoor" -o "$work/auto.sharc" --iterations 2 --resolution 64x36
+grep -q "^Light selection: by where light arrives in " "$work/out.txt" ||
+    { echo "FAIL: the plan does not say the light selection was measured"; failures=$((failures + 1)); }
+expect 0 "bake --light-selection power" "$sharcbake" bake "$outdoor" -o "$work/power.sharc" --iterations 2 \
+    --resolution 64x36 --light-selection power
+grep -q "^Light selection: by power (--light-selection power)" "$work/out.txt" ||
+    { echo "FAIL: the plan does not say the light selection is by power"; failures=$((failures + 1)); }
+cmp -s "$work/auto.sharc" "$work/power.sharc" &&
+    { echo "FAIL: --light-selection power baked the same cache as auto"; failures=$((failures + 1)); }
+"$sharcbake" info "$work/power.sharc" | grep -q "light_selection: power" ||
+    { echo "FAIL: info does not show the cache's light selection"; failures=$((failures + 1)); }
+expect 1 "an unknown light selection" "$sharcbake" bake "$outdoor" -o "$work/x.sharc" --light-selection best
+expect 0 "render --light-selection power" "$sharcbake" render "$outdoor" -o "$work/power.exr" --resolution 16 --spp 2 \
+    --light-selection power -q
 grep -q '"live_voxels"' "$work/bake.json" || { echo "FAIL: bake stats JSON lacks live_voxels"; failures=$((failures + 1)); }
 # The cache records which scene it came from: FNV-1a 64 of the bytes of the glTF file and then
 # its .bin (cache_format/SPEC.md, F.8).

@@ -83,6 +83,10 @@ grep -q 'checkpoint "' "$work/err.txt" && fail "a resume with the checkpoint's o
 # Refusals: other settings, a damaged checkpoint, a cache given as a checkpoint, a missing file.
 expect 3 "resume with another seed" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args --seed 7 -q --resume "$work/short.ckpt"
 grep -q 'seed: checkpoint "0", this bake "7"' "$work/err.txt" || fail "the mismatch message does not name the setting"
+expect 3 "resume with another light selection" "$sharcbake" bake "$cornell" -o "$work/x.sharc" $bake_args \
+    --light-selection power -q --resume "$work/short.ckpt"
+grep -q 'light_selection: checkpoint "auto", this bake "power"' "$work/err.txt" ||
+    fail "the light selection mismatch is not named"
 expect 3 "resume on another scene" "$sharcbake" bake "$furnace" -o "$work/x.sharc" $bake_args -q --resume "$work/short.ckpt"
 cp "$work/short.ckpt" "$work/damaged.ckpt"
 printf '\377' | dd of="$work/damaged.ckpt" bs=1 seek=200 conv=notrunc 2>/dev/null
