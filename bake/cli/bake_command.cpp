@@ -15,6 +15,7 @@
 #include "sharc/hit_rate.h"
 #include "sharc/light_leaks.h"
 #include "sharc/voxel_materials.h"
+#include "sharc/wall_leaks.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
 #include "support/json.h"
@@ -1147,6 +1148,11 @@ private:
             for (const CameraPose& pose : camera_path_->waypoints()) cameras.push_back(pose.position);
         }
         light_leaks_ = findLightLeaks(*tracer_, job_.settings.sharc.grid, cameras, 256, job_.settings.seed);
+        std::vector<glm::vec3> waypoints;
+        for (const CameraPose& pose : camera_path_->waypoints()) waypoints.push_back(pose.position);
+        wall_leaks_ = findWallLeaks(*tracer_, job_.settings.sharc.grid, cameras, waypoints, 16384, job_.settings.seed);
+        if (const std::string wall = wall_leaks_.describe(); !wall.empty())
+            std::fprintf(stderr, "warning: %s\n", wall.c_str());
         constexpr size_t kLeaksNamed = 5;  // a city of lit windows would fill the log
         for (size_t i = 0; i < light_leaks_.leaks.size() && i < kLeaksNamed; ++i)
             std::fprintf(stderr, "warning: %s\n", LightLeakReport::describe(light_leaks_.leaks[i]).c_str());
@@ -1293,6 +1299,13 @@ private:
             {"predicted_hit_rate", hitRateJson(prediction_)},
             {"stability", stabilityJson(stability_)},
             {"light_leaks", lightLeaksJson(light_leaks_)},
+            {"wall_leaks",
+             {{"points", wall_leaks_.points},
+              {"seen_sides", wall_leaks_.seen_sides},
+              {"leaking_sides", wall_leaks_.leaking_sides},
+              {"share", jsonNumber(wall_leaks_.share)},
+              {"voxel_size", jsonNumber(wall_leaks_.voxel_size)},
+              {"warned", !wall_leaks_.describe().empty()}}},
             {"light_selection", lightSelectionJson(lights_->spatialSelection())},
         });
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
@@ -1390,7 +1403,9 @@ private:
     std::string gpu_warning_;               ///< fp16 clipping of the written cache at its GPU radiance scale
     std::vector<uint32_t> written_levels_;  ///< the levels of the cache file's voxels
     StabilityReport stability_;
-    LightLeakReport light_leaks_;  ///< emitters sharing voxels with a surface behind them
+    LightLeakReport light_leaks_;
+    WallLeakReport
+        wall_leaks_;  ///< surfaces sharing voxels across walls thinner than a voxel  ///< emitters sharing voxels with a surface behind them
     double finish_seconds_ = 0.0;
 };
 

@@ -28,20 +28,6 @@ std::string materialLabel(const Scene& scene, uint32_t material) {
     return name.empty() ? "material #" + std::to_string(material) : "material '" + name + "'";
 }
 
-/// The camera nearest `point`: the one whose voxels there are finest.
-glm::vec3 nearestCamera(glm::vec3 point, const std::vector<glm::vec3>& cameras) {
-    glm::vec3 nearest = cameras.front();
-    float nearest2 = std::numeric_limits<float>::infinity();
-    for (const glm::vec3& camera : cameras) {
-        const glm::vec3 d = point - camera;
-        if (glm::dot(d, d) < nearest2) {
-            nearest2 = glm::dot(d, d);
-            nearest = camera;
-        }
-    }
-    return nearest;
-}
-
 Float3 toFloat3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
 
 /// `steps` float32 steps at `point`'s largest coordinate: a distance that moves it in any units.
@@ -188,6 +174,19 @@ std::string LightLeakReport::describe(const EmitterLeak& leak) {
                   "behind it",
                   100.0 * leak.area_share, double(leak.voxel_size), double(leak.median_gap), double(leak.voxel_size));
     return "emissive " + leak.material_label + text;
+}
+
+glm::vec3 nearestCamera(glm::vec3 point, const std::vector<glm::vec3>& cameras) {
+    glm::vec3 nearest = cameras.front();
+    float nearest2 = std::numeric_limits<float>::infinity();
+    for (const glm::vec3& camera : cameras) {
+        const glm::vec3 d = point - camera;
+        if (glm::dot(d, d) < nearest2) {
+            nearest2 = glm::dot(d, d);
+            nearest = camera;
+        }
+    }
+    return nearest;
 }
 
 LightLeakReport findLightLeaks(const Tracer& tracer, const HashGridParameters& grid,

@@ -35,6 +35,9 @@ struct LightLeakReport {
     static std::string describe(const EmitterLeak& leak);
 };
 
+/// The camera of `cameras` (not empty) nearest `point`: the one whose voxels there are finest.
+glm::vec3 nearestCamera(glm::vec3 point, const std::vector<glm::vec3>& cameras);
+
 /// A material is reported when at least this share of its emissive area leaks.
 inline constexpr double kLeakAreaShare = 0.01;
 

@@ -2,6 +2,7 @@
 // Light selection by where light arrives: the grid's shares, and a sampler that spends its
 // shadow rays on the lights a point can see while its estimates stay unbiased.
 #include "sharcbake/scene_loader.h"
+#include "test_rooms.h"
 #include "tracing/light_grid.h"
 #include "tracing/lights.h"
 #include "tracing/sampling.h"
@@ -64,29 +65,11 @@ TEST(LightSelectionGrid, SharesAreTheWeightsNormalisedAndPickedInProportion) {
     EXPECT_EQ(grid.pick(0, 0x1.fffffep-1f, remapped).group, 7u);
 }
 
-/// An inward-facing box [lo, hi] of grey walls.
-void addRoom(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t material) {
-    const uint32_t base = uint32_t(scene.positions.size());
-    for (int i = 0; i < 8; ++i)
-        scene.positions.push_back(glm::vec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
-    // Quads (a, b, c, d) wound to face into the box.
-    const int faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
-    for (const auto& f : faces) {
-        scene.triangles.push_back(glm::uvec3(base + f[0], base + f[1], base + f[2]));
-        scene.triangles.push_back(glm::uvec3(base + f[0], base + f[2], base + f[3]));
-        scene.triangle_materials.insert(scene.triangle_materials.end(), 2, material);
-    }
-    scene.bounds_min = glm::min(scene.bounds_min, lo);
-    scene.bounds_max = glm::max(scene.bounds_max, hi);
-}
-
 /// Two closed rooms side by side, 5 cm apart: room A (x < 0) has a bright ceiling panel, room
 /// B (x > 0.05) only a dim bulb. By power, a point in B would pick the panel it cannot see 99%
 /// of the time.
 Scene twoRoomsOneBright() {
-    Scene scene;
-    scene.bounds_min = glm::vec3(std::numeric_limits<float>::max());
-    scene.bounds_max = glm::vec3(-std::numeric_limits<float>::max());
+    Scene scene = emptyTestScene();
     Material wall;
     wall.name = "wall";
     wall.base_color = glm::vec3(0.7f);
@@ -97,8 +80,8 @@ Scene twoRoomsOneBright() {
     panel.emissive = glm::vec3(1.0f);
     panel.emissive_strength = 50.0f;
     scene.materials.push_back(panel);
-    addRoom(scene, glm::vec3(-2.0f, 0.0f, -1.0f), glm::vec3(0.0f, 2.0f, 1.0f), 0);
-    addRoom(scene, glm::vec3(0.05f, 0.0f, -1.0f), glm::vec3(2.05f, 2.0f, 1.0f), 0);
+    addInwardBox(scene, glm::vec3(-2.0f, 0.0f, -1.0f), glm::vec3(0.0f, 2.0f, 1.0f), 0);
+    addInwardBox(scene, glm::vec3(0.05f, 0.0f, -1.0f), glm::vec3(2.05f, 2.0f, 1.0f), 0);
     const uint32_t base = uint32_t(scene.positions.size());
     for (const glm::vec2 d :
          {glm::vec2(-1.3f, -0.3f), glm::vec2(-0.7f, -0.3f), glm::vec2(-0.7f, 0.3f), glm::vec2(-1.3f, 0.3f)})
