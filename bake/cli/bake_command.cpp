@@ -950,7 +950,7 @@ private:
         grid_decision_ = decideGrid(job_, scene_, seen_ ? &*seen_ : nullptr);
         for (const std::string& warning : grid_decision_.warnings)
             std::fprintf(stderr, "warning: %s\n", warning.c_str());
-        findEmitterLeaks();
+        warnAboutLeaks();
         if (autoCapacity()) chooseAutoCapacity();
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
                                          SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
@@ -1137,19 +1137,19 @@ private:
             addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, &*lights_, 2048, job_.settings.seed));
     }
 
-    /// Emitters nearer another surface than a voxel is wide, seen from the scene's own cameras
-    /// (render's automatic camera without any; the roaming camera's waypoints for a box or
-    /// points region of a scene without cameras): said before baking, so the artist can move them.
-    void findEmitterLeaks() {
+    /// Light leaks the voxels will cause, seen from the scene's own cameras (render's automatic
+    /// camera without any; the roaming camera's waypoints for a box or points region of a scene
+    /// without cameras): emitters nearer another surface than a voxel is wide, and walls thinner
+    /// than a voxel between places the waypoints reach. Said before baking, so the artist can
+    /// move or thicken them.
+    void warnAboutLeaks() {
+        std::vector<glm::vec3> waypoints;
+        for (const CameraPose& pose : camera_path_->waypoints()) waypoints.push_back(pose.position);
         std::vector<glm::vec3> cameras;
         for (const PredictionView& view : declaredViews(*tracer_, job_.settings.view_region))
             cameras.push_back(view.camera.position);
-        if (cameras.empty()) {
-            for (const CameraPose& pose : camera_path_->waypoints()) cameras.push_back(pose.position);
-        }
+        if (cameras.empty()) cameras = waypoints;
         light_leaks_ = findLightLeaks(*tracer_, job_.settings.sharc.grid, cameras, 256, job_.settings.seed);
-        std::vector<glm::vec3> waypoints;
-        for (const CameraPose& pose : camera_path_->waypoints()) waypoints.push_back(pose.position);
         wall_leaks_ = findWallLeaks(*tracer_, job_.settings.sharc.grid, cameras, waypoints, 16384, job_.settings.seed);
         if (const std::string wall = wall_leaks_.describe(); !wall.empty())
             std::fprintf(stderr, "warning: %s\n", wall.c_str());

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/light_leaks.h"
 
+#include "sharc/grid_points.h"
 #include "support/median.h"
 #include "tracing/sampling.h"
 #include "tracing/surface.h"
@@ -26,14 +27,6 @@ constexpr int kMaxEmissiveCrossings = 4;
 std::string materialLabel(const Scene& scene, uint32_t material) {
     const std::string& name = scene.materials[material].name;
     return name.empty() ? "material #" + std::to_string(material) : "material '" + name + "'";
-}
-
-Float3 toFloat3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
-
-/// `steps` float32 steps at `point`'s largest coordinate: a distance that moves it in any units.
-float floatSteps(glm::vec3 point, float steps) {
-    const float largest = std::max({std::abs(point.x), std::abs(point.y), std::abs(point.z), 1e-30f});
-    return steps * largest * 0x1p-23f;
 }
 
 /// The nearest surface behind an emitter that could share its voxels.

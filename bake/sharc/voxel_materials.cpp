@@ -2,6 +2,7 @@
 #include "sharc/voxel_materials.h"
 
 #include "sharc/coverage.h"
+#include "sharc/grid_points.h"
 #include "sharcbake/sdk_target.h"
 #include "tracing/surface_points.h"
 
@@ -25,8 +26,6 @@ struct VoxelSums {
     glm::dvec3 demodulation{0.0};
     uint64_t points = 0;
 };
-
-Float3 toFloat3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
 
 uint64_t voxelIndex(const std::vector<CacheVoxel>& voxels, uint64_t key) {
     const auto it = std::lower_bound(voxels.begin(), voxels.end(), key,

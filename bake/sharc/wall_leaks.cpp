@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/wall_leaks.h"
 
+#include "sharc/grid_points.h"
 #include "sharc/light_leaks.h"
 #include "support/median.h"
 #include "tracing/sampling.h"
@@ -55,8 +56,6 @@ bool shareOne(const Waypoints& a, const Waypoints& b) {
     return false;
 }
 
-Float3 float3(glm::vec3 v) { return Float3{v.x, v.y, v.z}; }
-
 /// Whether the side at `origin` (surface point `position`, facing `normal`, keyed `key` from
 /// `camera`, in a voxel `voxel` wide) shares its voxel with a surface facing the same way beyond
 /// a wall: along the surface, within the voxel, a probe meets something, passes it, and finds
@@ -72,8 +71,7 @@ bool leaksBeyondWall(const Tracer& tracer, const HashGridKeyer& keyer, const std
     // Far from the origin floats are coarse: where a ray offset along an axis (256 float steps of
     // the point's largest coordinate) is a tenth of the voxel, a wall cannot be told from the
     // offset (the bake warns about the offset itself).
-    const float largest = std::max(std::abs(position.x), std::max(std::abs(position.y), std::abs(position.z)));
-    if (256.0f * largest * 0x1.0p-23f > 0.1f * voxel) return false;
+    if (floatSteps(position, 256.0f) > 0.1f * voxel) return false;
     for (uint32_t k = 0; k < kAlongDirections; ++k) {
         const float angle = 2.0f * kPi * (float(k) + 0.5f) / float(kAlongDirections);
         const glm::vec3 along = frame.toWorld(glm::vec3(std::cos(angle), std::sin(angle), 0.0f));
@@ -86,8 +84,7 @@ bool leaksBeyondWall(const Tracer& tracer, const HashGridKeyer& keyer, const std
             // the bias of SHaRC's keys, 0.1 mm) is not stepped over.
             const glm::vec3 met = from + wall.t * along;
             const glm::vec3 wall_normal = makeSurfaceHit(scene, wall, along).face_normal;
-            const float step =
-                8.0f * std::max(std::abs(met.x), std::max(std::abs(met.y), std::abs(met.z))) * 0x1.0p-23f + 1e-7f;
+            const float step = floatSteps(met, 8.0f) + 1e-7f;
             from = met + step * along;
             left -= wall.t + step;
             RayHit below;
@@ -95,7 +92,8 @@ bool leaksBeyondWall(const Tracer& tracer, const HashGridKeyer& keyer, const std
             const SurfaceHit beyond = makeSurfaceHit(scene, below, -normal);
             if (glm::dot(beyond.geometric_normal, normal) < 0.9f) continue;
             if (scene.materials[beyond.material].isEmissive()) continue;
-            if (keyer.key(float3(beyond.position), float3(beyond.geometric_normal), float3(camera)) != key) continue;
+            if (keyer.key(toFloat3(beyond.position), toFloat3(beyond.geometric_normal), toFloat3(camera)) != key)
+                continue;
             const glm::vec3 beyond_origin = offsetRayOrigin(beyond.position, beyond.geometric_normal);
             const Waypoints beyond_seen_by = waypointsSeeing(tracer, beyond_origin, waypoints);
             if (beyond_seen_by.count == 0 || shareOne(seen_by, beyond_seen_by)) continue;
@@ -166,7 +164,7 @@ WallLeakReport findWallLeaks(const Tracer& tracer, const HashGridParameters& gri
         const glm::vec3 camera = nearestCamera(p.position, cameras);
         const glm::vec3 to_camera = p.position - camera;
         const float voxel = keyer.voxelSizeAt(keyer.levelOf(glm::dot(to_camera, to_camera)));
-        const uint64_t key = keyer.key(float3(p.position), float3(normal), float3(camera));
+        const uint64_t key = keyer.key(toFloat3(p.position), toFloat3(normal), toFloat3(camera));
         if (leaksBeyondWall(tracer, keyer, waypoints, p.position, origin, normal, camera, key, voxel, seen_by)) {
             leaking[i] = 1;
             voxel_of[i] = voxel;

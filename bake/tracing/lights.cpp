@@ -50,6 +50,23 @@ constexpr uint32_t kDrawsPerGroup = 64;
 /// (1.6) above; rooms lit by a lamp of their own lie far above (10 and more).
 constexpr double kPowerCloseEnough = 1.0;
 
+/// Items 0..n-1 grouped by bucket (`bucket_of[i]` < `count`), each bucket in item order (a
+/// counting sort): bucket b's items are items[first[b], first[b + 1]).
+struct Buckets {
+    std::vector<uint32_t> first;
+    std::vector<uint32_t> items;
+};
+Buckets bucketsOf(const std::vector<uint32_t>& bucket_of, uint32_t count) {
+    Buckets buckets;
+    buckets.first.assign(size_t(count) + 1, 0u);
+    for (const uint32_t b : bucket_of) ++buckets.first[b + 1];
+    for (uint32_t b = 0; b < count; ++b) buckets.first[b + 1] += buckets.first[b];
+    buckets.items.resize(bucket_of.size());
+    std::vector<uint32_t> next(buckets.first.begin(), buckets.first.end() - 1);
+    for (size_t i = 0; i < bucket_of.size(); ++i) buckets.items[next[bucket_of[i]]++] = uint32_t(i);
+    return buckets;
+}
+
 glm::vec3 textureMean(const Texture& texture) {
     glm::dvec3 sum(0.0);
     const size_t count = texture.texelCount();
@@ -246,12 +263,9 @@ void LightSampler::groupLights() {
     spatial_.groups = groups;
     if (groups < 2) return;
     // Each group's entries, in entry order, chosen among themselves by power.
-    group_first_.assign(size_t(groups) + 1, 0u);
-    for (const uint32_t g : entry_group_) ++group_first_[g + 1];
-    for (uint32_t g = 0; g < groups; ++g) group_first_[g + 1] += group_first_[g];
-    group_entries_.resize(entries_.size());
-    std::vector<uint32_t> next(group_first_.begin(), group_first_.end() - 1);
-    for (size_t e = 0; e < entries_.size(); ++e) group_entries_[next[entry_group_[e]]++] = uint32_t(e);
+    Buckets by_group = bucketsOf(entry_group_, groups);
+    group_first_ = std::move(by_group.first);
+    group_entries_ = std::move(by_group.items);
     group_selection_.resize(groups);
     entry_pmf_in_group_.resize(entries_.size());
     for (uint32_t g = 0; g < groups; ++g) {
@@ -269,19 +283,11 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
     spatial_.cells = grid_.dimensions();
     spatial_.cell_size = grid_.cellSize();
     const std::vector<SurfacePoint> points = sampleSurfacePoints(scene_, kLearningPoints, kLearningSeed);
-    // The points of each cell, in the order they were drawn (a counting sort).
-    std::vector<uint32_t> first(size_t(grid_.cellCount()) + 1, 0u);
+    // The points of each cell, in the order they were drawn.
     std::vector<uint32_t> cell_of_point(points.size());
-    for (size_t i = 0; i < points.size(); ++i) {
-        cell_of_point[i] = grid_.cellOf(points[i].position);
-        ++first[cell_of_point[i] + 1];
-    }
-    for (uint32_t c = 0; c < grid_.cellCount(); ++c) first[c + 1] += first[c];
-    std::vector<uint32_t> by_cell(points.size());
-    {
-        std::vector<uint32_t> next(first.begin(), first.end() - 1);
-        for (size_t i = 0; i < points.size(); ++i) by_cell[next[cell_of_point[i]]++] = uint32_t(i);
-    }
+    for (size_t i = 0; i < points.size(); ++i) cell_of_point[i] = grid_.cellOf(points[i].position);
+    const Buckets by_cell = bucketsOf(cell_of_point, grid_.cellCount());
+    const std::vector<uint32_t>& first = by_cell.first;
     // Groups are drawn half uniformly and half by power, so a weak lamp beside a sun is measured
     // too; each sample's contribution is divided by the probability it was drawn with.
     const uint32_t groups = spatial_.groups;
@@ -327,7 +333,7 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
         if (count == 0) return;
         const uint32_t taken = std::min(count, kPointsPerCell);
         for (uint32_t k = 0; k < taken; ++k) {
-            const SurfacePoint& p = points[by_cell[first[cell] + uint32_t(uint64_t(k) * count / taken)]];
+            const SurfacePoint& p = points[by_cell.items[first[cell] + uint32_t(uint64_t(k) * count / taken)]];
             for (uint32_t s = 0; s < kSamplesPerPoint; ++s) {
                 const uint32_t stream = hashCombine(hashCombine(kLearningSeed, cell), k * kSamplesPerPoint + s);
                 const float u_group = bitsToUnitFloat(hashUint32(stream));
