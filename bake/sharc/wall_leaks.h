@@ -30,7 +30,8 @@ struct WallLeakReport {
 
 /// A scene is warned about when at least this share of the seen surface, and this many sides,
 /// leak. Low, because the harm is not the area: the dim side's own lookups spread the light they
-/// read (a strip of 0.14% of two rooms' surface made the dim one 60 times too bright).
+/// read (two rooms whose shared strip is 0.5% of their surface, as this check measures it: the
+/// dim one 60 times too bright).
 inline constexpr double kWallLeakShare = 0.0005;
 inline constexpr uint32_t kWallLeakSides = 4;
 

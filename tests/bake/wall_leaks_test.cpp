@@ -56,7 +56,7 @@ TEST(WallLeaks, APartitionThinnerThanAVoxelSharesVoxelsOnceBothRoomsAreSeen) {
 
 TEST(WallLeaks, APartitionOnAVoxelBoundaryStillLeaksThroughTheKeysBias) {
     // At x = 0 every level's voxels meet at the partition, but SHaRC's keys add 1e-4 to positions
-    // first: the bright room's last 0.1 mm is in the dim room's voxels (baked, +82% there).
+    // first: the bright room's last 0.1 mm is in the dim room's voxels (baked, +86% there).
     const Scene scene = twoRooms(0.0f, 1e-4f);
     const Tracer tracer(scene);
     const Views views = bothRooms(0.0f);

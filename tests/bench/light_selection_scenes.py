@@ -5,6 +5,9 @@
 thin_walls.gltf  two closed 5 x 3 x 5 m rooms 0.1 mm apart: room A has a bright ceiling panel,
                  room B, where the camera is, only a 0.5 cd bulb. By power, room B's points pick
                  the panel they cannot see 91% of the time.
+thin_walls_both_seen.gltf, thin_walls_off_grid.gltf
+                 the same with a camera in room A too (the roaming camera bakes both rooms), the
+                 partition at x = 0 and at x = 0.37: walls thinner than a voxel (docs/baking.md).
 flat.gltf        four rooms in a row joined by doorways: a sun and a sky through room 0's window,
                  a 30 cd lamp in room 1, a ceiling panel in room 2, a 3 cd lamp in room 3; one
                  camera per room. By power the sun takes 98% of the picks everywhere.
@@ -136,15 +139,18 @@ def rotation_from_minus_z(direction):
     return [(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s, (m[1][0] - m[0][1]) / s]
 
 
-def thin_walls(path):
+def thin_walls(path, wall_x=0.0, camera_in_a=False):
+    x = wall_x
     s = Scene()
     wall = s.material("wall", (0.8, 0.8, 0.8))
     panel = s.material("panel", (1.0, 1.0, 1.0), emission=(1.0, 1.0, 1.0), strength=20.0)
-    s.box("room_a", (-5.0, 0.0, -2.5), (0.0, 3.0, 2.5), wall, inward=True)
-    s.box("room_b", (0.0001, 0.0, -2.5), (5.0001, 3.0, 2.5), wall, inward=True)
+    s.box("room_a", (x - 5.0, 0.0, -2.5), (x, 3.0, 2.5), wall, inward=True)
+    s.box("room_b", (x + 0.0001, 0.0, -2.5), (x + 5.0001, 3.0, 2.5), wall, inward=True)
     s.quads("panel", [((-3.0, 2.9, -0.5), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0))], panel)  # facing down
-    s.light("bulb_b", "point", 0.5, position=(4.5, 0.3, 2.0))
-    s.camera("room_b", (4.0, 1.5, 2.0), (0.0001, 1.5, 0.0))
+    s.light("bulb_b", "point", 0.5, position=(x + 4.5, 0.3, 2.0))
+    s.camera("room_b", (x + 4.0, 1.5, 2.0), (x + 0.0001, 1.5, 0.0))
+    if camera_in_a:
+        s.camera("room_a", (x - 4.0, 1.5, 2.0), (x - 0.0001, 1.5, 0.0))
     s.write(path)
 
 
@@ -183,4 +189,6 @@ if __name__ == "__main__":
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     thin_walls(sys.argv[1] + "/thin_walls.gltf")
+    thin_walls(sys.argv[1] + "/thin_walls_both_seen.gltf", camera_in_a=True)
+    thin_walls(sys.argv[1] + "/thin_walls_off_grid.gltf", wall_x=0.37, camera_in_a=True)
     flat(sys.argv[1] + "/flat.gltf")
