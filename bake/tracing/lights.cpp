@@ -328,12 +328,23 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
     std::vector<std::vector<Measured>> measured(grid_.slotCount());
     std::vector<uint32_t> samples(grid_.slotCount(), 0u);
     std::vector<uint32_t> rays(grid_.cellCount(), 0u);
+    // Each point's values are divided by its own mean light, so a slot's shares average what
+    // each of its points would pick, not what its brightest points would: in a cell that holds a
+    // lamp-lit floor and the sunlit ground outside its wall, raw sums gave the sun 99.9% of the
+    // floor's picks.
+    struct Sample {
+        uint32_t group;
+        double value;
+    };
     tbb::parallel_for(uint32_t(0), grid_.cellCount(), [&](uint32_t cell) {
         const uint32_t count = first[cell + 1] - first[cell];
         if (count == 0) return;
         const uint32_t taken = std::min(count, kPointsPerCell);
+        std::array<std::vector<Sample>, 2> sides;  // one point's lit samples, by side
         for (uint32_t k = 0; k < taken; ++k) {
             const SurfacePoint& p = points[by_cell.items[first[cell] + uint32_t(uint64_t(k) * count / taken)]];
+            std::array<uint32_t, 2> side_slot{}, side_samples{};
+            for (std::vector<Sample>& side : sides) side.clear();
             for (uint32_t s = 0; s < kSamplesPerPoint; ++s) {
                 const uint32_t stream = hashCombine(hashCombine(kLearningSeed, cell), k * kSamplesPerPoint + s);
                 const float u_group = bitsToUnitFloat(hashUint32(stream));
@@ -345,6 +356,8 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
                 const uint32_t slot = cell * LightSelectionGrid::kDirections +
                                       LightSelectionGrid::directionOf(at.geometric_normal);
                 ++samples[slot];
+                side_slot[s & 1u] = slot;
+                ++side_samples[s & 1u];
                 float within_group = 0.0f;
                 const size_t g = group_draw.sampleDiscrete(u_group, &within_group);
                 const Draw& draw = draws[g * kDrawsPerGroup +
@@ -365,14 +378,24 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
                 if (!shadowRayTo(at.position, at.geometric_normal, light.wi, light.distance, shadow)) continue;
                 ++rays[cell];
                 if (tracer.occluded(shadow)) continue;
-                std::vector<Measured>& slot_measured = measured[slot];
-                auto found = std::find_if(slot_measured.begin(), slot_measured.end(),
-                                          [&](const Measured& m) { return m.group == uint32_t(g); });
-                if (found == slot_measured.end()) {
-                    slot_measured.push_back({uint32_t(g), value, value * value});
-                } else {
-                    found->sum += value;
-                    found->sum_squares += value * value;
+                sides[s & 1u].push_back({uint32_t(g), value});
+            }
+            for (uint32_t side = 0; side < 2; ++side) {
+                double sum = 0.0;
+                for (const Sample& sample : sides[side]) sum += sample.value;
+                if (!(sum > 0.0) || !std::isfinite(sum)) continue;
+                const double to_relative = double(side_samples[side]) / sum;  // 1 / the point's mean
+                std::vector<Measured>& slot_measured = measured[side_slot[side]];
+                for (const Sample& sample : sides[side]) {
+                    const double value = sample.value * to_relative;
+                    auto found = std::find_if(slot_measured.begin(), slot_measured.end(),
+                                              [&](const Measured& m) { return m.group == sample.group; });
+                    if (found == slot_measured.end()) {
+                        slot_measured.push_back({sample.group, value, value * value});
+                    } else {
+                        found->sum += value;
+                        found->sum_squares += value * value;
+                    }
                 }
             }
         }
@@ -382,8 +405,10 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
     // in, which shares changing from cell to cell break (under an open sky, shares everywhere
     // left path tracing twice as noisy as power). The measure: the variance of a one-sample
     // estimate of the slot's light with groups picked by power, relative to its square,
-    // sum(c_g^2 / p_g) / C^2 - 1 for the measured contributions c_g (0 where power is exact; a
-    // lit floor under sun and sky 0.04, a shadowed one 1.6, the dim of two rooms 10). Each c_g^2
+    // sum(c_g^2 / p_g) / C^2 - 1 for the measured contributions c_g, each point's relative to its
+    // own light (0 where power is exact; a lit floor under sun and sky 0.04, a shadowed one 1.6,
+    // the dim of two rooms 10; summed raw, a lamp-lit floor sharing its slot with the sunlit
+    // ground outside looked exact). Each c_g^2
     // has its sampling variance taken off: among a hundred lamps that reach a hall alike, each
     // measured by a few samples, the squared noise alone made power look far off everywhere.
     std::vector<std::vector<std::pair<uint32_t, double>>> weights(grid_.slotCount());

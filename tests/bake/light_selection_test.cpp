@@ -157,6 +157,58 @@ TEST(SpatialLightSelection, APointPicksTheLightsItsRoomSees) {
     }
 }
 
+/// A closed 4 x 2.5 x 4 m room lit by a dim bulb, on a sunlit ground 200 m wide: the grid's
+/// cells are 6.25 m, so the cell holding the room's floor holds more sunlit ground and roof.
+Scene roomOnSunlitGround() {
+    Scene scene = emptyTestScene();
+    Material wall;
+    wall.name = "wall";
+    wall.base_color = glm::vec3(0.5f);
+    wall.metallic = 0.0f;
+    scene.materials.push_back(wall);
+    addInwardBox(scene, glm::vec3(0.5f, 0.0f, 0.5f), glm::vec3(4.5f, 2.5f, 4.5f), 0);
+    const uint32_t base = uint32_t(scene.positions.size());
+    for (const glm::vec2 d : {glm::vec2(-100.0f, -100.0f), glm::vec2(-100.0f, 100.0f), glm::vec2(100.0f, 100.0f),
+                              glm::vec2(100.0f, -100.0f)})
+        scene.positions.push_back(glm::vec3(d.x, -0.01f, d.y));
+    scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));  // facing up
+    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, 0u);
+    scene.bounds_min = glm::min(scene.bounds_min, glm::vec3(-100.0f, -0.01f, -100.0f));
+    scene.bounds_max = glm::max(scene.bounds_max, glm::vec3(100.0f, 2.5f, 100.0f));
+    PunctualLight bulb;
+    bulb.name = "bulb";
+    bulb.position = glm::vec3(2.5f, 2.0f, 2.5f);
+    bulb.intensity = glm::vec3(0.05f);
+    scene.lights.push_back(bulb);
+    PunctualLight sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+    sun.intensity = glm::vec3(150.0f);
+    scene.lights.push_back(sun);
+    return scene;
+}
+
+TEST(SpatialLightSelection, EachPointOfASlotHasAnEqualSayInItsShares) {
+    const Scene scene = roomOnSunlitGround();
+    const Tracer tracer(scene);
+    const LightSampler by_power(scene);
+    const LightSampler learned(tracer);
+    ASSERT_TRUE(learned.spatialSelection().active());
+    const size_t bulb = learned.entryCount() - 2;
+    const glm::vec3 floor_inside(2.0f, 0.0f, 3.0f);
+    EXPECT_LT(by_power.selectionPmf(bulb, floor_inside, kUp), 1e-3f);
+    // The floor's slot also holds the ground outside and the roof, 30000 times brighter under
+    // the sun: summed raw, their light made power look right for the whole slot, which left the
+    // bulb 1e-7 of the floor's picks. Each point's own shares averaged give the bulb about the
+    // floor's part of the slot's points (0.25 measured).
+    const float picked = learned.selectionPmf(bulb, floor_inside, kUp);
+    std::printf("[light selection] the bulb's share of the floor's picks: %.3g (by power %.3g)\n", double(picked),
+                double(by_power.selectionPmf(bulb, floor_inside, kUp)));
+    EXPECT_GT(picked, 0.15f);
+}
+
 TEST(SpatialLightSelection, EstimatesStayUnbiasedWithFarLessNoiseWhereAPowerfulLightIsHidden) {
     const Scene scene = twoRoomsOneBright();
     const Tracer tracer(scene);
