@@ -586,6 +586,13 @@ Json lightSelectionJson(const SpatialLightSelection& s) {
             {"grouped_by_region", s.grouped_by_region},
             {"cells", {s.cells.x, s.cells.y, s.cells.z}},
             {"cell_size", jsonNumber(s.cell_size)},
+            {"detail",
+             s.detail_cells.x == 0
+                 ? Json(nullptr)
+                 : Json{{"min", {jsonNumber(s.detail_min.x), jsonNumber(s.detail_min.y), jsonNumber(s.detail_min.z)}},
+                        {"max", {jsonNumber(s.detail_max.x), jsonNumber(s.detail_max.y), jsonNumber(s.detail_max.z)}},
+                        {"cells", {s.detail_cells.x, s.detail_cells.y, s.detail_cells.z}},
+                        {"cell_size", jsonNumber(s.detail_cell_size)}}},
             {"learned_slots", s.learned_slots},
             {"shadow_rays", s.shadow_rays},
             {"seconds", jsonNumber(s.seconds)}};

@@ -6,16 +6,38 @@
 
 namespace sharcbake {
 
-LightSelectionGrid::LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest)
-    : origin_(bounds_min) {
+LightSelectionGrid::Lattice::Lattice(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest)
+    : origin(bounds_min) {
     const glm::vec3 extent = glm::max(bounds_max - bounds_min, glm::vec3(0.0f));
     const float longest = std::max({extent.x, extent.y, extent.z});
-    cell_size_ = longest > 0.0f && std::isfinite(longest) ? longest / float(std::max(cells_along_longest, 1u)) : 1.0f;
+    cell_size = longest > 0.0f && std::isfinite(longest) ? longest / float(std::max(cells_along_longest, 1u)) : 1.0f;
     for (int axis = 0; axis < 3; ++axis) {
-        const float cells = std::ceil(extent[axis] / cell_size_);
-        dimensions_[axis] = uint32_t(std::clamp(cells, 1.0f, float(std::max(cells_along_longest, 1u))));
+        const float cells = std::ceil(extent[axis] / cell_size);
+        dimensions[axis] = uint32_t(std::clamp(cells, 1.0f, float(std::max(cells_along_longest, 1u))));
     }
-    inverse_cell_size_ = 1.0f / cell_size_;
+    inverse_cell_size = 1.0f / cell_size;
+}
+
+uint32_t LightSelectionGrid::Lattice::cellOf(glm::vec3 p) const {
+    glm::uvec3 cell;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float at = std::floor((p[axis] - origin[axis]) * inverse_cell_size);
+        // NaN and points outside take the nearest cell (the comparisons are false for NaN).
+        cell[axis] = at >= float(dimensions[axis]) ? dimensions[axis] - 1 : at > 0.0f ? uint32_t(at) : 0u;
+    }
+    return (cell.z * dimensions.y + cell.y) * dimensions.x + cell.x;
+}
+
+LightSelectionGrid::LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest)
+    : coarse_(bounds_min, bounds_max, cells_along_longest) {
+    first_.assign(size_t(slotCount()) + 1, 0u);
+}
+
+LightSelectionGrid::LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest,
+                                       glm::vec3 detail_min, glm::vec3 detail_max, uint32_t detail_cells_along_longest)
+    : coarse_(bounds_min, bounds_max, cells_along_longest),
+      detail_(detail_min, detail_max, detail_cells_along_longest),
+      detail_max_(detail_max) {
     first_.assign(size_t(slotCount()) + 1, 0u);
 }
 
@@ -28,13 +50,10 @@ uint32_t LightSelectionGrid::directionOf(glm::vec3 normal) {
 }
 
 uint32_t LightSelectionGrid::cellOf(glm::vec3 p) const {
-    glm::uvec3 cell;
-    for (int axis = 0; axis < 3; ++axis) {
-        const float at = std::floor((p[axis] - origin_[axis]) * inverse_cell_size_);
-        // NaN and points outside take the nearest cell (the comparisons are false for NaN).
-        cell[axis] = at >= float(dimensions_[axis]) ? dimensions_[axis] - 1 : at > 0.0f ? uint32_t(at) : 0u;
-    }
-    return (cell.z * dimensions_.y + cell.y) * dimensions_.x + cell.x;
+    const bool in_detail = detail_.cellCount() > 0 && p.x >= detail_.origin.x && p.y >= detail_.origin.y &&
+                           p.z >= detail_.origin.z && p.x <= detail_max_.x && p.y <= detail_max_.y &&
+                           p.z <= detail_max_.z;
+    return in_detail ? coarse_.cellCount() + detail_.cellOf(p) : coarse_.cellOf(p);
 }
 
 void LightSelectionGrid::setWeights(const std::vector<std::vector<std::pair<uint32_t, double>>>& weights_per_slot) {

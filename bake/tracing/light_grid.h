@@ -30,6 +30,11 @@ public:
     /// Cubic cells over the bounds, `cells_along_longest` along the longest axis (at least one
     /// along each axis), none holding shares yet.
     LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest);
+    /// The same, and a finer grid over the box [detail_min, detail_max] (within the bounds), whose
+    /// cells, numbered after the coarse ones, take every point inside it: a house's rooms on a
+    /// ground a kilometre wide get cells of their own size, not one cell for the whole house.
+    LightSelectionGrid(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest, glm::vec3 detail_min,
+                       glm::vec3 detail_max, uint32_t detail_cells_along_longest);
 
     /// Slots per cell: +X, -X, +Y, -Y, +Z, -Z, by a normal's largest component.
     static constexpr uint32_t kDirections = 6;
@@ -37,11 +42,18 @@ public:
     /// all reach a hall costs more than it gains over power.
     static constexpr size_t kMostShares = 64;
 
-    glm::uvec3 dimensions() const { return dimensions_; }
-    uint32_t cellCount() const { return dimensions_.x * dimensions_.y * dimensions_.z; }
+    /// The coarse grid's cells along each axis and their width.
+    glm::uvec3 dimensions() const { return coarse_.dimensions; }
+    float cellSize() const { return coarse_.cell_size; }
+    /// The detail grid's (0 cells where there is none), and its box.
+    glm::uvec3 detailDimensions() const { return detail_.dimensions; }
+    float detailCellSize() const { return detail_.cell_size; }
+    glm::vec3 detailMin() const { return detail_.origin; }
+    glm::vec3 detailMax() const { return detail_max_; }
+    uint32_t cellCount() const { return coarse_.cellCount() + detail_.cellCount(); }
     uint32_t slotCount() const { return cellCount() * kDirections; }
-    float cellSize() const { return cell_size_; }
-    /// The cell holding `p`; points outside the bounds take the nearest cell.
+    /// The cell holding `p`: the detail grid's inside its box, else the coarse grid's, where
+    /// points outside the bounds take the nearest cell.
     uint32_t cellOf(glm::vec3 p) const;
     /// The slot of a surface at `p` facing `normal` (any length; not finite counts as +X).
     uint32_t slotOf(glm::vec3 p, glm::vec3 normal) const { return cellOf(p) * kDirections + directionOf(normal); }
@@ -61,10 +73,23 @@ public:
     float probability(uint32_t slot, uint32_t group) const;
 
 private:
-    glm::vec3 origin_{0.0f};
-    float cell_size_ = 1.0f;
-    float inverse_cell_size_ = 1.0f;
-    glm::uvec3 dimensions_{1u};
+    /// Cubic cells from `origin`, `dimensions` of them along each axis (0 for no grid).
+    struct Lattice {
+        glm::vec3 origin{0.0f};
+        float cell_size = 0.0f;
+        float inverse_cell_size = 0.0f;
+        glm::uvec3 dimensions{0u};
+
+        Lattice() = default;
+        Lattice(glm::vec3 bounds_min, glm::vec3 bounds_max, uint32_t cells_along_longest);
+        uint32_t cellCount() const { return dimensions.x * dimensions.y * dimensions.z; }
+        /// The nearest cell to `p` (NaN counts as the first along its axis).
+        uint32_t cellOf(glm::vec3 p) const;
+    };
+
+    Lattice coarse_{glm::vec3(0.0f), glm::vec3(0.0f), 1u};
+    Lattice detail_;
+    glm::vec3 detail_max_{0.0f};
     std::vector<uint32_t> first_ =
         std::vector<uint32_t>(kDirections + 1, 0u);  ///< slot s's shares are shares_[first_[s], first_[s + 1])
     std::vector<Share> shares_;                      ///< sorted by group within each slot

@@ -29,6 +29,15 @@ constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr float kPowerShare = 0.25f;
 /// The grid the shares are learned in: cubic cells, this many along the scene's longest axis.
 constexpr uint32_t kCellsAlongLongest = 32;
+/// Where the scene's cameras and its local lights (all but the sun and sky), with the surfaces
+/// around them, lie within at most this part of the scene's longest extent, once widened by
+/// kDetailMargin of their own extent on each side (and at least 1/kDetailSmallestMarginDivisor
+/// of the scene), that box gets a detail grid of kCellsAlongLongest cells of its own: a flat of
+/// lamp-lit rooms on a 2 km ground otherwise sits in one 62 m cell with the sunlit ground around it.
+constexpr float kDetailMostOfScene = 0.5f;
+constexpr float kDetailMargin = 0.25f;
+constexpr float kDetailFarthestOfMedian = 4.0f;
+constexpr uint32_t kDetailSmallestMarginDivisor = 1024;
 /// Emissive triangles are grouped by connected piece, so a lamp of many triangles is one group
 /// and its shares are measured, not guessed per triangle; a piece wider than two cells of a
 /// grid this coarse is split by its cells.
@@ -278,11 +287,92 @@ void LightSampler::groupLights() {
     }
 }
 
+std::optional<std::pair<glm::vec3, glm::vec3>> LightSampler::detailBox(const Tracer& tracer) const {
+    // Where local lights compete and people look: the scene's cameras, its lights other than the
+    // sun and sky, and the surfaces around them (the rooms they are in), found by rays in 14
+    // directions from each camera and from the middle of each local light group. Hits further
+    // than kDetailFarthestOfMedian times a point's median hit are left out: a ray out of a window
+    // to the horizon says nothing about the room.
+    glm::vec3 lo(kInfinity), hi(-kInfinity);
+    const auto include = [&](glm::vec3 p) {
+        if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return;
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    };
+    std::vector<glm::vec3> origins;
+    for (const Camera& camera : scene_.cameras) origins.push_back(camera.position);
+    const size_t cameras = origins.size();
+    for (uint32_t g = 0; g < spatial_.groups; ++g) {
+        glm::dvec3 sum(0.0);
+        uint32_t members = 0;
+        for (uint32_t i = group_first_[g]; i < group_first_[g + 1]; ++i) {
+            const Entry& entry = entries_[group_entries_[i]];
+            if (entry.kind == Kind::Punctual && scene_.lights[entry.index].type != LightType::Directional) {
+                include(scene_.lights[entry.index].position);
+                sum += glm::dvec3(scene_.lights[entry.index].position);
+                ++members;
+            } else if (entry.kind == Kind::Triangle) {
+                const glm::uvec3 tri = scene_.triangles[entry.index];
+                for (const uint32_t v : {tri.x, tri.y, tri.z}) include(scene_.positions[v]);
+                sum += glm::dvec3(scene_.positions[tri.x] + scene_.positions[tri.y] + scene_.positions[tri.z]) / 3.0;
+                ++members;
+            }
+        }
+        if (members > 0) origins.push_back(glm::vec3(sum / double(members)));
+    }
+    if (origins.size() == cameras) return std::nullopt;  // only the sun and sky
+    for (const glm::vec3 origin : origins) {
+        include(origin);
+        std::array<float, 14> distances;
+        std::array<glm::vec3, 14> hits;
+        size_t found = 0;
+        for (int d = 0; d < 14; ++d) {
+            // The 6 axes, then the 8 diagonals.
+            glm::vec3 direction(0.0f);
+            if (d < 6) {
+                direction[d / 2] = d % 2 ? -1.0f : 1.0f;
+            } else {
+                direction = glm::normalize(glm::vec3(d & 1 ? -1.0f : 1.0f, d & 2 ? -1.0f : 1.0f, d & 4 ? -1.0f : 1.0f));
+            }
+            RayHit hit;
+            if (!tracer.intersect(Ray{origin, direction}, hit)) continue;
+            distances[found] = hit.t;
+            hits[found++] = origin + hit.t * direction;
+        }
+        if (found == 0) continue;
+        std::array<float, 14> sorted = distances;
+        std::nth_element(sorted.begin(), sorted.begin() + found / 2, sorted.begin() + found);
+        const float farthest = kDetailFarthestOfMedian * sorted[found / 2];
+        for (size_t k = 0; k < found; ++k)
+            if (distances[k] <= farthest) include(hits[k]);
+    }
+    const auto longestOf = [](glm::vec3 extent) { return std::max({extent.x, extent.y, extent.z}); };
+    const float scene_longest = longestOf(scene_.bounds_max - scene_.bounds_min);
+    const float margin = std::max(kDetailMargin * longestOf(hi - lo),
+                                  scene_longest / float(kDetailSmallestMarginDivisor));
+    lo = glm::max(lo - margin, scene_.bounds_min);
+    hi = glm::min(hi + margin, scene_.bounds_max);
+    if (!(longestOf(hi - lo) <= kDetailMostOfScene * scene_longest)) return std::nullopt;
+    return std::make_pair(lo, hi);
+}
+
 void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
-    grid_ = LightSelectionGrid(scene_.bounds_min, scene_.bounds_max, kCellsAlongLongest);
+    std::vector<SurfacePoint> points = sampleSurfacePoints(scene_, kLearningPoints, kLearningSeed);
+    if (const auto detail = detailBox(tracer)) {
+        grid_ = LightSelectionGrid(scene_.bounds_min, scene_.bounds_max, kCellsAlongLongest, detail->first,
+                                   detail->second, kCellsAlongLongest);
+        const std::vector<SurfacePoint> inside = sampleSurfacePointsInBox(scene_, detail->first, detail->second,
+                                                                          kLearningPoints, kLearningSeed + 1u);
+        points.insert(points.end(), inside.begin(), inside.end());
+        spatial_.detail_cells = grid_.detailDimensions();
+        spatial_.detail_cell_size = grid_.detailCellSize();
+        spatial_.detail_min = grid_.detailMin();
+        spatial_.detail_max = grid_.detailMax();
+    } else {
+        grid_ = LightSelectionGrid(scene_.bounds_min, scene_.bounds_max, kCellsAlongLongest);
+    }
     spatial_.cells = grid_.dimensions();
     spatial_.cell_size = grid_.cellSize();
-    const std::vector<SurfacePoint> points = sampleSurfacePoints(scene_, kLearningPoints, kLearningSeed);
     // The points of each cell, in the order they were drawn.
     std::vector<uint32_t> cell_of_point(points.size());
     for (size_t i = 0; i < points.size(); ++i) cell_of_point[i] = grid_.cellOf(points[i].position);
@@ -435,7 +525,7 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
 }
 
 std::string SpatialLightSelection::describe() const {
-    char text[320];
+    char text[512];
     if (!active()) {
         std::snprintf(text, sizeof text, "by power (%s)",
                       groups == 0      ? "no lights"
@@ -443,12 +533,20 @@ std::string SpatialLightSelection::describe() const {
                       : lit_slots == 0 ? "no shadow ray found light reaching a surface"
                                        : "it picks about as the shadow rays measured, everywhere");
     } else {
+        char detail[160] = "";
+        const glm::vec3 box = detail_max - detail_min;
+        if (detail_cells.x > 0)
+            std::snprintf(detail, sizeof detail,
+                          ", and %ux%ux%u of %.3g over the %.3gx%.3gx%.3g box of the cameras and lamps", detail_cells.x,
+                          detail_cells.y, detail_cells.z, double(detail_cell_size), double(box.x), double(box.y),
+                          double(box.z));
+        const uint32_t slots = (cells.x * cells.y * cells.z + detail_cells.x * detail_cells.y * detail_cells.z) * 6u;
         std::snprintf(text, sizeof text,
                       "by where light arrives in %u of %u (cell, direction) slots (a %ux%ux%u grid of %.3g-wide "
-                      "cells; %u light groups%s; %llu shadow rays, %.2f s), by power elsewhere and in %.0f%% of picks "
-                      "everywhere",
-                      learned_slots, cells.x * cells.y * cells.z * 6u, cells.x, cells.y, cells.z, double(cell_size),
-                      groups, grouped_by_region ? ", lights grouped by region: too many to measure one by one" : "",
+                      "cells%s; %u light groups%s; %llu shadow rays, %.2f s), by power elsewhere and in %.0f%% of "
+                      "picks everywhere",
+                      learned_slots, slots, cells.x, cells.y, cells.z, double(cell_size), detail, groups,
+                      grouped_by_region ? ", lights grouped by region: too many to measure one by one" : "",
                       static_cast<unsigned long long>(shadow_rays), seconds, 100.0 * double(kPowerShare));
     }
     return text;

@@ -16,7 +16,9 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sharcbake {
@@ -37,6 +39,10 @@ struct SpatialLightSelection {
     bool grouped_by_region = false;  ///< too many pieces and lights: grouped by coarse cells instead
     glm::uvec3 cells{0u};        ///< the grid's cells along each axis
     float cell_size = 0.0f;      ///< world units
+    /// The finer grid over where the cameras and local lights are (0 cells where there is none).
+    glm::uvec3 detail_cells{0u};
+    float detail_cell_size = 0.0f;
+    glm::vec3 detail_min{0.0f}, detail_max{0.0f};
     uint32_t lit_slots = 0;      ///< (cell, direction) slots whose surfaces some light reached
     uint32_t learned_slots = 0;  ///< of those, the slots that select by their measured shares
     uint64_t shadow_rays = 0;
@@ -120,6 +126,8 @@ private:
     /// LightSampler(const Tracer&)'s parts: the groups, then the slots' shares.
     void groupLights();
     void learnWhereLightArrives(const Tracer& tracer);
+    /// The box the detail grid covers, or none where it would cover most of the scene anyway.
+    std::optional<std::pair<glm::vec3, glm::vec3>> detailBox(const Tracer& tracer) const;
 
     const Scene& scene_;
     std::vector<Entry> entries_;

@@ -26,6 +26,12 @@ struct SurfacePoint {
 /// the same points. Empty for an empty scene; degenerate triangles (no area) are never picked.
 std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count, uint32_t seed = 0);
 
+/// Up to `count` points spread the same way over the parts of the surfaces inside the box
+/// [box_min, box_max] (each triangle clipped to it): a small region of a large scene gets as
+/// many points as the whole scene would.
+std::vector<SurfacePoint> sampleSurfacePointsInBox(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max,
+                                                   uint32_t count, uint32_t seed = 0);
+
 /// The scene's total surface area (world units squared).
 double surfaceArea(const Scene& scene);
 

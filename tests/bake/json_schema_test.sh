@@ -53,6 +53,11 @@ PY
 expect 0 "render from an orthographic camera --stats-json" "$sharcbake" render "$work/ortho/cornell_ortho.gltf" \
     -o "$work/ortho.exr" --resolution 64 --spp 4 -q --stats-json "$work/render-stats-ortho.json"
 
+# A flat of lamp-lit rooms on a ground 2 km wide: light selection adds a detail grid.
+"$python" "$(dirname "$0")/../bench/light_selection_scenes.py" "$work" || fail "writing the light-selection scenes"
+expect 0 "render with a light-selection detail grid --stats-json" "$sharcbake" render "$work/flat_on_ground.gltf" \
+    -o "$work/detail.exr" --resolution 16 --spp 1 -q --stats-json "$work/render-stats-detail.json"
+
 # info, validate (a good file, one with a byte flipped in its voxels, a missing one), compare.
 expect 0 "info --json" sh -c "'$sharcbake' info '$work/c.sharc' --json > '$work/info.json'"
 expect 0 "validate --json, valid" sh -c "'$sharcbake' validate '$work/c.sharc' --json > '$work/validate-ok.json'"
@@ -82,7 +87,7 @@ def check(condition, what):
 outputs = {
     "bake-stats": ["bake-stats.json"],
     "render-stats": ["render-stats.json", "render-stats-cache.json", "render-stats-debug-cache.json",
-                     "render-stats-debug-bounces.json", "render-stats-ortho.json"],
+                     "render-stats-debug-bounces.json", "render-stats-ortho.json", "render-stats-detail.json"],
     "info": ["info.json"],
     "validate": ["validate-ok.json", "validate-corrupt.json", "validate-missing.json"],
     "compare": ["compare.json"],
@@ -119,6 +124,9 @@ check(ortho["yfov"] is None and ortho["orthographic_half_height"] == 0.6
       "render stats: an orthographic camera's half height, no yfov; none for a perspective camera")
 check("debug_missing" in documents["render-stats-debug-cache.json"]
       and "debug_missing" not in documents["render-stats-debug-bounces.json"], "render stats: debug_missing only with --debug-view cache")
+detail = documents["render-stats-detail.json"]["light_selection"]["detail"]
+check(detail is not None and detail["cell_size"] < 1.0 and documents["render-stats.json"]["light_selection"]["detail"] is None,
+      "render stats: a light-selection detail grid over the flat on a 2 km ground, none in the Cornell box")
 check(any("probes" in row for row in documents["report/convergence.json"]["checkpoints"]), "convergence.json rows with probes")
 furnace = documents["furnace_report/convergence.json"]
 check(any("voxel" in row for row in furnace["checkpoints"]) and

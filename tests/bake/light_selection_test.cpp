@@ -6,6 +6,7 @@
 #include "tracing/light_grid.h"
 #include "tracing/lights.h"
 #include "tracing/sampling.h"
+#include "tracing/surface_points.h"
 #include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
@@ -37,6 +38,24 @@ TEST(LightSelectionGrid, CellsAreCubesAlongTheLongestAxisAndOutsidePointsTakeThe
     EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(-1.0f, 0.5f, 0.0f)), 1u);
     EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(0.0f, 0.0f, -2.0f)), 5u);
     EXPECT_EQ(LightSelectionGrid::directionOf(glm::vec3(std::numeric_limits<float>::quiet_NaN())), 0u);
+}
+
+TEST(LightSelectionGrid, ADetailBoxTakesThePointsInsideItInFinerCellsNumberedAfterTheCoarseOnes) {
+    const LightSelectionGrid grid(glm::vec3(-1000.0f, 0.0f, -1000.0f), glm::vec3(1000.0f, 10.0f, 1000.0f), 32,
+                                  glm::vec3(0.0f), glm::vec3(16.0f, 4.0f, 8.0f), 32);
+    EXPECT_EQ(grid.dimensions(), glm::uvec3(32u, 1u, 32u));
+    EXPECT_EQ(grid.detailDimensions(), glm::uvec3(32u, 8u, 16u));
+    EXPECT_FLOAT_EQ(grid.detailCellSize(), 0.5f);
+    const uint32_t coarse = 32u * 32u;
+    EXPECT_EQ(grid.cellCount(), coarse + 32u * 8u * 16u);
+    EXPECT_EQ(grid.slotCount(), grid.cellCount() * 6u);
+    EXPECT_EQ(grid.cellOf(glm::vec3(0.25f, 0.25f, 0.25f)), coarse);
+    EXPECT_EQ(grid.cellOf(glm::vec3(1.25f, 0.75f, 0.25f)), coarse + 32u + 2u);
+    EXPECT_EQ(grid.cellOf(glm::vec3(16.0f, 4.0f, 8.0f)), grid.cellCount() - 1);  // the box's far corner is in it
+    // Just outside the box: the coarse cell there (62.5 wide, the middle of 32 along x and z).
+    EXPECT_EQ(grid.cellOf(glm::vec3(16.5f, 1.0f, 1.0f)), 16u * 32u + 16u);
+    EXPECT_EQ(grid.cellOf(glm::vec3(-0.5f, 1.0f, 1.0f)), 16u * 32u + 15u);
+    EXPECT_LT(grid.cellOf(glm::vec3(std::numeric_limits<float>::quiet_NaN())), coarse);
 }
 
 TEST(LightSelectionGrid, SharesAreTheWeightsNormalisedAndPickedInProportion) {
@@ -191,11 +210,17 @@ Scene roomOnSunlitGround() {
 }
 
 TEST(SpatialLightSelection, EachPointOfASlotHasAnEqualSayInItsShares) {
-    const Scene scene = roomOnSunlitGround();
+    Scene scene = roomOnSunlitGround();
+    // A camera at the ground's far corner: the cameras and lamps span the scene, so there is no
+    // detail box, and the room shares its coarse cell with the ground.
+    Camera far_away;
+    far_away.position = glm::vec3(-95.0f, 1.5f, -95.0f);
+    scene.cameras.push_back(far_away);
     const Tracer tracer(scene);
     const LightSampler by_power(scene);
     const LightSampler learned(tracer);
     ASSERT_TRUE(learned.spatialSelection().active());
+    ASSERT_EQ(learned.spatialSelection().detail_cells.x, 0u);
     const size_t bulb = learned.entryCount() - 2;
     const glm::vec3 floor_inside(2.0f, 0.0f, 3.0f);
     EXPECT_LT(by_power.selectionPmf(bulb, floor_inside, kUp), 1e-3f);
@@ -207,6 +232,82 @@ TEST(SpatialLightSelection, EachPointOfASlotHasAnEqualSayInItsShares) {
     std::printf("[light selection] the bulb's share of the floor's picks: %.3g (by power %.3g)\n", double(picked),
                 double(by_power.selectionPmf(bulb, floor_inside, kUp)));
     EXPECT_GT(picked, 0.15f);
+}
+
+TEST(SurfacePointsInBox, SpreadByAreaOverTheClippedSurfacesInside) {
+    Scene scene = roomOnSunlitGround();  // the ground's two triangles are 200 m wide
+    const glm::vec3 lo(-3.0f, -1.0f, -3.0f), hi(3.0f, 1.0f, 3.0f);
+    constexpr uint32_t kCount = 20000;
+    const std::vector<SurfacePoint> points = sampleSurfacePointsInBox(scene, lo, hi, kCount, 3u);
+    ASSERT_EQ(points.size(), kCount);
+    // Inside the box: the ground's 6 x 6 m and the room's 2.5 x 2.5 m floor corner (its floor is
+    // [0.5, 4.5]^2 at y = 0) and the walls' 1 m strips in x = 0.5 and z = 0.5 up to y = 1.
+    const double ground = 36.0, floor = 2.5 * 2.5, walls = 2.0 * 2.5 * 1.0;
+    uint32_t on_ground = 0, on_floor = 0, on_walls = 0;
+    for (const SurfacePoint& p : points) {
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(p.position, lo - 1e-4f)) &&
+                    glm::all(glm::lessThanEqual(p.position, hi + 1e-4f)))
+            << p.position.x << " " << p.position.y << " " << p.position.z;
+        // The point lies on its triangle at its barycentrics.
+        const glm::uvec3 tri = scene.triangles[p.triangle];
+        const glm::vec3 at = (1.0f - p.barycentrics.x - p.barycentrics.y) * scene.positions[tri.x] +
+                             p.barycentrics.x * scene.positions[tri.y] + p.barycentrics.y * scene.positions[tri.z];
+        ASSERT_NEAR(glm::length(at - p.position), 0.0f, 1e-4f);
+        if (p.position.y < -0.005f) ++on_ground;
+        else if (std::abs(p.position.y) < 1e-4f) ++on_floor;
+        else ++on_walls;
+    }
+    const double total = ground + floor + walls;
+    // Within 5 standard deviations of a binomial share.
+    for (const auto& [count, area] :
+         {std::pair(on_ground, ground), std::pair(on_floor, floor), std::pair(on_walls, walls)}) {
+        const double share = area / total;
+        EXPECT_NEAR(double(count) / kCount, share, 5.0 * std::sqrt(share * (1.0 - share) / kCount)) << area;
+    }
+    EXPECT_TRUE(sampleSurfacePointsInBox(scene, glm::vec3(500.0f), glm::vec3(501.0f), kCount, 3u).empty());
+}
+
+TEST(SpatialLightSelection, ARoomOnAGroundAKilometreWideGetsCellsOfItsOwnSize) {
+    Scene scene = roomOnSunlitGround();
+    // Widen the ground to 2 km: the coarse cells are 62.5 m, the whole room one of them.
+    for (size_t v = scene.positions.size() - 4; v < scene.positions.size(); ++v) scene.positions[v] *= 10.0f;
+    scene.bounds_min = glm::vec3(-1000.0f, -0.1f, -1000.0f);
+    scene.bounds_max = glm::vec3(1000.0f, 2.5f, 1000.0f);
+    Camera camera;
+    camera.name = "inside";
+    camera.position = glm::vec3(1.0f, 1.5f, 1.0f);
+    scene.cameras.push_back(camera);
+    const Tracer tracer(scene);
+    const LightSampler learned(tracer);
+    const SpatialLightSelection& spatial = learned.spatialSelection();
+    ASSERT_TRUE(spatial.active());
+    EXPECT_FLOAT_EQ(spatial.cell_size, 62.5f);
+    // The box holds the room (the rays from the camera and the bulb find its walls) and a margin.
+    ASSERT_GT(spatial.detail_cells.x, 0u) << spatial.describe();
+    EXPECT_LE(spatial.detail_min.x, 0.5f);
+    EXPECT_GE(spatial.detail_max.x, 4.5f);
+    EXPECT_LE(spatial.detail_min.y, 0.0f);
+    EXPECT_LT(spatial.detail_max.x - spatial.detail_min.x, 10.0f);
+    EXPECT_LT(spatial.detail_cell_size, 0.3f);
+    EXPECT_NE(spatial.describe().find("over the"), std::string::npos) << spatial.describe();
+    // The floor picks the bulb, and its estimate is the bulb's analytic light: intensity x cos /
+    // distance^2 (the sun cannot reach it).
+    const size_t bulb = learned.entryCount() - 2;
+    const glm::vec3 floor_inside(2.0f, 0.0f, 3.0f);
+    EXPECT_GT(learned.selectionPmf(bulb, floor_inside, kUp), 0.7f);
+    constexpr uint32_t kSamples = 1u << 16;
+    const auto [mean, variance] = directLightEstimate(tracer, learned, floor_inside, kSamples);
+    const glm::vec3 to_bulb = scene.lights[0].position - floor_inside;
+    const double analytic = double(scene.lights[0].intensity.x) * double(to_bulb.y) /
+                            std::pow(double(glm::length(to_bulb)), 3.0);
+    EXPECT_NEAR(mean, analytic, 3.0 * std::sqrt(variance / kSamples) + 1e-3 * analytic);
+    // By power the bulb is picked 1e-8 of the time: its estimate would be 0 at these samples.
+    const LightSampler by_power(scene);
+    EXPECT_LT(by_power.selectionPmf(bulb, floor_inside, kUp), 1e-6f);
+    // A scene whose cameras and lamps spread over most of it gets no detail box.
+    const Scene rooms = twoRoomsOneBright();
+    const Tracer rooms_tracer(rooms);
+    EXPECT_EQ(LightSampler(rooms_tracer).spatialSelection().detail_cells.x, 0u);
 }
 
 TEST(SpatialLightSelection, EstimatesStayUnbiasedWithFarLessNoiseWhereAPowerfulLightIsHidden) {

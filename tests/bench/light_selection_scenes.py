@@ -11,6 +11,9 @@ thin_walls_both_seen.gltf, thin_walls_off_grid.gltf
 flat.gltf        four rooms in a row joined by doorways: a sun and a sky through room 0's window,
                  a 30 cd lamp in room 1, a ceiling panel in room 2, a 3 cd lamp in room 3; one
                  camera per room. By power the sun takes 98% of the picks everywhere.
+flat_on_ground.gltf
+                 the same flat on a sunlit ground 2 km wide: the scene-wide grid's cells are 62.5 m,
+                 and by power the lamps get 1e-8 of the picks (their light all but missing).
 
 Usage: light_selection_scenes.py OUT_DIR
 """
@@ -154,7 +157,7 @@ def thin_walls(path, wall_x=0.0, camera_in_a=False):
     s.write(path)
 
 
-def flat(path):
+def flat(path, ground=0.0):
     s = Scene()
     wall = s.material("wall", (0.75, 0.75, 0.75))
     floor = s.material("floor", (0.5, 0.4, 0.3))
@@ -178,6 +181,9 @@ def flat(path):
     s.light("lamp_room_1", "point", 30.0, position=(6.0, 2.2, 0.0))
     s.quads("panel_room_2", [((9.6, height - 0.01, -0.4), (0.8, 0, 0), (0, 0, 0.8))], panel)  # facing down
     s.light("lamp_room_3", "point", 3.0, position=(14.0, 1.5, 1.0))
+    if ground:
+        h = ground / 2
+        s.quads("ground", [((-h, -0.02, -h), (0, 0, ground), (ground, 0, 0))], s.material("ground", (0.3, 0.3, 0.3)))
     s.extras = {"sharcbake": {"sky_radiance": [0.3, 0.35, 0.45]}}
     for k in range(4):
         x = 4.0 * k
@@ -192,3 +198,4 @@ if __name__ == "__main__":
     thin_walls(sys.argv[1] + "/thin_walls_both_seen.gltf", camera_in_a=True)
     thin_walls(sys.argv[1] + "/thin_walls_off_grid.gltf", wall_x=0.37, camera_in_a=True)
     flat(sys.argv[1] + "/flat.gltf")
+    flat(sys.argv[1] + "/flat_on_ground.gltf", ground=2000.0)
