@@ -666,7 +666,8 @@ struct GridDecision {
 
 /// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
 /// or checks the given one against the scene.
-GridDecision decideGrid(BakeJob& job, const Scene& scene, const SeenSurface* seen) {
+GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* seen) {
+    const Scene& scene = tracer.scene();
     BakeSettings& settings = job.settings;
     ViewRegion& region = settings.view_region;
     if (region.kind == ViewRegion::Kind::Points && region.source == "gltf") {
@@ -687,9 +688,13 @@ GridDecision decideGrid(BakeJob& job, const Scene& scene, const SeenSurface* see
     GridDecision decision;
     HashGridParameters& grid = settings.sharc.grid;
     if (job.level_bias_auto) {
-        const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen);
+        const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen, &region);
         grid.level_bias = fit.level_bias;
         decision.choice = "auto, " + fit.reason;
+        if (region.kind == ViewRegion::Kind::FreeSpace) {
+            const std::string warning = checkVoxelsAroundCameras(tracer, grid, fit, job.voxel_budget, seen);
+            if (!warning.empty()) decision.warnings.push_back(warning);
+        }
     } else {
         char text[96];
         std::snprintf(text, sizeof text, "given: level bias %.9g, finest voxels %.4g wide", double(grid.level_bias),
@@ -709,7 +714,10 @@ GridDecision decideGrid(BakeJob& job, const Scene& scene, const SeenSurface* see
                       std::pow(double(grid.logarithm_base), double(decision.finest_level) - double(grid.level_bias)));
         decision.misses = text;
     }
-    if (!job.level_bias_auto) decision.warnings = checkGridForScene(scene, grid, decision.finest_level, job.voxel_budget);
+    if (!job.level_bias_auto) {
+        for (std::string& warning : checkGridForScene(scene, grid, decision.finest_level, job.voxel_budget))
+            decision.warnings.push_back(std::move(warning));
+    }
     if (!job.scene_scale_auto) {
         const std::string warning = checkSceneScale(grid.scene_scale);
         if (!warning.empty()) decision.warnings.push_back(warning);
@@ -947,7 +955,7 @@ private:
             for (const Camera& camera : scene_.cameras) viewpoints.push_back(camera.position);
             seen_ = surfaceSeenFrom(*tracer_, viewpoints, kSeenSurfaceSamples, job_.settings.seed);
         }
-        grid_decision_ = decideGrid(job_, scene_, seen_ ? &*seen_ : nullptr);
+        grid_decision_ = decideGrid(job_, *tracer_, seen_ ? &*seen_ : nullptr);
         for (const std::string& warning : grid_decision_.warnings)
             std::fprintf(stderr, "warning: %s\n", warning.c_str());
         warnAboutLeaks();
@@ -1594,7 +1602,9 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--voxel-budget", o->voxel_budget,
                     "Voxels for the whole visible surface at the finest level (--level-bias auto), or for the "
                     "part the cameras' free space sees when that is under a quarter of it (a room beside a large "
-                    "ground plane); each coarser level adds about a quarter of the one below")
+                    "ground plane); each coarser level adds about a quarter of the one below. With --view-region "
+                    "gltf, path, box or distance, the surface is counted at the level those cameras ask for at each "
+                    "place instead (finer voxels where they stand, coarse far away)")
         ->capture_default_str()
         ->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
     cmd->add_option("--view-region", o->view_region,

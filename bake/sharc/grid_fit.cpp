@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace sharcbake {
 namespace {
@@ -141,6 +142,97 @@ double seenTriangleArea(const Tracer& tracer, const std::vector<glm::vec3>& view
     return area;
 }
 
+/// Points spread over the surface by its distance from a view region, and what each stands for.
+struct DistanceSamples {
+    std::vector<float> distance2;  ///< from the point to the nearest place a region camera may be
+    std::vector<double> weight;    ///< the share of the scene's area the point stands for (sum 1)
+};
+
+/// Points per shell of distance (regionDistanceSamples).
+constexpr uint32_t kPointsPerShell = 512;
+constexpr uint32_t kMostShells = 40;
+
+/// The squared distance from `p` to the nearest place of a Points or Box region.
+float distance2ToRegion(glm::vec3 p, const ViewRegion& region) {
+    if (region.kind == ViewRegion::Kind::Box) {
+        const glm::vec3 outside = glm::max(glm::max(region.box_min - p, p - region.box_max), glm::vec3(0.0f));
+        return glm::dot(outside, outside);
+    }
+    float nearest2 = std::numeric_limits<float>::infinity();
+    for (const glm::vec3 q : region.points) nearest2 = std::min(nearest2, glm::dot(p - q, p - q));
+    return nearest2;
+}
+
+/// The surface sampled in shells around a Points or Box region: boxes around the region growing
+/// twofold until they hold the scene, each sampled by area, each sample weighted by the area of
+/// the shell it falls in (its box less the one inside it). Spread by area over the whole scene,
+/// a house on a ground two kilometres wide got no point at all, and it is the part that costs.
+DistanceSamples regionDistanceSamples(const Scene& scene, const ViewRegion& region, uint32_t seed) {
+    DistanceSamples samples;
+    glm::vec3 core_min(std::numeric_limits<float>::infinity()), core_max(-std::numeric_limits<float>::infinity());
+    if (region.kind == ViewRegion::Kind::Box) {
+        core_min = region.box_min;
+        core_max = region.box_max;
+    } else {
+        for (const glm::vec3 q : region.points) {
+            core_min = glm::min(core_min, q);
+            core_max = glm::max(core_max, q);
+        }
+    }
+    const double total = surfaceAreaInBox(scene, scene.bounds_min, scene.bounds_max);
+    if (!(core_min.x <= core_max.x) || !(total > 0.0)) return samples;
+    const glm::vec3 scene_extent = scene.bounds_max - scene.bounds_min;
+    const glm::vec3 core_extent = core_max - core_min;
+    float margin = std::max({std::max({core_extent.x, core_extent.y, core_extent.z}) / 8.0f,
+                             std::max({scene_extent.x, scene_extent.y, scene_extent.z}) / 4096.0f, 1e-30f});
+    double inner_area = 0.0;
+    glm::vec3 inner_min(0.0f), inner_max(-1.0f);  // empty
+    for (uint32_t shell = 0; shell < kMostShells; ++shell, margin *= 2.0f) {
+        const glm::vec3 box_min = core_min - margin, box_max = core_max + margin;
+        const bool holds_scene = glm::all(glm::lessThanEqual(box_min, scene.bounds_min)) &&
+                                 glm::all(glm::greaterThanEqual(box_max, scene.bounds_max));
+        const double area = holds_scene ? total : std::min(total, surfaceAreaInBox(scene, box_min, box_max));
+        const double shell_area = std::max(area - inner_area, 0.0);
+        if (shell_area > 0.0) {
+            const std::vector<SurfacePoint> points = sampleSurfacePointsInBox(scene, box_min, box_max, kPointsPerShell,
+                                                                              seed + shell);
+            const auto inInner = [&](glm::vec3 p) {
+                return glm::all(glm::greaterThanEqual(p, inner_min)) && glm::all(glm::lessThanEqual(p, inner_max));
+            };
+            size_t in_shell = 0;
+            for (const SurfacePoint& p : points) in_shell += !inInner(p.position);
+            // A shell too thin for its box's points is stood for by all of them (nearer, so finer:
+            // it counts no fewer voxels than it has).
+            const bool all = in_shell == 0;
+            const size_t used = all ? points.size() : in_shell;
+            for (const SurfacePoint& p : points) {
+                if (!all && inInner(p.position)) continue;
+                samples.distance2.push_back(distance2ToRegion(p.position, region));
+                samples.weight.push_back(shell_area / total / double(used));
+            }
+        }
+        inner_area = area;
+        inner_min = box_min;
+        inner_max = box_max;
+        if (holds_scene) break;
+    }
+    return samples;
+}
+
+/// Voxels of `surface_area` where each sample's share is at the level a camera at its distance
+/// asks for, in level-1 voxels of that bias.
+double voxelsAtViewDistances(double surface_area, const DistanceSamples& samples, HashGridParameters grid,
+                             float level_bias) {
+    grid.level_bias = level_bias;
+    const HashGridKeyer keyer(grid);
+    double voxels = 0.0;
+    for (size_t i = 0; i < samples.distance2.size(); ++i) {
+        const double size = double(keyer.voxelSizeAt(keyer.levelOf(samples.distance2[i])));
+        voxels += samples.weight[i] / (size * size);
+    }
+    return surface_area * voxels;
+}
+
 }  // namespace
 
 SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& viewpoints, uint32_t samples,
@@ -161,8 +253,8 @@ SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& 
     return seen;
 }
 
-GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
-                     const SeenSurface* seen) {
+GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget, const SeenSurface* seen,
+                     const ViewRegion* region) {
     GridFit fit;
     fit.scene_surface_area = visibleSurfaceArea(scene);
     fit.surface_area = fit.scene_surface_area;
@@ -186,10 +278,46 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     const double exact = 1.0 - std::log(double(grid.scene_scale) * size) / std::log(b);
     // Rounded down to 1/64: the voxels are at least `size` and the bias prints exactly.
     fit.level_bias = float(std::floor(exact * 64.0) / 64.0);
+    const bool keeps_cameras_to_places = region && (region->kind == ViewRegion::Kind::Points ||
+                                                    region->kind == ViewRegion::Kind::Box ||
+                                                    region->kind == ViewRegion::Kind::Distance);
+    DistanceSamples samples;  // where a region keeps its cameras to places
+    if (keeps_cameras_to_places && !fit.limited_by_range) {
+        // Level 1 everywhere is the coarsest such a region can need; finer biases, in 1/64 steps,
+        // while the surface at its cameras' levels fits the budget (the count only grows with the
+        // bias, but for steps within a level: the search finds one bias where it fits). Never
+        // finer than the grid range allows.
+        samples = region->kind == ViewRegion::Kind::Distance
+                      ? DistanceSamples{{region->min_distance * region->min_distance}, {1.0}}
+                      : regionDistanceSamples(scene, *region, 0x5eedu);
+        const double finest_exact = 1.0 -
+                                    std::log(double(grid.scene_scale) * std::max(range_limit, 1e-30)) / std::log(b);
+        const int64_t most_steps = std::clamp<int64_t>(int64_t(std::floor((finest_exact - fit.level_bias) * 64.0)), 0,
+                                                       64 * 64);
+        const auto fits = [&](int64_t steps) {
+            return voxelsAtViewDistances(fit.surface_area, samples, grid, fit.level_bias + float(steps) / 64.0f) <=
+                   budget;
+        };
+        int64_t lo = 0, hi = most_steps;  // fits(lo) holds: level 1 everywhere fits the budget
+        if (!samples.distance2.empty() && hi > 0) {
+            while (lo < hi) {
+                const int64_t mid = lo + (hi - lo + 1) / 2;
+                if (fits(mid)) {
+                    lo = mid;
+                } else {
+                    hi = mid - 1;
+                }
+            }
+            fit.fitted_to_view_distances = lo > 0;
+            fit.level_bias += float(lo) / 64.0f;
+        }
+    }
     HashGridParameters fitted = grid;
     fitted.level_bias = fit.level_bias;
     fit.finest_voxel_size = voxelSize(kHashGridLevelMin, fitted);
     fit.estimated_voxels = fit.surface_area / (double(fit.finest_voxel_size) * double(fit.finest_voxel_size));
+    if (fit.fitted_to_view_distances)
+        fit.estimated_voxels = voxelsAtViewDistances(fit.surface_area, samples, grid, fit.level_bias);
 
     char surface[160];
     if (fit.fitted_to_seen) {
@@ -205,13 +333,21 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     } else {
         std::snprintf(surface, sizeof surface, "%.3g units^2 of visible surface", fit.surface_area);
     }
-    char text[480];
+    char text[640];
     if (fit.limited_by_range) {
         std::snprintf(text, sizeof text,
                       "level bias %.9g: finest voxels %.4g wide, the smallest the 17-bit grid allows %.4g units from "
                       "the origin (%s, about %.3g voxels at level 1; the budget would allow finer)",
                       double(fit.level_bias), double(fit.finest_voxel_size), farthestCoordinate(scene), surface,
                       fit.estimated_voxels);
+    } else if (fit.fitted_to_view_distances) {
+        std::snprintf(text, sizeof text,
+                      "level bias %.9g: finest voxels %.4g wide, so the %s take about %.3g voxels at the levels the "
+                      "view region's cameras ask for (budget %llu; level 1 for all of it would need voxels %.3g "
+                      "times wider); cameras closer than %.4g use level 1",
+                      double(fit.level_bias), double(fit.finest_voxel_size), surface, fit.estimated_voxels,
+                      (unsigned long long)voxel_budget, size / double(fit.finest_voxel_size),
+                      double(fit.finest_voxel_size) * b * double(grid.scene_scale));
     } else {
         std::snprintf(text, sizeof text,
                       "level bias %.9g: finest voxels %.4g wide, so the %s take about %.3g voxels at level 1 (budget "
@@ -221,6 +357,74 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     }
     fit.reason = text;
     return fit;
+}
+
+std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid, const GridFit& fit,
+                                     uint64_t voxel_budget, const SeenSurface* seen) {
+    const Scene& scene = tracer.scene();
+    if (scene.cameras.empty() || fit.fitted_to_view_distances) return {};
+    // The camera with the least room around it, against the finest voxels.
+    constexpr uint32_t kDirections = 64;
+    const Camera* tightest = nullptr;
+    float tightest_room = std::numeric_limits<float>::infinity();
+    for (const Camera& camera : scene.cameras) {
+        std::vector<float> distances;
+        for (uint32_t i = 0; i < kDirections; ++i) {
+            RayHit hit;
+            if (tracer.intersect(Ray{camera.position, sphericalFibonacciDirection(i, kDirections)}, hit))
+                distances.push_back(hit.t);
+        }
+        if (distances.size() < kDirections / 2) continue;  // mostly open around it: no room to compare
+        std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+        const float room = distances[distances.size() / 2];
+        if (room < tightest_room) {
+            tightest_room = room;
+            tightest = &camera;
+        }
+    }
+    const float enough = 0.5f * tightest_room;
+    if (!tightest || !(fit.finest_voxel_size > enough)) return {};
+    // What fitting to the glTF cameras' distances gives, in this budget and, where that is still
+    // too coarse, in the smallest of 4, 16, ... 4096 times it that is fine enough.
+    ViewRegion at_cameras;
+    at_cameras.kind = ViewRegion::Kind::Points;
+    for (const Camera& camera : scene.cameras) at_cameras.points.push_back(camera.position);
+    const GridFit at_cameras_fit = fitLevelBias(scene, grid, voxel_budget, seen, &at_cameras);
+    if (!(at_cameras_fit.finest_voxel_size * 2.0f <= fit.finest_voxel_size)) return {};
+    char fix[240];
+    if (at_cameras_fit.finest_voxel_size <= enough) {
+        std::snprintf(fix, sizeof fix, "--view-region gltf fits the voxels to their distances (%.3g wide here)",
+                      double(at_cameras_fit.finest_voxel_size));
+    } else {
+        uint64_t budget = voxel_budget;
+        GridFit larger = at_cameras_fit;
+        for (int step = 0; step < 6 && larger.finest_voxel_size > enough; ++step) {
+            budget *= 4;
+            larger = fitLevelBias(scene, grid, budget, seen, &at_cameras);
+        }
+        if (larger.finest_voxel_size <= enough) {
+            std::snprintf(fix, sizeof fix,
+                          "--view-region gltf --voxel-budget %llu fits the voxels to their distances (%.3g wide "
+                          "here; %.3g in the present budget)",
+                          (unsigned long long)budget, double(larger.finest_voxel_size),
+                          double(at_cameras_fit.finest_voxel_size));
+        } else {
+            std::snprintf(fix, sizeof fix,
+                          "--view-region gltf fits the voxels to their distances (%.3g wide here), and a larger "
+                          "--voxel-budget makes them finer",
+                          double(at_cameras_fit.finest_voxel_size));
+        }
+    }
+    char text[900];
+    std::snprintf(text, sizeof text,
+                  "the finest voxels, %.3g wide, are wider than half the space around %s (what it sees lies a "
+                  "median %.3g away): through the cache its view blurs together what shares a voxel, and light leaks "
+                  "through walls thinner than one. They are that wide because --view-region free (the default) "
+                  "lets a runtime camera stand anywhere the roaming camera reaches, so all %.3g units^2 it sees get "
+                  "level 1 within --voxel-budget %llu. If the runtime's cameras stay near the glTF cameras, %s",
+                  double(fit.finest_voxel_size), cameraLabel(*tightest).c_str(), double(tightest_room),
+                  fit.surface_area, (unsigned long long)voxel_budget, fix);
+    return text;
 }
 
 std::vector<std::string> checkGridForScene(const Scene& scene, const HashGridParameters& grid, uint32_t finest_level,

@@ -13,6 +13,7 @@
 /// in other units gets the same voxels (scaled) and the same level structure.
 #pragma once
 
+#include "sharc/view_region.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/scene.h"
 #include "tracing/tracer.h"
@@ -69,6 +70,9 @@ struct GridFit {
     /// fitted to the seen part alone).
     double unseen_sides_left_out = 0.0;
     double scene_surface_area = 0.0;     ///< visibleSurfaceArea, seen or not
+    /// The view region keeps its cameras to some places (points, a box, a distance), and each part
+    /// of the surface was counted at the level they ask for there, not at level 1.
+    bool fitted_to_view_distances = false;
     std::string reason;                  ///< one line for the bake's output
 };
 
@@ -80,8 +84,23 @@ struct GridFit {
 /// it, the sides of double-sided surfaces `seen` says no viewpoint sees are left out: a closed room
 /// of double-sided walls (Blender's default material) gets the voxels of the same room
 /// single-sided, not voxels sqrt(2) wider for outer sides no camera reaches.
+///
+/// With a `region` that keeps the runtime's cameras to some places (the glTF cameras, a path's
+/// waypoints, a box, a least distance), each part of the surface is counted at the finest level
+/// those cameras ask for there (the level the bake deposits it at), so a house whose cameras stand
+/// in its rooms, on a ground two kilometres wide, gets level-1 voxels for its rooms and coarse ones
+/// for the far ground, instead of level 1 for all of it in the same budget.
 GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
-                     const SeenSurface* seen = nullptr);
+                     const SeenSurface* seen = nullptr, const ViewRegion* region = nullptr);
+
+/// For a fit with cameras free to stand anywhere (`fit` made without a region, or a free one): a
+/// warning (with the fix) when its finest voxels are wider than half the space around one of the
+/// scene's glTF cameras (the median distance of rays in 64 directions to what they hit), and
+/// fitting to the glTF cameras' distances would make them at least twice finer: a house whose
+/// rooms the roaming camera can leave for a ground two kilometres wide gets voxels wider than its
+/// rooms. Empty otherwise.
+std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid, const GridFit& fit,
+                                     uint64_t voxel_budget, const SeenSurface* seen);
 
 /// For grid parameters given by hand: warnings (each with the fix) when the scene spans too few
 /// voxels at `finest_level` (a coarse, blurry cache) or far more than `voxel_budget`.

@@ -111,27 +111,53 @@ std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count
     return points;
 }
 
-std::vector<SurfacePoint> sampleSurfacePointsInBox(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max,
-                                                   uint32_t count, uint32_t seed) {
-    std::vector<SurfacePoint> points;
-    if (scene.empty() || count == 0) return points;
-    // The area of each triangle's part inside the box (clipped again when a point lands on it:
-    // keeping the polygons would cost 180 bytes per triangle).
-    std::vector<uint32_t> clipped_triangles;
+namespace {
+
+/// The triangles that reach into the box and the area of each one's part inside it.
+struct ClippedAreas {
+    std::vector<uint32_t> triangles;
     std::vector<float> areas;
+};
+ClippedAreas clippedAreas(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max) {
+    ClippedAreas clipped;
     for (size_t t = 0; t < scene.triangles.size(); ++t) {
         const glm::uvec3 tri = scene.triangles[t];
         const glm::vec3 p0 = scene.positions[tri.x], p1 = scene.positions[tri.y], p2 = scene.positions[tri.z];
         const glm::vec3 lo = glm::min(p0, glm::min(p1, p2)), hi = glm::max(p0, glm::max(p1, p2));
         if (glm::any(glm::greaterThan(lo, box_max)) || glm::any(glm::lessThan(hi, box_min))) continue;
-        ClippedPolygon polygon;
-        const uint32_t corners = clipTriangle(scene, t, box_min, box_max, polygon);
+        // Inside the box whole: no clipping.
         float area = 0.0f;
-        for (uint32_t k = 0; k + 2 < corners; ++k) area += fanTriangleArea(polygon, k);
+        if (glm::all(glm::greaterThanEqual(lo, box_min)) && glm::all(glm::lessThanEqual(hi, box_max))) {
+            area = triangleArea(scene, t);
+        } else {
+            ClippedPolygon polygon;
+            const uint32_t corners = clipTriangle(scene, t, box_min, box_max, polygon);
+            for (uint32_t k = 0; k + 2 < corners; ++k) area += fanTriangleArea(polygon, k);
+        }
         if (!(area > 0.0f)) continue;
-        clipped_triangles.push_back(uint32_t(t));
-        areas.push_back(area);
+        clipped.triangles.push_back(uint32_t(t));
+        clipped.areas.push_back(area);
     }
+    return clipped;
+}
+
+}  // namespace
+
+double surfaceAreaInBox(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max) {
+    double area = 0.0;
+    for (const float a : clippedAreas(scene, box_min, box_max).areas) area += double(a);
+    return area;
+}
+
+std::vector<SurfacePoint> sampleSurfacePointsInBox(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max,
+                                                   uint32_t count, uint32_t seed) {
+    std::vector<SurfacePoint> points;
+    if (scene.empty() || count == 0) return points;
+    // Each triangle's part inside the box is clipped again when a point lands on it: keeping the
+    // polygons would cost 180 bytes per triangle.
+    const ClippedAreas clipped = clippedAreas(scene, box_min, box_max);
+    const std::vector<uint32_t>& clipped_triangles = clipped.triangles;
+    const std::vector<float>& areas = clipped.areas;
     if (areas.empty()) return points;
     const Distribution1D by_area(areas);
     const auto uniform = seededUniform(seed);

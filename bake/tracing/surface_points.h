@@ -32,6 +32,9 @@ std::vector<SurfacePoint> sampleSurfacePoints(const Scene& scene, uint32_t count
 std::vector<SurfacePoint> sampleSurfacePointsInBox(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max,
                                                    uint32_t count, uint32_t seed = 0);
 
+/// The area of the surfaces inside the box (each triangle clipped to it), world units squared.
+double surfaceAreaInBox(const Scene& scene, glm::vec3 box_min, glm::vec3 box_max);
+
 /// The scene's total surface area (world units squared).
 double surfaceArea(const Scene& scene);
 

@@ -224,6 +224,31 @@ TEST(GridFit, ARoomBesideALargeGroundPlaneIsFittedToWhatItsCamerasSee) {
     EXPECT_NE(fitted.reason.find("out of its sight"), std::string::npos) << fitted.reason;
 }
 
+TEST(GridFit, VoxelsWiderThanTheRoomAroundACameraAreWarnedAboutWithTheFix) {
+    // A room on a ground 2 km wide whose roaming camera gets out (a window: the fit counts the whole
+    // surface, not the room's): 5.6 m voxels around a camera whose walls are 2 m away.
+    test::TempDir dir;
+    RoomOptions options{false, true, true, false};
+    options.ground_half = 1000.0f;
+    const Scene scene = loadRoom(dir, options);
+    const Tracer tracer(scene);
+    const HashGridParameters grid{};
+    GridFit whole = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+    EXPECT_GT(whole.finest_voxel_size, 5.0f);
+    HashGridParameters fitted = grid;
+    fitted.level_bias = whole.level_bias;
+    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, whole, kDefaultVoxelBudget, nullptr);
+    EXPECT_NE(warning.find("wider than half the space around camera"), std::string::npos) << warning;
+    EXPECT_NE(warning.find("--view-region gltf"), std::string::npos) << warning;
+    // The same room alone: voxels of a few centimetres, nothing to say.
+    test::TempDir alone_dir;
+    const Scene alone = loadRoom(alone_dir, {false, true, true, false});
+    const Tracer alone_tracer(alone);
+    const GridFit room_fit = fitLevelBias(alone, grid, kDefaultVoxelBudget);
+    fitted.level_bias = room_fit.level_bias;
+    EXPECT_EQ(checkVoxelsAroundCameras(alone_tracer, fitted, room_fit, kDefaultVoxelBudget, nullptr), "");
+}
+
 TEST(GridFit, ARoomItsCamerasSeeWholeKeepsTheWholeSurfaceFit) {
     // The seen surface replaces the whole only when it is a small part: a room explored from its
     // camera sees all of it, and its fit is the one without the estimate, bit for bit.

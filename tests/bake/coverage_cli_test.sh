@@ -154,6 +154,21 @@ says "$work/err.txt" "box:x0,y0,z0,x1,y1,z1" "the message names the accepted for
 expect 1 "path region without a path" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --view-region path
 expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --level-bias fine
 
+# A flat of rooms on a ground 2 km wide, with a window the roaming camera leaves by: free space
+# gives the whole ground level 1, in voxels wider than the rooms, and the bake says so with the fix;
+# the glTF cameras as the region count each part of the surface at their distance's level.
+python3 "$(dirname "$0")/../bench/light_selection_scenes.py" "$work" || failures=$((failures + 1))
+expect 0 "a flat on a 2 km ground" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
+    --iterations 2 --resolution 64x64
+says "$work/err.txt" "warning: the finest voxels, 5.58 wide, are wider than half the space around camera" \
+    "voxels wider than the rooms around the cameras are warned about"
+says "$work/err.txt" "view-region gltf --voxel-budget 524288 fits the voxels to their distances (0.0329 wide here; 0.761 in the present budget)" "the warning names the fix"
+expect 0 "the same with the glTF cameras as the region" "$sharcbake" bake "$work/flat_on_ground.gltf" \
+    -o "$work/ground.sharc" --iterations 2 --resolution 64x64 --view-region gltf
+says "$work/out.txt" "finest voxels 0.7611 wide, so .* at the levels the view region's cameras ask for" \
+    "the fit counts the surface at the cameras' levels"
+grep -q "the finest voxels" "$work/err.txt" && fail "the glTF cameras as the region: the voxel warning stays"
+
 # The SDK's rule (the bake camera's levels only) from far away: the render warns with the remedy,
 # and the nearest-level fallback answers.
 expect 0 "a bake without coverage" "$sharcbake" bake "$cornell" -o "$work/sdk.sharc" --iterations 16 \

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <random>
@@ -138,4 +139,76 @@ TEST(GridFit, SceneScalesFarFromSharcsMeaningAreWarnedAbout) {
     EXPECT_FALSE(checkSceneScale(1e5f).empty());
     EXPECT_TRUE(checkSceneScale(50.0f).empty());
     EXPECT_TRUE(checkSceneScale(5.0f).empty());
+}
+
+namespace {
+
+/// The voxels a square ground of side `size` in y = 0 takes where each point is at the level a
+/// camera at `camera` asks for there: a sum over 1 x 1 cells (the fit's estimate, by another road).
+double groundVoxelsFromCamera(float size, glm::vec3 camera, HashGridParameters grid, float level_bias) {
+    grid.level_bias = level_bias;
+    const HashGridKeyer keyer(grid);
+    const int cells = int(size);
+    double voxels = 0.0;
+    for (int i = 0; i < cells; ++i) {
+        for (int j = 0; j < cells; ++j) {
+            const glm::vec3 p(float(i) + 0.5f, 0.0f, float(j) + 0.5f);
+            const double voxel = double(keyer.voxelSizeAt(keyer.levelOf(glm::dot(p - camera, p - camera))));
+            voxels += 1.0 / (voxel * voxel);
+        }
+    }
+    return voxels * double(size) * double(size) / (double(cells) * double(cells));
+}
+
+}  // namespace
+
+TEST(GridFit, CamerasKeptToPlacesGetTheFinestVoxelsTheirDistancesAllow) {
+    // A camera 1.7 m above a ground 2 km wide: level 1 for all of it would be 5.5 m voxels; the
+    // camera asks for level 1 only near it.
+    const float size = 2000.0f;
+    const Scene scene = square(size);
+    const HashGridParameters grid;
+    const GridFit anywhere = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+    ViewRegion one_camera;
+    one_camera.kind = ViewRegion::Kind::Points;
+    one_camera.points = {glm::vec3(1000.0f, 1.7f, 1000.0f)};
+    const GridFit near = fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &one_camera);
+    EXPECT_FALSE(anywhere.fitted_to_view_distances);
+    EXPECT_TRUE(near.fitted_to_view_distances);
+    EXPECT_GT(anywhere.finest_voxel_size, 5.0f);
+    EXPECT_LT(near.finest_voxel_size, anywhere.finest_voxel_size / 4.0f);
+    EXPECT_NE(near.reason.find("at the levels the view region's cameras ask for"), std::string::npos) << near.reason;
+    // The estimate is what the camera's levels take, summed cell by cell; and it fits the budget.
+    const double counted = groundVoxelsFromCamera(size, one_camera.points[0], grid, near.level_bias);
+    std::printf(
+        "[grid fit] 2 km ground, one camera: finest voxels %.3g (level 1 everywhere: %.3g), estimated %.4g "
+        "voxels, counted %.4g\n",
+        double(near.finest_voxel_size), double(anywhere.finest_voxel_size), near.estimated_voxels, counted);
+    EXPECT_NEAR(near.estimated_voxels, counted, 0.1 * counted);
+    EXPECT_LE(counted, 1.1 * double(kDefaultVoxelBudget));
+    // A 1/64 finer bias would not fit.
+    EXPECT_GT(groundVoxelsFromCamera(size, one_camera.points[0], grid, near.level_bias + 1.0f / 64.0f),
+              0.9 * double(kDefaultVoxelBudget));
+
+    // A box region around the same place: the same kind of fit.
+    ViewRegion box;
+    box.kind = ViewRegion::Kind::Box;
+    box.box_min = glm::vec3(990.0f, 1.0f, 990.0f);
+    box.box_max = glm::vec3(1010.0f, 2.0f, 1010.0f);
+    const GridFit in_box = fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &box);
+    EXPECT_TRUE(in_box.fitted_to_view_distances);
+    EXPECT_LT(in_box.finest_voxel_size, anywhere.finest_voxel_size / 2.0f);
+    EXPECT_GE(in_box.finest_voxel_size, near.finest_voxel_size);  // more ground near its cameras
+
+    // Free space and the bake camera's own levels keep the fit of level 1 everywhere.
+    for (const ViewRegion::Kind kind : {ViewRegion::Kind::FreeSpace, ViewRegion::Kind::BakeCamera}) {
+        ViewRegion region;
+        region.kind = kind;
+        EXPECT_EQ(fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &region).level_bias, anywhere.level_bias);
+    }
+    // Cameras kept 1 m away from everything already use level 1 within 1 m: nothing finer fits.
+    ViewRegion distance;
+    distance.kind = ViewRegion::Kind::Distance;
+    distance.min_distance = 1.0f;
+    EXPECT_EQ(fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &distance).level_bias, anywhere.level_bias);
 }
