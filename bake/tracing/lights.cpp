@@ -420,7 +420,7 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
     std::vector<uint32_t> rays(grid_.cellCount(), 0u);
     // Each point's values are divided by its own mean light, so a slot's shares average what
     // each of its points would pick, not what its brightest points would: in a cell that holds a
-    // lamp-lit floor and the sunlit ground outside its wall, raw sums gave the sun 99.9% of the
+    // lamp-lit floor and the sunlit ground outside its wall, raw sums left the lamp 1e-7 of the
     // floor's picks.
     struct Sample {
         uint32_t group;
@@ -498,9 +498,9 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
     // sum(c_g^2 / p_g) / C^2 - 1 for the measured contributions c_g, each point's relative to its
     // own light (0 where power is exact; a lit floor under sun and sky 0.04, a shadowed one 1.6,
     // the dim of two rooms 10; summed raw, a lamp-lit floor sharing its slot with the sunlit
-    // ground outside looked exact). Each c_g^2
-    // has its sampling variance taken off: among a hundred lamps that reach a hall alike, each
-    // measured by a few samples, the squared noise alone made power look far off everywhere.
+    // ground outside looked exact). Each c_g^2 has its sampling variance taken off: among a
+    // hundred lamps that reach a hall alike, each measured by a few samples, the squared noise
+    // alone made power look far off everywhere.
     std::vector<std::vector<std::pair<uint32_t, double>>> weights(grid_.slotCount());
     std::vector<uint8_t> lit(weights.size(), 0);
     tbb::parallel_for(size_t(0), weights.size(), [&](size_t slot) {
