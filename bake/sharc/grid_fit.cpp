@@ -292,7 +292,16 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
                       : regionDistanceSamples(scene, *region, 0x5eedu);
         const double finest_exact = 1.0 -
                                     std::log(double(grid.scene_scale) * std::max(range_limit, 1e-30)) / std::log(b);
-        const int64_t most_steps = std::clamp<int64_t>(int64_t(std::floor((finest_exact - fit.level_bias) * 64.0)), 0,
+        // Nor finer than the nearest surface needs: level 1 reaches b^(2 - bias), and once that is
+        // nearer than every surface no point asks for it, the count stops growing, and the bias
+        // would run on to the grid range (0.3 mm voxels at level 1 for an outdoor scene whose
+        // camera stands 3 m from the nearest surface; levels 9 to 12 used).
+        float nearest2 = std::numeric_limits<float>::infinity();
+        for (const float d2 : samples.distance2) nearest2 = std::min(nearest2, d2);
+        double useful_exact = finest_exact;
+        if (nearest2 > 0.0f && std::isfinite(nearest2))
+            useful_exact = std::min(useful_exact, 2.0 - 0.5 * std::log(double(nearest2)) / std::log(b));
+        const int64_t most_steps = std::clamp<int64_t>(int64_t(std::floor((useful_exact - fit.level_bias) * 64.0)), 0,
                                                        64 * 64);
         const auto fits = [&](int64_t steps) {
             return voxelsAtViewDistances(fit.surface_area, samples, grid, fit.level_bias + float(steps) / 64.0f) <=

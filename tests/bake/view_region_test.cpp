@@ -206,6 +206,15 @@ TEST(GridFit, CamerasKeptToPlacesGetTheFinestVoxelsTheirDistancesAllow) {
         region.kind = kind;
         EXPECT_EQ(fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &region).level_bias, anywhere.level_bias);
     }
+    // A camera 100 m above a 10 m square asks for level 1 nowhere: beyond level 1's reach the
+    // count no longer grows with the bias, and the fit keeps level 1 for all of it (2.8 cm voxels)
+    // instead of running on to the grid range.
+    ViewRegion high;
+    high.kind = ViewRegion::Kind::Points;
+    high.points = {glm::vec3(5.0f, 100.0f, 5.0f)};
+    const GridFit from_high = fitLevelBias(square(10.0f), grid, kDefaultVoxelBudget, nullptr, &high);
+    EXPECT_EQ(from_high.level_bias, fitLevelBias(square(10.0f), grid, kDefaultVoxelBudget).level_bias);
+    EXPECT_FALSE(from_high.limited_by_range);
     // Cameras kept 1 m away from everything already use level 1 within 1 m: nothing finer fits.
     ViewRegion distance;
     distance.kind = ViewRegion::Kind::Distance;
