@@ -87,12 +87,37 @@ TEST(LightSelectionGrid, SharesAreTheWeightsNormalisedAndPickedInProportion) {
 /// Two closed rooms side by side, 5 cm apart: room A (x < 0) has a bright ceiling panel, room
 /// B (x > 0.05) only a dim bulb. By power, a point in B would pick the panel it cannot see 99%
 /// of the time.
-Scene twoRoomsOneBright() {
-    Scene scene = emptyTestScene();
+/// A grey diffuse material named "wall".
+Material wallMaterial(float albedo) {
     Material wall;
     wall.name = "wall";
-    wall.base_color = glm::vec3(0.7f);
+    wall.base_color = glm::vec3(albedo);
     wall.metallic = 0.0f;
+    return wall;
+}
+
+/// Appends the quad (a, b, c, d), two triangles facing the side it winds counter-clockwise to.
+void addQuad(Scene& scene, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, uint32_t material) {
+    const uint32_t base = uint32_t(scene.positions.size());
+    scene.positions.insert(scene.positions.end(), {a, b, c, d});
+    scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));
+    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
+    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, material);
+    scene.bounds_min = glm::min(scene.bounds_min, glm::min(glm::min(a, b), glm::min(c, d)));
+    scene.bounds_max = glm::max(scene.bounds_max, glm::max(glm::max(a, b), glm::max(c, d)));
+}
+
+PunctualLight pointLight(const char* name, glm::vec3 position, float intensity) {
+    PunctualLight light;
+    light.name = name;
+    light.position = position;
+    light.intensity = glm::vec3(intensity);
+    return light;
+}
+
+Scene twoRoomsOneBright() {
+    Scene scene = emptyTestScene();
+    const Material wall = wallMaterial(0.7f);
     scene.materials.push_back(wall);
     Material panel = wall;
     panel.name = "panel";
@@ -101,19 +126,10 @@ Scene twoRoomsOneBright() {
     scene.materials.push_back(panel);
     addInwardBox(scene, glm::vec3(-2.0f, 0.0f, -1.0f), glm::vec3(0.0f, 2.0f, 1.0f), 0);
     addInwardBox(scene, glm::vec3(0.05f, 0.0f, -1.0f), glm::vec3(2.05f, 2.0f, 1.0f), 0);
-    const uint32_t base = uint32_t(scene.positions.size());
-    for (const glm::vec2 d :
-         {glm::vec2(-1.3f, -0.3f), glm::vec2(-0.7f, -0.3f), glm::vec2(-0.7f, 0.3f), glm::vec2(-1.3f, 0.3f)})
-        scene.positions.push_back(glm::vec3(d.x, 1.95f, d.y));
     // Facing down (-Y): counter-clockwise seen from below.
-    scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));
-    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
-    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, 1u);
-    PunctualLight bulb;
-    bulb.name = "bulb";
-    bulb.position = glm::vec3(1.05f, 1.0f, 0.0f);
-    bulb.intensity = glm::vec3(0.02f);
-    scene.lights.push_back(bulb);
+    addQuad(scene, glm::vec3(-1.3f, 1.95f, -0.3f), glm::vec3(-0.7f, 1.95f, -0.3f), glm::vec3(-0.7f, 1.95f, 0.3f),
+            glm::vec3(-1.3f, 1.95f, 0.3f), 1u);
+    scene.lights.push_back(pointLight("bulb", glm::vec3(1.05f, 1.0f, 0.0f), 0.02f));
     return scene;
 }
 
@@ -180,26 +196,12 @@ TEST(SpatialLightSelection, APointPicksTheLightsItsRoomSees) {
 /// cells are 6.25 m, so the cell holding the room's floor holds more sunlit ground and roof.
 Scene roomOnSunlitGround() {
     Scene scene = emptyTestScene();
-    Material wall;
-    wall.name = "wall";
-    wall.base_color = glm::vec3(0.5f);
-    wall.metallic = 0.0f;
-    scene.materials.push_back(wall);
+    scene.materials.push_back(wallMaterial(0.5f));
     addInwardBox(scene, glm::vec3(0.5f, 0.0f, 0.5f), glm::vec3(4.5f, 2.5f, 4.5f), 0);
-    const uint32_t base = uint32_t(scene.positions.size());
-    for (const glm::vec2 d : {glm::vec2(-100.0f, -100.0f), glm::vec2(-100.0f, 100.0f), glm::vec2(100.0f, 100.0f),
-                              glm::vec2(100.0f, -100.0f)})
-        scene.positions.push_back(glm::vec3(d.x, -0.01f, d.y));
-    scene.triangles.push_back(glm::uvec3(base, base + 1, base + 2));  // facing up
-    scene.triangles.push_back(glm::uvec3(base, base + 2, base + 3));
-    scene.triangle_materials.insert(scene.triangle_materials.end(), 2, 0u);
-    scene.bounds_min = glm::min(scene.bounds_min, glm::vec3(-100.0f, -0.01f, -100.0f));
-    scene.bounds_max = glm::max(scene.bounds_max, glm::vec3(100.0f, 2.5f, 100.0f));
-    PunctualLight bulb;
-    bulb.name = "bulb";
-    bulb.position = glm::vec3(2.5f, 2.0f, 2.5f);
-    bulb.intensity = glm::vec3(0.05f);
-    scene.lights.push_back(bulb);
+    // The ground, facing up.
+    addQuad(scene, glm::vec3(-100.0f, -0.01f, -100.0f), glm::vec3(-100.0f, -0.01f, 100.0f),
+            glm::vec3(100.0f, -0.01f, 100.0f), glm::vec3(100.0f, -0.01f, -100.0f), 0u);
+    scene.lights.push_back(pointLight("bulb", glm::vec3(2.5f, 2.0f, 2.5f), 0.05f));
     PunctualLight sun;
     sun.name = "sun";
     sun.type = LightType::Directional;
