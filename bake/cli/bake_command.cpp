@@ -691,10 +691,8 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
         const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen, &region);
         grid.level_bias = fit.level_bias;
         decision.choice = "auto, " + fit.reason;
-        if (region.kind == ViewRegion::Kind::FreeSpace) {
-            const std::string warning = checkVoxelsAroundCameras(tracer, grid, fit, job.voxel_budget, seen);
-            if (!warning.empty()) decision.warnings.push_back(warning);
-        }
+        const std::string warning = checkVoxelsAroundCameras(tracer, grid, region, &fit, job.voxel_budget, seen);
+        if (!warning.empty()) decision.warnings.push_back(warning);
     } else {
         char text[96];
         std::snprintf(text, sizeof text, "given: level bias %.9g, finest voxels %.4g wide", double(grid.level_bias),
@@ -715,8 +713,12 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
         decision.misses = text;
     }
     if (!job.level_bias_auto) {
-        for (std::string& warning : checkGridForScene(scene, grid, decision.finest_level, job.voxel_budget))
-            decision.warnings.push_back(std::move(warning));
+        decision.warnings = checkGridForScene(scene, grid, decision.finest_level, job.voxel_budget);
+        // A bias far off for the whole scene is warned about once, above.
+        const std::string warning = decision.warnings.empty() ? checkVoxelsAroundCameras(tracer, grid, region, nullptr,
+                                                                                         job.voxel_budget, seen)
+                                                              : std::string();
+        if (!warning.empty()) decision.warnings.push_back(warning);
     }
     if (!job.scene_scale_auto) {
         const std::string warning = checkSceneScale(grid.scene_scale);

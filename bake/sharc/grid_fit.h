@@ -93,14 +93,15 @@ struct GridFit {
 GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
                      const SeenSurface* seen = nullptr, const ViewRegion* region = nullptr);
 
-/// For a fit with cameras free to stand anywhere (`fit` made without a region, or a free one): a
-/// warning (with the fix) when its finest voxels are wider than half the space around one of the
-/// scene's glTF cameras (the median distance of rays in 64 directions to what they hit), and
-/// fitting to the glTF cameras' distances would make them at least twice finer: a house whose
-/// rooms the roaming camera can leave for a ground two kilometres wide gets voxels wider than its
-/// rooms. Empty otherwise.
-std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid, const GridFit& fit,
-                                     uint64_t voxel_budget, const SeenSurface* seen);
+/// A warning (with the fix) when the voxels a glTF camera's lookups get at the distance of what
+/// it sees (the median distance of rays in 64 directions to what they hit) are wider than 1/8 of
+/// that distance: a house whose rooms the roaming camera can leave for a ground two kilometres wide
+/// gets voxels wider than its rooms, and voxels of about a room's size leak light between rooms
+/// and around lamps. `fit` is the fit that set `grid`'s level bias (null for a bias given by
+/// hand); the fix is the view region and budget, the budget, or the bias that make the voxels
+/// fine enough. Empty otherwise.
+std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid, const ViewRegion& region,
+                                     const GridFit* fit, uint64_t voxel_budget, const SeenSurface* seen);
 
 /// For grid parameters given by hand: warnings (each with the fix) when the scene spans too few
 /// voxels at `finest_level` (a coarse, blurry cache) or far more than `voxel_budget`.

@@ -14,6 +14,7 @@
 
 #include "gltf_builder.h"
 #include "test_bake_scene.h"
+#include "test_rooms.h"
 
 #include <gtest/gtest.h>
 
@@ -237,16 +238,57 @@ TEST(GridFit, VoxelsWiderThanTheRoomAroundACameraAreWarnedAboutWithTheFix) {
     EXPECT_GT(whole.finest_voxel_size, 5.0f);
     HashGridParameters fitted = grid;
     fitted.level_bias = whole.level_bias;
-    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, whole, kDefaultVoxelBudget, nullptr);
-    EXPECT_NE(warning.find("wider than half the space around camera"), std::string::npos) << warning;
+    const ViewRegion free;
+    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, free, &whole, kDefaultVoxelBudget, nullptr);
+    EXPECT_NE(warning.find("the voxels around camera"), std::string::npos) << warning;
+    EXPECT_NE(warning.find("wide, are wider than 1/8 of the distance to what it sees"), std::string::npos) << warning;
     EXPECT_NE(warning.find("--view-region gltf"), std::string::npos) << warning;
+    // With the glTF cameras as the region, the fix is the budget that makes the voxels fine enough.
+    ViewRegion at_camera;
+    at_camera.kind = ViewRegion::Kind::Points;
+    at_camera.points = {scene.cameras[0].position};
+    const GridFit near = fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &at_camera);
+    fitted.level_bias = near.level_bias;
+    const std::string region_warning = checkVoxelsAroundCameras(tracer, fitted, at_camera, &near, kDefaultVoxelBudget,
+                                                                nullptr);
+    EXPECT_NE(region_warning.find("--voxel-budget"), std::string::npos) << region_warning;
+    EXPECT_NE(region_warning.find("makes them"), std::string::npos) << region_warning;
+    EXPECT_EQ(region_warning.find("--view-region gltf"), std::string::npos) << region_warning;
+    // A bias given by hand: the fix is a bias, whose voxels are fine enough.
+    fitted.level_bias = whole.level_bias;
+    const std::string hand = checkVoxelsAroundCameras(tracer, fitted, free, nullptr, kDefaultVoxelBudget, nullptr);
+    EXPECT_NE(hand.find("because of --level-bias"), std::string::npos) << hand;
+    EXPECT_NE(hand.find("or --level-bias auto"), std::string::npos) << hand;
     // The same room alone: voxels of a few centimetres, nothing to say.
     test::TempDir alone_dir;
     const Scene alone = loadRoom(alone_dir, {false, true, true, false});
     const Tracer alone_tracer(alone);
     const GridFit room_fit = fitLevelBias(alone, grid, kDefaultVoxelBudget);
     fitted.level_bias = room_fit.level_bias;
-    EXPECT_EQ(checkVoxelsAroundCameras(alone_tracer, fitted, room_fit, kDefaultVoxelBudget, nullptr), "");
+    EXPECT_EQ(checkVoxelsAroundCameras(alone_tracer, fitted, free, &room_fit, kDefaultVoxelBudget, nullptr), "");
+}
+
+TEST(GridFit, VoxelsMadeWideByTheGridRangeNameTheOriginAsTheFix) {
+    // A 4 m room 100 km from the origin: SHaRC's 17-bit coordinates allow 1.7 m voxels there.
+    Scene scene = emptyTestScene();
+    scene.materials.emplace_back();
+    const glm::vec3 offset(1e5f, 0.0f, 0.0f);
+    addInwardBox(scene, offset + glm::vec3(-2.0f, 0.0f, -2.0f), offset + glm::vec3(2.0f, 3.0f, 2.0f), 0);
+    Camera camera;
+    camera.name = "inside";
+    camera.position = offset + glm::vec3(0.0f, 1.5f, 0.0f);
+    scene.cameras.push_back(camera);
+    const Tracer tracer(scene);
+    const HashGridParameters grid{};
+    const GridFit fit = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+    ASSERT_TRUE(fit.limited_by_range);
+    HashGridParameters fitted = grid;
+    fitted.level_bias = fit.level_bias;
+    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, ViewRegion{}, &fit, kDefaultVoxelBudget,
+                                                         nullptr);
+    EXPECT_NE(warning.find("the voxels around camera 'inside'"), std::string::npos) << warning;
+    EXPECT_NE(warning.find("towards the origin"), std::string::npos) << warning;
+    EXPECT_EQ(warning.find("--view-region gltf"), std::string::npos) << warning;
 }
 
 TEST(GridFit, ARoomItsCamerasSeeWholeKeepsTheWholeSurfaceFit) {

@@ -156,18 +156,27 @@ expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.shar
 
 # A flat of rooms on a ground 2 km wide, with a window the roaming camera leaves by: free space
 # gives the whole ground level 1, in voxels wider than the rooms, and the bake says so with the fix;
-# the glTF cameras as the region count each part of the surface at their distance's level.
+# the glTF cameras as the region count each part of the surface at their distance's level, and the
+# budget the warning names makes the voxels fine enough. A bias given by hand gets a bias as its fix.
 python3 "$(dirname "$0")/../bench/light_selection_scenes.py" "$work" || failures=$((failures + 1))
 expect 0 "a flat on a 2 km ground" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
     --iterations 2 --resolution 64x64
-says "$work/err.txt" "warning: the finest voxels, 5.58 wide, are wider than half the space around camera" \
+says "$work/err.txt" "warning: the voxels around camera 'room_[0-3]', 5.58 wide, are wider than 1/8 of the distance" \
     "voxels wider than the rooms around the cameras are warned about"
-says "$work/err.txt" "view-region gltf --voxel-budget 524288 fits the voxels to their distances (0.0329 wide here; 0.761 in the present budget)" "the warning names the fix"
+says "$work/err.txt" "view-region gltf --voxel-budget 524288 fits the voxels to their distances (0.0329 wide here" \
+    "the warning names the fix"
 expect 0 "the same with the glTF cameras as the region" "$sharcbake" bake "$work/flat_on_ground.gltf" \
     -o "$work/ground.sharc" --iterations 2 --resolution 64x64 --view-region gltf
 says "$work/out.txt" "finest voxels 0.7611 wide, so .* at the levels the view region's cameras ask for" \
     "the fit counts the surface at the cameras' levels"
-grep -q "the finest voxels" "$work/err.txt" && fail "the glTF cameras as the region: the voxel warning stays"
+says "$work/err.txt" "0.761 wide, .* --voxel-budget 524288 makes them 0.0329 wide" "room-sized voxels are warned about"
+expect 0 "and with the budget the warning names" "$sharcbake" bake "$work/flat_on_ground.gltf" \
+    -o "$work/ground.sharc" --iterations 2 --resolution 64x64 --view-region gltf --voxel-budget 524288
+grep -q "the voxels around" "$work/err.txt" && fail "the budget the warning names: the voxel warning stays"
+expect 0 "the flat with a level bias giving room-sized voxels" "$sharcbake" bake "$work/flat.gltf" -o "$work/flat.sharc" \
+    --iterations 2 --resolution 64x64 --level-bias -4.25
+says "$work/err.txt" "because of --level-bias -4.25. --level-bias -1.82812 makes them 0.142 wide" \
+    "a bias given by hand gets a bias as its fix"
 
 # The SDK's rule (the bake camera's levels only) from far away: the render warns with the remedy,
 # and the nearest-level fallback answers.
