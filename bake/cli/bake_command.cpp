@@ -1413,9 +1413,8 @@ private:
     std::string gpu_warning_;               ///< fp16 clipping of the written cache at its GPU radiance scale
     std::vector<uint32_t> written_levels_;  ///< the levels of the cache file's voxels
     StabilityReport stability_;
-    LightLeakReport light_leaks_;
-    WallLeakReport
-        wall_leaks_;  ///< surfaces sharing voxels across walls thinner than a voxel  ///< emitters sharing voxels with a surface behind them
+    LightLeakReport light_leaks_;  ///< emitters sharing voxels with a surface behind them
+    WallLeakReport wall_leaks_;    ///< surfaces sharing voxels across walls thinner than a voxel
     double finish_seconds_ = 0.0;
 };
 

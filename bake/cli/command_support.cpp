@@ -305,13 +305,7 @@ void warnAboutPunctualLightUnits(const Tracer& tracer) {
     std::vector<float> light_distances;
     for (const PunctualLight& light : scene.lights) {
         if (light.type == LightType::Directional) continue;
-        std::vector<float> distances;
-        for (uint32_t i = 0; i < kDirections; ++i) {
-            RayHit hit;
-            if (tracer.intersect(Ray{light.position, sphericalFibonacciDirection(i, kDirections)}, hit)) {
-                distances.push_back(hit.t);
-            }
-        }
+        std::vector<float> distances = hitDistancesAround(tracer, light.position, kDirections);
         if (!distances.empty()) light_distances.push_back(median(std::move(distances)));
     }
     if (light_distances.empty()) return;

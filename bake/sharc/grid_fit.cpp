@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/grid_fit.h"
 
+#include "support/median.h"
 #include "tracing/sampling.h"
 #include "tracing/surface_points.h"
 
@@ -179,7 +180,7 @@ DistanceSamples regionDistanceSamples(const Scene& scene, const ViewRegion& regi
             core_max = glm::max(core_max, q);
         }
     }
-    const double total = surfaceAreaInBox(scene, scene.bounds_min, scene.bounds_max);
+    const double total = surfaceArea(scene);
     if (!(core_min.x <= core_max.x) || !(total > 0.0)) return samples;
     const glm::vec3 scene_extent = scene.bounds_max - scene.bounds_min;
     const glm::vec3 core_extent = core_max - core_min;
@@ -384,15 +385,9 @@ std::pair<const Camera*, float> typicalCamera(const Tracer& tracer) {
     constexpr uint32_t kDirections = 64;
     std::vector<std::pair<float, const Camera*>> rooms;
     for (const Camera& camera : tracer.scene().cameras) {
-        std::vector<float> distances;
-        for (uint32_t i = 0; i < kDirections; ++i) {
-            RayHit hit;
-            if (tracer.intersect(Ray{camera.position, sphericalFibonacciDirection(i, kDirections)}, hit))
-                distances.push_back(hit.t);
-        }
+        std::vector<float> distances = hitDistancesAround(tracer, camera.position, kDirections);
         if (distances.size() < kDirections / 2) continue;
-        std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
-        rooms.emplace_back(distances[distances.size() / 2], &camera);
+        rooms.emplace_back(median(std::move(distances)), &camera);
     }
     if (rooms.empty()) return {nullptr, 0.0f};
     // The lower median, and among equal rooms the first camera: the same on every run.

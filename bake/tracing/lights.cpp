@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "tracing/lights.h"
 
+#include "support/median.h"
 #include "tracing/sampling.h"
 #include "tracing/surface_points.h"
 #include "tracing/tracer.h"
@@ -340,9 +341,8 @@ std::optional<std::pair<glm::vec3, glm::vec3>> LightSampler::detailBox(const Tra
             hits[found++] = origin + hit.t * direction;
         }
         if (found == 0) continue;
-        std::array<float, 14> sorted = distances;
-        std::nth_element(sorted.begin(), sorted.begin() + found / 2, sorted.begin() + found);
-        const float farthest = kDetailFarthestOfMedian * sorted[found / 2];
+        const float farthest = kDetailFarthestOfMedian *
+                               median(std::vector<float>(distances.begin(), distances.begin() + found));
         for (size_t k = 0; k < found; ++k)
             if (distances[k] <= farthest) include(hits[k]);
     }

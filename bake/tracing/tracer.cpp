@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "tracing/tracer.h"
+#include "tracing/sampling.h"
 #include "tracing/surface.h"
 
 #include <algorithm>
@@ -225,6 +226,15 @@ bool leavesScene(const Tracer& tracer, glm::vec3 from, glm::vec3 d) {
 
 bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b) {
     return visibleOneWay(tracer, a, b) && visibleOneWay(tracer, b, a);
+}
+
+std::vector<float> hitDistancesAround(const Tracer& tracer, glm::vec3 from, uint32_t directions) {
+    std::vector<float> distances;
+    for (uint32_t i = 0; i < directions; ++i) {
+        RayHit hit;
+        if (tracer.intersect(Ray{from, sphericalFibonacciDirection(i, directions)}, hit)) distances.push_back(hit.t);
+    }
+    return distances;
 }
 
 float largestRayOffset(float far_coordinate) {

@@ -115,6 +115,10 @@ bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
 /// escape).
 bool leavesScene(const Tracer& tracer, glm::vec3 from, glm::vec3 d);
 
+/// How far rays from `from` in `directions` directions spread over the sphere (a spherical
+/// Fibonacci set) travel before they hit something, for those that do: the room around a point.
+std::vector<float> hitDistancesAround(const Tracer& tracer, glm::vec3 from, uint32_t directions);
+
 /// The largest distance offsetRayOrigin moves an origin anywhere in the bounds: at the coordinate
 /// farthest from 0 on any axis (`far_coordinate`, as max |bounds|).
 float largestRayOffset(float far_coordinate);
