@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 
 namespace sharcbake {
 namespace {
@@ -254,8 +255,13 @@ SeenSurface surfaceSeenFrom(const Tracer& tracer, const std::vector<glm::vec3>& 
     return seen;
 }
 
-GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget, const SeenSurface* seen,
-                     const ViewRegion* region) {
+namespace {
+
+/// fitLevelBias, drawing the region's distance samples into `samples` where they are first needed
+/// and reusing them where given: the voxel warning fits one region for several budgets.
+GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget,
+                            const SeenSurface* seen, const ViewRegion* region,
+                            std::optional<DistanceSamples>& samples) {
     GridFit fit;
     fit.scene_surface_area = visibleSurfaceArea(scene);
     fit.surface_area = fit.scene_surface_area;
@@ -282,15 +288,16 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     const bool keeps_cameras_to_places = region && (region->kind == ViewRegion::Kind::Points ||
                                                     region->kind == ViewRegion::Kind::Box ||
                                                     region->kind == ViewRegion::Kind::Distance);
-    DistanceSamples samples;  // where a region keeps its cameras to places
     if (keeps_cameras_to_places && !fit.limited_by_range) {
         // Level 1 everywhere is the coarsest such a region can need; finer biases, in 1/64 steps,
         // while the surface at its cameras' levels fits the budget (the count only grows with the
         // bias, but for steps within a level: the search finds one bias where it fits). Never
         // finer than the grid range allows.
-        samples = region->kind == ViewRegion::Kind::Distance
-                      ? DistanceSamples{{region->min_distance * region->min_distance}, {1.0}}
-                      : regionDistanceSamples(scene, *region, 0x5eedu);
+        if (!samples) {
+            samples = region->kind == ViewRegion::Kind::Distance
+                          ? DistanceSamples{{region->min_distance * region->min_distance}, {1.0}}
+                          : regionDistanceSamples(scene, *region, 0x5eedu);
+        }
         const double finest_exact = 1.0 -
                                     std::log(double(grid.scene_scale) * std::max(range_limit, 1e-30)) / std::log(b);
         // Nor finer than the nearest surface needs: level 1 reaches b^(2 - bias), and once that is
@@ -298,18 +305,18 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
         // would run on to the grid range (0.3 mm voxels at level 1 for an outdoor scene whose
         // camera stands 6.6 m from the nearest surface; levels 9 to 12 used).
         float nearest2 = std::numeric_limits<float>::infinity();
-        for (const float d2 : samples.distance2) nearest2 = std::min(nearest2, d2);
+        for (const float d2 : samples->distance2) nearest2 = std::min(nearest2, d2);
         double useful_exact = finest_exact;
         if (nearest2 > 0.0f && std::isfinite(nearest2))
             useful_exact = std::min(useful_exact, 2.0 - 0.5 * std::log(double(nearest2)) / std::log(b));
         const int64_t most_steps = std::clamp<int64_t>(int64_t(std::floor((useful_exact - fit.level_bias) * 64.0)), 0,
                                                        64 * 64);
         const auto fits = [&](int64_t steps) {
-            return voxelsAtViewDistances(fit.surface_area, samples, grid, fit.level_bias + float(steps) / 64.0f) <=
+            return voxelsAtViewDistances(fit.surface_area, *samples, grid, fit.level_bias + float(steps) / 64.0f) <=
                    budget;
         };
         int64_t lo = 0, hi = most_steps;  // fits(lo) holds: level 1 everywhere fits the budget
-        if (!samples.distance2.empty() && hi > 0) {
+        if (!samples->distance2.empty() && hi > 0) {
             while (lo < hi) {
                 const int64_t mid = lo + (hi - lo + 1) / 2;
                 if (fits(mid)) {
@@ -327,7 +334,7 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     fit.finest_voxel_size = voxelSize(kHashGridLevelMin, fitted);
     fit.estimated_voxels = fit.surface_area / (double(fit.finest_voxel_size) * double(fit.finest_voxel_size));
     if (fit.fitted_to_view_distances)
-        fit.estimated_voxels = voxelsAtViewDistances(fit.surface_area, samples, grid, fit.level_bias);
+        fit.estimated_voxels = voxelsAtViewDistances(fit.surface_area, *samples, grid, fit.level_bias);
 
     char surface[160];
     if (fit.fitted_to_seen) {
@@ -367,6 +374,14 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
     }
     fit.reason = text;
     return fit;
+}
+
+}  // namespace
+
+GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_t voxel_budget, const SeenSurface* seen,
+                     const ViewRegion* region) {
+    std::optional<DistanceSamples> samples;
+    return fitLevelBiasReusing(scene, grid, voxel_budget, seen, region, samples);
 }
 
 namespace {
@@ -413,18 +428,20 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
     const float voxel = typical ? voxelAtDistance(grid, room) : 0.0f;
     if (!typical || !(voxel > enough)) return {};
     char why[400], fix[320];
-    const auto fitWithBudget = [&](uint64_t budget, const ViewRegion* fit_region) {
+    // Each region's distance samples are drawn once for all the budgets tried.
+    const auto fitWithBudget = [&](uint64_t budget, const ViewRegion* fit_region,
+                                   std::optional<DistanceSamples>& samples) {
         HashGridParameters fitted = grid;
-        fitted.level_bias = fitLevelBias(scene, grid, budget, seen, fit_region).level_bias;
+        fitted.level_bias = fitLevelBiasReusing(scene, grid, budget, seen, fit_region, samples).level_bias;
         return voxelAtDistance(fitted, room);
     };
     // The smallest of 4, 16, ... 4096 times the budget that makes the voxels fine enough, or 0.
-    const auto budgetFor = [&](const ViewRegion* fit_region, float& reached) {
+    const auto budgetFor = [&](const ViewRegion* fit_region, std::optional<DistanceSamples>& samples, float& reached) {
         uint64_t budget = voxel_budget;
         for (int step = 0; step < 6; ++step) {
             budget *= 4;
             if (budget > (uint64_t(1) << 28)) break;
-            reached = fitWithBudget(budget, fit_region);
+            reached = fitWithBudget(budget, fit_region, samples);
             if (reached <= enough) return budget;
         }
         return uint64_t(0);
@@ -456,19 +473,22 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
         ViewRegion at_cameras;
         at_cameras.kind = ViewRegion::Kind::Points;
         for (const Camera& camera : scene.cameras) at_cameras.points.push_back(camera.position);
-        const float at_cameras_voxel = fitWithBudget(voxel_budget, &at_cameras);
+        std::optional<DistanceSamples> at_cameras_samples, no_samples;
+        const float at_cameras_voxel = fitWithBudget(voxel_budget, &at_cameras, at_cameras_samples);
         float reached = 0.0f;
         if (at_cameras_voxel <= enough) {
             std::snprintf(fix, sizeof fix,
                           "If the runtime's cameras stay near the glTF cameras, --view-region gltf fits the voxels to "
                           "their distances (%.3g wide here)",
                           double(at_cameras_voxel));
-        } else if (const uint64_t budget = at_cameras_voxel * 2.0f <= voxel ? budgetFor(&at_cameras, reached) : 0) {
+        } else if (const uint64_t budget = at_cameras_voxel * 2.0f <= voxel
+                                               ? budgetFor(&at_cameras, at_cameras_samples, reached)
+                                               : 0) {
             std::snprintf(fix, sizeof fix,
                           "If the runtime's cameras stay near the glTF cameras, --view-region gltf --voxel-budget %llu "
                           "fits the voxels to their distances (%.3g wide here; %.3g in the present budget)",
                           (unsigned long long)budget, double(reached), double(at_cameras_voxel));
-        } else if (const uint64_t free_budget = budgetFor(nullptr, reached)) {
+        } else if (const uint64_t free_budget = budgetFor(nullptr, no_samples, reached)) {
             std::snprintf(fix, sizeof fix, "--voxel-budget %llu makes them %.3g wide", (unsigned long long)free_budget,
                           double(reached));
         } else {
@@ -482,7 +502,8 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
                       "region's cameras ask for.",
                       (unsigned long long)voxel_budget);
         float reached = 0.0f;
-        if (const uint64_t budget = budgetFor(&region, reached)) {
+        std::optional<DistanceSamples> region_samples;
+        if (const uint64_t budget = budgetFor(&region, region_samples, reached)) {
             std::snprintf(fix, sizeof fix, "--voxel-budget %llu makes them %.3g wide", (unsigned long long)budget,
                           double(reached));
         } else {
