@@ -18,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -289,6 +290,60 @@ TEST(GridFit, VoxelsMadeWideByTheGridRangeNameTheOriginAsTheFix) {
     EXPECT_NE(warning.find("the voxels around camera 'inside'"), std::string::npos) << warning;
     EXPECT_NE(warning.find("towards the origin"), std::string::npos) << warning;
     EXPECT_EQ(warning.find("--view-region gltf"), std::string::npos) << warning;
+}
+
+TEST(GridFit, AStreetCameraInAWideCityIsToldBothBudgets) {
+    // A street 3 m wide among 10 m blocks, in a city of 60 x 60 blocks on a 2 km ground. Cameras
+    // anywhere need every surface at level 1; cameras at the street camera need the far blocks
+    // only at the levels of their distances, whose count no bias lowers: neither fits the default
+    // budget, so the warning names the budget each needs, the one near the glTF cameras first.
+    Scene scene = emptyTestScene();
+    scene.materials.emplace_back();
+    addInwardBox(scene, glm::vec3(-1000.0f, -1.0f, -1000.0f), glm::vec3(1000.0f, 0.0f, 1000.0f), 0);
+    for (int i = -30; i < 30; ++i)
+        for (int j = -30; j < 30; ++j)
+            addInwardBox(scene, glm::vec3(8.0f * float(i) - 2.5f, 0.0f, 8.0f * float(j) - 2.5f),
+                         glm::vec3(8.0f * float(i) + 2.5f, 10.0f, 8.0f * float(j) + 2.5f), 0);
+    Camera camera;
+    camera.name = "street";
+    camera.position = glm::vec3(4.0f, 1.7f, 4.0f);
+    scene.cameras.push_back(camera);
+    const Tracer tracer(scene);
+    const HashGridParameters grid{};
+    const GridFit fit = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+    HashGridParameters fitted = grid;
+    fitted.level_bias = fit.level_bias;
+    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, ViewRegion{}, &fit, kDefaultVoxelBudget,
+                                                         nullptr);
+    ASSERT_NE(warning.find("the voxels around camera 'street'"), std::string::npos) << warning;
+    const auto budgetAfter = [&](const std::string& text) {
+        const size_t at = warning.find(text);
+        return at == std::string::npos ? uint64_t(0) : std::stoull(warning.substr(at + text.size()));
+    };
+    const uint64_t near_budget = budgetAfter("--view-region gltf --voxel-budget ");
+    const uint64_t anywhere_budget = budgetAfter("for cameras anywhere, --voxel-budget ");
+    EXPECT_GT(near_budget, kDefaultVoxelBudget) << warning;
+    EXPECT_GT(anywhere_budget, 4 * near_budget) << warning;
+    std::printf("[voxel warning] city of 60 x 60 blocks: --view-region gltf needs %llu voxels, anywhere %llu\n",
+                (unsigned long long)near_budget, (unsigned long long)anywhere_budget);
+    // Each named fix, applied, leaves nothing to warn about; a quarter of it does not.
+    ViewRegion at_camera;
+    at_camera.kind = ViewRegion::Kind::Points;
+    at_camera.points = {camera.position};
+    for (const uint64_t budget : {near_budget, near_budget / 4}) {
+        const GridFit near = fitLevelBias(scene, grid, budget, nullptr, &at_camera);
+        fitted.level_bias = near.level_bias;
+        EXPECT_EQ(checkVoxelsAroundCameras(tracer, fitted, at_camera, &near, budget, nullptr).empty(),
+                  budget == near_budget)
+            << budget;
+    }
+    for (const uint64_t budget : {anywhere_budget, anywhere_budget / 4}) {
+        const GridFit anywhere = fitLevelBias(scene, grid, budget);
+        fitted.level_bias = anywhere.level_bias;
+        EXPECT_EQ(checkVoxelsAroundCameras(tracer, fitted, ViewRegion{}, &anywhere, budget, nullptr).empty(),
+                  budget == anywhere_budget)
+            << budget;
+    }
 }
 
 TEST(GridFit, ARoomItsCamerasSeeWholeKeepsTheWholeSurfaceFit) {
