@@ -1203,11 +1203,16 @@ private:
             std::snprintf(deposit_levels, sizeof deposit_levels, ", %.2f%% none at the level its deposits go to",
                           100.0 * coverage_.unreached_deposit_area);
         }
-        std::printf(
-            "  coverage: %.2f%% of the surface area has no voxel at any level, %.2f%% none at the finest "
-            "(level %u)%s (%u points tested)\n",
-            100.0 * coverage_.unreached_area, 100.0 * coverage_.unreached_finest_area, coverage_.finest_level,
-            deposit_levels, coverage_.points);
+        if (written_levels_.empty()) {
+            std::printf("  coverage: %.2f%% of the surface area has no voxel (the cache is empty; %u points tested)\n",
+                        100.0 * coverage_.unreached_area, coverage_.points);
+        } else {
+            std::printf(
+                "  coverage: %.2f%% of the surface area has no voxel at any level, %.2f%% none at the finest "
+                "(level %u)%s (%u points tested)\n",
+                100.0 * coverage_.unreached_area, 100.0 * coverage_.unreached_finest_area, coverage_.finest_level,
+                deposit_levels, coverage_.points);
+        }
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         for (const ViewHitRate& v : prediction_.views) {
             if (v.view.declared && v.eligible == 0 && v.refused > 0) {
@@ -1331,7 +1336,17 @@ private:
                                      ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
         warnAboutHitRate(prediction_, unreached);
-        if (unreached > 0.3) {
+        if (live_voxels_ == 0) {
+            // The file is valid, and every lookup from it will miss: say so once, plainly.
+            const char* remedies = !job_.camera.path_file.empty() ? "a --camera-path whose cameras look at the scene"
+                                   : job_.camera.source == CameraPathSource::GltfCameras
+                                       ? "--camera-source explore (the free space around the glTF cameras)"
+                                       : "more --explore-points, or a --camera-path that looks at the scene";
+            std::fprintf(stderr,
+                         "warning: the cache is empty: no path from the roaming camera hit a surface, so every "
+                         "lookup will miss. Check that the camera looks at the scene, or give %s\n",
+                         remedies);
+        } else if (unreached > 0.3) {
             // Not a stability problem, so not in that section, but the cache is missing much of the scene.
             char sight[200] = "";
             if (seen_ && seen_->fraction < kFitToSeenBelow) {

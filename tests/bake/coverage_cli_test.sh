@@ -342,4 +342,24 @@ says "$work/err.txt" "ray origins up to 16 off surfaces.*move the scene towards 
 expect 0 "render the floor at the origin" "$sharcbake" render "$work/floor.gltf" -o "$work/near.exr" \
     --resolution 16 --spp 1 --no-png
 grep -q "ray origins" "$work/err.txt" && fail "render warns about the ray offset at the origin: $(cat "$work/err.txt")"
+# The Cornell box's camera turned to look away from it, baked along the glTF camera: no path hits
+# a surface, and the file written holds no voxel. The bake says so plainly, not with a level 0.
+mkdir -p "$work/away"
+cp "$scenes/cornell_box/cornell_box.bin" "$work/away/"
+python3 - "$cornell" "$work/away/cornell_box.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+for n in g["nodes"]:
+    if "camera" in n:
+        n["rotation"] = [0.0, 1.0, 0.0, 0.0]
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "a camera that looks away from the scene" "$sharcbake" bake "$work/away/cornell_box.gltf" \
+    -o "$work/away.sharc" --camera-source gltf --iterations 2 --resolution 64x64
+says "$work/err.txt" "warning: the cache is empty: no path from the roaming camera hit a surface" \
+    "an empty cache is warned about"
+says "$work/err.txt" "or give --camera-source explore" "the empty cache's warning names the remedy"
+says "$work/out.txt" "has no voxel (the cache is empty" "the coverage line of an empty cache"
+grep -q "(level 0)" "$work/out.txt" && fail "an empty cache's coverage names level 0"
+grep -q "was never reached" "$work/err.txt" && fail "an empty cache also gets the unreached-surface warning"
 finish "coverage"
