@@ -562,6 +562,13 @@ std::string describeHitRate(const HitRatePrediction& p) {
                       p.views.size());
         return text;
     }
+    if (p.eligible < kLookupsForARate) {  // nearly every first bounce leaves the scene: no rate to speak of
+        std::snprintf(text, sizeof text,
+                      "%.1f%% of only %llu lookups from %zu views (nearly every first bounce from them leaves the "
+                      "scene: little for a cache to answer)",
+                      100.0 * p.rate(), (unsigned long long)p.eligible, p.views.size());
+        return text;
+    }
     std::snprintf(text, sizeof text, "%.1f%% of %llu lookups from %zu views", 100.0 * p.rate(),
                   (unsigned long long)p.eligible, p.views.size());
     std::string result = text;
@@ -611,6 +618,7 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
                      (unsigned long long)p.refused);
         return;
     }
+    if (p.eligible < kLookupsForARate) return;  // a rate of a handful says nothing (describeHitRate says why)
     constexpr double kWanted = 0.95;
     const ViewHitRate* worst = p.worst();
     if (p.rate() >= kWanted && (!worst || worst->rate() >= kWanted)) return;
@@ -1224,8 +1232,10 @@ private:
                 std::printf("    %s: no lookups (no first bounce from it hits a surface)\n",
                             v.view.camera.name.c_str());
             } else if (v.view.declared) {
-                std::printf("    %s: %.1f%% of %llu lookups\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
-                            (unsigned long long)v.eligible);
+                std::printf("    %s: %.1f%% of %llu lookups%s\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
+                            (unsigned long long)v.eligible,
+                            v.eligible < kLookupsForARate ? " (too few for a rate: its first bounces leave the scene)"
+                                                          : "");
             }
         }
         printStabilitySection(stdout, stability_);

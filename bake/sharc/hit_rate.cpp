@@ -31,7 +31,7 @@ PredictionView sampledView(const std::string& name, glm::vec3 position, uint32_t
 const ViewHitRate* HitRatePrediction::worst() const {
     const ViewHitRate* worst = nullptr;
     for (const ViewHitRate& v : views) {
-        if (v.eligible >= 100 && (!worst || v.rate() < worst->rate())) worst = &v;
+        if (v.eligible >= kLookupsForARate && (!worst || v.rate() < worst->rate())) worst = &v;
     }
     return worst;
 }

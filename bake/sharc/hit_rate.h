@@ -34,13 +34,17 @@ struct ViewHitRate {
     double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
 };
 
+/// Fewer eligible lookups than this make no rate worth reporting: a lone convex model's first
+/// bounces leave it, and the one that met its other side read "0.0% answered".
+inline constexpr uint64_t kLookupsForARate = 100;
+
 struct HitRatePrediction {
     std::vector<ViewHitRate> views;
     uint64_t eligible = 0;
     uint64_t hits = 0;
     uint64_t refused = 0;
     double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
-    /// The lowest rate of a view with at least 100 eligible lookups (nullptr when none).
+    /// The lowest rate of a view with at least kLookupsForARate eligible lookups (nullptr when none).
     const ViewHitRate* worst() const;
 };
 
