@@ -251,9 +251,9 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                        : "") +
                   ")";
     if (explored.views_around > 0) {
-        description += ", and " + std::to_string(explored.views_around) +
-                       " views from around the scene (it has no camera, and " +
-                       std::to_string(int(std::lround(100.0f * explored.escaped_fraction))) +
+        description += ", and " + std::to_string(explored.views_around) + " views from around the scene (" +
+                       (explored.cameras_outside ? "its cameras all stand outside its bounds" : "it has no camera") +
+                       ", and " + std::to_string(int(std::lround(100.0f * explored.escaped_fraction))) +
                        "% of the probe rays from those points leave it)";
     }
     return std::move(*path);

@@ -542,12 +542,21 @@ std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene&
         if (explored) *explored = result;
         return std::nullopt;
     }
-    // Without cameras, open space around the free points (most probe rays leave the scene, as
-    // around a lone model) says the scene is looked at from outside, as render's automatic
-    // camera does: exploring inside its bounds alone leaves what faces away from the free points
-    // there without a voxel at the finest level.
+    // Open space around the free points (most probe rays leave the scene, as around a lone
+    // model) says the scene is looked at from outside, as render's automatic camera does, when it
+    // has no camera or its cameras all stand outside its bounds (Blender's default camera and
+    // cube): exploring inside the bounds and the corner of them the cameras face leaves the rest
+    // without a voxel at the finest level (75% of Blender's default cube). A camera inside the
+    // bounds (a street, a room with an open side, a house's interior beside its exterior view)
+    // keeps the bake's paths near it.
+    result.cameras_outside = starts_are_cameras;
+    for (const Camera& c : scene.cameras) {
+        if (glm::all(glm::greaterThanEqual(c.position, scene.bounds_min)) &&
+            glm::all(glm::lessThanEqual(c.position, scene.bounds_max)))
+            result.cameras_outside = false;
+    }
     std::vector<CameraPose> around;
-    if (!starts_are_cameras && result.escaped_fraction >= kOpenSceneEscapedFraction) {
+    if ((!starts_are_cameras || result.cameras_outside) && result.escaped_fraction >= kOpenSceneEscapedFraction) {
         around = viewsAroundScene(scene, uint32_t(result.points.size()), seed);
     }
     result.views_around = uint32_t(around.size());

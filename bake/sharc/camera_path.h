@@ -67,6 +67,9 @@ struct ExplorationResult {
     /// closed room, most of them around an object under the sky.
     float escaped_fraction = 0.0f;
     uint32_t views_around = 0;  ///< views from around the scene added to the path (exploringCameraPath)
+    /// The scene has cameras, and every one stands outside its bounds (looking at it from outside,
+    /// as Blender's default camera looks at its cube): a reason for the views from around.
+    bool cameras_outside = false;
 };
 
 /// Above this share of escaping probe rays the space the exploration found is open, as around a
@@ -157,9 +160,10 @@ private:
 
 /// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's
 /// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
-/// new random direction. A scene without cameras whose free space is open (escaped_fraction at
-/// least kOpenSceneEscapedFraction) is also looked at from outside: as many views from around it
-/// (viewsAroundScene), which keep their direction, alternate with the free-space positions.
+/// new random direction. A scene whose free space is open (escaped_fraction at least
+/// kOpenSceneEscapedFraction) and that has no camera, or whose cameras all stand outside its
+/// bounds, is also looked at from outside: as many views from around it (viewsAroundScene), which
+/// keep their direction, alternate with the free-space positions.
 /// std::nullopt when no free space was found; `explored` (if given) receives the search's counts
 /// either way.
 std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,

@@ -415,7 +415,7 @@ TEST(ExploreFreeSpace, ExplorationIsAPureFunctionOfTheSeed) {
 
 /// A lone table under a white sky: a 2 x 1 m top, 10 cm thick, on four 90 cm legs, nothing else.
 /// Its bounds end at the top's upper face, so no free point inside them sees that face.
-Scene loadTable(const test::TempDir& dir, bool camera) {
+Scene loadTable(const test::TempDir& dir, bool camera, glm::vec3 camera_position = glm::vec3(0.0f, 1.5f, 3.0f)) {
     test::GltfBuilder gltf;
     std::vector<float> positions;
     std::vector<uint32_t> indices;
@@ -432,7 +432,8 @@ Scene loadTable(const test::TempDir& dir, bool camera) {
     if (camera) {
         gltf.doc["cameras"] = nlohmann::json::array(
             {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.01}}}}});
-        roots.push_back(gltf.addNode({{"camera", 0}, {"translation", {0.0, 1.5, 3.0}}}));
+        roots.push_back(
+            gltf.addNode({{"camera", 0}, {"translation", {camera_position.x, camera_position.y, camera_position.z}}}));
     }
     gltf.setScene(roots);
     Scene scene = loadGltf(gltf.writeEmbedded(dir, "table.gltf"));
@@ -547,17 +548,25 @@ TEST(ExploreFreeSpace, LoneObjectWithoutACameraIsAlsoSeenFromAround) {
     }
 }
 
-TEST(ExploreFreeSpace, ClosedRoomsAndSceneCamerasGetNoViewsFromAround) {
+TEST(ExploreFreeSpace, ClosedRoomsAndCamerasWithinTheBoundsGetNoViewsFromAround) {
     test::TempDir dir;
     const Explored room = explore(loadRoom(dir, {true, false, false, true}));
     ASSERT_TRUE(room.has_path);
     EXPECT_LT(room.result.escaped_fraction, 0.05f) << "a closed room without a camera";
     EXPECT_EQ(room.result.views_around, 0u);
-    // The scene's own camera says where it is seen from.
+    // A camera within the scene's bounds (under the table, as one in a street or a room with an
+    // open side) keeps the bake's paths around it.
+    const Explored under = explore(loadTable(dir, true, glm::vec3(0.0f, 0.5f, 0.0f)));
+    ASSERT_TRUE(under.has_path);
+    EXPECT_GE(under.result.escaped_fraction, kOpenSceneEscapedFraction);
+    EXPECT_FALSE(under.result.cameras_outside);
+    EXPECT_EQ(under.result.views_around, 0u);
+    // One outside them looks at the table from outside, as Blender's default camera looks at its
+    // cube: the table is seen from around too, or its far side would have no finest voxel.
     const Explored table = explore(loadTable(dir, true));
     ASSERT_TRUE(table.has_path);
-    EXPECT_GE(table.result.escaped_fraction, kOpenSceneEscapedFraction);
-    EXPECT_EQ(table.result.views_around, 0u);
+    EXPECT_TRUE(table.result.cameras_outside);
+    EXPECT_EQ(table.result.views_around, table.result.points.size());
 }
 
 TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {
