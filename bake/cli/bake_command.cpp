@@ -1679,8 +1679,8 @@ void registerBakeCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--camera-source", o->camera_source_name,
                     "Where the roaming camera goes: explore (free space reachable from the glTF cameras; a "
-                    "scene without cameras that is open around, such as a lone model, is also looked at from "
-                    "around it) or gltf (along the glTF cameras)")
+                    "scene that is open around, such as a lone model, and has no camera or only cameras "
+                    "outside its bounds, is also looked at from around it) or gltf (along the glTF cameras)")
         ->capture_default_str()
         ->check(CLI::IsMember({"explore", "gltf"}))
         ->each([o](const std::string& name) {
@@ -1691,7 +1691,7 @@ void registerBakeCommand(CLI::App& app) {
                                "\"px py pz tx ty tz [fov_degrees]\", '#' comments"));
     cmd->add_option("--explore-points", o->explore_points,
                     "Free-space points the exploring camera visits (and as many views from around an open scene "
-                    "without cameras)")
+                    "without cameras inside its bounds)")
         ->capture_default_str()
         ->check(CLI::Range(1u, 4096u));
     cmd->add_option("--iterations-per-leg", o->iterations_per_leg,

@@ -49,15 +49,20 @@ struct FreeSpaceProbe {
     int escaped = 0;  ///< probe rays that left the scene
 };
 
-/// A point is in free space when most probe rays that hit a single-sided surface hit its front
-/// (the side its winding faces): inside a closed solid every ray sees back faces. A double-sided
-/// surface has no inside in glTF (both sides are seen and lit, as in a room modelled from a cube
-/// whose normals face out), so its hits do not vote, and without `use_winding` no hit does: a
-/// point is then free when no surface is nearer than `clearance`, and reachability from the
-/// starts (exploreFreeSpace) keeps the space inside closed objects out of the path. Points
+/// Which faces' winding says where solids are. Blender's exporter writes its default material
+/// double-sided, and most models keep their normals pointing out: inside such a model (Suzanne,
+/// whose head is open behind the eyes) most probes meet the backs of double-sided faces, and
+/// without their vote the inside was free space, reachable through the gaps; a fifth of the hit
+/// rate's sample views stood there. But a room modelled from a cube scaled up also shows its
+/// camera the backs of double-sided walls: where all faces' winding puts a camera inside a solid,
+/// or no point at all is free, single-sided faces alone vote, and where those do too, none.
+enum class Winding { kAllFaces, kSingleSided, kIgnored };
+
+/// A point is in free space when most probe rays that hit a face that votes (`winding`) hit its
+/// front (the side its winding faces): inside a closed solid every ray sees back faces. Points
 /// closer to any surface than `clearance` are rejected so the camera does not sit on a wall.
-FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, bool use_winding) {
-    int votes = 0, back_votes = 0, escaped = 0;
+FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, Winding winding) {
+    int votes = 0, back_votes = 0, single_sided_votes = 0, escaped = 0;
     const Scene& scene = tracer.scene();
     for (int i = 0; i < kProbeCount; ++i) {
         const glm::vec3 d = probeDirection(i);
@@ -67,15 +72,19 @@ FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance
             continue;
         }
         if (hit.t < clearance) return {};
-        if (!use_winding || scene.materials[scene.triangle_materials[hit.triangle]].double_sided) continue;
+        const bool double_sided = scene.materials[scene.triangle_materials[hit.triangle]].double_sided;
+        if (winding == Winding::kIgnored || (double_sided && winding == Winding::kSingleSided)) continue;
         const glm::uvec3 tri = scene.triangles[hit.triangle];
         const glm::vec3 n = glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
                                        scene.positions[tri.z] - scene.positions[tri.x]);
         ++votes;
+        single_sided_votes += !double_sided;
         if (glm::dot(n, d) > 0.0f) ++back_votes;
     }
     const bool free = votes == 0 || 2 * back_votes < votes;
-    return {free, free && (escaped > 0 || votes > 0), escaped};
+    // Known as before the double-sided faces voted: a closed room of them, wound either way, says
+    // nothing certain about which side is in.
+    return {free, free && (escaped > 0 || single_sided_votes > 0), escaped};
 }
 
 }  // namespace
@@ -218,40 +227,62 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     const float clearance = 0.01f * diagonal;
 
     std::vector<FreePoint> free_points;
-    const auto tryPoint = [&](glm::vec3 p, float point_clearance, bool use_winding) {
+    const auto tryPoint = [&](glm::vec3 p, float point_clearance, Winding winding) {
         ++result.candidates;
-        const FreeSpaceProbe probe = probeFreeSpace(tracer, p, point_clearance, use_winding);
+        const FreeSpaceProbe probe = probeFreeSpace(tracer, p, point_clearance, winding);
         if (probe.free) free_points.push_back({p, false, probe.known, probe.escaped});
     };
     // Candidates: the starts first, then stratified random points in the bounds (8x more than
     // needed).
-    const auto collect = [&](bool use_winding) {
+    const auto collect = [&](Winding winding) {
         free_points.clear();
         for (const glm::vec3& s : starts) {
             ++result.candidates;
-            const FreeSpaceProbe probe = probeFreeSpace(tracer, s, 0.0f, use_winding);
+            const FreeSpaceProbe probe = probeFreeSpace(tracer, s, 0.0f, winding);
             if (starts_are_cameras || probe.free)
                 free_points.push_back({s, true, starts_are_cameras || probe.known, probe.escaped});
         }
         for (uint32_t i = 0; i < 8 * count; ++i) {
             const glm::vec3 u(hashToUnitFloat(seed, i, 0), hashToUnitFloat(seed, i, 1), hashToUnitFloat(seed, i, 2));
-            tryPoint(center + (2.0f * u - 1.0f) * half, clearance, use_winding);
+            tryPoint(center + (2.0f * u - 1.0f) * half, clearance, winding);
         }
     };
-    // The scene's own cameras look from free space. Where the winding test puts one of them
-    // inside a solid, or finds no free space at all, the scene's winding does not tell inside from
-    // outside (single-sided faces facing away from the viewer, as a room modelled from a cube has
-    // them): it is ignored, and clearance and reachability decide alone.
-    bool use_winding = true;
+    // The scene's own cameras look from free space. Where a winding test puts one of them inside
+    // a solid, or finds no free space at all, the scene's winding does not tell inside from
+    // outside that way (faces facing away from the viewer, as a room modelled from a cube has
+    // them): the next, weaker test is used, and last none, where clearance and reachability
+    // decide alone.
+    Winding winding = Winding::kAllFaces;
+    const auto camerasFree = [&](Winding w) {
+        for (const glm::vec3& s : starts)
+            if (!probeFreeSpace(tracer, s, 0.0f, w).free) return false;
+        return true;
+    };
+    const auto weaker = [](Winding w) { return w == Winding::kAllFaces ? Winding::kSingleSided : Winding::kIgnored; };
     if (starts_are_cameras) {
-        for (const glm::vec3& s : starts) use_winding = use_winding && probeFreeSpace(tracer, s, 0.0f, true).free;
+        while (winding != Winding::kIgnored && !camerasFree(winding)) winding = weaker(winding);
     }
-    collect(use_winding);
-    if (use_winding && free_points.empty()) {
-        use_winding = false;
-        collect(false);
+    collect(winding);
+    if (winding == Winding::kAllFaces) {
+        // Where double-sided faces put most of what single-sided faces leave free inside solids,
+        // they are not telling solids apart (a room of them wound outwards, some furniture wound
+        // inwards, without a camera): single-sided faces alone vote. Suzanne's inside is a quarter
+        // of the single-sided free points, a closed double-sided sphere's a third.
+        std::vector<FreePoint> all_faces = std::move(free_points);
+        const uint32_t tried = result.candidates;  // the same candidates, tested again
+        collect(Winding::kSingleSided);
+        result.candidates = tried;
+        if (4 * all_faces.size() >= free_points.size()) {
+            free_points = std::move(all_faces);
+        } else {
+            winding = Winding::kSingleSided;
+        }
     }
-    result.winding_ignored = !use_winding;
+    while (winding != Winding::kIgnored && free_points.empty()) {
+        winding = weaker(winding);
+        collect(winding);
+    }
+    result.winding_ignored = winding == Winding::kIgnored;
     std::vector<bool> kept = reachablePoints(tracer, free_points, starts_are_cameras);
 
     // Where the starts' free space is a small part of the bounds (a room beside a large ground
@@ -272,7 +303,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
             const float r = 0.5f * largest_half * std::ldexp(1.0f, -int(i % scales));
             const uint32_t n = candidates + i;
             const glm::vec3 u(hashToUnitFloat(seed, n, 0), hashToUnitFloat(seed, n, 1), hashToUnitFloat(seed, n, 2));
-            tryPoint(start + (2.0f * u - 1.0f) * r, std::min(clearance, kClearanceOfScale * r), use_winding);
+            tryPoint(start + (2.0f * u - 1.0f) * r, std::min(clearance, kClearanceOfScale * r), winding);
         }
         kept = reachablePoints(tracer, free_points, starts_are_cameras);
     }
@@ -425,11 +456,12 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
     if (scene.empty()) return outside;
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
     const float clearance = 0.01f * glm::length(scene.bounds_max - scene.bounds_min);
-    const FreeSpaceProbe by_winding = probeFreeSpace(tracer, center, clearance, true);
+    const FreeSpaceProbe by_winding = probeFreeSpace(tracer, center, clearance, Winding::kSingleSided);
     // Single-sided walls wound away from the centre (a cube scaled up into a room) put it inside a
     // solid: the clearance alone then says whether it is free, as exploreFreeSpace ignores a
     // winding that finds no free space, and light below whether it is a room.
-    const FreeSpaceProbe probe = by_winding.free ? by_winding : probeFreeSpace(tracer, center, clearance, false);
+    const FreeSpaceProbe probe = by_winding.free ? by_winding
+                                                 : probeFreeSpace(tracer, center, clearance, Winding::kIgnored);
     if (!probe.free || probe.escaped > 0 || visibleOneWay(tracer, outside.position, center)) return outside;
     // Closed around the centre: a room, or the inside of a closed object. Single-sided walls
     // facing the centre say a room (the winding voted it free); other walls (double-sided, as
