@@ -441,17 +441,24 @@ Scene loadTable(const test::TempDir& dir, bool camera, glm::vec3 camera_position
     return scene;
 }
 
-/// One mesh of `positions` and `indices` with a double-sided material (Blender's default), written
-/// to `name` in `dir` and loaded.
+/// One mesh of `positions` and `indices` with a double-sided material (Blender's default), and a
+/// camera at `camera` if given, written to `name` in `dir` and loaded.
 Scene loadDoubleSidedMesh(const test::TempDir& dir, const std::vector<float>& positions,
-                          const std::vector<uint32_t>& indices, const std::string& name) {
+                          const std::vector<uint32_t>& indices, const std::string& name,
+                          std::optional<glm::vec3> camera = std::nullopt) {
     test::GltfBuilder gltf;
     const int material = gltf.addMaterial({{"doubleSided", true}});
     const int mesh = gltf.addMesh(
         nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
                                 {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
                                 {"material", material}}}));
-    gltf.setScene({gltf.addNode({{"mesh", mesh}})});
+    std::vector<int> roots{gltf.addNode({{"mesh", mesh}})};
+    if (camera) {
+        gltf.doc["cameras"] = nlohmann::json::array(
+            {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.01}}}}});
+        roots.push_back(gltf.addNode({{"camera", 0}, {"translation", {camera->x, camera->y, camera->z}}}));
+    }
+    gltf.setScene(roots);
     return loadGltf(gltf.writeEmbedded(dir, name));
 }
 
@@ -495,18 +502,10 @@ TEST(ExploreFreeSpace, TheInsideOfADoubleSidedModelOpenThroughAGapIsNotExplored)
     const uint32_t base = uint32_t(positions.size() / 3);
     positions.insert(positions.end(), {-2.0f, 0.0f, -2.0f, 4.0f, 0.0f, -2.0f, 4.0f, 0.0f, 4.0f, -2.0f, 0.0f, 4.0f});
     indices.insert(indices.end(), {base, base + 2, base + 1, base, base + 3, base + 2});  // facing up
-    test::GltfBuilder gltf;
-    const int material = gltf.addMaterial({{"doubleSided", true}});
-    const int mesh = gltf.addMesh(
-        nlohmann::json::array({{{"attributes", {{"POSITION", gltf.addPositions(positions)}}},
-                                {"indices", gltf.addData(indices, test::kUnsignedInt, "SCALAR")},
-                                {"material", material}}}));
-    gltf.doc["cameras"] = nlohmann::json::array(
-        {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.01}}}}});
-    gltf.setScene({gltf.addNode({{"mesh", mesh}}), gltf.addNode({{"camera", 0}, {"translation", {1.5, 1.0, 5.0}}})});
-    const Scene scene = loadGltf(gltf.writeEmbedded(dir, "head.gltf"));
+    constexpr glm::vec3 kCamera{1.5f, 1.0f, 5.0f};
+    const Scene scene = loadDoubleSidedMesh(dir, positions, indices, "head.gltf", kCamera);
     const Tracer tracer(scene);
-    ASSERT_TRUE(visibleOneWay(tracer, glm::vec3(1.5f, 1.0f, 5.0f), glm::vec3(1.0f, 1.0f, 1.0f)))
+    ASSERT_TRUE(visibleOneWay(tracer, kCamera, glm::vec3(1.0f, 1.0f, 1.0f)))
         << "the camera sees into the box through the hole";
     const Explored e = explore(scene);
     ASSERT_TRUE(e.has_path);
