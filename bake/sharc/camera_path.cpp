@@ -55,7 +55,8 @@ struct FreeSpaceProbe {
 /// without their vote the inside was free space, reachable through the gaps; a fifth of the hit
 /// rate's sample views stood there. But a room modelled from a cube scaled up also shows its
 /// camera the backs of double-sided walls: where all faces' winding puts a camera inside a solid,
-/// or no point at all is free, single-sided faces alone vote, and where those do too, none.
+/// or leaves free fewer than a quarter of the points single-sided faces leave free (none, in such
+/// a room without a camera), single-sided faces alone vote, and where those fail too, none.
 enum class Winding { kAllFaces, kSingleSided, kIgnored };
 
 /// A point is in free space when most probe rays that hit a face that votes (`winding`) hit its
