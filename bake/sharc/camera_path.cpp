@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/camera_path.h"
+#include "support/box.h"
 
 #include "tracing/sampling.h"
 #include "tracing/surface.h"
@@ -30,14 +31,9 @@ float hashToUnitFloat(uint32_t seed, uint32_t a, uint32_t b) {
     return bitsToUnitFloat(hashCombine(hashCombine(hashUint32(seed), a), b));
 }
 
-/// Axis directions plus the eight diagonals: enough to tell a closed solid from open space.
-constexpr int kProbeCount = 14;
-glm::vec3 probeDirection(int i) {
-    static const glm::vec3 kDirections[kProbeCount] = {
-        {1, 0, 0},  {-1, 0, 0}, {0, 1, 0},   {0, -1, 0},  {0, 0, 1},   {0, 0, -1},  {1, 1, 1},
-        {1, 1, -1}, {1, -1, 1}, {1, -1, -1}, {-1, 1, 1}, {-1, 1, -1}, {-1, -1, 1}, {-1, -1, -1}};
-    return glm::normalize(kDirections[i]);
-}
+/// Probes in the axis directions plus the eight diagonals: enough to tell a closed solid from open
+/// space.
+constexpr int kProbeCount = kAxisAndDiagonalDirections;
 
 /// What the probe rays from a point say about it.
 struct FreeSpaceProbe {
@@ -66,7 +62,7 @@ FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance
     int votes = 0, back_votes = 0, single_sided_votes = 0, escaped = 0;
     const Scene& scene = tracer.scene();
     for (int i = 0; i < kProbeCount; ++i) {
-        const glm::vec3 d = probeDirection(i);
+        const glm::vec3 d = axisOrDiagonalDirection(i);
         RayHit hit;
         if (!tracer.intersect(Ray{p, d}, hit)) {
             ++escaped;
@@ -584,9 +580,7 @@ std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene&
     // keeps the bake's paths near it.
     result.cameras_outside = starts_are_cameras;
     for (const Camera& c : scene.cameras) {
-        if (glm::all(glm::greaterThanEqual(c.position, scene.bounds_min)) &&
-            glm::all(glm::lessThanEqual(c.position, scene.bounds_max)))
-            result.cameras_outside = false;
+        if (insideBox(c.position, scene.bounds_min, scene.bounds_max)) result.cameras_outside = false;
     }
     std::vector<CameraPose> around;
     if ((!starts_are_cameras || result.cameras_outside) && result.escaped_fraction >= kOpenSceneEscapedFraction) {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/grid_fit.h"
 
+#include "support/box.h"
 #include "support/median.h"
 #include "tracing/sampling.h"
 #include "tracing/surface_points.h"
@@ -27,6 +28,12 @@ constexpr double kTooManyFactor = 16.0;
 /// The grid coordinates are 17-bit signed (|g| < 65536); keep the farthest point of the scene
 /// within 90% of that at level 1.
 constexpr double kGridRange = 0.9 * 65536.0;
+
+/// The level bias whose level-1 voxels are `size` wide, unrounded: voxelSize(1) = b^(1 - bias) / S
+/// = size  <=>  bias = 1 - log_b(S * size).
+double biasForLevelOneVoxel(const HashGridParameters& grid, double size) {
+    return 1.0 - std::log(double(grid.scene_scale) * size) / std::log(double(grid.logarithm_base));
+}
 
 /// A triangle's area in double precision, 0 where it is not finite.
 double triangleAreaOf(const Scene& scene, size_t t) {
@@ -198,17 +205,14 @@ DistanceSamples regionDistanceSamples(const Scene& scene, const ViewRegion& regi
         if (shell_area > 0.0) {
             const std::vector<SurfacePoint> points = sampleSurfacePointsInBox(scene, box_min, box_max, kPointsPerShell,
                                                                               seed + shell);
-            const auto inInner = [&](glm::vec3 p) {
-                return glm::all(glm::greaterThanEqual(p, inner_min)) && glm::all(glm::lessThanEqual(p, inner_max));
-            };
             size_t in_shell = 0;
-            for (const SurfacePoint& p : points) in_shell += !inInner(p.position);
+            for (const SurfacePoint& p : points) in_shell += !insideBox(p.position, inner_min, inner_max);
             // A shell too thin for its box's points is stood for by all of them (nearer, so finer:
             // it counts no fewer voxels than it has).
             const bool all = in_shell == 0;
             const size_t used = all ? points.size() : in_shell;
             for (const SurfacePoint& p : points) {
-                if (!all && inInner(p.position)) continue;
+                if (!all && insideBox(p.position, inner_min, inner_max)) continue;
                 samples.distance2.push_back(distance2ToRegion(p.position, region));
                 samples.weight.push_back(shell_area / total / double(used));
             }
@@ -280,11 +284,9 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
         fit.limited_by_range = size < range_limit;
         size = std::max(range_limit, 1e-30);
     }
-    // voxelSize(1) = b^(1 - bias) / S = size  <=>  bias = 1 - log_b(S * size).
     const double b = double(grid.logarithm_base);
-    const double exact = 1.0 - std::log(double(grid.scene_scale) * size) / std::log(b);
     // Rounded down to 1/64: the voxels are at least `size` and the bias prints exactly.
-    fit.level_bias = float(std::floor(exact * 64.0) / 64.0);
+    fit.level_bias = float(std::floor(biasForLevelOneVoxel(grid, size) * 64.0) / 64.0);
     const bool keeps_cameras_to_places = region && (region->kind == ViewRegion::Kind::Points ||
                                                     region->kind == ViewRegion::Kind::Box ||
                                                     region->kind == ViewRegion::Kind::Distance);
@@ -298,8 +300,7 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
                           ? DistanceSamples{{region->min_distance * region->min_distance}, {1.0}}
                           : regionDistanceSamples(scene, *region, 0x5eedu);
         }
-        const double finest_exact = 1.0 -
-                                    std::log(double(grid.scene_scale) * std::max(range_limit, 1e-30)) / std::log(b);
+        const double finest_exact = biasForLevelOneVoxel(grid, std::max(range_limit, 1e-30));
         // Nor finer than the nearest surface needs: level 1 reaches b^(2 - bias), and once that is
         // nearer than every surface no point asks for it, the count stops growing, and the bias
         // would run on to the grid range (0.3 mm voxels at level 1 for an outdoor scene whose
@@ -454,10 +455,8 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
         std::snprintf(fix, sizeof fix, "Moving the scene (and its cameras) towards the origin allows finer ones");
     } else if (!fit) {
         std::snprintf(why, sizeof why, "They are that wide because of --level-bias %g.", double(grid.level_bias));
-        // Level 1's voxels b^(1 - bias) / S at most `enough`, in 1/64 steps.
-        const double b = double(grid.logarithm_base);
-        const double bias =
-            std::ceil((1.0 - std::log(double(grid.scene_scale) * double(enough)) / std::log(b)) * 64.0) / 64.0;
+        // Level 1's voxels at most `enough`, in 1/64 steps.
+        const double bias = std::ceil(biasForLevelOneVoxel(grid, double(enough)) * 64.0) / 64.0;
         HashGridParameters finer = grid;
         finer.level_bias = float(bias);
         std::snprintf(fix, sizeof fix,

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "tracing/light_grid.h"
+#include "support/box.h"
 
 #include <algorithm>
 #include <cmath>
@@ -50,9 +51,7 @@ uint32_t LightSelectionGrid::directionOf(glm::vec3 normal) {
 }
 
 uint32_t LightSelectionGrid::cellOf(glm::vec3 p) const {
-    const bool in_detail = detail_.cellCount() > 0 && p.x >= detail_.origin.x && p.y >= detail_.origin.y &&
-                           p.z >= detail_.origin.z && p.x <= detail_max_.x && p.y <= detail_max_.y &&
-                           p.z <= detail_max_.z;
+    const bool in_detail = detail_.cellCount() > 0 && insideBox(p, detail_.origin, detail_max_);
     return in_detail ? coarse_.cellCount() + detail_.cellOf(p) : coarse_.cellOf(p);
 }
 

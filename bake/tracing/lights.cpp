@@ -324,17 +324,11 @@ std::optional<std::pair<glm::vec3, glm::vec3>> LightSampler::detailBox(const Tra
     if (origins.size() == cameras) return std::nullopt;  // only the sun and sky
     for (const glm::vec3 origin : origins) {
         include(origin);
-        std::array<float, 14> distances;
-        std::array<glm::vec3, 14> hits;
+        std::array<float, kAxisAndDiagonalDirections> distances;
+        std::array<glm::vec3, kAxisAndDiagonalDirections> hits;
         size_t found = 0;
-        for (int d = 0; d < 14; ++d) {
-            // The 6 axes, then the 8 diagonals.
-            glm::vec3 direction(0.0f);
-            if (d < 6) {
-                direction[d / 2] = d % 2 ? -1.0f : 1.0f;
-            } else {
-                direction = glm::normalize(glm::vec3(d & 1 ? -1.0f : 1.0f, d & 2 ? -1.0f : 1.0f, d & 4 ? -1.0f : 1.0f));
-            }
+        for (int d = 0; d < kAxisAndDiagonalDirections; ++d) {
+            const glm::vec3 direction = axisOrDiagonalDirection(d);
             RayHit hit;
             if (!tracer.intersect(Ray{origin, direction}, hit)) continue;
             distances[found] = hit.t;
@@ -540,7 +534,8 @@ std::string SpatialLightSelection::describe() const {
                           ", and %ux%ux%u of %.3g over the %.3gx%.3gx%.3g box of the cameras and lamps", detail_cells.x,
                           detail_cells.y, detail_cells.z, double(detail_cell_size), double(box.x), double(box.y),
                           double(box.z));
-        const uint32_t slots = (cells.x * cells.y * cells.z + detail_cells.x * detail_cells.y * detail_cells.z) * 6u;
+        const uint32_t slots = (cells.x * cells.y * cells.z + detail_cells.x * detail_cells.y * detail_cells.z) *
+                               LightSelectionGrid::kDirections;
         std::snprintf(text, sizeof text,
                       "by where light arrives in %u of %u (cell, direction) slots (a %ux%ux%u grid of %.3g-wide "
                       "cells%s; %u light groups%s; %llu shadow rays, %.2f s), by power elsewhere and in %.0f%% of "

@@ -198,6 +198,19 @@ inline glm::vec3 sphericalFibonacciDirection(uint32_t i, uint32_t count) {
     return {ring * std::cos(turn), y, ring * std::sin(turn)};
 }
 
+/// The 6 axis directions and the 8 diagonals: a coarse, exact set of directions around a point,
+/// enough to tell a closed solid from open space or to find the walls of a room.
+inline constexpr int kAxisAndDiagonalDirections = 14;
+/// Direction `i` (0 to kAxisAndDiagonalDirections - 1) of that set: +X, -X, +Y, -Y, +Z, -Z, then
+/// the diagonals, unit length.
+inline glm::vec3 axisOrDiagonalDirection(int i) {
+    static const glm::vec3 kDirections[kAxisAndDiagonalDirections] = {{1, 0, 0},   {-1, 0, 0},  {0, 1, 0},  {0, -1, 0},
+                                                                      {0, 0, 1},   {0, 0, -1},  {1, 1, 1},  {1, 1, -1},
+                                                                      {1, -1, 1},  {1, -1, -1}, {-1, 1, 1}, {-1, 1, -1},
+                                                                      {-1, -1, 1}, {-1, -1, -1}};
+    return glm::normalize(kDirections[i]);
+}
+
 /// Uniform point on a triangle as barycentrics (b1, b2) of vertices 1 and 2 (Heitz 2019's
 /// low-distortion square-to-triangle map keeps the Sobol stratification).
 inline glm::vec2 sampleUniformTriangle(glm::vec2 u) {
