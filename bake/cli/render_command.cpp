@@ -5,6 +5,7 @@
 #include "cli/commands.h"
 #include "sharc/cache_query.h"
 #include "sharc/camera_path.h"
+#include "sharc/hit_rate.h"
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/image.h"
@@ -482,7 +483,7 @@ private:
                          (unsigned long long)cache_->refused());
             return;
         }
-        if (cache_ && !primaryView() && eligible_ >= 100 && hit_rate_ < 0.9) {
+        if (cache_ && !primaryView() && eligible_ >= kLookupsForARate && hit_rate_ < 0.9) {
             // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
             std::fprintf(stderr,
                          "warning: the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); "

@@ -34,8 +34,9 @@ struct ViewHitRate {
     double rate() const { return eligible ? double(hits) / double(eligible) : 1.0; }
 };
 
-/// Fewer eligible lookups than this make no rate worth reporting: a lone convex model's first
-/// bounces leave it, and the one that met its other side read "0.0% answered".
+/// Fewer eligible lookups than this make no rate worth reporting or warning about (the bake's
+/// prediction and render's own count): a lone convex model's first bounces leave it, and the one
+/// that met its other side read "0.0% answered".
 inline constexpr uint64_t kLookupsForARate = 100;
 
 struct HitRatePrediction {
