@@ -154,6 +154,116 @@ std::vector<CameraPose> readCameraPathFile(const std::string& path) {
 
 namespace {
 
+/// Rays from the centre of a closed space, and one bounce on from where each lands: the surfaces
+/// a view from inside would see, and where light falling into the space would show.
+constexpr uint32_t kEnclosureRays = 64;
+/// Points on emitters tested against those surfaces: this many spread by area, as many again one
+/// on each of evenly spaced emissive triangles, so a small bulb beside a large lit panel (or
+/// behind the space's own walls) still gets some.
+constexpr uint32_t kEmitterPoints = 64;
+
+/// Points on the scene's emissive triangles (where their emission is not black).
+std::vector<EmitterPoint> sampleEmitterPoints(const Scene& scene) {
+    std::vector<uint32_t> emitters;
+    std::vector<double> cumulative_area;
+    double area = 0.0;
+    for (uint32_t t = 0; t < uint32_t(scene.triangles.size()); ++t) {
+        if (!scene.materials[scene.triangle_materials[t]].isEmissive()) continue;
+        const glm::uvec3 tri = scene.triangles[t];
+        area += 0.5 * double(glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
+                                                    scene.positions[tri.z] - scene.positions[tri.x])));
+        emitters.push_back(t);
+        cumulative_area.push_back(area);
+    }
+    std::vector<EmitterPoint> points;
+    if (emitters.empty()) return points;
+    for (uint32_t i = 0; i < 2 * kEmitterPoints; ++i) {
+        const double u = (double(i % kEmitterPoints) + 0.5) / double(kEmitterPoints);
+        const size_t k = i < kEmitterPoints
+                             ? size_t(std::lower_bound(cumulative_area.begin(), cumulative_area.end(), u * area) -
+                                      cumulative_area.begin())
+                             : size_t(u * double(emitters.size()));
+        const glm::vec2 b = sampleUniformTriangle({hashToUnitFloat(i, 0, 1), hashToUnitFloat(i, 0, 2)});
+        const EmitterPoint e = makeEmitterPoint(scene, emitters[std::min(k, emitters.size() - 1)], b.x, b.y);
+        if (maxComponent(e.emission) > 0.0f) points.push_back(e);
+    }
+    return points;
+}
+
+/// True when a punctual light gives any light at all (the light sampler skips the others).
+bool givesLight(const PunctualLight& light) {
+    return maxComponent(light.intensity) > 0.0f && (light.type != LightType::Spot || light.outer_cone_angle > 0.0f);
+}
+
+/// Whether most of what `center` sees emits: inside a glowing object (a closed emissive model,
+/// double-sided), or inside a sky dome modelled as an emissive mesh. 64 rays.
+bool mostlyEmittersAround(const Tracer& tracer, glm::vec3 center) {
+    const Scene& scene = tracer.scene();
+    uint32_t emitting = 0;
+    for (uint32_t i = 0; i < kEnclosureRays; ++i) {
+        const glm::vec3 d = sphericalFibonacciDirection(i, kEnclosureRays);
+        RayHit hit;
+        if (!tracer.intersect(Ray{center, d}, hit)) continue;
+        const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
+        if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) ++emitting;
+    }
+    return 2 * emitting > kEnclosureRays;
+}
+
+/// Whether light reaches the space closed around `center`, as it reaches a room: an emitter is
+/// seen from it, or lights a surface seen from it (a ceiling panel, a lamp behind furniture), a
+/// punctual light is in it, or the sky or the sun comes in through an opening the probes missed.
+/// The inside of a closed object lit from outside (a model under the sky, lamps around it) is
+/// dark: no light reaches it, and a view from there is black. Surfaces one bounce away count, so
+/// a light around a corner of the space is found too. A few thousand rays; deterministic.
+bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
+    const Scene& scene = tracer.scene();
+    const bool sky = !scene.sky.isBlack();
+    // Where light could land: the centre and points just off the surfaces around it, on the
+    // side facing it.
+    std::vector<glm::vec3> receivers;
+    std::vector<std::pair<glm::vec3, glm::vec3>> landed;  // where the rays met a surface, and that side's normal
+    // Whether the ray that left `from` along `d` meets light: the sky, or an emitter's lit side.
+    const auto rayFindsLight = [&](glm::vec3 from, glm::vec3 d) {
+        RayHit hit;
+        if (!tracer.intersect(Ray{from, d}, hit)) return sky && leavesScene(tracer, from, d);
+        const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
+        if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) return true;
+        const glm::vec3 at = offsetRayOrigin(surface.position, surface.geometric_normal);
+        receivers.push_back(at);
+        landed.emplace_back(at, surface.geometric_normal);
+        return false;
+    };
+    for (uint32_t i = 0; i < kEnclosureRays; ++i) {
+        if (rayFindsLight(center, sphericalFibonacciDirection(i, kEnclosureRays))) return true;
+    }
+    for (uint32_t i = 0, first_hits = uint32_t(landed.size()); i < first_hits; ++i) {
+        const auto [at, normal] = landed[i];  // a copy: the bounce adds to `landed`
+        const glm::vec3 local = sampleCosineHemisphere({hashToUnitFloat(i, 1, 0), hashToUnitFloat(i, 1, 1)});
+        if (rayFindsLight(at, Frame(normal).toWorld(local))) return true;
+    }
+    receivers.push_back(center);
+    for (const PunctualLight& light : scene.lights) {
+        if (!givesLight(light)) continue;
+        for (const glm::vec3& at : receivers) {
+            const bool reached = light.type == LightType::Directional
+                                     ? leavesScene(tracer, at, -light.direction)
+                                     : (light.range <= 0.0f || glm::distance(at, light.position) < light.range) &&
+                                           visibleBothWays(tracer, at, light.position);
+            if (reached) return true;
+        }
+    }
+    for (const EmitterPoint& e : sampleEmitterPoints(scene)) {
+        for (const glm::vec3& at : receivers) {
+            const float facing = glm::dot(at - e.position, e.face_normal);
+            if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
+            const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
+            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side))) return true;
+        }
+    }
+    return false;
+}
+
 /// A candidate camera position that passed the free-space test.
 struct FreePoint {
     glm::vec3 position;
@@ -336,117 +446,6 @@ Camera automaticCamera(const Scene& scene, float yfov) {
     return c;
 }
 
-namespace {
-
-/// Rays from the centre of a closed space, and one bounce on from where each lands: the surfaces
-/// a view from inside would see, and where light falling into the space would show.
-constexpr uint32_t kEnclosureRays = 64;
-/// Points on emitters tested against those surfaces: this many spread by area, as many again one
-/// on each of evenly spaced emissive triangles, so a small bulb beside a large lit panel (or
-/// behind the space's own walls) still gets some.
-constexpr uint32_t kEmitterPoints = 64;
-
-/// Points on the scene's emissive triangles (where their emission is not black).
-std::vector<EmitterPoint> sampleEmitterPoints(const Scene& scene) {
-    std::vector<uint32_t> emitters;
-    std::vector<double> cumulative_area;
-    double area = 0.0;
-    for (uint32_t t = 0; t < uint32_t(scene.triangles.size()); ++t) {
-        if (!scene.materials[scene.triangle_materials[t]].isEmissive()) continue;
-        const glm::uvec3 tri = scene.triangles[t];
-        area += 0.5 * double(glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
-                                                    scene.positions[tri.z] - scene.positions[tri.x])));
-        emitters.push_back(t);
-        cumulative_area.push_back(area);
-    }
-    std::vector<EmitterPoint> points;
-    if (emitters.empty()) return points;
-    for (uint32_t i = 0; i < 2 * kEmitterPoints; ++i) {
-        const double u = (double(i % kEmitterPoints) + 0.5) / double(kEmitterPoints);
-        const size_t k = i < kEmitterPoints
-                             ? size_t(std::lower_bound(cumulative_area.begin(), cumulative_area.end(), u * area) -
-                                      cumulative_area.begin())
-                             : size_t(u * double(emitters.size()));
-        const glm::vec2 b = sampleUniformTriangle({hashToUnitFloat(i, 0, 1), hashToUnitFloat(i, 0, 2)});
-        const EmitterPoint e = makeEmitterPoint(scene, emitters[std::min(k, emitters.size() - 1)], b.x, b.y);
-        if (maxComponent(e.emission) > 0.0f) points.push_back(e);
-    }
-    return points;
-}
-
-/// True when a punctual light gives any light at all (the light sampler skips the others).
-bool givesLight(const PunctualLight& light) {
-    return maxComponent(light.intensity) > 0.0f && (light.type != LightType::Spot || light.outer_cone_angle > 0.0f);
-}
-
-/// Whether light reaches the space closed around `center`, as it reaches a room: an emitter is
-/// seen from it, or lights a surface seen from it (a ceiling panel, a lamp behind furniture), a
-/// punctual light is in it, or the sky or the sun comes in through an opening the probes missed.
-/// The inside of a closed object lit from outside (a model under the sky, lamps around it) is
-/// dark: no light reaches it, and a view from there is black. Surfaces one bounce away count, so
-/// a light around a corner of the space is found too. A few thousand rays; deterministic.
-bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
-    const Scene& scene = tracer.scene();
-    const bool sky = !scene.sky.isBlack();
-    // Where light could land: the centre and points just off the surfaces around it, on the
-    // side facing it.
-    std::vector<glm::vec3> receivers;
-    std::vector<std::pair<glm::vec3, glm::vec3>> landed;  // where the rays met a surface, and that side's normal
-    // Whether the ray that left `from` along `d` meets light: the sky, or an emitter's lit side.
-    const auto rayFindsLight = [&](glm::vec3 from, glm::vec3 d) {
-        RayHit hit;
-        if (!tracer.intersect(Ray{from, d}, hit)) return sky && leavesScene(tracer, from, d);
-        const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
-        if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) return true;
-        const glm::vec3 at = offsetRayOrigin(surface.position, surface.geometric_normal);
-        receivers.push_back(at);
-        landed.emplace_back(at, surface.geometric_normal);
-        return false;
-    };
-    // The inside of a glowing object (a closed emissive model, double-sided) is lit by its own
-    // walls: no room, whose lamps are a part of what surrounds the centre. Where most of what the
-    // centre sees emits, the view from there is a white wall and the object is framed from outside.
-    uint32_t emitting = 0;
-    for (uint32_t i = 0; i < kEnclosureRays; ++i) {
-        const glm::vec3 d = sphericalFibonacciDirection(i, kEnclosureRays);
-        RayHit hit;
-        if (!tracer.intersect(Ray{center, d}, hit)) continue;
-        const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
-        if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) ++emitting;
-    }
-    if (2 * emitting > kEnclosureRays) return false;
-    for (uint32_t i = 0; i < kEnclosureRays; ++i) {
-        if (rayFindsLight(center, sphericalFibonacciDirection(i, kEnclosureRays))) return true;
-    }
-    for (uint32_t i = 0, first_hits = uint32_t(landed.size()); i < first_hits; ++i) {
-        const auto [at, normal] = landed[i];  // a copy: the bounce adds to `landed`
-        const glm::vec3 local = sampleCosineHemisphere({hashToUnitFloat(i, 1, 0), hashToUnitFloat(i, 1, 1)});
-        if (rayFindsLight(at, Frame(normal).toWorld(local))) return true;
-    }
-    receivers.push_back(center);
-    for (const PunctualLight& light : scene.lights) {
-        if (!givesLight(light)) continue;
-        for (const glm::vec3& at : receivers) {
-            const bool reached = light.type == LightType::Directional
-                                     ? leavesScene(tracer, at, -light.direction)
-                                     : (light.range <= 0.0f || glm::distance(at, light.position) < light.range) &&
-                                           visibleBothWays(tracer, at, light.position);
-            if (reached) return true;
-        }
-    }
-    for (const EmitterPoint& e : sampleEmitterPoints(scene)) {
-        for (const glm::vec3& at : receivers) {
-            const float facing = glm::dot(at - e.position, e.face_normal);
-            if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
-            const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
-            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side))) return true;
-        }
-    }
-    return false;
-}
-
-}  // namespace
-
 Camera automaticCamera(const Tracer& tracer, float yfov) {
     const Scene& scene = tracer.scene();
     Camera outside = automaticCamera(scene, yfov);
@@ -465,7 +464,11 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
     // Blender writes them by default, or wound outwards) look the same from inside a room and
     // inside a solid model, and only light tells them apart: a room is lit from within, a model
     // under the sky from outside.
-    if (!by_winding.known && !lightReachesInside(tracer, center)) return outside;
+    // The inside of a glowing object (a closed emissive model, double-sided) is lit by its own
+    // walls: no room, whose lamps are a part of what surrounds the centre. Where most of what the
+    // centre sees emits, the view from there is a white wall and the object is framed from outside.
+    if (!by_winding.known && (mostlyEmittersAround(tracer, center) || !lightReachesInside(tracer, center)))
+        return outside;
     // Level (+Y up), along the horizontal axis with the most room, from near the wall behind: the
     // view across the whole room (from the centre it filled the frame with the far wall alone).
     const auto distanceTo = [&](glm::vec3 d) {
