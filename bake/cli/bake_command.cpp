@@ -244,6 +244,13 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                                std::to_string(explored.candidates) +
                                " points); give a --camera-path or --camera-source gltf");
     }
+    if (explored.dark_enclosure && explored.views_around > 0) {
+        description = std::to_string(explored.views_around) +
+                      " views from around the scene (it has no camera, and the free space inside its bounds is "
+                      "closed and no light reaches it: the inside of a closed object lit from outside, which no "
+                      "runtime camera sees)";
+        return std::move(*path);
+    }
     description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
                   std::to_string(explored.candidates) + " tried" +
                   (explored.winding_ignored

@@ -272,11 +272,16 @@ struct FreePoint {
     int escaped;  ///< FreeSpaceProbe::escaped
 };
 
+/// Free points tested for light where a scene without cameras says nothing else of which free
+/// space is a room, and before closed free space is called dark: a few thousand rays each.
+constexpr size_t kLightTests = 16;
+
 /// The candidates' sets connected under mutual visibility, and which of them to keep: the sets
 /// that hold a camera. Without cameras, the start is only the centre of the bounds, which may lie
 /// inside a closed double-sided object (Blender's default material is double-sided), whose inside
-/// looks free: the sets where free space is known are kept instead, else the centre's set, and
-/// with neither the largest set. Returns, per point, whether its set is kept.
+/// looks free: the sets where free space is known are kept instead, else those light reaches (a
+/// room is lit from within, the inside of a closed object is not), else the centre's set, and
+/// with none of these the largest set. Returns, per point, whether its set is kept.
 std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePoint>& points, bool starts_are_cameras) {
     // Union-find over all pairs: a few thousand rays.
     const size_t n = points.size();
@@ -297,6 +302,12 @@ std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePo
     bool any_kept = false;
     for (size_t i = 0; i < n; ++i) {
         if (starts_are_cameras ? points[i].start : points[i].known) keep_root[root(i)] = any_kept = true;
+    }
+    // Points spread over all candidates, so a lit room beside a larger dark inside is found.
+    const size_t light_tests = any_kept ? 0 : std::min(n, kLightTests);
+    for (size_t k = 0; k < light_tests; ++k) {
+        const size_t i = k * n / light_tests;
+        if (!keep_root[root(i)] && lightReachesInside(tracer, points[i].position)) keep_root[root(i)] = any_kept = true;
     }
     for (size_t i = 0; i < n && !any_kept; ++i) {
         if (points[i].start) keep_root[root(i)] = any_kept = true;
@@ -418,13 +429,30 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     if (free_points.empty()) return result;
 
     uint64_t escaped_probes = 0;
+    bool any_known = false;
     for (size_t i = 0; i < free_points.size() && result.points.size() < count; ++i) {
         if (!kept[i]) continue;
         result.points.push_back(free_points[i].position);
         escaped_probes += uint64_t(free_points[i].escaped);
+        any_known = any_known || free_points[i].known;
     }
     if (!result.points.empty())
         result.escaped_fraction = float(double(escaped_probes) / double(result.points.size() * kProbeCount));
+    // Without a camera, free space that is closed (no probe ray leaves it), that no single-sided
+    // face calls free, and that no light reaches is the inside of a closed object lit from
+    // outside: a cube or a housing under the sky, whose bounds hold nothing but its inside. The
+    // automatic camera frames such a scene from outside; so must the bake. Points spread over
+    // those found are tested, since a lit room may be a few of them. Space with an opening is left
+    // alone (light may come in through it), as is a room whose single-sided walls face it (a sky
+    // dome of unlit faces wound inwards).
+    if (!starts_are_cameras && !result.points.empty() && escaped_probes == 0 && !any_known) {
+        const size_t tested = std::min(result.points.size(), kLightTests);
+        bool lit = false;
+        for (size_t i = 0; i < tested && !lit; ++i) {
+            lit = lightReachesInside(tracer, result.points[i * result.points.size() / tested]);
+        }
+        result.dark_enclosure = !lit;
+    }
     return result;
 }
 
@@ -586,11 +614,17 @@ std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene&
         if (insideBox(c.position, scene.bounds_min, scene.bounds_max)) result.cameras_outside = false;
     }
     std::vector<CameraPose> around;
-    if ((!starts_are_cameras || result.cameras_outside) && result.escaped_fraction >= kOpenSceneEscapedFraction) {
+    if ((!starts_are_cameras || result.cameras_outside) &&
+        (result.escaped_fraction >= kOpenSceneEscapedFraction || result.dark_enclosure)) {
         around = viewsAroundScene(scene, uint32_t(result.points.size()), seed);
     }
     result.views_around = uint32_t(around.size());
     if (explored) *explored = result;
+    // The inside of a closed object lit from outside is black and no runtime camera stands
+    // there: the views from around alone.
+    if (result.dark_enclosure && !around.empty()) {
+        return CameraPath(std::move(around), true, 1, 0.0f, seed, std::vector<bool>(result.views_around, true));
+    }
     // Free-space points and views from around alternate, so a short bake gets both.
     std::vector<CameraPose> poses;
     std::vector<bool> aimed;

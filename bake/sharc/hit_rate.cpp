@@ -64,9 +64,23 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
     switch (region.kind) {
     case ViewRegion::Kind::FreeSpace:
     case ViewRegion::Kind::Distance:
-    case ViewRegion::Kind::BakeCamera:
-        points = exploreFreeSpace(tracer, starts, !starts.empty(), samples, seed ^ 0x5EED0001u).points;
+    case ViewRegion::Kind::BakeCamera: {
+        const uint32_t explore_seed = seed ^ 0x5EED0001u;
+        const ExplorationResult explored = exploreFreeSpace(tracer, starts, !starts.empty(), samples, explore_seed);
+        if (!explored.dark_enclosure) {
+            points = explored.points;
+            break;
+        }
+        // The dark inside of a closed object: runtime cameras look at it from outside, as the bake
+        // does (exploringCameraPath).
+        const std::vector<CameraPose> around = viewsAroundScene(scene, samples, explore_seed);
+        for (size_t i = 0; i < around.size(); ++i) {
+            PredictionView view{toCamera(around[i]), false};
+            view.camera.name = "view from around " + std::to_string(i);
+            views.push_back(view);
+        }
         break;
+    }
     case ViewRegion::Kind::Points:
         for (uint32_t i = 0; i < samples && !region.points.empty(); ++i) {
             points.push_back(region.points[size_t(i) * region.points.size() / samples]);

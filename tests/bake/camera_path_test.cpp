@@ -125,20 +125,26 @@ bool inside(glm::vec3 p, glm::vec3 lo, glm::vec3 hi) {
 struct Explored {
     ExplorationResult result;
     bool has_path = false;
+    std::vector<CameraPose> waypoints;  ///< the exploring camera's path
 };
 
 Explored explore(const Scene& scene) {
     const Tracer tracer(scene);
     Explored out;
-    out.has_path = exploringCameraPath(tracer, scene, 32, 7, &out.result).has_value();
+    const std::optional<CameraPath> path = exploringCameraPath(tracer, scene, 32, 7, &out.result);
+    out.has_path = path.has_value();
+    if (path) out.waypoints = path->waypoints();
     return out;
 }
 
-/// Every explored point lies inside the room, none inside the cube, and there are enough of them.
+/// Every explored point, and every waypoint of the path, lies inside the room, none inside the
+/// cube, and there are enough of them.
 void expectPointsFillTheRoom(const Explored& e, const char* what) {
     ASSERT_TRUE(e.has_path) << what;
     EXPECT_EQ(e.result.points.size(), 32u) << what;
-    for (const glm::vec3& p : e.result.points) {
+    std::vector<glm::vec3> positions = e.result.points;
+    for (const CameraPose& pose : e.waypoints) positions.push_back(pose.position);
+    for (const glm::vec3& p : positions) {
         EXPECT_TRUE(inside(p, kRoomMin, kRoomMax)) << what << ": (" << p.x << ", " << p.y << ", " << p.z << ")";
         EXPECT_FALSE(inside(p, kCubeMin, kCubeMax)) << what << ": (" << p.x << ", " << p.y << ", " << p.z << ")";
     }
@@ -171,11 +177,16 @@ TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsTrustsTheCamera) {
 
 TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsWithoutACameraIsExplored) {
     // No camera: the start is the room's centre, which the winding puts inside a solid, as it
-    // does every other point; the winding is then ignored and reachability decides.
+    // does every other point; the winding is then ignored and reachability decides. The lamp
+    // says it is a room: without light inside, it is the dark inside of a closed object
+    // (TheDarkInsideOfAClosedModelIsSeenFromAround).
     test::TempDir dir;
-    const Explored e = explore(loadRoom(dir, {false, false, false, true}));
+    RoomOptions options{false, false, false, true};
+    options.lamp = true;
+    const Explored e = explore(loadRoom(dir, options));
     expectPointsFillTheRoom(e, "single-sided room wound outwards, no camera");
     EXPECT_TRUE(e.result.winding_ignored);
+    EXPECT_FALSE(e.result.dark_enclosure);
 }
 
 TEST(ExploreFreeSpace, AClosedRoomBesideALargeGroundPlaneIsExploredFromItsCamera) {
@@ -462,6 +473,16 @@ Scene loadDoubleSidedMesh(const test::TempDir& dir, const std::vector<float>& po
     return loadGltf(gltf.writeEmbedded(dir, name));
 }
 
+/// Two closed boxes wound outwards, double-sided (loadDoubleSidedMesh), without a camera.
+Scene loadTwoBoxes(const test::TempDir& dir, glm::vec3 a_min, glm::vec3 a_max, glm::vec3 b_min, glm::vec3 b_max,
+                   const std::string& name) {
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    addBox(positions, indices, a_min, a_max, false);
+    addBox(positions, indices, b_min, b_max, false);
+    return loadDoubleSidedMesh(dir, positions, indices, name);
+}
+
 TEST(ExploreFreeSpace, TheInsideOfAClosedDoubleSidedObjectIsNotExplored) {
     // Blender's default material is double-sided. A closed T of two boxes without a camera: the
     // centre of its bounds lies inside the bar, and with no single-sided face to vote, its inside
@@ -469,11 +490,7 @@ TEST(ExploreFreeSpace, TheInsideOfAClosedDoubleSidedObjectIsNotExplored) {
     constexpr glm::vec3 kBarMin{0.0f, 0.8f, 0.0f}, kBarMax{3.0f, 2.0f, 1.0f};
     constexpr glm::vec3 kStemMin{1.0f, 0.0f, 0.0f}, kStemMax{2.0f, 0.8f, 1.0f};
     test::TempDir dir;
-    std::vector<float> positions;
-    std::vector<uint32_t> indices;
-    addBox(positions, indices, kBarMin, kBarMax, false);
-    addBox(positions, indices, kStemMin, kStemMax, false);
-    const Scene scene = loadDoubleSidedMesh(dir, positions, indices, "t.gltf");
+    const Scene scene = loadTwoBoxes(dir, kBarMin, kBarMax, kStemMin, kStemMax, "t.gltf");
     const Explored e = explore(scene);
     ASSERT_TRUE(e.has_path);
     EXPECT_GE(e.result.points.size(), 16u);
@@ -531,12 +548,18 @@ TEST(ExploreFreeSpace, ADoubleSidedRoomWoundOutwardsWithoutACameraKeepsTheSingle
     addBox(positions, indices, kTubMin, kTubMax, true);
     // Faces come -X, +X, -Y, +Y, -Z, +Z, two triangles each: the tub has no top.
     indices.erase(indices.begin() + std::ptrdiff_t(tub + 3 * 6), indices.begin() + std::ptrdiff_t(tub + 4 * 6));
-    const Explored e = explore(loadDoubleSidedMesh(dir, positions, indices, "room.gltf"));
+    Scene room = loadDoubleSidedMesh(dir, positions, indices, "room.gltf");
+    PunctualLight bulb;  // a room, lit from within
+    bulb.position = kLampCenter;
+    bulb.intensity = glm::vec3(5.0f);
+    room.lights.push_back(bulb);
+    const Explored e = explore(room);
     ASSERT_TRUE(e.has_path);
     EXPECT_EQ(e.result.points.size(), 32u);
     EXPECT_FALSE(e.result.winding_ignored);
+    EXPECT_FALSE(e.result.dark_enclosure);
     int above_tub = 0;
-    for (const glm::vec3& p : e.result.points) above_tub += p.y > kTubMax.y;
+    for (const CameraPose& pose : e.waypoints) above_tub += pose.position.y > kTubMax.y;
     EXPECT_GT(above_tub, 16) << "the room above the tub is explored";
 }
 
@@ -613,10 +636,13 @@ TEST(ExploreFreeSpace, LoneObjectWithoutACameraIsAlsoSeenFromAround) {
 
 TEST(ExploreFreeSpace, ClosedRoomsAndCamerasWithinTheBoundsGetNoViewsFromAround) {
     test::TempDir dir;
-    const Explored room = explore(loadRoom(dir, {true, false, false, true}));
+    RoomOptions lit_room{true, false, false, true};
+    lit_room.lamp = true;
+    const Explored room = explore(loadRoom(dir, lit_room));
     ASSERT_TRUE(room.has_path);
     EXPECT_LT(room.result.escaped_fraction, 0.05f) << "a closed room without a camera";
     EXPECT_EQ(room.result.views_around, 0u);
+    expectPointsFillTheRoom(room, "a closed double-sided room lit from within, no camera");
     // A camera within the scene's bounds (under the table, as one in a street or a room with an
     // open side) keeps the bake's paths around it.
     const Explored under = explore(loadTable(dir, true, glm::vec3(0.0f, 0.5f, 0.0f)));
@@ -630,6 +656,68 @@ TEST(ExploreFreeSpace, ClosedRoomsAndCamerasWithinTheBoundsGetNoViewsFromAround)
     ASSERT_TRUE(table.has_path);
     EXPECT_TRUE(table.result.cameras_outside);
     EXPECT_EQ(table.result.views_around, table.result.points.size());
+}
+
+TEST(ExploreFreeSpace, TheDarkInsideOfAClosedModelIsSeenFromAround) {
+    // A closed housing wound outwards with a part inside it, under the sky, without a camera, as
+    // CAD tools export an assembly. The housing's bounds hold nothing but its inside: the winding
+    // put every point inside a solid, the fallback ignored it, and the path explored the housing's
+    // black inside; the grid was fitted to the part, and the bake predicted 0.1% from views
+    // standing inside. No light reaches there and no runtime camera stands there.
+    constexpr glm::vec3 kShellMin{-1.0f, 0.0f, -1.0f}, kShellMax{1.0f, 2.0f, 1.0f};
+    constexpr glm::vec3 kPartMin{-0.3f, 0.5f, -0.3f}, kPartMax{0.3f, 1.1f, 0.3f};
+    test::TempDir dir;
+    const Scene loaded = loadTwoBoxes(dir, kShellMin, kShellMax, kPartMin, kPartMax, "housing.gltf");
+    for (const bool double_sided : {false, true}) {
+        Scene scene = loaded;
+        for (Material& m : scene.materials) m.double_sided = double_sided;
+        scene.sky.uniform = glm::vec3(1.0f);
+        const char* what = double_sided ? "double-sided housing" : "single-sided housing";
+        const Explored e = explore(scene);
+        ASSERT_TRUE(e.has_path) << what;
+        EXPECT_TRUE(e.result.dark_enclosure) << what;
+        EXPECT_EQ(e.result.escaped_fraction, 0.0f) << what;
+        // The views from around alone: every waypoint outside the housing, each keeping its aim.
+        ASSERT_GT(e.result.views_around, 0u) << what;
+        EXPECT_EQ(e.waypoints.size(), e.result.views_around) << what;
+        for (const CameraPose& pose : e.waypoints) {
+            EXPECT_FALSE(inside(pose.position, kShellMin, kShellMax))
+                << what << ": (" << pose.position.x << ", " << pose.position.y << ", " << pose.position.z << ")";
+        }
+        // The hit rate is predicted from outside too: render's automatic camera and views from
+        // around, none inside.
+        const Tracer tracer(scene);
+        const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 8, 1);
+        EXPECT_EQ(views.size(), 9u) << what;
+        for (const PredictionView& view : views) {
+            EXPECT_FALSE(inside(view.camera.position, kShellMin, kShellMax)) << what << ": " << view.camera.name;
+        }
+    }
+    // Light inside makes the shell a room, explored from inside, around the part: a lamp (a closed
+    // box modelled around the camera's space), or the shell's own glow (a sky dome modelled as an
+    // emissive mesh, double-sided as Blender writes it, around a model).
+    Scene lamp = loaded;
+    PunctualLight bulb;
+    bulb.position = glm::vec3(0.0f, 1.7f, 0.0f);
+    bulb.intensity = glm::vec3(5.0f);
+    lamp.lights.push_back(bulb);
+    Scene dome = loaded;
+    Material sky = dome.materials.front();
+    sky.emissive = glm::vec3(0.5f, 0.7f, 1.0f);
+    dome.materials.push_back(sky);
+    for (uint32_t t = 0; t < 12; ++t) dome.triangle_materials[t] = uint32_t(dome.materials.size() - 1);  // the shell
+    for (const auto& [scene, what] : {std::pair<const Scene&, const char*>{lamp, "a lamp inside"},
+                                      std::pair<const Scene&, const char*>{dome, "a glowing shell"}}) {
+        const Explored e = explore(scene);
+        ASSERT_TRUE(e.has_path) << what;
+        EXPECT_FALSE(e.result.dark_enclosure) << what;
+        EXPECT_EQ(e.result.views_around, 0u) << what;
+        ASSERT_FALSE(e.waypoints.empty()) << what;
+        for (const CameraPose& pose : e.waypoints) {
+            EXPECT_TRUE(inside(pose.position, kShellMin, kShellMax)) << what;
+            EXPECT_FALSE(inside(pose.position, kPartMin, kPartMax)) << what;
+        }
+    }
 }
 
 TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {

@@ -4,8 +4,9 @@
 # camera's distance all hit; the same scene in millimetres or kilometres gets the same grid (in its
 # units), the same voxel count and hit rate, and no warning; a level bias that does not fit the
 # units is warned about; the automatic camera sees a lone floor, which has nothing to look up, and
-# frames a closed double-sided box under the sky from outside (a black image is warned about); a
-# room beside a 10 km ground plane is served from its own camera.
+# frames a closed double-sided box under the sky from outside (a black image is warned about), as
+# the bake's camera sees it from around; a room beside a 10 km ground plane is served from its
+# own camera.
 # Usage: coverage_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -287,6 +288,18 @@ expect 0 "render from inside the box" "$sharcbake" render "$work/box.gltf" -o "$
     --spp 1 --no-png --sky 1,1,1 --look-at 0,0.8,0,0,0.8,-1
 says "$work/err.txt" "warning: every pixel of the image is black: no light reaches what camera '--look-at' at (0, 0.8, 0)" \
     "a black image from inside a closed object is warned about"
+# Baked without a camera, the box is seen from around: its inside, where the roaming camera
+# stood before, is black and no runtime camera sees it, and 387 of the automatic camera's 401
+# primary hits found no voxel.
+expect 0 "bake the closed box under the sky" "$sharcbake" bake "$work/box.gltf" -o "$work/box.sharc" --iterations 64 \
+    --sky 1,1,1
+says "$work/out.txt" "Camera: 64 views from around the scene (it has no camera, and the free space inside its bounds is closed" \
+    "a closed model under the sky without a camera is baked from around"
+grep -q "^warning" "$work/err.txt" && fail "the box's bake warns: $(cat "$work/err.txt")"
+expect 0 "the box's primary hits through its cache" "$sharcbake" render "$work/box.gltf" -o "$work/box.exr" \
+    --resolution 32 --spp 1 --no-png --sky 1,1,1 --cache "$work/box.sharc" --debug-view cache
+says "$work/out.txt" "debug view 'cache': 0 of [0-9]* primary hits have no cached voxel" \
+    "every primary hit of the automatic camera on the box has a voxel"
 # A closed 4 m room with its camera beside a 10 km ground plane under a sky (a building on its
 # site). Fitted to the whole surface, the grid had 28 m voxels: SHaRC's tests refused every lookup
 # from the room's camera, and the bake said "no first bounce hits a surface". The grid now fits
