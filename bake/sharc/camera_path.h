@@ -72,9 +72,9 @@ struct ExplorationResult {
     bool cameras_outside = false;
     /// The scene has no camera, and the free space found is closed and dark: no probe ray leaves
     /// it, no single-sided face's winding calls it free, and no light reaches it (tested at up to
-    /// 16 of `points`). It is the inside
-    /// of a closed object lit from outside (a cube or a housing under the sky), so the scene is
-    /// looked at from around it instead (exploringCameraPath, the hit-rate prediction).
+    /// 16 of `points`). It is the inside of a closed object lit from outside (a cube or a housing
+    /// under the sky), so the scene is looked at from around it instead (exploringCameraPath, the
+    /// hit-rate prediction).
     bool dark_enclosure = false;
 };
 
@@ -124,10 +124,11 @@ std::vector<CameraPose> viewsAroundScene(const Scene& scene, uint32_t count, uin
 /// the connected sets holding them are kept. Otherwise the start (the centre of the bounds) may
 /// lie inside a closed double-sided object, whose inside looks free, so the sets kept are those
 /// where free space is known (a probe ray left the scene, or single-sided faces said so); where
-/// none is, those light reaches, else the start's set, else the largest set. If a camera is behind single-sided faces, or
-/// no point is free at all, the winding cannot be trusted and is ignored for the whole scene
-/// (`winding_ignored`): then only the clearance from surfaces and reachability decide. Without
-/// cameras, closed free space that no light reaches is flagged `dark_enclosure`.
+/// none is, those light reaches, else the start's set, else the largest set. If a camera is behind
+/// single-sided faces, or no point is free at all, the winding cannot be trusted and is ignored
+/// for the whole scene (`winding_ignored`): then only the clearance from surfaces and
+/// reachability decide. Without cameras, closed free space that no light reaches is flagged
+/// `dark_enclosure`.
 /// Deterministic for a given seed.
 ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::vec3>& starts, bool starts_are_cameras,
                                    uint32_t count, uint32_t seed);
