@@ -1687,7 +1687,8 @@ void registerBakeCommand(CLI::App& app) {
     cmd->add_option("--camera-source", o->camera_source_name,
                     "Where the roaming camera goes: explore (free space reachable from the glTF cameras; a "
                     "scene that is open around, such as a lone model, and has no camera or only cameras "
-                    "outside its bounds, is also looked at from around it) or gltf (along the glTF cameras)")
+                    "outside its bounds, is also looked at from around it; a closed model without a camera "
+                    "whose inside no light reaches, from around alone) or gltf (along the glTF cameras)")
         ->capture_default_str()
         ->check(CLI::IsMember({"explore", "gltf"}))
         ->each([o](const std::string& name) {
