@@ -55,14 +55,27 @@ struct FreeSpaceProbe {
 /// a room without a camera), single-sided faces alone vote, and where those fail too, none.
 enum class Winding { kAllFaces, kSingleSided, kIgnored };
 
+/// The directions a point is probed along: the 14 axis and diagonal directions, or for a glTF
+/// camera, before its scene's winding is distrusted, 64 spread evenly (a spherical Fibonacci
+/// set). Along the 14, one that met the inside of a wall through a gap (a camera on the axis of
+/// Suzanne's eye) outvoted the single front face the others met, and the scene lost its
+/// double-sided faces' vote. Seen densely, the model's outside outweighs the gap; the outside of a
+/// room wound inwards shows a camera nothing but backs either way.
+enum class Probes { kAxesAndDiagonals, kCameraSphere };
+constexpr uint32_t kCameraSphereProbes = 64;
+
 /// A point is in free space when most probe rays that hit a face that votes (`winding`) hit its
 /// front (the side its winding faces): inside a closed solid every ray sees back faces. Points
 /// closer to any surface than `clearance` are rejected so the camera does not sit on a wall.
-FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, Winding winding) {
+FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance, Winding winding,
+                              Probes probes = Probes::kAxesAndDiagonals) {
     int votes = 0, back_votes = 0, single_sided_votes = 0, escaped = 0;
     const Scene& scene = tracer.scene();
-    for (int i = 0; i < kProbeCount; ++i) {
-        const glm::vec3 d = axisOrDiagonalDirection(i);
+    const bool sphere = probes == Probes::kCameraSphere;
+    const int count = sphere ? int(kCameraSphereProbes) : kProbeCount;
+    for (int i = 0; i < count; ++i) {
+        const glm::vec3 d = sphere ? sphericalFibonacciDirection(uint32_t(i), kCameraSphereProbes)
+                                   : axisOrDiagonalDirection(i);
         RayHit hit;
         if (!tracer.intersect(Ray{p, d}, hit)) {
             ++escaped;
@@ -369,11 +382,11 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     // a solid, or finds no free space at all, the scene's winding does not tell inside from
     // outside that way (faces facing away from the viewer, as a room modelled from a cube has
     // them): the next, weaker test is used, and last none, where clearance and reachability
-    // decide alone.
+    // decide alone. The cameras are probed densely (Probes::kCameraSphere).
     Winding winding = Winding::kAllFaces;
     const auto camerasFree = [&](Winding w) {
         for (const glm::vec3& s : starts)
-            if (!probeFreeSpace(tracer, s, 0.0f, w).free) return false;
+            if (!probeFreeSpace(tracer, s, 0.0f, w, Probes::kCameraSphere).free) return false;
         return true;
     };
     const auto weaker = [](Winding w) { return w == Winding::kAllFaces ? Winding::kSingleSided : Winding::kIgnored; };

@@ -507,7 +507,10 @@ TEST(ExploreFreeSpace, TheInsideOfADoubleSidedModelOpenThroughAGapIsNotExplored)
     // with a camera that sees into it through the hole: its inside is reachable, and with no
     // single-sided face to vote it was free space, so the bake and the hit rate's sample views
     // stood inside the head (a fifth of those views, at under 1% each). The backs of double-sided
-    // faces now vote where the cameras stand in free space by them.
+    // faces now vote where the cameras stand in free space by them. The camera stands on the
+    // hole's axis: its -Z probe meets the back of the far wall inside, and that one back face
+    // against a single front (the ground below) put the camera inside a solid, so double-sided
+    // faces lost their vote and the head was explored again; its escaping probes now count.
     constexpr glm::vec3 kHeadMin{0.0f, 0.0f, 0.0f}, kHeadMax{2.0f, 2.0f, 2.0f};
     test::TempDir dir;
     std::vector<float> positions;
@@ -519,11 +522,14 @@ TEST(ExploreFreeSpace, TheInsideOfADoubleSidedModelOpenThroughAGapIsNotExplored)
     const uint32_t base = uint32_t(positions.size() / 3);
     positions.insert(positions.end(), {-2.0f, 0.0f, -2.0f, 4.0f, 0.0f, -2.0f, 4.0f, 0.0f, 4.0f, -2.0f, 0.0f, 4.0f});
     indices.insert(indices.end(), {base, base + 2, base + 1, base, base + 3, base + 2});  // facing up
-    constexpr glm::vec3 kCamera{1.5f, 1.0f, 5.0f};
+    constexpr glm::vec3 kCamera{1.0f, 1.0f, 5.0f};
     const Scene scene = loadDoubleSidedMesh(dir, positions, indices, "head.gltf", kCamera);
     const Tracer tracer(scene);
     ASSERT_TRUE(visibleOneWay(tracer, kCamera, glm::vec3(1.0f, 1.0f, 1.0f)))
         << "the camera sees into the box through the hole";
+    RayHit far_wall;
+    ASSERT_TRUE(tracer.intersect(Ray{kCamera, glm::vec3(0.0f, 0.0f, -1.0f)}, far_wall));
+    ASSERT_NEAR(far_wall.t, 5.0f, 1e-4f) << "the -Z probe meets the inside of the far wall";
     const Explored e = explore(scene);
     ASSERT_TRUE(e.has_path);
     EXPECT_GE(e.result.points.size(), 16u);
