@@ -244,9 +244,12 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                                std::to_string(explored.candidates) +
                                " points); give a --camera-path or --camera-source gltf");
     }
+    // "1 view", "64 views".
+    const std::string views_around = std::to_string(explored.views_around) +
+                                     (explored.views_around == 1 ? " view" : " views") + " from around the scene";
     if (explored.dark_enclosure && explored.views_around > 0) {
-        description = std::to_string(explored.views_around) +
-                      " views from around the scene (it has no camera, and the free space inside its bounds is "
+        description = views_around +
+                      " (it has no camera, and the free space inside its bounds is "
                       "closed and no light reaches it: the inside of a closed object lit from outside, which no "
                       "runtime camera sees)";
         return std::move(*path);
@@ -258,7 +261,7 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                        : "") +
                   ")";
     if (explored.views_around > 0) {
-        description += ", and " + std::to_string(explored.views_around) + " views from around the scene (" +
+        description += ", and " + views_around + " (" +
                        (explored.cameras_outside ? "its cameras all stand outside its bounds" : "it has no camera") +
                        ", and " + std::to_string(int(std::lround(100.0f * explored.escaped_fraction))) +
                        "% of the probe rays from those points leave it)";
@@ -1368,8 +1371,8 @@ private:
             char sight[200] = "";
             if (seen_ && seen_->fraction < kFitToSeenBelow) {
                 std::snprintf(sight, sizeof sight,
-                              "; the free space around the scene's cameras sees only %.2g%% of it (the grid is "
-                              "fitted to that part), so the rest is out of their sight",
+                              "; the roaming camera's viewpoints see only %.2g%% of it (the grid is fitted to that "
+                              "part), so the rest is out of their sight",
                               100.0 * seen_->fraction);
             }
             // The remedies that change where the camera goes, less the one already in use.
