@@ -510,7 +510,8 @@ TEST(ExploreFreeSpace, TheInsideOfADoubleSidedModelOpenThroughAGapIsNotExplored)
     // faces now vote where the cameras stand in free space by them. The camera stands on the
     // hole's axis: its -Z probe meets the back of the far wall inside, and that one back face
     // against a single front (the ground below) put the camera inside a solid, so double-sided
-    // faces lost their vote and the head was explored again; its escaping probes now count.
+    // faces lost their vote and the head was explored again. Cameras are now probed along 64
+    // directions, where the head's outside outweighs the hole.
     constexpr glm::vec3 kHeadMin{0.0f, 0.0f, 0.0f}, kHeadMax{2.0f, 2.0f, 2.0f};
     test::TempDir dir;
     std::vector<float> positions;
