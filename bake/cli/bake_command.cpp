@@ -1701,8 +1701,8 @@ void registerBakeCommand(CLI::App& app) {
                                "Camera path file (overrides --camera-source): one waypoint per line, "
                                "\"px py pz tx ty tz [fov_degrees]\", '#' comments"));
     cmd->add_option("--explore-points", o->explore_points,
-                    "Free-space points the exploring camera visits (and as many views from around an open scene "
-                    "without cameras inside its bounds)")
+                    "Free-space points the exploring camera visits, and as many views from around a scene looked "
+                    "at from outside (see --camera-source)")
         ->capture_default_str()
         ->check(CLI::Range(1u, 4096u));
     cmd->add_option("--iterations-per-leg", o->iterations_per_leg,
