@@ -296,6 +296,17 @@ expect 0 "bake the closed box under the sky" "$sharcbake" bake "$work/box.gltf" 
 says "$work/out.txt" "Camera: 64 views from around the scene (it has no camera, and the free space inside its bounds is closed" \
     "a closed model under the sky without a camera is baked from around"
 grep -q "^warning" "$work/err.txt" && fail "the box's bake warns: $(cat "$work/err.txt")"
+# A convex white box (albedo 1) under a uniform sky of 1 sends back radiance 1 from every outside
+# point: the voxels' mean is 1 (it was 5e-7 with the path inside the box, where no light is).
+expect 0 "info --json of the box" "$sharcbake" info "$work/box.sharc" --json
+python3 - "$work/out.txt" <<'PY' || failures=$((failures + 1))
+import json, sys
+mean = json.load(open(sys.argv[1]))["radiance"]["mean"]
+if any(abs(c - 1.0) > 0.02 for c in mean):
+    print("FAIL: the box's voxels hold a mean radiance of %s, not 1 (a white box under a sky of 1)" % mean)
+    sys.exit(1)
+print("ok: the box's voxels hold the furnace radiance 1 (mean %.4f)" % mean[0])
+PY
 expect 0 "the box's primary hits through its cache" "$sharcbake" render "$work/box.gltf" -o "$work/box.exr" \
     --resolution 32 --spp 1 --no-png --sky 1,1,1 --cache "$work/box.sharc" --debug-view cache
 says "$work/out.txt" "debug view 'cache': 0 of [0-9]* primary hits have no cached voxel" \
