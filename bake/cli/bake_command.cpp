@@ -303,7 +303,7 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
     std::optional<Image> reference;
     if (!o.reference_path.empty()) {
         try {
-            reference = readExr(o.reference_path);
+            reference = readLinearImage(o.reference_path);
         } catch (const ImageError& e) {
             throw CommandError(kExitIo, std::string("--reference: ") + e.what());
         }
@@ -1745,10 +1745,11 @@ void registerBakeCommand(CLI::App& app) {
                         "(gnuplot). Evaluation time is not counted in the bake's time. Works on any scene: the "
                         "cache is measured against a path-traced probe reference (--report-probes); --reference adds "
                         "an image comparison, a scene with a known radiance an exact voxel error"));
-    pathOption(
-        cmd->add_option("--reference", o->reference_path,
-                        "Linear EXR of the evaluation camera (any converged render, e.g. sharcbake render --spp 4096): "
-                        "the image error is a render through the cache against it; its size is the evaluation size"));
+    pathOption(cmd->add_option(
+        "--reference", o->reference_path,
+        "Linear image (OpenEXR, PFM or Radiance HDR) of the evaluation camera (any converged render, e.g. "
+        "sharcbake render --spp 4096): "
+        "the image error is a render through the cache against it; its size is the evaluation size"));
     cmd->add_option("--report-camera", o->report_camera,
                     "Evaluation camera (default: the first): a glTF camera by its node's name, its own name or its "
                     "index #N, as render --camera");

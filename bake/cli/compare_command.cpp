@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// `sharcbake compare`: error of an image against a reference EXR (any renderer's, same camera
-// and resolution).
+// `sharcbake compare`: error of an image against a reference image (any renderer's OpenEXR, PFM
+// or Radiance HDR; same camera and resolution).
 #include "cli/command_support.h"
 #include "cli/commands.h"
 #include "support/json.h"
@@ -22,8 +22,8 @@ struct CompareOptions {
 void runCompare(const CompareOptions& o) {
     Image image, reference;
     try {
-        image = readExr(o.image_path);
-        reference = readExr(o.reference_path);
+        image = readLinearImage(o.image_path);
+        reference = readLinearImage(o.reference_path);
     } catch (const sharcbake::ImageError& e) {
         throw CommandError(kExitIo, e.what());
     }
@@ -62,16 +62,18 @@ void registerCompareCommand(CLI::App& app) {
     CLI::App* cmd =
         app.add_subcommand("compare",
                            "Error of an image against a reference image.\n\n"
-                           "Both are linear EXRs of the same camera and resolution; either may come from any\n"
-                           "renderer. A multilayer EXR (Blender's) is read from its only RGB layer or its Combined\n"
-                           "pass. Prints relative MSE ((x-r)^2/(r^2+(0.1m)^2)), mean relative error\n"
-                           "(|x-r|/(|r|+0.01m)) and the relative bias of the image mean, averaged over pixels and\n"
-                           "channels. m is the reference's mean over pixels and channels, so the measures do not\n"
-                           "depend on the images' radiance units (m = 1 for a black reference).\n\n"
+                           "Both are linear images of the same camera and resolution, from any renderer: OpenEXR,\n"
+                           "PFM (pbrt, Mitsuba) or Radiance HDR, told apart by their first bytes. A multilayer EXR\n"
+                           "(Blender's) is read from its only RGB layer or its Combined pass. PNG and JPEG are\n"
+                           "refused: their 8-bit display values are not radiance.\n\n"
+                           "Prints relative MSE ((x-r)^2/(r^2+(0.1m)^2)), mean relative error (|x-r|/(|r|+0.01m))\n"
+                           "and the relative bias of the image mean, averaged over pixels and channels. m is the\n"
+                           "reference's mean over pixels and channels, so the measures do not depend on the images'\n"
+                           "radiance units (m = 1 for a black reference).\n\n"
                            "Example:\n"
                            "  sharcbake compare out/cached.exr out/reference.exr");
-    pathOption(cmd->add_option("image", o->image_path, "Image to measure (.exr)"))->required();
-    pathOption(cmd->add_option("reference", o->reference_path, "Reference image (.exr)"))->required();
+    pathOption(cmd->add_option("image", o->image_path, "Image to measure (.exr, .pfm or .hdr)"))->required();
+    pathOption(cmd->add_option("reference", o->reference_path, "Reference image (.exr, .pfm or .hdr)"))->required();
     cmd->add_flag("--json", o->json, "Print the measures as one JSON object");
     cmd->callback([o] { runCompare(*o); });
 }

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Image I/O: EXR round trips (exact floats, metadata, layout), EXRs written directly with
 // OpenEXR (half, data-window offset, missing channels, Y-only, luminance/chroma), error paths
-// (unwritable, missing, corrupt, no temporary left behind), PNG previews and tone mapping.
+// (unwritable, missing, corrupt, no temporary left behind), PNG previews and tone mapping; PFM and
+// Radiance HDR from other renderers (byte layouts written here, and files ImageMagick wrote).
 #include "sharcbake/image.h"
 
 #include <ImfChannelList.h>
@@ -475,6 +476,199 @@ TEST_F(ImageTest, PngErrorsNameThePathAndLeaveNoTemporary) {
 // Tone mapping
 
 float srgb(float x) { return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f; }
+
+// ------------------------------------------------------------------------------------------------
+// readLinearImage: PFM and Radiance HDR
+// ------------------------------------------------------------------------------------------------
+
+/// `header` then `floats` as float32 in the given byte order.
+std::vector<unsigned char> pfmBytes(const std::string& header, const std::vector<float>& floats, bool little_endian) {
+    std::vector<unsigned char> bytes(header.begin(), header.end());
+    for (const float f : floats) {
+        const uint32_t u = bits(f);
+        for (int k = 0; k < 4; ++k) bytes.push_back(uint8_t(u >> (little_endian ? 8 * k : 24 - 8 * k)));
+    }
+    return bytes;
+}
+
+TEST_F(ImageTest, PfmColourAndGreyInEitherByteOrderRowsFromTheBottomUp) {
+    // 2 x 2 RGB, little-endian (negative scale, as pbrt writes): the file's first row is the
+    // image's bottom row.
+    const std::vector<float> rgb = {1, 2, 3, 4, 5, 6, /* top: */ 7, 8, 9, 10, 11, 12};
+    const std::vector<unsigned char> little = pfmBytes("PF\n2 2\n-1.0\n", rgb, true);
+    writeBytes(file("a.pfm"), little.data(), little.size());
+    const Image a = readLinearImage(file("a.pfm"));
+    ASSERT_EQ(a.width, 2);
+    ASSERT_EQ(a.height, 2);
+    EXPECT_EQ(a.at(0, 0), glm::vec3(7, 8, 9));
+    EXPECT_EQ(a.at(1, 0), glm::vec3(10, 11, 12));
+    EXPECT_EQ(a.at(0, 1), glm::vec3(1, 2, 3));
+    EXPECT_EQ(a.at(1, 1), glm::vec3(4, 5, 6));
+    // The same big-endian (positive scale), and a grey "Pf" file replicated into RGB.
+    const std::vector<unsigned char> big = pfmBytes("PF 2 2 1\n", rgb, false);
+    writeBytes(file("b.pfm"), big.data(), big.size());
+    expectBitwiseEqual(a, readLinearImage(file("b.pfm")));
+    const std::vector<unsigned char> grey = pfmBytes("Pf\n1 2\n-1\n", {0.25f, 0.75f}, true);
+    writeBytes(file("g.pfm"), grey.data(), grey.size());
+    const Image g = readLinearImage(file("g.pfm"));
+    EXPECT_EQ(g.at(0, 0), glm::vec3(0.75f));
+    EXPECT_EQ(g.at(0, 1), glm::vec3(0.25f));
+}
+
+TEST_F(ImageTest, BrokenPfmFilesSayWhatIsWrong) {
+    std::vector<unsigned char> bytes = pfmBytes("PF\n2 2\n-1.0\n", std::vector<float>(12, 1.0f), true);
+    bytes.resize(bytes.size() - 5);
+    writeBytes(file("short.pfm"), bytes.data(), bytes.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("short.pfm")); }).find("truncated"), std::string::npos);
+    const std::string zero_scale = "PF\n2 2\n0\n";
+    writeBytes(file("scale.pfm"), zero_scale.data(), zero_scale.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("scale.pfm")); }).find("scale"), std::string::npos);
+    const std::string huge = "PF\n1048576 1048576\n-1\n";
+    writeBytes(file("huge.pfm"), huge.data(), huge.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("huge.pfm")); }).find("larger than"), std::string::npos);
+    const std::string negative = "PF\n-2 2\n-1\n";
+    writeBytes(file("negative.pfm"), negative.data(), negative.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("negative.pfm")); }).find("width and height"), std::string::npos);
+}
+
+/// A Radiance HDR file: the header lines, a blank line, the resolution line, then `pixels`.
+std::vector<unsigned char> hdrBytes(const std::string& header, const std::string& resolution,
+                                    const std::vector<unsigned char>& pixels) {
+    const std::string text = "#?RADIANCE\n" + header + "\n\n" + resolution + "\n";
+    std::vector<unsigned char> bytes(text.begin(), text.end());
+    bytes.insert(bytes.end(), pixels.begin(), pixels.end());
+    return bytes;
+}
+
+TEST_F(ImageTest, RadianceHdrFlatAndOldRunLengthPixelsWithExposure) {
+    // RGBE (128, 64, 32, 129): mantissa centres (m + 0.5) * 2^(129 - 136): 1.00390625,
+    // 0.50390625, 0.25390625. (1, 1, 1, 2) repeats the previous pixel twice; e = 0 is black.
+    // EXPOSURE=2 says the values were doubled: they are halved back.
+    const std::vector<unsigned char> pixels = {128, 64, 32, 129, 1, 1, 1, 2, 0, 0, 0, 0};
+    const std::vector<unsigned char> bytes = hdrBytes("FORMAT=32-bit_rle_rgbe\nEXPOSURE=2", "-Y 1 +X 4", pixels);
+    writeBytes(file("flat.hdr"), bytes.data(), bytes.size());
+    const Image image = readLinearImage(file("flat.hdr"));
+    ASSERT_EQ(image.width, 4);
+    ASSERT_EQ(image.height, 1);
+    const glm::vec3 first = glm::vec3(1.00390625f, 0.50390625f, 0.25390625f) / 2.0f;
+    EXPECT_EQ(image.at(0, 0), first);
+    EXPECT_EQ(image.at(1, 0), first);
+    EXPECT_EQ(image.at(2, 0), first);
+    EXPECT_EQ(image.at(3, 0), glm::vec3(0.0f));
+}
+
+TEST_F(ImageTest, RadianceHdrAdaptiveRunLengthAndBottomUpRows) {
+    // Width 8 in the adaptive scheme: per channel, a run of 8 (136 = 128 + 8) or literals. Two
+    // rows, "+Y": the file's first row is the bottom one.
+    std::vector<unsigned char> pixels;
+    for (int row = 0; row < 2; ++row) {
+        pixels.insert(pixels.end(), {2, 2, 0, 8});
+        pixels.insert(pixels.end(), {136, uint8_t(100 + row)});           // R: a run
+        pixels.insert(pixels.end(), {8, 0, 10, 20, 30, 40, 50, 60, 70});  // G: literals
+        pixels.insert(pixels.end(), {4, 1, 2, 3, 4, 132, 9});             // B: literals, then a run
+        pixels.insert(pixels.end(), {136, 136});                          // E: 2^(136 - 136) = 1
+    }
+    const std::vector<unsigned char> bytes = hdrBytes("FORMAT=32-bit_rle_rgbe", "+Y 2 +X 8", pixels);
+    writeBytes(file("rle.hdr"), bytes.data(), bytes.size());
+    const Image image = readLinearImage(file("rle.hdr"));
+    ASSERT_EQ(image.width, 8);
+    ASSERT_EQ(image.height, 2);
+    EXPECT_EQ(image.at(0, 1), glm::vec3(100.5f, 0.5f, 1.5f));  // the file's first row, at the bottom
+    EXPECT_EQ(image.at(7, 0), glm::vec3(101.5f, 70.5f, 9.5f));
+    EXPECT_EQ(image.at(3, 0), glm::vec3(101.5f, 30.5f, 4.5f));
+    // Cut short, and a run past the row's end, are errors that say so.
+    std::vector<unsigned char> cut = bytes;
+    cut.resize(cut.size() - 3);
+    writeBytes(file("cut.hdr"), cut.data(), cut.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("cut.hdr")); }).find("truncated"), std::string::npos);
+    std::vector<unsigned char> overrun = pixels;
+    overrun[4] = 137;  // a run of 9 in a row of 8
+    const std::vector<unsigned char> bad = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 2 +X 8", overrun);
+    writeBytes(file("bad.hdr"), bad.data(), bad.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("bad.hdr")); }).find("bad run"), std::string::npos);
+    // XYZE pixels and an unusual orientation are refused by name.
+    const std::vector<unsigned char> xyze = hdrBytes("FORMAT=32-bit_rle_xyze", "-Y 1 +X 1", {1, 1, 1, 128});
+    writeBytes(file("xyze.hdr"), xyze.data(), xyze.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("xyze.hdr")); }).find("xyze"), std::string::npos);
+    const std::vector<unsigned char> turned = hdrBytes("FORMAT=32-bit_rle_rgbe", "+X 1 -Y 1", {1, 1, 1, 128});
+    writeBytes(file("turned.hdr"), turned.data(), turned.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("turned.hdr")); }).find("resolution line"), std::string::npos);
+}
+
+TEST_F(ImageTest, LinearImagesWrittenByImageMagickMatchTheExrTheyCameFrom) {
+    // Files another tool wrote (fixtures/README.md): ImageMagick 6.9.11 converted sharcbake's EXR
+    // to Radiance HDR and PFM.
+    const std::string fixtures = SHARCBAKE_IMAGE_FIXTURES;
+    const Image exr = readLinearImage(fixtures + "/suzanne_32x24.exr");
+    expectBitwiseEqual(exr, readExr(fixtures + "/suzanne_32x24.exr"));
+    const Image pfm = readLinearImage(fixtures + "/suzanne_32x24_imagemagick.pfm");
+    const Image hdr = readLinearImage(fixtures + "/suzanne_32x24_imagemagick.hdr");
+    ASSERT_EQ(pfm.width, exr.width);
+    ASSERT_EQ(pfm.height, exr.height);
+    ASSERT_EQ(hdr.width, exr.width);
+    ASSERT_EQ(hdr.height, exr.height);
+    double exr_sum = 0.0, hdr_sum = 0.0;
+    for (size_t i = 0; i < exr.pixels.size(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const float r = exr.pixels[i][c];
+            EXPECT_NEAR(pfm.pixels[i][c], r, 1e-3f * r + 1e-5f) << "pixel " << i;  // read as half
+            EXPECT_NEAR(hdr.pixels[i][c], r, 0.01f * r + 1e-4f) << "pixel " << i;  // 8-bit mantissas
+            exr_sum += r;
+            hdr_sum += hdr.pixels[i][c];
+        }
+    }
+    EXPECT_NEAR(hdr_sum / exr_sum, 1.0, 0.005);  // measured +0.23%: ImageMagick rounds its mantissas
+}
+
+TEST_F(ImageTest, CorruptOrCutHdrAndPfmFilesFailCleanly) {
+    // Every byte of ImageMagick's HDR and of the PFM's header changed, and the HDR cut at every
+    // length: each file reads or throws ImageError, nothing else.
+    const std::string fixtures = SHARCBAKE_IMAGE_FIXTURES;
+    const auto readsOrRefuses = [&](const std::vector<unsigned char>& bytes, const std::string& what) {
+        writeBytes(file("x"), bytes.data(), bytes.size());
+        try {
+            (void)readLinearImage(file("x"));
+        } catch (const ImageError&) {
+        } catch (const std::exception& e) {
+            ADD_FAILURE() << what << ": " << e.what();
+        }
+    };
+    const std::vector<unsigned char> hdr = readBytes(fixtures + "/suzanne_32x24_imagemagick.hdr");
+    for (size_t i = 0; i < hdr.size(); ++i) {
+        std::vector<unsigned char> changed = hdr;
+        changed[i] ^= 0x5A;
+        readsOrRefuses(changed, "HDR byte " + std::to_string(i) + " changed");
+        readsOrRefuses(std::vector<unsigned char>(hdr.begin(), hdr.begin() + std::ptrdiff_t(i)),
+                       "HDR cut to " + std::to_string(i) + " bytes");
+    }
+    const std::vector<unsigned char> pfm = readBytes(fixtures + "/suzanne_32x24_imagemagick.pfm");
+    for (size_t i = 0; i < 32; ++i) {
+        std::vector<unsigned char> changed = pfm;
+        changed[i] ^= 0x5A;
+        readsOrRefuses(changed, "PFM byte " + std::to_string(i) + " changed");
+    }
+    // A run-length HDR of a few bytes can claim any size: refused before the pixels are made.
+    const std::vector<unsigned char> huge = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 1048576 +X 1048576", {});
+    writeBytes(file("huge.hdr"), huge.data(), huge.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("huge.hdr")); }).find("larger than"), std::string::npos);
+}
+
+TEST_F(ImageTest, DisplayImagesAreRefusedWithTheReason) {
+    const Image image = patternImage(4, 3);
+    writePng(file("preview.png"), image);
+    const std::string message = imageErrorOf([&] { readLinearImage(file("preview.png")); });
+    EXPECT_NE(message.find("a PNG image"), std::string::npos) << message;
+    EXPECT_NE(message.find("not radiance"), std::string::npos) << message;
+    const unsigned char jpeg[] = {0xFF, 0xD8, 0xFF, 0xE0, 0, 16};
+    writeBytes(file("photo.jpg"), jpeg, sizeof jpeg);
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("photo.jpg")); }).find("a JPEG image"), std::string::npos);
+    writeBytes(file("empty.exr"), "", 0);
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("empty.exr")); }).find("empty"), std::string::npos);
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("missing.exr")); }).find("cannot open"), std::string::npos);
+    // An EXR goes to readExr.
+    writeExr(file("data.exr"), image);
+    expectBitwiseEqual(image, readLinearImage(file("data.exr")));
+}
 
 TEST(ToneMap, KnownValues) {
     const float nan = std::numeric_limits<float>::quiet_NaN();

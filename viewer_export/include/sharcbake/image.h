@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file image.h
 /// @brief Linear float RGB images and their files: OpenEXR (linear, 32-bit float) for data,
-/// PNG (tone-mapped, sRGB, 8-bit) for people.
+/// PNG (tone-mapped, sRGB, 8-bit) for people; PFM and Radiance HDR read from other renderers.
 #pragma once
 
 #include <glm/glm.hpp>
@@ -43,6 +43,13 @@ void writeExr(const std::string& path, const Image& image, const ImageMetadata& 
 /// "Combined" pass; with neither, or no picture channels at all, an error names the layers or
 /// channels. Throws ImageError.
 Image readExr(const std::string& path, ImageMetadata* metadata = nullptr);
+
+/// Reads a linear RGB image from any renderer, by the file's first bytes: OpenEXR (readExr), PFM
+/// ("PF" colour or "Pf" grey, either byte order, rows from the bottom up: pbrt, Mitsuba) or
+/// Radiance HDR (RGBE, flat or run-length; EXPOSURE and COLORCORR divided back out). Display
+/// images (PNG, JPEG, TIFF, ...) are refused with the reason: their 8-bit values are not
+/// radiance. Throws ImageError.
+Image readLinearImage(const std::string& path);
 
 /// Tone-mapping for PNG previews: exposure (in stops), then the operator, then the sRGB curve.
 enum class ToneMap { Clamp, Reinhard, Aces };
