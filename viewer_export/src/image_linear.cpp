@@ -5,6 +5,7 @@
 #include "sharcbake/image.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -26,10 +27,14 @@ constexpr uint64_t kMaxPixels = uint64_t(1) << 26;
     throw ImageError("cannot read " + std::string(format) + " '" + path + "': " + reason);
 }
 
-std::vector<unsigned char> readWholeFile(const std::string& path) {
+/// The file's bytes, or its first `limit` bytes.
+std::vector<unsigned char> readFileBytes(const std::string& path, size_t limit = SIZE_MAX) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw ImageError("cannot open '" + path + "'");
-    return std::vector<unsigned char>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    std::vector<unsigned char> bytes;
+    for (std::istreambuf_iterator<char> it(in), end; it != end && bytes.size() < limit; ++it)
+        bytes.push_back(static_cast<unsigned char>(*it));
+    return bytes;
 }
 
 bool startsWith(const std::vector<unsigned char>& bytes, const char* prefix, size_t length) {
@@ -248,12 +253,14 @@ Image readRadianceHdr(const std::string& path, const std::vector<unsigned char>&
 }  // namespace
 
 Image readLinearImage(const std::string& path) {
-    const std::vector<unsigned char> bytes = readWholeFile(path);
-    if (startsWith(bytes, "\x76\x2f\x31\x01", 4)) return readExr(path);
-    if (startsWith(bytes, "PF", 2) || startsWith(bytes, "Pf", 2)) {
-        if (bytes.size() > 2 && std::isspace(bytes[2])) return readPfm(path, bytes);
+    // The signature first: an EXR (the usual case, and the largest files) is read by OpenEXR.
+    const std::vector<unsigned char> head = readFileBytes(path, 16);
+    if (startsWith(head, "\x76\x2f\x31\x01", 4)) return readExr(path);
+    if ((startsWith(head, "PF", 2) || startsWith(head, "Pf", 2)) && head.size() > 2 && std::isspace(head[2])) {
+        return readPfm(path, readFileBytes(path));
     }
-    if (startsWith(bytes, "#?", 2)) return readRadianceHdr(path, bytes);
+    if (startsWith(head, "#?", 2)) return readRadianceHdr(path, readFileBytes(path));
+    const std::vector<unsigned char>& bytes = head;
     if (const char* format = displayFormatName(bytes)) {
         throw ImageError("cannot read '" + path + "': it is " + format +
                          " image, whose 8-bit display values (usually tone-mapped) are not radiance; render "
