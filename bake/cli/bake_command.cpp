@@ -249,9 +249,8 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                                      (explored.views_around == 1 ? " view" : " views") + " from around the scene";
     if (explored.dark_enclosure && explored.views_around > 0) {
         description = views_around +
-                      " (it has no camera, and the free space inside its bounds is "
-                      "closed and no light reaches it: the inside of a closed object lit from outside, which no "
-                      "runtime camera sees)";
+                      " (it has no camera, and the free space inside its bounds is closed and no light reaches it: "
+                      "the inside of a closed object lit from outside, which no runtime camera sees)";
         return std::move(*path);
     }
     description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
@@ -1748,8 +1747,8 @@ void registerBakeCommand(CLI::App& app) {
     pathOption(cmd->add_option(
         "--reference", o->reference_path,
         "Linear image (OpenEXR, PFM or Radiance HDR) of the evaluation camera (any converged render, e.g. "
-        "sharcbake render --spp 4096): "
-        "the image error is a render through the cache against it; its size is the evaluation size"));
+        "sharcbake render --spp 4096): the image error is a render through the cache against it; its size is the "
+        "evaluation size"));
     cmd->add_option("--report-camera", o->report_camera,
                     "Evaluation camera (default: the first): a glTF camera by its node's name, its own name or its "
                     "index #N, as render --camera");
