@@ -949,13 +949,19 @@ private:
         checkOutputs(scene_.source_files);  // the buffers and images the scene read
         scene_hash_ = sceneContentHash(scene_.source_files);
         if (scene_.empty()) {
-            const uint64_t collapsed = scene_.stats.triangles_collapsed_by_rounding;
-            throw CommandError(kExitInvalidInput,
-                               job_.scene_path + ": the scene has no triangles to bake" +
-                                   (collapsed > 0 ? " (" + std::to_string(collapsed) +
-                                                        " collapsed when rounded to float32 far from the origin: "
-                                                        "move the model towards the origin)"
-                                                  : ""));
+            // What the loader left out, so a file of lines (CAD edges) or of degenerate triangles
+            // says why nothing is left.
+            const LoadStats& stats = scene_.stats;
+            std::string why;
+            const auto add = [&why](uint64_t count, const char* what) {
+                if (count > 0) why += (why.empty() ? " (" : "; ") + std::to_string(count) + what;
+            };
+            add(stats.primitives_skipped, " point or line primitives skipped: they have no surface");
+            add(stats.degenerate_triangles_dropped, " degenerate triangles dropped: they have no area");
+            add(stats.triangles_collapsed_by_rounding,
+                " collapsed when rounded to float32 far from the origin: move the model towards the origin");
+            throw CommandError(kExitInvalidInput, job_.scene_path + ": the scene has no triangles to bake" + why +
+                                                      (why.empty() ? "" : ")"));
         }
         const auto setup_start = std::chrono::steady_clock::now();
         tracer_.emplace(scene_);

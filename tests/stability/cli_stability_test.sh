@@ -12,12 +12,12 @@ scenes=$2
 work=$3
 . "$(dirname "$0")/../cli_support.sh"
 
-# Small glTF files: no meshes at all; one triangle with a NaN vertex; a closed tetrahedron with
-# no emission, no lights and no sky.
+# Small glTF files: no meshes at all; one triangle with a NaN vertex; lines only; one triangle of no
+# area; a closed tetrahedron with no emission, no lights and no sky.
 python3 - "$work" <<'PY'
 import base64, json, struct, sys
 work = sys.argv[1]
-def write(name, positions, indices):
+def write(name, positions, indices, mode=4):
     doc = {"asset": {"version": "2.0"}, "scenes": [{"nodes": []}], "scene": 0}
     if positions:
         data = struct.pack("<%df" % len(positions), *positions)
@@ -32,12 +32,14 @@ def write(name, positions, indices):
                              "min": [min(finite)] * 3, "max": [max(finite)] * 3},
                             {"bufferView": 1, "componentType": 5123, "count": len(indices), "type": "SCALAR"}]
         doc["materials"] = [{"doubleSided": True}]
-        doc["meshes"] = [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}]
+        doc["meshes"] = [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0, "mode": mode}]}]
         doc["nodes"] = [{"mesh": 0}]
         doc["scenes"] = [{"nodes": [0]}]
     open(work + "/" + name, "w").write(json.dumps(doc))
 write("empty.gltf", [], [])
 write("nan_vertex.gltf", [0, 0, 0, 1, 0, 0, 0, float("nan"), 0], [0, 1, 2])
+write("lines.gltf", [0, 0, 0, 1, 0, 0, 1, 1, 0], [0, 1, 1, 2], mode=1)  # a CAD export's edges
+write("flat.gltf", [0, 0, 0, 1, 1, 1, 2, 2, 2], [0, 1, 2])  # one triangle of no area
 write("dark.gltf", [0, 0, 0, 2, 0, 0, 0, 2, 0, 0, 0, 2], [0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])
 PY
 
@@ -45,6 +47,12 @@ expect 3 "empty scene" "$sharcbake" bake "$work/empty.gltf" -o "$work/a.sharc"
 says "$work/err.txt" "no triangles to bake" "empty scene: clear message"
 expect 3 "sky-only scene" "$sharcbake" bake "$work/empty.gltf" -o "$work/a.sharc" --sky 1,1,1
 says "$work/err.txt" "no triangles to bake" "sky-only scene: clear message"
+expect 3 "lines only" "$sharcbake" bake "$work/lines.gltf" -o "$work/a.sharc"
+says "$work/err.txt" "no triangles to bake (1 point or line primitives skipped: they have no surface)" \
+    "lines only: says the lines were skipped"
+expect 3 "a triangle of no area" "$sharcbake" bake "$work/flat.gltf" -o "$work/a.sharc"
+says "$work/err.txt" "no triangles to bake (1 degenerate triangles dropped: they have no area)" \
+    "a triangle of no area: says it was dropped"
 expect 3 "NaN vertex" "$sharcbake" bake "$work/nan_vertex.gltf" -o "$work/a.sharc"
 says "$work/err.txt" "vertex 2 is NaN or infinite" "NaN vertex: names the vertex"
 expect 1 "capacity 0" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --capacity 0
