@@ -953,13 +953,17 @@ private:
             // says why nothing is left.
             const LoadStats& stats = scene_.stats;
             std::string why;
-            const auto add = [&why](uint64_t count, const char* what) {
-                if (count > 0) why += (why.empty() ? " (" : "; ") + std::to_string(count) + what;
+            const auto add = [&why](uint64_t count, const char* one, const char* many, const char* reason) {
+                if (count > 0) {
+                    why += (why.empty() ? " (" : "; ") + std::to_string(count) + (count == 1 ? one : many) + reason;
+                }
             };
-            add(stats.primitives_skipped, " point or line primitives skipped: they have no surface");
-            add(stats.degenerate_triangles_dropped, " degenerate triangles dropped: they have no area");
-            add(stats.triangles_collapsed_by_rounding,
-                " collapsed when rounded to float32 far from the origin: move the model towards the origin");
+            add(stats.primitives_skipped, " primitive of points or lines skipped",
+                " primitives of points or lines skipped", ": they have no surface");
+            add(stats.degenerate_triangles_dropped, " degenerate triangle dropped", " degenerate triangles dropped",
+                ": they have no area");
+            add(stats.triangles_collapsed_by_rounding, " triangle collapsed", " triangles collapsed",
+                " when rounded to float32 far from the origin: move the model towards the origin");
             throw CommandError(kExitInvalidInput, job_.scene_path + ": the scene has no triangles to bake" + why +
                                                       (why.empty() ? "" : ")"));
         }

@@ -48,10 +48,10 @@ says "$work/err.txt" "no triangles to bake" "empty scene: clear message"
 expect 3 "sky-only scene" "$sharcbake" bake "$work/empty.gltf" -o "$work/a.sharc" --sky 1,1,1
 says "$work/err.txt" "no triangles to bake" "sky-only scene: clear message"
 expect 3 "lines only" "$sharcbake" bake "$work/lines.gltf" -o "$work/a.sharc"
-says "$work/err.txt" "no triangles to bake (1 point or line primitives skipped: they have no surface)" \
+says "$work/err.txt" "no triangles to bake (1 primitive of points or lines skipped: they have no surface)" \
     "lines only: says the lines were skipped"
 expect 3 "a triangle of no area" "$sharcbake" bake "$work/flat.gltf" -o "$work/a.sharc"
-says "$work/err.txt" "no triangles to bake (1 degenerate triangles dropped: they have no area)" \
+says "$work/err.txt" "no triangles to bake (1 degenerate triangle dropped: they have no area)" \
     "a triangle of no area: says it was dropped"
 expect 3 "NaN vertex" "$sharcbake" bake "$work/nan_vertex.gltf" -o "$work/a.sharc"
 says "$work/err.txt" "vertex 2 is NaN or infinite" "NaN vertex: names the vertex"
