@@ -253,11 +253,21 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
                       "the inside of a closed object lit from outside, which no runtime camera sees)";
         return std::move(*path);
     }
+    // Which cameras the winding put inside a solid: all of a room modelled from a cube with its
+    // normals out, or one that stands inside a closed object by mistake.
+    std::string in_solids;
+    const std::vector<uint32_t>& inside = explored.cameras_in_solids;
+    for (size_t i = 0; i < inside.size() && i < 3; ++i) {
+        in_solids += (i == 0 ? "" : ", ") + cameraLabel(scene.cameras[inside[i]]);
+    }
+    if (inside.size() > 3) in_solids += " and " + std::to_string(inside.size() - 3) + " more";
     description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
                   std::to_string(explored.candidates) + " tried" +
-                  (explored.winding_ignored
-                       ? "; faces' winding ignored: it puts a glTF camera, or every point, inside a solid"
-                       : "") +
+                  (!explored.winding_ignored ? ""
+                   : inside.empty()
+                       ? "; faces' winding ignored: it puts every point inside a solid"
+                       : "; faces' winding ignored: it puts " + in_solids +
+                             " inside a solid (faces wound away from the camera, or a camera inside a closed object)") +
                   ")";
     if (explored.views_around > 0) {
         description += ", and " + views_around + " (" +

@@ -384,14 +384,21 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     // them): the next, weaker test is used, and last none, where clearance and reachability
     // decide alone. The cameras are probed densely (Probes::kCameraSphere).
     Winding winding = Winding::kAllFaces;
-    const auto camerasFree = [&](Winding w) {
-        for (const glm::vec3& s : starts)
-            if (!probeFreeSpace(tracer, s, 0.0f, w, Probes::kCameraSphere).free) return false;
-        return true;
+    // The cameras a winding puts inside a solid (indices into `starts`), for the report.
+    const auto camerasInSolids = [&](Winding w) {
+        std::vector<uint32_t> inside;
+        for (uint32_t i = 0; i < uint32_t(starts.size()); ++i)
+            if (!probeFreeSpace(tracer, starts[i], 0.0f, w, Probes::kCameraSphere).free) inside.push_back(i);
+        return inside;
     };
     const auto weaker = [](Winding w) { return w == Winding::kAllFaces ? Winding::kSingleSided : Winding::kIgnored; };
     if (starts_are_cameras) {
-        while (winding != Winding::kIgnored && !camerasFree(winding)) winding = weaker(winding);
+        while (winding != Winding::kIgnored) {
+            std::vector<uint32_t> inside = camerasInSolids(winding);
+            if (inside.empty()) break;
+            if (winding == Winding::kSingleSided) result.cameras_in_solids = std::move(inside);
+            winding = weaker(winding);
+        }
     }
     collect(winding);
     if (winding == Winding::kAllFaces) {

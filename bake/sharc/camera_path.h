@@ -63,6 +63,10 @@ struct ExplorationResult {
     uint32_t candidates = 0;        ///< points tried
     uint32_t free = 0;              ///< not inside geometry
     bool winding_ignored = false;   ///< faces' winding did not tell solids from free space: not used
+    /// The glTF cameras (indices into the scene's cameras) that single-sided faces' winding put
+    /// inside a solid, which made it ignored: a camera inside a closed object by mistake, or every
+    /// camera of a room modelled from a cube with its normals out.
+    std::vector<uint32_t> cameras_in_solids;
     /// The share of the probe rays from `points` that leave the scene without a hit: near 0 in a
     /// closed room, most of them around an object under the sky.
     float escaped_fraction = 0.0f;

@@ -173,6 +173,26 @@ TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsTrustsTheCamera) {
     const Explored e = explore(loadRoom(dir, {false, false, true, true}));
     expectPointsFillTheRoom(e, "single-sided room wound outwards, with a camera");
     EXPECT_TRUE(e.result.winding_ignored);
+    EXPECT_EQ(e.result.cameras_in_solids, std::vector<uint32_t>{0});  // the bake names it
+}
+
+TEST(ExploreFreeSpace, ACameraInsideAClosedObjectIsNamed) {
+    // A room wound inwards, its camera, and a second camera inside the closed cube by mistake: the
+    // winding puts that one in a solid, is ignored for the scene, and the bake's Camera line names
+    // the camera instead of "a glTF camera".
+    test::TempDir dir;
+    Scene scene = loadRoom(dir, {false, true, true, true});
+    Camera stray;
+    stray.position = 0.5f * (kCubeMin + kCubeMax);
+    scene.cameras.push_back(stray);
+    const Explored e = explore(scene);
+    ASSERT_TRUE(e.has_path);
+    EXPECT_TRUE(e.result.winding_ignored);
+    EXPECT_EQ(e.result.cameras_in_solids, std::vector<uint32_t>{1});
+    // Without the stray camera the winding holds, and no camera is named.
+    const Explored room = explore(loadRoom(dir, {false, true, true, true}));
+    EXPECT_FALSE(room.result.winding_ignored);
+    EXPECT_TRUE(room.result.cameras_in_solids.empty());
 }
 
 TEST(ExploreFreeSpace, SingleSidedRoomWoundOutwardsWithoutACameraIsExplored) {
