@@ -293,8 +293,9 @@ constexpr size_t kLightTests = 16;
 /// that hold a camera. Without cameras, the start is only the centre of the bounds, which may lie
 /// inside a closed double-sided object (Blender's default material is double-sided), whose inside
 /// looks free: the sets where free space is known are kept instead, else those light reaches (a
-/// room is lit from within, the inside of a closed object is not), else the centre's set, and
-/// with none of these the largest set. Returns, per point, whether its set is kept.
+/// room is lit from within, the inside of a closed object is not; the inside of a glowing object
+/// only where nothing else is lit), else the centre's set, and with none of these the largest
+/// set. Returns, per point, whether its set is kept.
 std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePoint>& points, bool starts_are_cameras) {
     // Union-find over all pairs: a few thousand rays.
     const size_t n = points.size();
@@ -316,12 +317,24 @@ std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePo
     for (size_t i = 0; i < n; ++i) {
         if (starts_are_cameras ? points[i].start : points[i].known) keep_root[root(i)] = any_kept = true;
     }
-    // Points spread over all candidates, so a lit room beside a larger dark inside is found.
+    // Points spread over all candidates, so a lit room beside a larger dark inside is found. The
+    // inside of a glowing object (a light fixture modelled as a closed emissive mesh) is lit by
+    // its own walls: kept only where no other lit space is (a glowing box around a model).
     const size_t light_tests = any_kept ? 0 : std::min(n, kLightTests);
+    std::vector<size_t> glowing_insides;
     for (size_t k = 0; k < light_tests; ++k) {
         const size_t i = k * n / light_tests;
-        if (!keep_root[root(i)] && lightReachesInside(tracer, points[i].position)) keep_root[root(i)] = any_kept = true;
+        if (keep_root[root(i)] || !lightReachesInside(tracer, points[i].position)) continue;
+        if (mostlyEmittersAround(tracer, points[i].position)) {
+            glowing_insides.push_back(i);
+        } else {
+            keep_root[root(i)] = any_kept = true;
+        }
     }
+    for (size_t i : glowing_insides) {
+        if (!any_kept) keep_root[root(i)] = true;
+    }
+    any_kept = any_kept || !glowing_insides.empty();
     for (size_t i = 0; i < n && !any_kept; ++i) {
         if (points[i].start) keep_root[root(i)] = any_kept = true;
     }
