@@ -209,7 +209,10 @@ void parseShard(const std::string& text, uint32_t& index, uint32_t& count) {
 }
 
 /// The roaming camera the options ask for.
-CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& tracer, std::string& description) {
+/// The bake's camera path; `description` says how it was made, and `cameras_in_solids` names the
+/// glTF cameras exploration found inside a solid by the faces' winding (cameraLabel).
+CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& tracer, std::string& description,
+                          std::vector<std::string>& cameras_in_solids) {
     const float diagonal = glm::length(scene.bounds_max - scene.bounds_min);
     if (!job.camera.path_file.empty()) {
         std::error_code error;
@@ -257,9 +260,8 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
     // normals out, or one that stands inside a closed object by mistake.
     std::string in_solids;
     const std::vector<uint32_t>& inside = explored.cameras_in_solids;
-    for (size_t i = 0; i < inside.size() && i < 3; ++i) {
-        in_solids += (i == 0 ? "" : ", ") + cameraLabel(scene.cameras[inside[i]]);
-    }
+    for (const uint32_t i : inside) cameras_in_solids.push_back(cameraLabel(scene.cameras[i]));
+    for (size_t i = 0; i < inside.size() && i < 3; ++i) in_solids += (i == 0 ? "" : ", ") + cameras_in_solids[i];
     if (inside.size() > 3) in_solids += " and " + std::to_string(inside.size() - 3) + " more";
     description = "exploration (" + std::to_string(explored.points.size()) + " reachable free-space points of " +
                   std::to_string(explored.candidates) + " tried" +
@@ -628,7 +630,8 @@ Json lightLeaksJson(const LightLeakReport& r) {
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
 /// `unreached_area`: the share of the surface no update path reached (see warnAndStop).
-void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
+void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
+                      const std::vector<std::string>& cameras_in_solids) {
     if (p.eligible == 0 && p.refused > 0) {
         std::fprintf(stderr,
                      "warning: SHaRC's eligibility tests refuse every one of the %llu lookups from the views (each "
@@ -671,11 +674,21 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area) {
                                "--camera-path through the places the views see, or --camera-source gltf."
                              : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
                                "holds the views (free, the default, holds every camera position).";
+    // A lowest camera that stands inside a solid by the winding may be inside a closed object by
+    // mistake, where no bake reaches what it sees: more iterations would not help it.
+    std::string inside;
+    if (worst && worst->view.declared &&
+        std::find(cameras_in_solids.begin(), cameras_in_solids.end(), worst->view.camera.name) !=
+            cameras_in_solids.end()) {
+        inside = " The faces' winding puts " + worst->view.camera.name +
+                 " inside a solid (the Camera line names it): if it stands inside a closed object by mistake, "
+                 "move it.";
+    }
     std::fprintf(stderr,
                  "warning: the cache answers %.1f%% of SHaRC's lookups from its views%s; a runtime traces the rest. "
-                 "%s Engines can also fall back to the nearest level the file holds (lookupNearestLevel; render "
+                 "%s%s Engines can also fall back to the nearest level the file holds (lookupNearestLevel; render "
                  "--cache-lookup nearest shows it)\n",
-                 100.0 * p.rate(), lowest, remedy);
+                 100.0 * p.rate(), lowest, remedy, inside.c_str());
 }
 
 /// What the grid step decided, for the output, the metadata and the stats.
@@ -986,7 +999,7 @@ private:
         }
         warnWhenUnlit(scene_, *lights_, "cache");
         warnAboutPunctualLightUnits(*tracer_);
-        camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_));
+        camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_, cameras_in_solids_));
         // The automatic grid fits what the roaming camera's positions (and the scene's cameras) see.
         if (job_.level_bias_auto) {
             std::vector<glm::vec3> viewpoints;
@@ -1374,7 +1387,7 @@ private:
         const double unreached = job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
                                      ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
-        warnAboutHitRate(prediction_, unreached);
+        warnAboutHitRate(prediction_, unreached, cameras_in_solids_);
         if (live_voxels_ == 0) {
             // The file is valid, and every lookup from it will miss: say so once, plainly.
             const char* remedies = !job_.camera.path_file.empty() ? "a --camera-path whose cameras look at the scene"
@@ -1444,6 +1457,7 @@ private:
     GridDecision grid_decision_;
     std::optional<SeenSurface> seen_;  ///< what the roaming camera's positions see (--level-bias auto)
     std::string camera_description_;
+    std::vector<std::string> cameras_in_solids_;  ///< makeCameraPath's, for the hit-rate warning
     std::optional<CameraPath> camera_path_;
     CapacityChoice capacity_choice_;
     std::string capacity_choice_text_;  ///< empty for a fixed --capacity

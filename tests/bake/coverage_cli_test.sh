@@ -311,6 +311,28 @@ expect 0 "the box's primary hits through its cache" "$sharcbake" render "$work/b
     --resolution 32 --spp 1 --no-png --sky 1,1,1 --cache "$work/box.sharc" --debug-view cache
 says "$work/out.txt" "debug view 'cache': 0 of [0-9]* primary hits have no cached voxel" \
     "every primary hit of the automatic camera on the box has a voxel"
+# The Cornell box with 70 cameras along its front and one inside the tall block by mistake: the
+# winding puts that one inside a solid and is ignored, and the Camera line names it ("a glTF
+# camera" before). Exploration's 64 points start at the first cameras, so the stray one's view is
+# never baked: the hit-rate warning says why, beside its remedies (more iterations would not help).
+cp "$scenes/cornell_box/cornell_box.bin" "$work/"
+python3 - "$cornell" "$work/cornell_stray.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+nodes = g["scenes"][g.get("scene", 0)]["nodes"]
+for k in range(70):
+    g["nodes"].append({"name": "front%d" % k, "camera": 0,
+                       "translation": [-0.4 + 0.8 * (k % 10) / 9, 0.2 + 0.6 * (k // 10) / 6, 0.45]})
+    nodes.append(len(g["nodes"]) - 1)
+g["nodes"].append({"name": "stray", "camera": 0, "translation": [-0.17, 0.3, -0.15]})
+nodes.append(len(g["nodes"]) - 1)
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "a camera inside a block" "$sharcbake" bake "$work/cornell_stray.gltf" -o "$work/stray.sharc" --iterations 32
+says "$work/out.txt" "faces' winding ignored: it puts camera 'stray' (glTF camera 'camera') inside a solid" \
+    "the Camera line names the camera inside a solid"
+says "$work/err.txt" "The faces' winding puts camera 'stray' (glTF camera 'camera') inside a solid" \
+    "the hit-rate warning says why the stray camera is not served"
 # A closed 4 m room with its camera beside a 10 km ground plane under a sky (a building on its
 # site). Fitted to the whole surface, the grid had 28 m voxels: SHaRC's tests refused every lookup
 # from the room's camera, and the bake said "no first bounce hits a surface". The grid now fits
