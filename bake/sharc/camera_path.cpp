@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 namespace sharcbake {
@@ -223,13 +224,28 @@ bool mostlyEmittersAround(const Tracer& tracer, glm::vec3 center) {
     return 2 * emitting > kEnclosureRays;
 }
 
-/// Whether light reaches the space closed around `center`, as it reaches a room: an emitter is
-/// seen from it, or lights a surface seen from it (a ceiling panel, a lamp behind furniture), a
-/// punctual light is in it, or the sky or the sun comes in through an opening the probes missed.
-/// The inside of a closed object lit from outside (a model under the sky, lamps around it) is
-/// dark: no light reaches it, and a view from there is black. Surfaces one bounce away count, so
-/// a light around a corner of the space is found too. A few thousand rays; deterministic.
-bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
+/// Whether light reaches the space closed around a point, asked of many points of one scene:
+/// the points on its emitters are drawn once, when first needed (a pass over every triangle).
+class LightTest {
+public:
+    explicit LightTest(const Tracer& tracer) : tracer_(tracer) {}
+
+    /// Whether light reaches the space closed around `center`, as it reaches a room: an emitter
+    /// is seen from it, or lights a surface seen from it (a ceiling panel, a lamp behind
+    /// furniture), a punctual light is in it, or the sky or the sun comes in through an opening
+    /// the probes missed. The inside of a closed object lit from outside (a model under the sky,
+    /// lamps around it) is dark: no light reaches it, and a view from there is black. Surfaces one
+    /// bounce away count, so a light around a corner of the space is found too. A few thousand
+    /// rays; deterministic.
+    bool reachesInside(glm::vec3 center);
+
+private:
+    const Tracer& tracer_;
+    std::optional<std::vector<EmitterPoint>> emitters_;  ///< sampleEmitterPoints, once drawn
+};
+
+bool LightTest::reachesInside(glm::vec3 center) {
+    const Tracer& tracer = tracer_;
     const Scene& scene = tracer.scene();
     const bool sky = !scene.sky.isBlack();
     // Where light could land: the centre and points just off the surfaces around it, on the
@@ -266,7 +282,8 @@ bool lightReachesInside(const Tracer& tracer, glm::vec3 center) {
             if (reached) return true;
         }
     }
-    for (const EmitterPoint& e : sampleEmitterPoints(scene)) {
+    if (!emitters_) emitters_ = sampleEmitterPoints(scene);
+    for (const EmitterPoint& e : *emitters_) {
         for (const glm::vec3& at : receivers) {
             const float facing = glm::dot(at - e.position, e.face_normal);
             if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
@@ -296,7 +313,8 @@ constexpr size_t kLightTests = 16;
 /// room is lit from within, the inside of a closed object is not; the inside of a glowing object
 /// only where nothing else is lit), else the centre's set, and with none of these the largest
 /// set. Returns, per point, whether its set is kept.
-std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePoint>& points, bool starts_are_cameras) {
+std::vector<bool> reachablePoints(const Tracer& tracer, LightTest& light, const std::vector<FreePoint>& points,
+                                  bool starts_are_cameras) {
     // Union-find over all pairs: a few thousand rays.
     const size_t n = points.size();
     std::vector<size_t> parent(n);
@@ -324,17 +342,16 @@ std::vector<bool> reachablePoints(const Tracer& tracer, const std::vector<FreePo
     std::vector<size_t> glowing_insides;
     for (size_t k = 0; k < light_tests; ++k) {
         const size_t i = k * n / light_tests;
-        if (keep_root[root(i)] || !lightReachesInside(tracer, points[i].position)) continue;
+        if (keep_root[root(i)] || !light.reachesInside(points[i].position)) continue;
         if (mostlyEmittersAround(tracer, points[i].position)) {
             glowing_insides.push_back(i);
         } else {
             keep_root[root(i)] = any_kept = true;
         }
     }
-    for (size_t i : glowing_insides) {
-        if (!any_kept) keep_root[root(i)] = true;
+    if (!any_kept) {
+        for (size_t i : glowing_insides) keep_root[root(i)] = any_kept = true;
     }
-    any_kept = any_kept || !glowing_insides.empty();
     for (size_t i = 0; i < n && !any_kept; ++i) {
         if (points[i].start) keep_root[root(i)] = any_kept = true;
     }
@@ -371,6 +388,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     const float clearance = 0.01f * diagonal;
 
     std::vector<FreePoint> free_points;
+    LightTest light(tracer);
     const auto tryPoint = [&](glm::vec3 p, float point_clearance, Winding winding) {
         ++result.candidates;
         const FreeSpaceProbe probe = probeFreeSpace(tracer, p, point_clearance, winding);
@@ -434,7 +452,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
         collect(winding);
     }
     result.winding_ignored = winding == Winding::kIgnored;
-    std::vector<bool> kept = reachablePoints(tracer, free_points, starts_are_cameras);
+    std::vector<bool> kept = reachablePoints(tracer, light, free_points, starts_are_cameras);
 
     // Where the starts' free space is a small part of the bounds (a room beside a large ground
     // plane or terrain), the bounds-wide candidates almost never fall in it and the camera would
@@ -456,7 +474,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
             const glm::vec3 u(hashToUnitFloat(seed, n, 0), hashToUnitFloat(seed, n, 1), hashToUnitFloat(seed, n, 2));
             tryPoint(start + (2.0f * u - 1.0f) * r, std::min(clearance, kClearanceOfScale * r), winding);
         }
-        kept = reachablePoints(tracer, free_points, starts_are_cameras);
+        kept = reachablePoints(tracer, light, free_points, starts_are_cameras);
     }
     result.free = uint32_t(free_points.size());
     if (free_points.empty()) return result;
@@ -482,7 +500,7 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
         const size_t tested = std::min(result.points.size(), kLightTests);
         bool lit = false;
         for (size_t i = 0; i < tested && !lit; ++i) {
-            lit = lightReachesInside(tracer, result.points[i * result.points.size() / tested]);
+            lit = light.reachesInside(result.points[i * result.points.size() / tested]);
         }
         result.dark_enclosure = !lit;
     }
@@ -528,7 +546,7 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
     // The inside of a glowing object (a closed emissive model, double-sided) is lit by its own
     // walls: no room, whose lamps are a part of what surrounds the centre. Where most of what the
     // centre sees emits, the view from there is a white wall and the object is framed from outside.
-    if (!by_winding.known && (mostlyEmittersAround(tracer, center) || !lightReachesInside(tracer, center)))
+    if (!by_winding.known && (mostlyEmittersAround(tracer, center) || !LightTest(tracer).reachesInside(center)))
         return outside;
     // Level (+Y up), along the horizontal axis with the most room, from near the wall behind: the
     // view across the whole room (from the centre it filled the frame with the far wall alone).
