@@ -728,6 +728,21 @@ TEST(ExploreFreeSpace, TheDarkInsideOfAClosedModelIsSeenFromAround) {
             EXPECT_FALSE(inside(view.camera.position, kShellMin, kShellMax)) << what << ": " << view.camera.name;
         }
     }
+    // Finely meshed, as CAD exports are (64 x 64 quads a face): a probe that slips between two
+    // triangles at a shared edge seemed to leave the scene, and one such leak made the housing's
+    // inside count as known free space.
+    {
+        std::vector<float> positions;
+        std::vector<uint32_t> indices;
+        addBox(positions, indices, kShellMin, kShellMax, false, 64);
+        Scene fine = loadDoubleSidedMesh(dir, positions, indices, "fine_housing.gltf");
+        fine.sky.uniform = glm::vec3(1.0f);
+        const Explored e = explore(fine);
+        ASSERT_TRUE(e.has_path);
+        EXPECT_TRUE(e.result.dark_enclosure) << "a finely meshed closed box";
+        EXPECT_EQ(e.result.escaped_fraction, 0.0f);
+        for (const CameraPose& pose : e.waypoints) EXPECT_FALSE(inside(pose.position, kShellMin, kShellMax));
+    }
     // Light inside makes the shell a room, explored from inside, around the part: a lamp (a closed
     // box modelled around the camera's space), or the shell's own glow (a sky dome modelled as an
     // emissive mesh, double-sided as Blender writes it, around a model).
