@@ -44,8 +44,8 @@ struct SideShare {
 };
 
 /// Tests of light reaching points; escapes and unblocked samples are confirmed by a ray back,
-/// since Embree's triangle test is not watertight and a ray from inside a closed mesh now and
-/// then slips out through a shared edge.
+/// since Embree's triangle test is not watertight (even robust, at shared vertices) and a ray from
+/// inside a closed mesh now and then slips out.
 class LightTests {
 public:
     LightTests(const Tracer& tracer, const LightSampler& lights)

@@ -29,8 +29,13 @@ struct RayHit {
     float v = 0.0f;  ///< barycentric of vertex 2
 };
 
-/// Fills an Embree ray from `ray` over (0, t_max): what Tracer traces, for code that calls
-/// Embree's packet or stream APIs itself.
+/// Where every traced ray begins: just after its origin. Embree's robust (watertight) mode
+/// reports a triangle through the origin itself at t = 0, so a camera standing on a floor would
+/// see the floor behind every upward ray; a distance of zero is never a hit.
+inline constexpr float kRayTNear = std::numeric_limits<float>::min();
+
+/// Fills an Embree ray from `ray` over (kRayTNear, t_max): what Tracer traces, for code that
+/// calls Embree's packet or stream APIs itself.
 void initEmbreeRay(const Ray& ray, RTCRay& embree_ray);
 
 /// initEmbreeRay for lane `lane` of an Embree packet (RTCRay4/8/16: one array per field).
@@ -42,7 +47,7 @@ void initEmbreeLane(const Ray& ray, RayN& packet, int lane) {
     packet.dir_x[lane] = ray.direction.x;
     packet.dir_y[lane] = ray.direction.y;
     packet.dir_z[lane] = ray.direction.z;
-    packet.tnear[lane] = 0.0f;
+    packet.tnear[lane] = kRayTNear;
     packet.tfar[lane] = ray.t_max;
     packet.time[lane] = 0.0f;
     packet.mask[lane] = 0xffffffffu;
@@ -103,10 +108,11 @@ bool shadowRayTo(glm::vec3 position, glm::vec3 normal, glm::vec3 wi, float dista
 
 /// True when nothing blocks the segment from `a` to `b` (a ray from `a`; true when they coincide).
 bool visibleOneWay(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
-/// Unblocked from `a` to `b` and from `b` to `a`. Embree's triangle test is not watertight: a ray
-/// that meets a shared edge can slip between its two triangles (among thousands of segments, one
-/// joined a closed room's camera to the ground outside). The ray back starts elsewhere and rounds
-/// differently, so it does not slip through the same edge.
+/// Unblocked from `a` to `b` and from `b` to `a`. Embree's triangle test is not watertight even in
+/// the robust mode the Tracer uses: a ray that meets a shared vertex can slip between its
+/// triangles (before robust mode, a shared edge too: among thousands of segments, one joined a
+/// closed room's camera to the ground outside). The ray back starts elsewhere and rounds
+/// differently, so it does not slip through at the same place.
 bool visibleBothWays(const Tracer& tracer, glm::vec3 a, glm::vec3 b);
 
 /// True when a ray from `from` along unit `d` leaves the scene: nothing blocks it, and the ray

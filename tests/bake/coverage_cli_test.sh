@@ -307,6 +307,49 @@ if any(abs(c - 1.0) > 0.02 for c in mean):
     sys.exit(1)
 print("ok: the box's voxels hold the furnace radiance 1 (mean %.4f)" % mean[0])
 PY
+# The same box as a modelling tool tessellates it, 64 x 64 quads a side sharing their vertices.
+# Rays slipped through the shared edges into the box, where no light is, and some of its voxels
+# held radiance 0; tracing is watertight now and the darkest voxel holds about half the sky.
+python3 - "$work/box64.gltf" <<'PY'
+import base64, json, struct, sys
+n, lo, hi = 64, (-1.0, 0.0, -0.6), (1.0, 1.6, 0.6)
+positions, indices = [], []
+for axis in range(3):
+    u, v = (axis + 1) % 3, (axis + 2) % 3
+    for side in (lo, hi):
+        base = len(positions)
+        for j in range(n + 1):
+            for i in range(n + 1):
+                p = [0.0, 0.0, 0.0]
+                p[axis], p[u], p[v] = side[axis], lo[u] + (hi[u] - lo[u]) * i / n, lo[v] + (hi[v] - lo[v]) * j / n
+                positions.append(p)
+        for j in range(n):
+            for i in range(n):
+                a = base + j * (n + 1) + i
+                indices += [a, a + 1, a + n + 2, a, a + n + 2, a + n + 1]
+data = b"".join(struct.pack("<3f", *p) for p in positions) + struct.pack("<%dI" % len(indices), *indices)
+g = {"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+     "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+     "materials": [{"doubleSided": True, "pbrMetallicRoughness": {"metallicFactor": 0}}],
+     "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+     "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 12 * len(positions)},
+                     {"buffer": 0, "byteOffset": 12 * len(positions), "byteLength": 4 * len(indices)}],
+     "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(positions), "type": "VEC3", "min": list(lo), "max": list(hi)},
+                   {"bufferView": 1, "componentType": 5125, "count": len(indices), "type": "SCALAR"}]}
+json.dump(g, open(sys.argv[1], "w"))
+PY
+expect 0 "bake the tessellated box under the sky" "$sharcbake" bake "$work/box64.gltf" -o "$work/box64.sharc" \
+    --iterations 64 --sky 1,1,1
+expect 0 "info --json of the tessellated box" "$sharcbake" info "$work/box64.sharc" --json
+python3 - "$work/out.txt" <<'PY' || failures=$((failures + 1))
+import json, sys
+radiance = json.load(open(sys.argv[1]))["radiance"]
+if min(radiance["min"]) < 0.25 or any(abs(c - 1.0) > 0.01 for c in radiance["mean"]):
+    print("FAIL: the tessellated box's voxels hold radiance from %s (mean %s): rays leak through shared edges"
+          % (radiance["min"], radiance["mean"]))
+    sys.exit(1)
+print("ok: no voxel of the tessellated box is dark (darkest %.3f, mean %.4f)" % (radiance["min"][0], radiance["mean"][0]))
+PY
 expect 0 "the box's primary hits through its cache" "$sharcbake" render "$work/box.gltf" -o "$work/box.exr" \
     --resolution 32 --spp 1 --no-png --sky 1,1,1 --cache "$work/box.sharc" --debug-view cache
 says "$work/out.txt" "debug view 'cache': 0 of [0-9]* primary hits have no cached voxel" \
