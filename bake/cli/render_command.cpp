@@ -689,7 +689,9 @@ void registerRenderCommand(CLI::App& app) {
                     "glTF camera (default: the first): by its node's name (Blender's object name), else by the glTF "
                     "camera's own name, else by its index, #N or N. A name two cameras share is refused with "
                     "both listed. A scene without cameras gets an automatic one: framing it from outside, or, "
-                    "closed around its centre and lit from within (a room), looking across it from inside");
+                    "closed around its centre and lit from within (a room), looking across it from inside, or, "
+                    "wrapped in a glowing shell (a sky dome modelled as an emissive sphere), framing what the "
+                    "shell holds from inside it");
     cmd->add_option("--look-at", options->look_at,
                     "Camera from eye and target: \"ex,ey,ez,tx,ty,tz\" (overrides --camera)");
     cmd->add_option("--up", options->up, "Up vector for --look-at")->capture_default_str();

@@ -530,10 +530,19 @@ Camera automaticCamera(const Scene& scene, float yfov) {
     return c;
 }
 
-Camera automaticCamera(const Tracer& tracer, float yfov) {
+namespace {
+
+/// Rays from outside the scene towards its content that must all meet a glowing shell first.
+constexpr uint32_t kShellRays = 16;
+
+bool emits(const Scene& scene, uint32_t triangle) {
+    return scene.materials[scene.triangle_materials[triangle]].isEmissive();
+}
+
+/// The camera inside a closed room around the centre of the scene's bounds (automaticCamera's
+/// second half), or nothing where the scene is to be framed from outside.
+std::optional<Camera> cameraInsideRoom(const Tracer& tracer, const Camera& outside) {
     const Scene& scene = tracer.scene();
-    Camera outside = automaticCamera(scene, yfov);
-    if (scene.empty()) return outside;
     const glm::vec3 center = 0.5f * (scene.bounds_min + scene.bounds_max);
     const float clearance = 0.01f * glm::length(scene.bounds_max - scene.bounds_min);
     const FreeSpaceProbe by_winding = probeFreeSpace(tracer, center, clearance, Winding::kSingleSided);
@@ -542,7 +551,7 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
     // winding that finds no free space, and light below whether it is a room.
     const FreeSpaceProbe probe = by_winding.free ? by_winding
                                                  : probeFreeSpace(tracer, center, clearance, Winding::kIgnored);
-    if (!probe.free || probe.escaped > 0 || visibleOneWay(tracer, outside.position, center)) return outside;
+    if (!probe.free || probe.escaped > 0 || visibleOneWay(tracer, outside.position, center)) return std::nullopt;
     // Closed around the centre: a room, or the inside of a closed object. Single-sided walls
     // facing the centre say a room (the winding voted it free); other walls (double-sided, as
     // Blender writes them by default, or wound outwards) look the same from inside a room and
@@ -552,7 +561,7 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
     // walls: no room, whose lamps are a part of what surrounds the centre. Where most of what the
     // centre sees emits, the view from there is a white wall and the object is framed from outside.
     if (!by_winding.known && (mostlyEmittersAround(tracer, center) || !LightTest(tracer).reachesInside(center)))
-        return outside;
+        return std::nullopt;
     // Level (+Y up), along the horizontal axis with the most room, from near the wall behind: the
     // view across the whole room (from the centre it filled the frame with the far wall alone).
     const auto distanceTo = [&](glm::vec3 d) {
@@ -569,9 +578,61 @@ Camera automaticCamera(const Tracer& tracer, float yfov) {
         inside.forward = -axis;  // glTF's cameras look down -Z: the first axis ties to that
         inside.position = center + axis * (0.8f * behind);
     }
-    if (longest < 0.0f) return outside;
+    if (longest < 0.0f) return std::nullopt;
     inside.up = glm::vec3(0.0f, 1.0f, 0.0f);
     return inside;
+}
+
+/// A scene wrapped in a glowing shell: a sky dome modelled as an emissive or unlit sphere (or
+/// hemisphere) around it, or a glowing box around a model. From outside, the camera sees nothing
+/// but the shell, whose outer side the bake never reaches (it explores the lit space inside).
+/// The shell is recognised from above and around: rays from outside the scene towards the
+/// centre of what does not emit (the content), from kShellRays directions above it, meet
+/// emitting surfaces first (all but one: a ray may slip through a shared vertex). Returns the
+/// camera framing the content from `outside`'s direction, moved inside the shell where the
+/// framing distance reaches it; nothing where no such shell hides the content.
+std::optional<Camera> cameraInsideGlowingShell(const Tracer& tracer, const Camera& outside) {
+    const Scene& scene = tracer.scene();
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (size_t t = 0; t < scene.triangles.size(); ++t) {
+        if (emits(scene, uint32_t(t))) continue;
+        for (int k = 0; k < 3; ++k) {
+            lo = glm::min(lo, scene.positions[scene.triangles[t][k]]);
+            hi = glm::max(hi, scene.positions[scene.triangles[t][k]]);
+        }
+    }
+    if (!(lo.x <= hi.x)) return std::nullopt;  // everything emits: a glowing object, no content
+    const glm::vec3 content = 0.5f * (lo + hi);
+    const glm::vec3 scene_center = 0.5f * (scene.bounds_min + scene.bounds_max);
+    const float far = 2.0f * boundingRadius(scene) + glm::distance(content, scene_center);
+    // How far from the content's centre, along `d`, a ray from outside first meets an emitter;
+    // negative where its first hit does not emit or it meets nothing.
+    const auto shellDistance = [&](glm::vec3 d) {
+        RayHit hit;
+        if (!tracer.intersect(Ray{content + far * d, -d}, hit) || !emits(scene, hit.triangle)) return -1.0f;
+        return far - hit.t;
+    };
+    uint32_t shell_hits = 0;
+    for (uint32_t i = 0; i < kShellRays; ++i) {  // the upper half of a Fibonacci sphere
+        if (shellDistance(sphericalFibonacciDirection(i, 2 * kShellRays)) > 0.0f) ++shell_hits;
+    }
+    const glm::vec3 toward_camera = glm::normalize(outside.position - scene_center);
+    const float shell = shellDistance(toward_camera);
+    if (shell_hits + 1 < kShellRays || shell <= 0.0f) return std::nullopt;
+    const float radius = std::max(0.5f * glm::length(hi - lo), 1e-3f);
+    Camera inside = outside;
+    inside.position = content + toward_camera * std::min(1.1f * radius / std::sin(0.5f * outside.yfov), 0.9f * shell);
+    return inside;
+}
+
+}  // namespace
+
+Camera automaticCamera(const Tracer& tracer, float yfov) {
+    const Camera outside = automaticCamera(tracer.scene(), yfov);
+    if (tracer.scene().empty()) return outside;
+    if (std::optional<Camera> room = cameraInsideRoom(tracer, outside)) return *room;
+    if (std::optional<Camera> shell = cameraInsideGlowingShell(tracer, outside)) return *shell;
+    return outside;
 }
 
 namespace {

@@ -109,7 +109,10 @@ Camera automaticCamera(const Scene& scene, float yfov);
 /// and the bake never reaches; it then stands near the wall behind the centre, looking level along
 /// the horizontal axis with the most room. The inside of a closed double-sided model lit from
 /// outside (Blender's default material, under the sky) looks just as closed, but is dark: it is
-/// framed from outside. Named "automatic" either way.
+/// framed from outside. A scene wrapped in a glowing shell (a sky dome modelled as an emissive or
+/// unlit sphere, a glowing box around a model), whose content rays from outside meet only after
+/// the shell, is framed as from outside but from inside the shell: what does not emit, from the
+/// same direction, no farther than 90% of the way to the shell. Named "automatic" either way.
 Camera automaticCamera(const Tracer& tracer, float yfov);
 
 /// The automatic camera's vertical field of view unless the user gives one (render's --fov), in

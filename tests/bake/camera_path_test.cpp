@@ -1059,6 +1059,51 @@ TEST(AutomaticCamera, FramesAClosedDoubleSidedModelLitFromOutside) {
     expectFramedFromOutside(glowing, "a lone glowing sphere");
 }
 
+TEST(AutomaticCamera, FramesWhatADomeHoldsFromInsideIt) {
+    // A sky dome modelled as a glowing sphere 20 m wide around a sphere on a ground plane (as
+    // scenes from model stores have one), no camera: the centre of the bounds lies on the ground,
+    // so no room was found, and the camera framed the dome from 100 m away. It saw the dome's
+    // outer side alone, which the bake, exploring the lit space inside, never reaches.
+    test::TempDir dir;
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    addSphere(positions, indices, {0.0f, 1.2f, 0.0f}, 1.0f);
+    const uint32_t ball_end = uint32_t(indices.size() / 3);
+    for (const glm::vec2 corner : {glm::vec2(-5, -5), glm::vec2(-5, 5), glm::vec2(5, 5), glm::vec2(5, -5)})
+        positions.insert(positions.end(), {corner.x, 0.0f, corner.y});
+    for (const uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) indices.push_back(uint32_t(positions.size() / 3) - 4 + k);
+    const uint32_t content_end = uint32_t(indices.size() / 3);
+    addSphere(positions, indices, {0.0f, 0.0f, 0.0f}, 20.0f);
+    Scene dome = loadDoubleSidedMesh(dir, positions, indices, "dome.gltf");
+    makeEmissive(dome, content_end, uint32_t(dome.triangles.size()), glm::vec3(0.4f, 0.6f, 1.0f));
+    const Tracer tracer(dome);
+    const Camera view = automaticCamera(tracer, glm::radians(kAutomaticCameraFovDegrees));
+    const glm::vec3 content_center(0.0f, 1.1f, 0.0f);  // of the ground and the ball: y from 0 to 2.2
+    EXPECT_LT(glm::length(view.position), 0.95f * 20.0f)
+        << view.position.x << ", " << view.position.y << ", " << view.position.z;
+    EXPECT_GT(glm::distance(view.position, content_center), 5.0f * std::sqrt(2.0f));  // outside the content
+    EXPECT_GT(glm::dot(view.forward, glm::normalize(content_center - view.position)), 0.9999f);
+    EXPECT_EQ(view.name, "automatic");
+    // Not from a point the bake never reaches: it sees the ball, and the ball is not emissive.
+    RayHit hit;
+    ASSERT_TRUE(tracer.intersect(Ray{view.position, view.forward}, hit));
+    EXPECT_LT(hit.triangle, content_end);
+    // The bake predicts its hit rate from the same view.
+    const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
+    ASSERT_EQ(views.size(), 1u);
+    EXPECT_EQ(views.front().camera.position, view.position);
+
+    // A lamp is no dome: a glowing ball above the ball lights it, but rays from the sides meet the
+    // ball (and the ground) first, so the scene is framed from outside.
+    std::vector<float> lamp_positions;
+    std::vector<uint32_t> lamp_indices;
+    addSphere(lamp_positions, lamp_indices, {0.0f, 1.2f, 0.0f}, 1.0f);
+    addSphere(lamp_positions, lamp_indices, {0.0f, 2.6f, 0.0f}, 0.3f);
+    Scene lamp = loadDoubleSidedMesh(dir, lamp_positions, lamp_indices, "lamp.gltf");
+    makeEmissive(lamp, ball_end, uint32_t(lamp.triangles.size()), glm::vec3(5.0f));
+    expectFramedFromOutside(lamp, "a ball under a glowing ball");
+}
+
 TEST(AutomaticCamera, LooksFromInsideAClosedDoubleSidedRoomLitFromWithin) {
     // The same closed double-sided walls (Blender's default, a cube scaled into a room, wound
     // outwards) around a room with furniture: a lamp inside says it is a room, under a sky or not.
