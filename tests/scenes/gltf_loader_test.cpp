@@ -1229,7 +1229,9 @@ TEST(SpecularGlossiness, FactorsBecomeADielectricWithThatF0AndRoughness) {
     // Read, not ignored; its fallback here (a red metal) is another material, which is said.
     for (const std::string& w : scene.stats.warnings) {
         EXPECT_EQ(w.find("not supported"), std::string::npos) << w;
-        if (w.find("pbrSpecularGlossiness") != std::string::npos) EXPECT_NE(w.find("fallback"), std::string::npos) << w;
+        if (w.find("pbrSpecularGlossiness") != std::string::npos) {
+            EXPECT_NE(w.find("fallback"), std::string::npos) << w;
+        }
     }
 
     // Absent factors are the extension's defaults: white diffuse, white specular, glossiness 1.
