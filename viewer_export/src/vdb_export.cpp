@@ -4,18 +4,17 @@
 
 #include "sharcbake/cache_file.h"
 
+#include <openvdb/io/Archive.h>
 #include <openvdb/openvdb.h>
-#include <openvdb/io/File.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <unordered_map>
 #include <utility>
-
-#include <unistd.h>
 
 namespace sharcbake {
 namespace {
@@ -236,34 +235,36 @@ openvdb::MetaMap fileMetadata(const CacheView& cache, const VdbExportOptions& op
     return meta;
 }
 
-/// The caches' output rules (cache_file.h): the grids go to a temporary beside the target, which
-/// is read back in full (OpenVDB does not report write errors: a full disk leaves a truncated
-/// file) and only then renamed over the target. A device or FIFO is never replaced, and on
-/// failure the previous file is intact. (io::File, not io::Stream: vdb_render needs the grid
-/// offsets that only a file archive stores.) Returns an error message, empty on success.
+/// An OpenVDB archive serialised into memory as io::File lays it out, with the grid offsets that
+/// vdb_render needs (io::Stream writes none). io::File itself ignores write errors: on a full
+/// disk it left a truncated file, and reading that back to find out cost OpenVDB tens of seconds
+/// of allocations sized by garbage. Bytes in memory are written by writeFileAtomically instead,
+/// which checks every write.
+class MemoryArchive : public openvdb::io::Archive {
+public:
+    std::string serialise(const openvdb::GridPtrVec& grids, const openvdb::MetaMap& meta) const {
+        std::ostringstream out(std::ios_base::out | std::ios_base::binary);
+        Archive::write(out, grids, /*seekable=*/true, meta);
+        if (!out) throw std::runtime_error("OpenVDB could not serialise the grids");
+        return std::move(out).str();
+    }
+};
+
+/// The caches' output rules (cache_file.h): a temporary beside the target, every byte checked,
+/// renamed over the target only when complete. A device or FIFO is never replaced, and on failure
+/// the previous file is intact. Returns an error message, empty on success.
 std::string writeGridsAtomically(const std::string& out_path, const openvdb::GridPtrVec& grids,
                                  const openvdb::MetaMap& meta) {
-    std::string target, temporary, problem;
-    if (prepareOutputFile(out_path, &target, &temporary, &problem) != CacheFileStatus::kOk) {
-        return "cannot write " + out_path + ": " + problem;
-    }
+    std::string bytes;
     try {
-        openvdb::io::File file(temporary);
-        file.write(grids, meta);
-        file.close();
-        openvdb::io::File check(temporary);
-        check.open(false);
-        const openvdb::GridPtrVecPtr read_back = check.getGrids();
-        check.close();
-        if (!read_back || read_back->size() != grids.size()) throw std::runtime_error("the grids do not read back");
+        bytes = MemoryArchive().serialise(grids, meta);
     } catch (const std::exception& e) {
-        ::unlink(temporary.c_str());
-        return "cannot write " + out_path + " (disk full?): " + e.what() + "; the previous file is untouched";
+        return "cannot write " + out_path + ": " + e.what();
     }
-    if (commitOutputFile(temporary, target, &problem) != CacheFileStatus::kOk) {
-        return "cannot write " + out_path + ": " + problem;
-    }
-    return {};
+    std::string problem;
+    const CacheFileStatus status = writeFileAtomically(out_path, bytes.data(), bytes.size(), &problem);
+    // The message names the file, and on a failed write says that the previous one is untouched.
+    return status == CacheFileStatus::kOk ? std::string() : problem;
 }
 
 }  // namespace
