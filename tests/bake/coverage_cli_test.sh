@@ -480,4 +480,54 @@ says "$work/err.txt" "or give --camera-source explore" "the empty cache's warnin
 says "$work/out.txt" "has no voxel (the cache is empty" "the coverage line of an empty cache"
 grep -q "(level 0)" "$work/out.txt" && fail "an empty cache's coverage names level 0"
 grep -q "was never reached" "$work/err.txt" && fail "an empty cache also gets the unreached-surface warning"
+# A sky dome modelled as an unlit sphere of radius 30 around a ground and a box, no camera: the bake
+# explores the lit inside, and render's automatic camera, which framed the dome from 150 units
+# out (seeing its outer side, which has no voxel), frames the ground and the box from inside it.
+python3 - "$work/dome.gltf" <<'PY'
+import base64, json, math, struct, sys
+R, nu, nv = 30.0, 32, 16
+dome = [(R * math.sin(math.pi * j / nv) * math.cos(2 * math.pi * (i + 0.3) / nu), R * math.cos(math.pi * j / nv),
+         R * math.sin(math.pi * j / nv) * math.sin(2 * math.pi * (i + 0.3) / nu)) for j in range(nv + 1) for i in range(nu + 1)]
+dome_idx = [k for j in range(1, nv - 1) for i in range(nu) for k in
+            (j * (nu + 1) + i, (j + 1) * (nu + 1) + i, j * (nu + 1) + i + 1,
+             j * (nu + 1) + i + 1, (j + 1) * (nu + 1) + i, (j + 1) * (nu + 1) + i + 1)]
+dome_idx += [k for i in range(nu) for k in (i, nu + 1 + i, nu + 2 + i)]  # the top cap
+dome_idx += [k for i in range(nu) for k in ((nv - 1) * (nu + 1) + i, nv * (nu + 1) + i, (nv - 1) * (nu + 1) + i + 1)]
+ground = [(-10, 0, -10), (10, 0, -10), (10, 0, 10), (-10, 0, 10)]
+ground_idx = [0, 2, 1, 0, 3, 2]
+lo, hi = (-1, 0, -1), (1, 2, 1)
+box = [(hi[0] if c & 1 else lo[0], hi[1] if c & 2 else lo[1], hi[2] if c & 4 else lo[2]) for c in range(8)]
+box_idx = [k for a, b, c, d in [(0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3), (0, 2, 3, 1), (4, 5, 7, 6)]
+           for k in (a, b, c, a, c, d)]
+data, views, accessors, prims = b"", [], [], []
+for material, (points, idx) in enumerate([(ground, ground_idx), (box, box_idx), (dome, dome_idx)]):
+    for blob, kind in ((b"".join(struct.pack("<3f", *p) for p in points), "VEC3"), (struct.pack("<%dI" % len(idx), *idx), "SCALAR")):
+        views.append({"buffer": 0, "byteOffset": len(data), "byteLength": len(blob)})
+        data += blob
+        accessor = {"bufferView": len(views) - 1, "componentType": 5126 if kind == "VEC3" else 5125,
+                    "count": len(points) if kind == "VEC3" else len(idx), "type": kind}
+        if kind == "VEC3":
+            accessor.update(min=[min(p[k] for p in points) for k in range(3)], max=[max(p[k] for p in points) for k in range(3)])
+        accessors.append(accessor)
+    prims.append({"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": material})
+g = {"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_materials_unlit"],
+     "scenes": [{"nodes": [0, 1, 2]}], "nodes": [{"mesh": i} for i in range(3)], "meshes": [{"primitives": [p]} for p in prims],
+     "materials": [{"doubleSided": True, "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}},
+                   {"doubleSided": True, "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.3, 0.2, 1], "metallicFactor": 0}},
+                   {"doubleSided": True, "extensions": {"KHR_materials_unlit": {}},
+                    "pbrMetallicRoughness": {"baseColorFactor": [0.4, 0.6, 1.0, 1], "metallicFactor": 0}}],
+     "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+     "bufferViews": views, "accessors": accessors}
+json.dump(g, open(sys.argv[1], "w"))
+PY
+expect 0 "bake the scene in a sky dome" "$sharcbake" bake "$work/dome.gltf" -o "$work/dome.sharc" --iterations 64
+says "$work/out.txt" "Camera: exploration" "the inside of the dome is explored"
+expect 0 "render the dome's cache from the automatic camera" "$sharcbake" render "$work/dome.gltf" \
+    -o "$work/dome.exr" --resolution 32 --spp 1 --no-png --cache "$work/dome.sharc" --debug-view cache
+eye=$(sed -n "s/^Camera: 'automatic' at (\([^)]*\)).*/\1/p" "$work/out.txt")
+echo "$eye" | awk -F', ' '{ exit !($1 * $1 + $2 * $2 + $3 * $3 < 30 * 30) }' ||
+    fail "the automatic camera stands outside the dome, at ($eye)"
+says "$work/out.txt" "debug view 'cache': 0 of [0-9]* primary hits have no cached voxel" \
+    "every primary hit of the automatic camera inside the dome has a voxel"
+
 finish "coverage"
