@@ -512,11 +512,20 @@ ExplorationResult exploreFreeSpace(const Tracer& tracer, const std::vector<glm::
     return result;
 }
 
-float boundingRadius(const Scene& scene) {
-    return std::max(0.5f * glm::length(scene.bounds_max - scene.bounds_min), 1e-3f);
-}
+namespace {
 
-float framingDistance(const Scene& scene, float yfov) { return 1.1f * boundingRadius(scene) / std::sin(0.5f * yfov); }
+/// The radius of the sphere around the box [lo, hi] (at least 1e-3).
+float boxRadius(glm::vec3 lo, glm::vec3 hi) { return std::max(0.5f * glm::length(hi - lo), 1e-3f); }
+
+/// How far a camera of vertical field of view `yfov` stands to see a sphere of `radius` whole,
+/// with a 10% margin.
+float framingDistanceOf(float radius, float yfov) { return 1.1f * radius / std::sin(0.5f * yfov); }
+
+}  // namespace
+
+float boundingRadius(const Scene& scene) { return boxRadius(scene.bounds_min, scene.bounds_max); }
+
+float framingDistance(const Scene& scene, float yfov) { return framingDistanceOf(boundingRadius(scene), yfov); }
 
 Camera automaticCamera(const Scene& scene, float yfov) {
     Camera c;
@@ -619,9 +628,9 @@ std::optional<Camera> cameraInsideGlowingShell(const Tracer& tracer, const Camer
     const glm::vec3 toward_camera = glm::normalize(outside.position - scene_center);
     const float shell = shellDistance(toward_camera);
     if (shell_hits + 1 < kShellRays || shell <= 0.0f) return std::nullopt;
-    const float radius = std::max(0.5f * glm::length(hi - lo), 1e-3f);
     Camera inside = outside;
-    inside.position = content + toward_camera * std::min(1.1f * radius / std::sin(0.5f * outside.yfov), 0.9f * shell);
+    inside.position = content +
+                      toward_camera * std::min(framingDistanceOf(boxRadius(lo, hi), outside.yfov), 0.9f * shell);
     return inside;
 }
 
