@@ -741,6 +741,7 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
     }
     const HashGridStatus status = validateHashGridParameters(grid);
     if (status != HashGridStatus::kOk) throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(status));
+    settings.sharc.grid_anchor = gridAnchorFor(scene, voxelSize(kHashGridLevelMin, grid));
     const DepositLevels levels = levelsFor(scene, settings);
     decision.finest_level = levels.finestLevel();
     decision.coarsest_level = levels.coarsestLevel();

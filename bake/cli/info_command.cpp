@@ -80,6 +80,13 @@ void printText(const std::string& path, const CacheView& v) {
     // parameters bit for bit (a level bias of 2.515625 printed as 2.51562 moved keys).
     std::printf("  log base %.9g, scene scale %.9g, level bias %.9g, bake capacity %u\n", double(p.logarithm_base),
                 double(p.scene_scale), double(p.level_bias), v.bakeCapacity());
+    const Float3& anchor = v.gridAnchor();
+    if (anchor.x != 0.0f || anchor.y != 0.0f || anchor.z != 0.0f) {
+        std::printf(
+            "  anchor (%.9g, %.9g, %.9g) (ANCR): keys decode to the cells nearest it, for a scene beyond the "
+            "17-bit grid range around the origin; lookups do not need it\n",
+            double(anchor.x), double(anchor.y), double(anchor.z));
+    }
     std::printf("Voxels: %" PRIu64 " live (%.2f%% of the bake capacity; empty slots are not stored), %.1f bytes/voxel\n",
                 s.voxels, v.bakeCapacity() ? 100.0 * double(s.voxels) / double(v.bakeCapacity()) : 0.0,
                 s.bytes_per_voxel);
@@ -169,6 +176,8 @@ void printJson(const std::string& path, const CacheView& v) {
           {"logarithm_base", jsonNumber(p.logarithm_base)},
           {"scene_scale", jsonNumber(p.scene_scale)},
           {"level_bias", jsonNumber(p.level_bias)},
+          {"anchor",
+           Json::array({jsonNumber(v.gridAnchor().x), jsonNumber(v.gridAnchor().y), jsonNumber(v.gridAnchor().z)})},
           {"bake_capacity", v.bakeCapacity()}}},
         {"gpu",
          {{"radiance_scale", jsonNumber(gpu.radiance_scale)},
@@ -212,12 +221,12 @@ void registerInfoCommand(CLI::App& app) {
     });
 
     auto v = std::make_shared<InfoOptions>();
-    CLI::App* validate = app.add_subcommand(
-        "validate",
-        "Check a .sharc cache against every validation rule of cache_format/SPEC.md (V1..V18).\n"
-        "On failure prints the rule that failed. Exit codes: 0 valid, 3 invalid, 2 cannot read.\n\n"
-        "Example:\n"
-        "  sharcbake validate out/cornell_box.sharc");
+    CLI::App* validate =
+        app.add_subcommand("validate",
+                           "Check a .sharc cache against every validation rule of cache_format/SPEC.md (V1..V21).\n"
+                           "On failure prints the rule that failed. Exit codes: 0 valid, 3 invalid, 2 cannot read.\n\n"
+                           "Example:\n"
+                           "  sharcbake validate out/cornell_box.sharc");
     pathOption(validate->add_option("file", v->path, "Cache file (.sharc)"))->required();
     validate->add_flag("--json", v->json, "Print the result as JSON");
     validate->callback([v] {

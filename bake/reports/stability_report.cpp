@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "reports/stability_report.h"
 
+#include "support/float_spacing.h"
 #include "tracing/tracer.h"
 
 #include <algorithm>
@@ -11,12 +12,6 @@ namespace sharcbake {
 namespace {
 
 double channelSum(const glm::dvec3& v) { return v.x + v.y + v.z; }
-
-/// Distance from `x` to the next float32 towards +infinity (the spacing of floats there).
-double floatSpacing(double x) {
-    const float f = float(std::abs(x));
-    return double(std::nextafter(f, std::numeric_limits<float>::infinity())) - double(f);
-}
 
 std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
     // Sized by a first pass: a fixed buffer cut the longest warnings short.
@@ -96,11 +91,12 @@ void addWarnings(StabilityReport& r) {
                                     double(r.orphan_sums)));
     }
     if (r.grid_coordinates_wrap) {
-        r.warnings.push_back(format("the scene reaches grid cell %.0f at level %.0f, beyond the key's 17-bit range "
-                                    "(+-65536): keys stay unique near the camera, but voxel positions decoded from "
-                                    "keys (export-vdb, info) wrap; move the scene towards the origin or lower "
-                                    "--scene-scale",
-                                    double(r.max_grid_coordinate), double(r.finest_level)));
+        r.warnings.push_back(
+            format("the scene reaches %.0f grid cells from the grid anchor at level %.0f, beyond "
+                   "the key's 17-bit range (+-65536): keys stay unique near the camera, but voxel "
+                   "positions decoded from keys (export-vdb) wrap; lower --scene-scale or raise "
+                   "--level-bias (or use --level-bias auto)",
+                   double(r.max_grid_coordinate), double(r.finest_level)));
     }
     if (r.finest_voxel_size > 0.0 && r.ray_offset > r.finest_voxel_size) {
         // Within kRayOffsetOriginRegion of the origin the guard is a fixed distance: a scene lying
@@ -171,6 +167,8 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
     r.float_spacing = floatSpacing(r.far_corner_distance);
     r.ray_offset = double(largestRayOffset(float(r.far_corner_distance)));
     const HashGridParameters& grid = cache.settings().grid;
+    const Float3& anchor = cache.settings().grid_anchor;
+    const double anchor_coordinates[3] = {double(anchor.x), double(anchor.y), double(anchor.z)};
     for (uint32_t level : levels) {
         const double size = double(voxelSize(level, grid));
         if (!(size > 0.0)) continue;
@@ -178,9 +176,16 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
             r.finest_level = level;
             r.finest_voxel_size = size;
         }
-        // Positions are biased before quantisation, exactly as the key does it.
-        const double cell = std::floor((r.far_corner_distance + double(kHashGridPositionBias)) / size);
-        r.max_grid_coordinate = std::max(r.max_grid_coordinate, int64_t(std::min(cell, 9.0e18)));
+        // Cells from the anchor's cell, where keys decode (HashGridKeyDecoder). Positions are
+        // biased before quantisation, exactly as the key does it.
+        for (int axis = 0; axis < 3; ++axis) {
+            const double anchor_cell = std::floor(anchor_coordinates[axis] / size);
+            for (const float bound : {bounds_min[axis], bounds_max[axis]}) {
+                const double cell = std::floor((double(bound) + double(kHashGridPositionBias)) / size);
+                const double cells = std::abs(cell - anchor_cell);
+                r.max_grid_coordinate = std::max(r.max_grid_coordinate, int64_t(std::min(cells, 9.0e18)));
+            }
+        }
     }
     constexpr int64_t kMaxSignedCoordinate = int64_t(1) << (kHashGridPositionBits - 1);
     r.grid_coordinates_wrap = r.max_grid_coordinate >= kMaxSignedCoordinate;
@@ -219,8 +224,9 @@ void printStabilitySection(std::FILE* out, const StabilityReport& r) {
                  (unsigned long long)r.non_finite_dropped, (unsigned long long)r.negative_clamped,
                  (unsigned long long)r.resample_emission_clamped, (unsigned long long)r.orphan_sums);
     if (r.finest_level > 0) {
-        std::fprintf(out, "  coordinates: far corner %.6g, float32 spacing %.3g = %.3g%% of the finest voxel "
-                          "(%.3g, level %u), ray offset %.3g; grid cells up to %lld of +-65536\n",
+        std::fprintf(out,
+                     "  coordinates: far corner %.6g, float32 spacing %.3g = %.3g%% of the finest voxel "
+                     "(%.3g, level %u), ray offset %.3g; grid cells up to %lld of +-65536 from the anchor\n",
                      r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(), r.finest_voxel_size,
                      r.finest_level, r.ray_offset, (long long)r.max_grid_coordinate);
     }

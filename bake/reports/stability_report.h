@@ -9,6 +9,7 @@
 
 #include "sharc/sharc_cache.h"
 #include "sharc/sharc_update.h"
+#include "support/float_spacing.h"
 #include "support/json.h"
 #include "tracing/scene_reflectance.h"
 
@@ -20,10 +21,6 @@
 #include <vector>
 
 namespace sharcbake {
-
-/// Float32 spacing at the scene's far corner above this share of the finest voxel makes hit
-/// points jitter between voxels (docs/sharc_algorithm.md §10.9: about 20 % at 1e5 units, S = 50).
-inline constexpr double kPrecisionWarningShare = 0.05;
 
 /// Float32 spacing above this multiple of SHaRC's 1e-4 position bias (beyond ~16k units from
 /// the origin) no longer keeps surfaces that lie on voxel boundaries on one side of them
@@ -63,7 +60,8 @@ struct StabilityReport {
     double ray_offset = 0.0;           ///< how far the tracer moves ray origins off a surface there
     uint32_t finest_level = 0;         ///< 0 when the cache is empty
     double finest_voxel_size = 0.0;
-    int64_t max_grid_coordinate = 0;   ///< largest |cell index| the scene reaches, at any level present
+    /// Largest |cell index - the grid anchor's| the scene's bounds reach, at any level present.
+    int64_t max_grid_coordinate = 0;
     bool grid_coordinates_wrap = false;  ///< beyond the 17-bit signed key field
 
     // Light transport: how long light stays in the scene (SceneReflectance), -1 when not measured.

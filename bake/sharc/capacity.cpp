@@ -53,10 +53,11 @@ CapacityChoice chooseCapacity(const Tracer& tracer, const LightSampler& lights, 
     // The coarser voxels every deposited voxel feeds live in the table too (view_region.h).
     const uint32_t coarsest = sampler.depositLevels().coarsestLevel();
     std::vector<uint64_t> level = keys;
+    const HashGridKeyDecoder decoder(settings.sharc.grid, settings.sharc.grid_anchor);
     while (!level.empty()) {
         std::vector<uint64_t> coarser;
         for (const uint64_t key : level) {
-            if (decodeHashGridKey(key).level < coarsest) coarser.push_back(coarserKey(key, settings.sharc.grid));
+            if (decodeHashGridKey(key).level < coarsest) coarser.push_back(decoder.coarserKey(key));
         }
         std::sort(coarser.begin(), coarser.end());
         coarser.erase(std::unique(coarser.begin(), coarser.end()), coarser.end());

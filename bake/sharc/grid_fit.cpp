@@ -2,6 +2,7 @@
 #include "sharc/grid_fit.h"
 
 #include "support/box.h"
+#include "support/float_spacing.h"
 #include "support/median.h"
 #include "tracing/sampling.h"
 #include "tracing/surface_points.h"
@@ -25,8 +26,8 @@ namespace {
 /// a runtime table far larger than the scene needs.
 constexpr double kTooFewVoxels = 256.0;
 constexpr double kTooManyFactor = 16.0;
-/// The grid coordinates are 17-bit signed (|g| < 65536); keep the farthest point of the scene
-/// within 90% of that at level 1.
+/// Keys keep 17 bits of each grid coordinate and decode to the cell within 65536 cells of the
+/// grid anchor's (HashGridKeyDecoder); keep every point of the scene within 90% of that at level 1.
 constexpr double kGridRange = 0.9 * 65536.0;
 
 /// The level bias whose level-1 voxels are `size` wide, unrounded: voxelSize(1) = b^(1 - bias) / S
@@ -49,7 +50,29 @@ double farthestCoordinate(const Scene& scene) {
     return double(std::max({m.x, m.y, m.z})) + double(kHashGridPositionBias);
 }
 
+/// The largest distance along any axis from the centre of the scene's bounds to its bounds.
+double halfExtent(const Scene& scene) {
+    const glm::dvec3 extent = glm::dvec3(scene.bounds_max) - glm::dvec3(scene.bounds_min);
+    return 0.5 * std::max({extent.x, extent.y, extent.z}) + double(kHashGridPositionBias);
+}
+
+/// The finest level-1 voxel the grid can give the scene, and why (GridFit::range_limit).
+std::pair<double, GridFit::RangeLimit> finestVoxelAllowed(const Scene& scene) {
+    const double around_anchor = halfExtent(scene) / kGridRange;
+    // Nor finer than float32 positions resolve there: the spacing at most kPrecisionWarningShare
+    // of a voxel (20 float steps), as the stability report asks.
+    const double float_steps = floatSpacing(farthestCoordinate(scene)) / kPrecisionWarningShare;
+    return around_anchor >= float_steps ? std::pair{around_anchor, GridFit::RangeLimit::kSceneSize}
+                                        : std::pair{float_steps, GridFit::RangeLimit::kFloatPrecision};
+}
+
 }  // namespace
+
+Float3 gridAnchorFor(const Scene& scene, float finest_voxel_size) {
+    if (farthestCoordinate(scene) <= kGridRange * double(finest_voxel_size)) return Float3{0.0f, 0.0f, 0.0f};
+    const glm::dvec3 centre = 0.5 * (glm::dvec3(scene.bounds_min) + glm::dvec3(scene.bounds_max));
+    return Float3{float(centre.x), float(centre.y), float(centre.z)};
+}
 
 double visibleSurfaceArea(const Scene& scene) {
     double area = 0.0;
@@ -279,9 +302,10 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
     }
     const double budget = double(std::max<uint64_t>(voxel_budget, 1));
     double size = std::sqrt(fit.surface_area / budget);
-    const double range_limit = farthestCoordinate(scene) / kGridRange;
+    const auto [range_limit, range_reason] = finestVoxelAllowed(scene);
     if (!(size > range_limit)) {
         fit.limited_by_range = size < range_limit;
+        if (fit.limited_by_range) fit.range_limit = range_reason;
         size = std::max(range_limit, 1e-30);
     }
     const double b = double(grid.logarithm_base);
@@ -333,6 +357,7 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
     HashGridParameters fitted = grid;
     fitted.level_bias = fit.level_bias;
     fit.finest_voxel_size = voxelSize(kHashGridLevelMin, fitted);
+    fit.grid_anchor = gridAnchorFor(scene, fit.finest_voxel_size);
     fit.estimated_voxels = fit.surface_area / (double(fit.finest_voxel_size) * double(fit.finest_voxel_size));
     if (fit.fitted_to_view_distances)
         fit.estimated_voxels = voxelsAtViewDistances(fit.surface_area, *samples, grid, fit.level_bias);
@@ -353,11 +378,18 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
     }
     char text[640];
     if (fit.limited_by_range) {
+        char limit[160];
+        if (fit.range_limit == GridFit::RangeLimit::kSceneSize) {
+            std::snprintf(limit, sizeof limit, "the smallest the 17-bit grid allows across a scene %.4g units wide",
+                          2.0 * halfExtent(scene));
+        } else {
+            std::snprintf(limit, sizeof limit, "the smallest float32 positions %.4g units from the origin resolve",
+                          farthestCoordinate(scene));
+        }
         std::snprintf(text, sizeof text,
-                      "level bias %.9g: finest voxels %.4g wide, the smallest the 17-bit grid allows %.4g units from "
-                      "the origin (%s, about %.3g voxels at level 1; the budget would allow finer)",
-                      double(fit.level_bias), double(fit.finest_voxel_size), farthestCoordinate(scene), surface,
-                      fit.estimated_voxels);
+                      "level bias %.9g: finest voxels %.4g wide, %s (%s, about %.3g voxels at level 1; the budget "
+                      "would allow finer)",
+                      double(fit.level_bias), double(fit.finest_voxel_size), limit, surface, fit.estimated_voxels);
     } else if (fit.fitted_to_view_distances) {
         std::snprintf(text, sizeof text,
                       "level bias %.9g: finest voxels %.4g wide, so the %s take about %.3g voxels at the levels the "
@@ -447,11 +479,19 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
         }
         return uint64_t(0);
     };
-    if (fit && fit->limited_by_range) {
+    if (fit && fit->limited_by_range && fit->range_limit == GridFit::RangeLimit::kSceneSize) {
         std::snprintf(why, sizeof why,
-                      "They are that wide because SHaRC's grid coordinates reach 65536 voxels from the origin, and "
-                      "the scene reaches %.4g units from it.",
-                      farthestCoordinate(scene));
+                      "They are that wide because SHaRC's keys tell cells apart only within 65536 voxels, and the "
+                      "scene is %.4g units wide.",
+                      2.0 * halfExtent(scene));
+        std::snprintf(fix, sizeof fix,
+                      "Baking the parts the cameras see as separate scenes (or leaving out what they never see) "
+                      "allows finer ones");
+    } else if (fit && fit->limited_by_range) {
+        std::snprintf(why, sizeof why,
+                      "They are that wide because float32 positions %.4g units from the origin are %.3g apart, and "
+                      "a voxel must span several of those steps.",
+                      farthestCoordinate(scene), floatSpacing(farthestCoordinate(scene)));
         std::snprintf(fix, sizeof fix, "Moving the scene (and its cameras) towards the origin allows finer ones");
     } else if (!fit) {
         std::snprintf(why, sizeof why, "They are that wide because of --level-bias %g.", double(grid.level_bias));

@@ -64,7 +64,12 @@ struct GridFit {
     float finest_voxel_size = 0.0f;      ///< voxelSize(1) with that bias
     double surface_area = 0.0;           ///< visibleSurfaceArea
     double estimated_voxels = 0.0;       ///< surface_area / finest_voxel_size^2 (flat surfaces)
-    bool limited_by_range = false;       ///< the 17-bit grid range forced larger voxels
+    bool limited_by_range = false;       ///< the grid's range or float precision forced larger voxels
+    /// What limited them: the scene's size against the 17-bit grid range around the anchor, or
+    /// float32 precision at its farthest coordinate (voxels at least 20 float steps wide there).
+    enum class RangeLimit { kSceneSize, kFloatPrecision } range_limit = RangeLimit::kSceneSize;
+    /// gridAnchorFor(scene, finest_voxel_size): where the cache's keys decode.
+    Float3 grid_anchor{0.0f, 0.0f, 0.0f};
     bool fitted_to_seen = false;         ///< surface_area is the part the viewpoints see (SeenSurface)
     /// Sides of double-sided surfaces no viewpoint sees, left out of surface_area (where it is not
     /// fitted to the seen part alone).
@@ -76,9 +81,16 @@ struct GridFit {
     std::string reason;                  ///< one line for the bake's output
 };
 
+/// Where a cache's keys decode (HashGridKeyDecoder; the file's ANCR section): the origin while
+/// every point of the scene lies within 90% of 2^16 level-1 voxels of `finest_voxel_size` from it
+/// (the file then needs no anchor), else the centre of the scene's bounds, so that a room 10 km
+/// from the origin keeps voxels as fine as the same room at the origin.
+Float3 gridAnchorFor(const Scene& scene, float finest_voxel_size);
+
 /// Fits `grid.level_bias` (rounded down to 1/64, so voxels are never finer than the budget asks)
-/// so that level 1 holds the scene's visible surface in about `voxel_budget` voxels, and never
-/// finer than the 17-bit grid allows around the scene's farthest coordinate. With `seen` below
+/// so that level 1 holds the scene's visible surface in about `voxel_budget` voxels, never finer
+/// than the 17-bit grid tells apart across the scene (2^16 voxels each way from its centre) nor
+/// than float32 positions resolve at its farthest coordinate (20 float steps). With `seen` below
 /// kFitToSeenBelow of that surface, level 1 holds the seen part instead: the roaming camera never
 /// reaches the rest, and a 4 m room beside a 10 km ground plane keeps voxels for the room. Above
 /// it, the sides of double-sided surfaces `seen` says no viewpoint sees are left out: a closed room

@@ -180,6 +180,7 @@ double SharcCache::chooseRadianceScale(double max_radiance) {
 
 SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
     : settings_(settings),
+      key_decoder_(settings.grid, settings.grid_anchor),
       radiance_scale_(radiance_scale),
       accumulation_(settings.grid.capacity),
       resolved_(settings.grid.capacity) {
@@ -713,7 +714,7 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
         };
         Parent ahead[kPrefetchDistance];
         const auto makeParent = [&](size_t i) {
-            const uint64_t key = coarserKey(table_.keyAt(sorted_slots[i]), settings_.grid);
+            const uint64_t key = key_decoder_.coarserKey(table_.keyAt(sorted_slots[i]));
             const Parent p{key, bucketBaseOf(key)};
             table_.prefetchBucket(p.base);
             return p;
@@ -812,6 +813,7 @@ CacheData toCacheData(const SharcCache& cache) {
     data.scene_scale = s.grid.scene_scale;
     data.level_bias = s.grid.level_bias;
     data.bucket_size = s.grid.bucket_size;
+    data.grid_anchor = s.grid_anchor;
     data.bake_capacity = cache.capacity();
     const HashGridTable& table = cache.table();
     for (uint32_t slot = 0; slot < table.capacity(); ++slot) {

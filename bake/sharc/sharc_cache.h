@@ -60,6 +60,9 @@ struct SharcSettings {
         g.capacity = 1u << 20;
         return g;
     }();
+    /// Where the table's keys decode (HashGridKeyDecoder): the scene's centre where it reaches
+    /// beyond the 17-bit grid range around the origin (gridAnchorFor), else the origin.
+    Float3 grid_anchor{0.0f, 0.0f, 0.0f};
     HistorySchedule history;
     /// Path vertices that receive radiance propagated back from later ones (SDK default with
     /// cache resampling: 2).
@@ -286,6 +289,7 @@ private:
     glm::dvec3 feedbackMean(const ResolvedEntry& r, const glm::dvec3& newest, const glm::dvec3& mean) const;
 
     SharcSettings settings_;
+    HashGridKeyDecoder key_decoder_;  ///< settings_'s grid and anchor: coarser keys of wrapped cells
     HashGridTable table_;
     double radiance_scale_;
     // Zero-filled lazily (ZeroedArray): a table far larger than the scene needs costs memory only

@@ -140,17 +140,17 @@ std::vector<CacheVoxelMaterial> computeVoxelMaterials(const Scene& scene, const 
     for (int c = 0; c < 3; ++c) {
         scene_mean.demodulation[c] = points.empty() ? 1.0f : float(factor_sum[c] / double(points.size()));
     }
-    const HashGridParameters grid = data.gridParameters();
+    const HashGridKeyDecoder decoder(data.gridParameters(), data.grid_anchor);
     for (size_t i = 0; i < data.voxels.size(); ++i) {
         if (sums[i].points > 0) {
             result[i] = meansOf(sums[i]);
             continue;
         }
         // A sliver of surface no point landed in: the nearest coarser voxel that has points.
-        uint64_t key = coarserKey(data.voxels[i].key, grid);
+        uint64_t key = decoder.coarserKey(data.voxels[i].key);
         uint64_t index = kNoVoxel;
         while (key != 0 && (index = voxelIndex(data.voxels, key), index == kNoVoxel || sums[size_t(index)].points == 0)) {
-            key = coarserKey(key, grid);
+            key = decoder.coarserKey(key);
         }
         if (key != 0 && index != kNoVoxel) {
             result[i] = meansOf(sums[size_t(index)]);

@@ -78,6 +78,10 @@ CacheFileStatus checkCacheData(const CacheData& data, std::vector<CacheLevel>& l
     if (!std::isfinite(data.gpu_radiance_scale) || !(data.gpu_radiance_scale > 0.0f)) {
         return fail(CacheFileStatus::kInvalidData, message, "the GPU radiance scale must be finite and > 0");
     }
+    if (!std::isfinite(data.grid_anchor.x) || !std::isfinite(data.grid_anchor.y) ||
+        !std::isfinite(data.grid_anchor.z)) {
+        return fail(CacheFileStatus::kInvalidData, message, "the grid anchor must be finite");
+    }
     if (!data.voxel_materials.empty() && data.voxel_materials.size() != data.voxels.size()) {
         return fail(CacheFileStatus::kInvalidData, message, "voxel materials: one per voxel, or none");
     }
@@ -142,7 +146,7 @@ void writeMetadataSection(ByteWriter& w, const std::vector<std::pair<std::string
 
 }  // namespace
 
-// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META (and RSCL, VMAT).
+// Writes the sections in the order of SPEC §F.4: GRID, KEYS, VOXL, LEVL, META (and RSCL, VMAT, ANCR).
 CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out, std::string* message) {
     if (!out) return fail(CacheFileStatus::kInvalidArgument, message, "encodeCacheFile: null output");
     if (!hostIsLittleEndian()) return fail(CacheFileStatus::kUnsupportedFeature, message, "big-endian hosts are not supported");
@@ -152,7 +156,9 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
     }
     const bool scaled = data.gpu_radiance_scale != 1.0f;  // SPEC §F.8a: RSCL only when not 1
     const bool materials = !data.voxel_materials.empty();  // SPEC §F.8b: VMAT only when kept
-    const uint32_t kSections = 5 + (scaled ? 1 : 0) + (materials ? 1 : 0);
+    const Float3& anchor = data.grid_anchor;
+    const bool anchored = anchor.x != 0.0f || anchor.y != 0.0f || anchor.z != 0.0f;  // SPEC §F.8c
+    const uint32_t kSections = 5 + (scaled ? 1 : 0) + (materials ? 1 : 0) + (anchored ? 1 : 0);
     std::vector<uint8_t>& bytes = *out;
     bytes.clear();
     bytes.reserve(kCacheHeaderSize + kSections * kCacheSectionEntrySize + 64 + data.voxels.size() * 24 +
@@ -194,6 +200,14 @@ CacheFileStatus encodeCacheFile(const CacheData& data, std::vector<uint8_t>* out
             for (float c : m.emission) w.put(c);
             for (float c : m.demodulation) w.put(c);
         }
+        container.endSection();
+    }
+    if (anchored) {
+        container.beginSection(kSectionGridAnchor, 0);  // SPEC §F.8c, optional
+        w.put(anchor.x);
+        w.put(anchor.y);
+        w.put(anchor.z);
+        w.put(uint32_t(0));
         container.endSection();
     }
     container.finish();  // table entries, file size, checksums
@@ -363,6 +377,7 @@ CacheFileStatus readCacheFile(const std::string& path, CacheData* data, std::str
     result.bucket_size = p.bucket_size;
     result.bake_capacity = view.bakeCapacity();
     result.gpu_radiance_scale = view.gpuRadianceScale();
+    result.grid_anchor = view.gridAnchor();
     if (view.hasVoxelMaterials()) {
         result.voxel_materials.resize(size_t(view.voxelCount()));
         for (uint64_t i = 0; i < view.voxelCount(); ++i) result.voxel_materials[size_t(i)] = view.voxelMaterial(i);

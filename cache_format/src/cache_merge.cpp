@@ -44,6 +44,11 @@ std::string incompatibility(const CacheData& first, const CacheData& other, cons
     if (!sameBits(first.level_bias, other.level_bias)) return "grid level bias differs";
     if (first.bucket_size != other.bucket_size) return "grid bucket size differs";
     if (!sameBits(first.gpu_radiance_scale, other.gpu_radiance_scale)) return "GPU radiance scale differs";
+    // The anchor comes from the scene's bounds: shards of one bake share it.
+    if (!sameBits(first.grid_anchor.x, other.grid_anchor.x) || !sameBits(first.grid_anchor.y, other.grid_anchor.y) ||
+        !sameBits(first.grid_anchor.z, other.grid_anchor.z)) {
+        return "grid anchor (ANCR) differs";
+    }
     if (first.voxel_materials.empty() != other.voxel_materials.empty()) {
         return std::string(other.voxel_materials.empty() ? "it has no" : "it has") +
                " voxel materials (VMAT, bake --voxel-materials) and input 1 " +
@@ -125,6 +130,7 @@ CacheFileStatus mergeCaches(const std::vector<CacheData>& inputs, const std::vec
     merged.level_bias = inputs[0].level_bias;
     merged.bucket_size = inputs[0].bucket_size;
     merged.gpu_radiance_scale = inputs[0].gpu_radiance_scale;
+    merged.grid_anchor = inputs[0].grid_anchor;
     merged.version_major = inputs[0].version_major;
     merged.version_minor = inputs[0].version_minor;
     for (const CacheData& input : inputs) merged.bake_capacity = std::max(merged.bake_capacity, input.bake_capacity);

@@ -248,23 +248,24 @@ HashGridCell decodeHashGridKey(uint64_t key) {
     return cell;
 }
 
-Float3 voxelCenter(uint64_t key, const HashGridParameters& params) {
-    const HashGridCell cell = decodeHashGridKey(key);
-    const float size = voxelSize(cell.level, params);
-    // |g| <= 65536, so the int -> float conversion is exact.
-    return Float3{(static_cast<float>(cell.grid.x) + 0.5f) * size,
-                  (static_cast<float>(cell.grid.y) + 0.5f) * size,
-                  (static_cast<float>(cell.grid.z) + 0.5f) * size};
+namespace {
+
+/// (g + 0.5) * size per axis. |g| < 2^24 for any cell a float position quantises to finely enough
+/// to matter, so the int -> float conversion is exact there.
+Float3 cellCenter(const Int3& g, float size) {
+    return Float3{(static_cast<float>(g.x) + 0.5f) * size, (static_cast<float>(g.y) + 0.5f) * size,
+                  (static_cast<float>(g.z) + 0.5f) * size};
 }
 
-uint64_t coarserKey(uint64_t key, const HashGridParameters& params) {
-    const HashGridCell cell = decodeHashGridKey(key);
+/// SPEC §H.8a on a decoded cell: the key of the level-(L + 1) voxel holding it. `size` and
+/// `coarser_size` are voxelSize(L) and voxelSize(L + 1).
+uint64_t coarserKeyOfCell(const HashGridCell& cell, float logarithm_base, float size, float coarser_size) {
     if (cell.level >= kHashGridLevelMax) return kHashGridInvalidKey;
     const uint32_t level = cell.level + 1;
     // A power-of-two base b = 2^k: floor(p / (b s)) == floor(floor(p / s) / b), exactly in float32
     // because b s is exact and dividing by a power of two commutes with rounding.
     int exponent = 0;
-    const float mantissa = std::frexp(params.logarithm_base, &exponent);
+    const float mantissa = std::frexp(logarithm_base, &exponent);
     if (mantissa == 0.5f && exponent >= 2) {
         const int shift = exponent - 1;
         // floor(g / 2^shift) for either sign (C++17 leaves >> of a negative value to the compiler).
@@ -272,8 +273,60 @@ uint64_t coarserKey(uint64_t key, const HashGridParameters& params) {
         const Int3 g{floorShift(cell.grid.x), floorShift(cell.grid.y), floorShift(cell.grid.z)};
         return packHashGridKey(g, level, cell.normal_bits, cell.user_bit);
     }
-    return packHashGridKey(quantisePosition(voxelCenter(key, params), voxelSize(level, params)), level,
-                           cell.normal_bits, cell.user_bit);
+    return packHashGridKey(quantisePosition(cellCenter(cell.grid, size), coarser_size), level, cell.normal_bits,
+                           cell.user_bit);
+}
+
+/// The coordinate congruent to a 17-bit field (mod 2^17) within [-2^16, 2^16) of `anchor`,
+/// saturated to int32 (only an anchor within 2^16 of the int32 limits can reach them).
+int32_t unwrapNear(uint32_t field, int32_t anchor) {
+    const uint32_t offset_field = (field - static_cast<uint32_t>(anchor)) & kHashGridPositionMask;
+    const int64_t value = int64_t(anchor) + int64_t(signExtend17(offset_field));
+    return static_cast<int32_t>(std::clamp<int64_t>(value, INT32_MIN, INT32_MAX));
+}
+
+}  // namespace
+
+Float3 voxelCenter(uint64_t key, const HashGridParameters& params) {
+    const HashGridCell cell = decodeHashGridKey(key);
+    return cellCenter(cell.grid, voxelSize(cell.level, params));
+}
+
+uint64_t coarserKey(uint64_t key, const HashGridParameters& params) {
+    const HashGridCell cell = decodeHashGridKey(key);
+    if (cell.level >= kHashGridLevelMax) return kHashGridInvalidKey;
+    return coarserKeyOfCell(cell, params.logarithm_base, voxelSize(cell.level, params),
+                            voxelSize(cell.level + 1, params));
+}
+
+HashGridKeyDecoder::HashGridKeyDecoder(const HashGridParameters& params, const Float3& anchor)
+    : logarithm_base_(params.logarithm_base), anchor_(anchor) {
+    voxel_size_.resize(kHashGridLevelMax + 1);
+    anchor_cell_.resize(kHashGridLevelMax + 1);
+    for (uint32_t level = 0; level <= kHashGridLevelMax; ++level) {
+        voxel_size_[level] = voxelSize(level, params);
+        anchor_cell_[level] = quantisePosition(anchor, voxel_size_[level]);
+    }
+}
+
+HashGridCell HashGridKeyDecoder::decode(uint64_t key) const {
+    HashGridCell cell = decodeHashGridKey(key);
+    const Int3& a = anchor_cell_[cell.level];
+    cell.grid.x = unwrapNear(static_cast<uint32_t>(key), a.x);
+    cell.grid.y = unwrapNear(static_cast<uint32_t>(key >> kHashGridPositionBits), a.y);
+    cell.grid.z = unwrapNear(static_cast<uint32_t>(key >> (2 * kHashGridPositionBits)), a.z);
+    return cell;
+}
+
+Float3 HashGridKeyDecoder::voxelCenter(uint64_t key) const {
+    const HashGridCell cell = decode(key);
+    return cellCenter(cell.grid, voxel_size_[cell.level]);
+}
+
+uint64_t HashGridKeyDecoder::coarserKey(uint64_t key) const {
+    const HashGridCell cell = decode(key);
+    if (cell.level >= kHashGridLevelMax) return kHashGridInvalidKey;
+    return coarserKeyOfCell(cell, logarithm_base_, voxel_size_[cell.level], voxel_size_[cell.level + 1]);
 }
 
 uint32_t jenkins32(uint32_t a) {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// CacheView: opening and validating a .sharc file (SPEC.md §F, rules V1..V18), lookups and GPU
+// CacheView: opening and validating a .sharc file (SPEC.md §F, rules V1..V21), lookups and GPU
 // buffers. Reads every field with memcpy from validated offsets; never trusts a count before
 // checking it against the bytes that hold it.
 #include "sharcbake/runtime.h"
@@ -135,6 +135,7 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     bucket_size_ = other.bucket_size_;
     bake_capacity_ = other.bake_capacity_;
     gpu_radiance_scale_ = other.gpu_radiance_scale_;
+    grid_anchor_ = other.grid_anchor_;
     voxel_count_ = other.voxel_count_;
     keys_ = other.keys_;
     voxels_ = other.voxels_;
@@ -164,6 +165,7 @@ void CacheView::reset() {
     header_size_ = 0;
     sections_.clear();
     gpu_radiance_scale_ = 1.0f;
+    grid_anchor_ = Float3{0.0f, 0.0f, 0.0f};
     voxel_count_ = 0;
     keys_ = voxels_ = voxel_materials_ = nullptr;
     levels_.clear();
@@ -400,6 +402,7 @@ CacheFileStatus CacheView::parseSections(const SectionTable& table, CacheError* 
             case kSectionMetadata: slot = &meta; break;
             case kSectionRadianceScale: slot = &found->radiance_scale; break;
             case kSectionVoxelMaterials: slot = &found->voxel_materials; break;
+            case kSectionGridAnchor: slot = &found->grid_anchor; break;
             default: break;
         }
         s.known = slot != nullptr;
@@ -630,7 +633,25 @@ CacheFileStatus CacheView::parseVoxelMaterials(const CacheSectionInfo* section, 
     return CacheFileStatus::kOk;
 }
 
-/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V20), and fills the view.
+/// V21: the optional ANCR section (format 1.2): a finite anchor.
+CacheFileStatus CacheView::parseGridAnchor(const CacheSectionInfo* section, CacheError* error) {
+    grid_anchor_ = Float3{0.0f, 0.0f, 0.0f};
+    if (!section) return CacheFileStatus::kOk;
+    if (section->length < kCacheGridAnchorSize || (version_minor_ <= 2 && section->length != kCacheGridAnchorSize)) {
+        return fail(error, CacheFileStatus::kCorrupt, 21,
+                    "ANCR: length " + std::to_string(section->length) + ", expected 16");
+    }
+    const Float3 anchor{load<float>(data_ + section->offset), load<float>(data_ + section->offset + 4),
+                        load<float>(data_ + section->offset + 8)};
+    if (!std::isfinite(anchor.x) || !std::isfinite(anchor.y) || !std::isfinite(anchor.z) ||
+        load<uint32_t>(data_ + section->offset + 12) != 0) {
+        return fail(error, CacheFileStatus::kCorrupt, 21, "ANCR: the anchor must be finite and the reserved field 0");
+    }
+    grid_anchor_ = anchor;
+    return CacheFileStatus::kOk;
+}
+
+/// Validates the whole file, rule by rule in SPEC §F.10's order (V1 - V21), and fills the view.
 CacheFileStatus CacheView::parse(CacheError* error) {
     SectionTable table;
     KnownSections found;
@@ -643,6 +664,7 @@ CacheFileStatus CacheView::parse(CacheError* error) {
     if (status == CacheFileStatus::kOk) status = parseMetadata(found.meta, error);
     if (status == CacheFileStatus::kOk) status = parseRadianceScale(found.radiance_scale, error);
     if (status == CacheFileStatus::kOk) status = parseVoxelMaterials(found.voxel_materials, error);
+    if (status == CacheFileStatus::kOk) status = parseGridAnchor(found.grid_anchor, error);
     if (status != CacheFileStatus::kOk) return status;
     // Query acceleration (not validation): voxel sizes and level thresholds.
     keyer_ = HashGridKeyer(gridParameters());

@@ -300,27 +300,51 @@ TEST(GridFit, VoxelsWiderThanTheRoomAroundACameraAreWarnedAboutWithTheFix) {
     EXPECT_EQ(checkVoxelsAroundCameras(alone_tracer, fitted, free, &room_fit, kDefaultVoxelBudget, nullptr), "");
 }
 
-TEST(GridFit, VoxelsMadeWideByTheGridRangeNameTheOriginAsTheFix) {
-    // A 4 m room 100 km from the origin: SHaRC's 17-bit coordinates allow 1.7 m voxels there.
+/// A 4 m room `distance` from the origin along x, with a camera inside, and its fit.
+struct FarRoom {
     Scene scene = emptyTestScene();
-    scene.materials.emplace_back();
-    const glm::vec3 offset(1e5f, 0.0f, 0.0f);
-    addInwardBox(scene, offset + glm::vec3(-2.0f, 0.0f, -2.0f), offset + glm::vec3(2.0f, 3.0f, 2.0f), 0);
-    Camera camera;
-    camera.name = "inside";
-    camera.position = offset + glm::vec3(0.0f, 1.5f, 0.0f);
-    scene.cameras.push_back(camera);
-    const Tracer tracer(scene);
-    const HashGridParameters grid{};
-    const GridFit fit = fitLevelBias(scene, grid, kDefaultVoxelBudget);
-    ASSERT_TRUE(fit.limited_by_range);
-    HashGridParameters fitted = grid;
-    fitted.level_bias = fit.level_bias;
-    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, ViewRegion{}, &fit, kDefaultVoxelBudget,
-                                                         nullptr);
-    EXPECT_NE(warning.find("the voxels around camera 'inside'"), std::string::npos) << warning;
-    EXPECT_NE(warning.find("towards the origin"), std::string::npos) << warning;
-    EXPECT_EQ(warning.find("--view-region gltf"), std::string::npos) << warning;
+    GridFit fit;
+    std::string warning;
+    explicit FarRoom(float distance) {
+        scene.materials.emplace_back();
+        const glm::vec3 offset(distance, 0.0f, 0.0f);
+        addInwardBox(scene, offset + glm::vec3(-2.0f, 0.0f, -2.0f), offset + glm::vec3(2.0f, 3.0f, 2.0f), 0);
+        Camera camera;
+        camera.name = "inside";
+        camera.position = offset + glm::vec3(0.0f, 1.5f, 0.0f);
+        scene.cameras.push_back(camera);
+        const Tracer tracer(scene);
+        const HashGridParameters grid{};
+        fit = fitLevelBias(scene, grid, kDefaultVoxelBudget);
+        HashGridParameters fitted = grid;
+        fitted.level_bias = fit.level_bias;
+        warning = checkVoxelsAroundCameras(tracer, fitted, ViewRegion{}, &fit, kDefaultVoxelBudget, nullptr);
+    }
+};
+
+TEST(GridFit, VoxelsMadeWideByTheGridRangeNameTheOriginAsTheFix) {
+    // 1000 km from the origin float32 positions are 6 cm apart, and voxels of 20 such steps are
+    // 1.25 m wide: too wide for a 4 m room.
+    const FarRoom far(1e6f);
+    ASSERT_TRUE(far.fit.limited_by_range);
+    EXPECT_EQ(far.fit.range_limit, GridFit::RangeLimit::kFloatPrecision);
+    EXPECT_NE(far.fit.reason.find("float32"), std::string::npos) << far.fit.reason;
+    EXPECT_NE(far.warning.find("the voxels around camera 'inside'"), std::string::npos) << far.warning;
+    EXPECT_NE(far.warning.find("towards the origin"), std::string::npos) << far.warning;
+    EXPECT_EQ(far.warning.find("--view-region gltf"), std::string::npos) << far.warning;
+}
+
+TEST(GridFit, ARoomFarFromTheOriginKeepsTheVoxelsItHasAtTheOrigin) {
+    // 100 km out, SHaRC's 17-bit coordinates around the origin allowed only 1.7 m voxels; around
+    // an anchor in the room the room's own budget decides, as at the origin.
+    const FarRoom near(0.0f), far(1e5f);
+    EXPECT_FALSE(near.fit.limited_by_range);
+    EXPECT_EQ(near.fit.grid_anchor.x, 0.0f);
+    EXPECT_EQ(far.fit.grid_anchor.x, 1e5f);  // the centre of the room's bounds
+    EXPECT_EQ(far.fit.grid_anchor.y, 1.5f);
+    EXPECT_LT(far.fit.finest_voxel_size, 0.2f);
+    EXPECT_LE(far.fit.finest_voxel_size, 1.5f * near.fit.finest_voxel_size + 0.16f);
+    EXPECT_EQ(far.warning, "");
 }
 
 TEST(GridFit, AStreetCameraInAWideCityIsToldBothBudgets) {

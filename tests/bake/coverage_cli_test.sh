@@ -6,7 +6,7 @@
 # units is warned about; the automatic camera sees a lone floor, which has nothing to look up, and
 # frames a closed double-sided box under the sky from outside (a black image is warned about), as
 # the bake's camera sees it from around; a room beside a 10 km ground plane is served from its
-# own camera.
+# own camera; the room moved 2 km from the origin keeps its grid (keys decode near an anchor).
 # Usage: coverage_cli_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
 sharcbake=$1
@@ -99,6 +99,36 @@ for name, s, k in (("mm", mm, 1000.0), ("km", km, 0.001)):
           % (name, voxels, size, rate))
     if not ok:
         sys.exit(1)
+PY
+
+# The same room 2 km from the origin: its level-1 cells lie near 300000, beyond the 17 bits a key
+# keeps, so the keys decode near an anchor at the room's centre (info shows it) and the room keeps
+# the grid it has at the origin (before the anchor: voxels 5x wider, 2000 / 58982 units). The ray
+# offset warning is the tracer's (256 float steps there).
+mkdir -p "$work/moved"
+cp "$scenes/cornell_box/cornell_box.bin" "$work/moved/"
+python3 - "$cornell" "$work/moved/cornell_box.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+g["nodes"].append({"name": "site", "translation": [2000.0, 0.0, 0.0], "children": g["scenes"][0]["nodes"]})
+g["scenes"][0]["nodes"] = [len(g["nodes"]) - 1]
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "bake moved 2 km" "$sharcbake" bake "$work/moved/cornell_box.gltf" -o "$work/moved.sharc" $small --stats-json "$work/moved.json"
+grep -v "warning: emissive material 'light'\|warning: the tracer moves ray origins" "$work/err.txt" > "$work/other_warnings.txt"
+[ -s "$work/other_warnings.txt" ] && fail "the moved bake warned: $(cat "$work/other_warnings.txt")"
+expect 0 "info --json moved" "$sharcbake" info "$work/moved.sharc" --json
+python3 - "$work/unit.json" "$work/moved.json" "$work/out.txt" <<'PY' || failures=$((failures + 1))
+import json, sys
+unit, moved, info = (json.load(open(f)) for f in sys.argv[1:])
+voxels = moved["live_voxels"] / unit["live_voxels"]
+size = moved["grid"]["finest_voxel_size"] / unit["grid"]["finest_voxel_size"]
+rate = moved["predicted_hit_rate"]["rate"] - unit["predicted_hit_rate"]["rate"]
+anchor = info["grid"]["anchor"]
+ok = abs(voxels - 1) < 0.10 and abs(size - 1) < 0.02 and abs(rate) < 0.01 and 1999 < anchor[0] < 2002
+print(("ok" if ok else "FAIL") + ": moved 2 km: voxels x%.4f, finest voxel x%.4f of the unit's, hit rate %+.4f, anchor %s"
+      % (voxels, size, rate, anchor))
+sys.exit(0 if ok else 1)
 PY
 
 # Point lights fall off with the squared distance in the scene's units: the mm room's lamp is

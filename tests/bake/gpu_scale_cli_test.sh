@@ -18,7 +18,7 @@ says "$work/out.txt" "radiance x 1 (no RSCL section), fp16 up to 65504: nothing 
 expect 0 "bake at scale 0.5" "$sharcbake" bake "$scene" -o "$work/half.sharc" $small --gpu-radiance-scale 0.5
 expect 0 "info" "$sharcbake" info "$work/half.sharc"
 says "$work/out.txt" "radiance x 0.5 (RSCL section)" "info shows the recorded scale"
-says "$work/out.txt" "format 1.1" "the cache is format 1.1"
+says "$work/out.txt" "format 1.2" "the cache is format 1.2"
 expect 0 "info --json" "$sharcbake" info "$work/half.sharc" --json
 python3 - "$work/out.txt" <<'PY' || fail "info --json gpu fields"
 import json, sys

@@ -116,15 +116,47 @@ TEST(GridFit, TheFinestLevelHoldsTheSurfaceInTheBudgetInAnyUnits) {
                 std::log2(1000.0), 1.0 / 32.0);
 }
 
-TEST(GridFit, FarFromTheOriginTheGridRangeWins) {
-    Scene scene = square(1.0f);
-    for (glm::vec3& p : scene.positions) p += glm::vec3(1e6f, 0.0f, 0.0f);
-    scene.bounds_min += glm::vec3(1e6f, 0.0f, 0.0f);
-    scene.bounds_max += glm::vec3(1e6f, 0.0f, 0.0f);
-    const GridFit fit = fitLevelBias(scene, HashGridParameters{}, 1u << 16);
+namespace {
+
+Scene moved(Scene scene, glm::vec3 offset) {
+    for (glm::vec3& p : scene.positions) p += offset;
+    scene.bounds_min += offset;
+    scene.bounds_max += offset;
+    return scene;
+}
+
+}  // namespace
+
+// Keys decode near an anchor at the scene's centre (HashGridKeyDecoder), so a scene away from the
+// origin keeps its voxels while float32 resolves them there (20 float steps a voxel); beyond,
+// float precision decides.
+TEST(GridFit, FarFromTheOriginFloatPrecisionWins) {
+    const GridFit home = fitLevelBias(square(1.0f), HashGridParameters{}, 1u << 16);
+    EXPECT_EQ(home.grid_anchor.x, 0.0f);  // the origin: no ANCR section
+    const GridFit away = fitLevelBias(moved(square(1.0f), glm::vec3(1e3f, 0.0f, 0.0f)), HashGridParameters{}, 1u << 16);
+    EXPECT_FALSE(away.limited_by_range);
+    EXPECT_EQ(away.level_bias, home.level_bias);
+    EXPECT_GT(1e3f / away.finest_voxel_size, 65536.0f);  // beyond the 17 bits: decoded near the anchor
+    EXPECT_EQ(away.grid_anchor.x, 1e3f + 0.5f * (square(1.0f).bounds_min.x + square(1.0f).bounds_max.x));
+    const GridFit far = fitLevelBias(moved(square(1.0f), glm::vec3(1e6f, 0.0f, 0.0f)), HashGridParameters{}, 1u << 16);
+    EXPECT_TRUE(far.limited_by_range);
+    EXPECT_EQ(far.range_limit, GridFit::RangeLimit::kFloatPrecision);
+    EXPECT_GE(far.finest_voxel_size, 20.0f * 0.0625f);  // float32 spacing at 1e6
+    EXPECT_NE(far.reason.find("float32"), std::string::npos) << far.reason;
+}
+
+// A strip 200 km long and 1 m wide: 2^16 voxels each way from its centre allow 1.7 m voxels,
+// though the budget would give 0.2 m.
+TEST(GridFit, ALongSceneIsLimitedByTheGridRange) {
+    Scene strip = square(1.0f);
+    for (glm::vec3& p : strip.positions) p.x *= 2e5f;
+    strip.bounds_min.x *= 2e5f;
+    strip.bounds_max.x *= 2e5f;
+    const GridFit fit = fitLevelBias(strip, HashGridParameters{}, 1u << 22);
     EXPECT_TRUE(fit.limited_by_range);
-    EXPECT_LT(1e6f / fit.finest_voxel_size, 65536.0f);
-    EXPECT_NE(fit.reason.find("17-bit"), std::string::npos);
+    EXPECT_EQ(fit.range_limit, GridFit::RangeLimit::kSceneSize);
+    EXPECT_GE(fit.finest_voxel_size, 0.5f * (strip.bounds_max.x - strip.bounds_min.x) / 65536.0f);
+    EXPECT_NE(fit.reason.find("17-bit"), std::string::npos) << fit.reason;
 }
 
 TEST(GridFit, WrongUnitsAreWarnedAbout) {

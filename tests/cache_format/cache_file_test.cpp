@@ -34,7 +34,8 @@ namespace sharcbake {
 namespace {
 
 const std::string kGoldenPath = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.0.sharc";  ///< format 1.0, kept
-const std::string kGolden11Path = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.1.sharc";
+const std::string kGolden11Path = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.1.sharc";  ///< format 1.1, kept
+const std::string kGolden12Path = std::string(SHARCBAKE_GOLDEN_DIR) + "/small.v1.2.sharc";
 
 // ------------------------------------------------------------------------------------------------
 // Helpers
@@ -81,6 +82,13 @@ CacheData goldenData() {
 CacheData goldenData11() {
     CacheData data = goldenData();
     data.gpu_radiance_scale = 0.25f;
+    return data;
+}
+
+/// goldenData11 with a grid anchor (ANCR, format 1.2), as a scene 10 km from the origin has.
+CacheData goldenData12() {
+    CacheData data = goldenData11();
+    data.grid_anchor = Float3{1.0e4f, 0.5f, -3.0f};
     return data;
 }
 
@@ -247,37 +255,45 @@ TEST(CacheFile, EmptyCacheRoundTrips) {
 }
 
 // Writes the golden when SHARCBAKE_UPDATE_GOLDENS is set; otherwise the writer must reproduce it.
-// (small.v1.0.sharc, of format 1.0, is no longer written: GoldenReadsBack keeps it readable.)
+// (small.v1.0.sharc and small.v1.1.sharc, of formats 1.0 and 1.1, are no longer written:
+// GoldenReadsBack keeps them readable.)
 TEST(CacheFileGolden, WriterReproducesGolden) {
-    const std::vector<uint8_t> bytes = encode(goldenData11());
+    const std::vector<uint8_t> bytes = encode(goldenData12());
     if (std::getenv("SHARCBAKE_UPDATE_GOLDENS")) {
-        std::ofstream out(kGolden11Path, std::ios::binary | std::ios::trunc);
+        std::ofstream out(kGolden12Path, std::ios::binary | std::ios::trunc);
         out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
         ASSERT_TRUE(out.good());
     }
-    const std::vector<uint8_t> golden = readBytes(kGolden11Path);
-    ASSERT_FALSE(golden.empty()) << kGolden11Path << " is missing; run with SHARCBAKE_UPDATE_GOLDENS=1";
+    const std::vector<uint8_t> golden = readBytes(kGolden12Path);
+    ASSERT_FALSE(golden.empty()) << kGolden12Path << " is missing; run with SHARCBAKE_UPDATE_GOLDENS=1";
     EXPECT_EQ(bytes, golden)
-        << "the writer no longer reproduces " << kGolden11Path
+        << "the writer no longer reproduces " << kGolden12Path
         << ". If the change is intended, add a new golden for the new format version "
            "(goldens are kept forever) and verify, then regenerate with SHARCBAKE_UPDATE_GOLDENS=1";
 }
 
 TEST(CacheFileGolden, GoldenReadsBack) {
-    // Every golden stays readable: 1.0 (no RSCL: scale 1) and 1.1 (RSCL 0.25; VOXL is not scaled).
+    // Every golden stays readable: 1.0 (no RSCL: scale 1), 1.1 (RSCL 0.25; VOXL is not scaled) and
+    // 1.2 (ANCR: the anchor; without it the origin).
     struct Golden {
         std::string path;
         uint16_t minor;
         float scale;
         size_t sections;
+        Float3 anchor;
     };
-    for (const Golden& g : {Golden{kGoldenPath, 0, 1.0f, 5}, Golden{kGolden11Path, 1, 0.25f, 6}}) {
+    for (const Golden& g :
+         {Golden{kGoldenPath, 0, 1.0f, 5, {0.0f, 0.0f, 0.0f}}, Golden{kGolden11Path, 1, 0.25f, 6, {0.0f, 0.0f, 0.0f}},
+          Golden{kGolden12Path, 2, 0.25f, 7, goldenData12().grid_anchor}}) {
         CacheData back;
         std::string message;
         ASSERT_EQ(readCacheFile(g.path, &back, &message), CacheFileStatus::kOk) << message;
         EXPECT_EQ(back.version_major, 1);
         EXPECT_EQ(back.version_minor, g.minor);
         EXPECT_EQ(back.gpu_radiance_scale, g.scale);
+        EXPECT_EQ(back.grid_anchor.x, g.anchor.x);
+        EXPECT_EQ(back.grid_anchor.y, g.anchor.y);
+        EXPECT_EQ(back.grid_anchor.z, g.anchor.z);
         const CacheData expected = goldenData();
         ASSERT_EQ(back.voxels.size(), expected.voxels.size());
         for (size_t i = 0; i < expected.voxels.size(); ++i) {
@@ -293,10 +309,15 @@ TEST(CacheFileGolden, GoldenReadsBack) {
         ASSERT_EQ(view.sections().size(), g.sections);
         EXPECT_EQ(view.metadata("seed"), "7");
         EXPECT_EQ(view.gpuRadianceScale(), g.scale);
-        if (g.sections == 6) {
+        if (g.sections >= 6) {
             EXPECT_EQ(view.sections()[5].type, kSectionRadianceScale);
             EXPECT_TRUE(view.sections()[5].required);
         }
+        if (g.sections == 7) {
+            EXPECT_EQ(view.sections()[6].type, kSectionGridAnchor);
+            EXPECT_FALSE(view.sections()[6].required);
+        }
+        EXPECT_EQ(view.gridAnchor().x, g.anchor.x);
     }
 }
 
@@ -318,7 +339,7 @@ TEST(CacheFileReject, EveryPrefixIsRejected) {
 }
 
 TEST(CacheFileReject, EveryFlippedByteIsRejected) {
-    for (const std::vector<uint8_t>& bytes : {encode(goldenData()), encode(goldenData11())}) {
+    for (const std::vector<uint8_t>& bytes : {encode(goldenData()), encode(goldenData11()), encode(goldenData12())}) {
         ASSERT_EQ(openBytes(bytes), CacheFileStatus::kOk);
         for (size_t i = 0; i < bytes.size(); ++i) {
             for (uint8_t mask : {uint8_t(0x01), uint8_t(0x80), uint8_t(0xFF)}) {
@@ -479,7 +500,7 @@ TEST(CacheFileReject, RadianceScaleRule19) {
     const std::vector<RawSection> sections = splitSections(bytes);
     ASSERT_EQ(sections.size(), 6u);
     ASSERT_EQ(sections[5].type, kSectionRadianceScale);
-    ASSERT_EQ(assemble(1, 1, sections), bytes);
+    ASSERT_EQ(assemble(1, kCacheVersionMinor, sections), bytes);
     auto with = [&](auto change, uint16_t minor = 1) {
         std::vector<RawSection> s = sections;
         change(s[5]);
@@ -511,6 +532,54 @@ TEST(CacheFileReject, RadianceScaleRule19) {
     twice.push_back(sections[5]);
     EXPECT_EQ(openBytes(assemble(1, 1, twice), &error), CacheFileStatus::kCorrupt);
     EXPECT_EQ(error.rule, 10u);
+}
+
+TEST(CacheFileReject, GridAnchorRule21) {
+    const std::vector<uint8_t> bytes = encode(goldenData12());
+    const std::vector<RawSection> sections = splitSections(bytes);
+    ASSERT_EQ(sections.size(), 7u);
+    ASSERT_EQ(sections[6].type, kSectionGridAnchor);
+    ASSERT_EQ(sections[6].flags, 0u);  // optional: lookups do not need it
+    ASSERT_EQ(assemble(1, kCacheVersionMinor, sections), bytes);
+    auto with = [&](auto change, uint16_t minor = 2) {
+        std::vector<RawSection> s = sections;
+        change(s[6]);
+        return assemble(1, minor, s);
+    };
+    CacheError error;
+    for (size_t at : {size_t(0), size_t(4), size_t(8)}) {
+        for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity()}) {
+            EXPECT_EQ(openBytes(with([&](RawSection& r) { set(r.data, at, bad); }), &error), CacheFileStatus::kCorrupt)
+                << at << " " << bad;
+            EXPECT_EQ(error.rule, 21u) << error.message;
+        }
+    }
+    EXPECT_EQ(openBytes(with([](RawSection& r) { set(r.data, 12, uint32_t(1)); }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 21u);
+    EXPECT_EQ(openBytes(with([](RawSection& r) { r.data.resize(12); }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 21u);
+    EXPECT_EQ(openBytes(with([](RawSection& r) { r.data.resize(24, 0); }), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 21u);
+    // A later minor may append fields.
+    CacheView view;
+    ASSERT_EQ(openBytes(with([](RawSection& r) { r.data.resize(24, 0); }, 3), &error, &view), CacheFileStatus::kOk)
+        << error.message;
+    EXPECT_EQ(view.gridAnchor().x, 1.0e4f);
+    EXPECT_EQ(view.gridAnchor().z, -3.0f);
+    // Twice: V10.
+    std::vector<RawSection> twice = sections;
+    twice.push_back(sections[6]);
+    EXPECT_EQ(openBytes(assemble(1, 2, twice), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 10u);
+    // The writer refuses an anchor a reader would reject; the origin writes no section.
+    CacheData data = goldenData12();
+    data.grid_anchor.y = std::numeric_limits<float>::infinity();
+    std::vector<uint8_t> out;
+    std::string message;
+    EXPECT_EQ(encodeCacheFile(data, &out, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("anchor"), std::string::npos) << message;
+    EXPECT_EQ(splitSections(encode(goldenData11())).size(), 6u);
 }
 
 TEST(CacheFile, GpuRadianceScaleIsRecordedAndAppliedToGpuBuffersOnly) {

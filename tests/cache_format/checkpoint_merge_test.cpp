@@ -225,6 +225,10 @@ TEST(CacheMerge, RefusesDifferentGridsScenesAndVersions) {
     b = a;
     b.bucket_size = 8;
     EXPECT_EQ(mergeCaches({a, b}, {"scene_hash"}, &out, &message), CacheFileStatus::kInvalidData);
+    b = a;
+    b.grid_anchor = Float3{1e4f, 0.0f, 0.0f};  // keys decode elsewhere: not one bake's shards
+    EXPECT_EQ(mergeCaches({a, b}, {"scene_hash"}, &out, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("anchor"), std::string::npos) << message;
     b = shard(a.voxels, "fnv1a64:2");
     EXPECT_EQ(mergeCaches({a, b}, {"scene_hash"}, &out, &message), CacheFileStatus::kInvalidData);
     EXPECT_NE(message.find("scene_hash"), std::string::npos) << message;

@@ -384,6 +384,78 @@ TEST(HashGridKey, KeyDecodesToItsCellAndCentre) {
     }
 }
 
+// A room 10 km from the origin (and one 5 km out on the negative side) in 2 mm voxels: its cells
+// lie near +-5 million, far beyond the 17 bits a key keeps. Decoded near an anchor in the room,
+// every key gives its true cell, a centre within half a voxel of the point, and the coarser key
+// the point has one level up; decoded around the origin (the anchor-less way) they are wrong.
+TEST(HashGridKeyDecoder, FarFromTheOriginKeysDecodeNearTheAnchor) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> local(-6.0f, 6.0f), unit(-1.0f, 1.0f);
+    for (const float base : {2.0f, 1.5f}) {
+        HashGridParameters params;
+        params.logarithm_base = base;
+        params.level_bias = std::log2(1.0f / (params.scene_scale * 0.002f)) / std::log2(base) + 1.0f;
+        ASSERT_NEAR(voxelSize(1, params), 0.002f, 1e-6f);
+        for (const Float3 room : {Float3{1.0e4f, 2.0f, 3.0f}, Float3{-5.0e3f, 7.0e3f, -1.0e4f}}) {
+            const HashGridKeyDecoder decoder(params, room);
+            size_t wrapped = 0;
+            for (int i = 0; i < 5000; ++i) {
+                const Float3 p{room.x + local(rng), room.y + local(rng), room.z + local(rng)};
+                const Float3 n{unit(rng), unit(rng), unit(rng)};
+                for (const uint32_t level : {1u, 2u, 5u}) {
+                    const uint64_t key = hashGridKeyAtLevel(p, n, level, params);
+                    const Float3 biased{p.x + kHashGridPositionBias, p.y + kHashGridPositionBias,
+                                        p.z + kHashGridPositionBias};
+                    const Int3 truth = quantisePosition(biased, voxelSize(level, params));
+                    const HashGridCell cell = decoder.decode(key);
+                    ASSERT_EQ(cell.grid.x, truth.x) << "base " << base << " level " << level;
+                    ASSERT_EQ(cell.grid.y, truth.y);
+                    ASSERT_EQ(cell.grid.z, truth.z);
+                    ASSERT_EQ(cell.level, level);
+                    ASSERT_EQ(cell.normal_bits, normalBits(n));
+                    wrapped += decodeHashGridKey(key).grid.x != truth.x;
+                    const Float3 c = decoder.voxelCenter(key);
+                    const float half = 0.5f * voxelSize(level, params) + 1e-3f;  // + float spacing at 1e4
+                    ASSERT_LE(std::fabs(c.x - biased.x), half);
+                    ASSERT_LE(std::fabs(c.y - biased.y), half);
+                    ASSERT_LE(std::fabs(c.z - biased.z), half);
+                    if (base == 2.0f) {
+                        ASSERT_EQ(decoder.coarserKey(key), hashGridKeyAtLevel(p, n, level + 1, params));
+                    } else {
+                        const Int3 parent = quantisePosition(c, voxelSize(level + 1, params));
+                        ASSERT_EQ(decoder.coarserKey(key), packHashGridKey(parent, level + 1, normalBits(n)));
+                    }
+                }
+            }
+            EXPECT_GT(wrapped, 0u);  // the anchor-less decoding was wrong here
+        }
+    }
+}
+
+// With the anchor at the origin the decoder is decodeHashGridKey, voxelCenter and coarserKey.
+TEST(HashGridKeyDecoder, AtTheOriginItDecodesAsTheFreeFunctions) {
+    std::mt19937_64 rng(29);
+    for (const float base : {2.0f, 1.5f}) {
+        HashGridParameters params;
+        params.logarithm_base = base;
+        params.level_bias = 1.25f;
+        const HashGridKeyDecoder decoder(params);
+        for (int i = 0; i < 20000; ++i) {
+            uint64_t key = rng() & ~(uint64_t(1) << kHashGridUserBit);
+            if ((key >> kHashGridLevelOffset & kHashGridLevelMask) == 0) key |= uint64_t(1) << kHashGridLevelOffset;
+            const HashGridCell a = decoder.decode(key), b = decodeHashGridKey(key);
+            ASSERT_EQ(a.grid.x, b.grid.x);
+            ASSERT_EQ(a.grid.y, b.grid.y);
+            ASSERT_EQ(a.grid.z, b.grid.z);
+            ASSERT_EQ(a.level, b.level);
+            ASSERT_EQ(a.normal_bits, b.normal_bits);
+            const Float3 ca = decoder.voxelCenter(key), cb = voxelCenter(key, params);
+            ASSERT_TRUE(std::memcmp(&ca, &cb, sizeof ca) == 0);
+            ASSERT_EQ(decoder.coarserKey(key), coarserKey(key, params));
+        }
+    }
+}
+
 TEST(HashGridKey, DebugColorInUnitRange) {
     const Float3 c = hashDebugColor(0x0008012C00640019ull);
     for (float v : {c.x, c.y, c.z}) {

@@ -302,5 +302,49 @@ TEST(VdbExportUnrepresentable, MicrometreVoxelsNameTheLevelsThatFit) {
     std::remove(out.c_str());
 }
 
+// A room 10 km from the origin in 1 cm voxels: its cells lie near 10^6, beyond the 17 bits a key
+// keeps. The file's anchor (ANCR) puts every voxel back in the room; decoded around the origin
+// (as before the anchor) they landed up to 1.3 km away.
+TEST(VdbExportFarFromTheOrigin, VoxelsStayInTheRoom) {
+    openvdb::initialize();
+    CacheData data;
+    data.bake_capacity = 1024;
+    data.level_bias = 1.0f - std::log2(data.scene_scale * 0.01f);  // level-1 voxels 1 cm wide
+    data.grid_anchor = Float3{1.0e4f, 1.5f, -2.0f};
+    const HashGridParameters params = data.gridParameters();
+    ASSERT_NEAR(voxelSize(1, params), 0.01f, 1e-6f);
+    for (int i = 0; i < 64; ++i) {
+        const Float3 p{1.0e4f + 0.03f * float(i % 8) - 0.1f, 1.5f + 0.05f * float(i / 8), -2.0f + 0.02f * float(i)};
+        data.voxels.push_back(CacheVoxel{hashGridKeyAtLevel(p, Float3{0, 1, 0}, 1, params), {1.0f, 1.0f, 1.0f}, 1.0f});
+    }
+    sortVoxels(data.voxels);
+    data.voxels.erase(std::unique(data.voxels.begin(), data.voxels.end(),
+                                  [](const CacheVoxel& a, const CacheVoxel& b) { return a.key == b.key; }),
+                      data.voxels.end());
+    std::vector<uint8_t> bytes;
+    CacheView view;
+    ASSERT_NO_FATAL_FAILURE(openInMemory(data, bytes, view));
+    ASSERT_NE(decodeHashGridKey(data.voxels[0].key).grid.x, quantisePosition(data.grid_anchor, 0.01f).x);
+    const std::string out = ::testing::TempDir() + "sharcbake_far_" + std::to_string(::getpid()) + ".vdb";
+    std::string message;
+    ASSERT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kOk) << message;
+    openvdb::io::File file(out);
+    file.open();
+    const auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("level1_radiance"));
+    const openvdb::MetaMap::Ptr meta = file.getMetadata();
+    file.close();
+    std::remove(out.c_str());
+    ASSERT_TRUE(grid);
+    EXPECT_EQ(grid->activeVoxelCount(), data.voxels.size());
+    for (auto it = grid->cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d world = grid->indexToWorld(it.getCoord());
+        EXPECT_NEAR(world.x(), 1.0e4, 0.2) << it.getCoord();
+        EXPECT_NEAR(world.y(), 1.5 + 0.2, 0.25) << it.getCoord();
+        EXPECT_NEAR(world.z(), -2.0 + 0.64, 0.7) << it.getCoord();
+    }
+    const openvdb::Vec3s anchor = meta->metaValue<openvdb::Vec3s>("sharcbake_grid_anchor");
+    EXPECT_EQ(anchor.x(), 1.0e4f);
+}
+
 }  // namespace
 }  // namespace sharcbake

@@ -34,11 +34,14 @@ using Groups = std::map<GroupKey, std::unordered_map<uint64_t, Cell>>;
 constexpr uint64_t kNormalBitsMask = uint64_t(kHashGridNormalMask) << kHashGridNormalOffset;
 
 /// Groups the cache entries of the selected levels into cells (normal bits merged unless split).
+/// Cells are decoded near the file's grid anchor (SPEC §H.6a): a scene far from the origin keeps
+/// its place.
 Groups accumulate(const CacheView& cache, const std::vector<uint32_t>& levels, bool split) {
     Groups groups;
+    const HashGridKeyDecoder decoder(cache.gridParameters(), cache.gridAnchor());
     for (uint64_t i = 0; i < cache.voxelCount(); ++i) {
         const CacheVoxel v = cache.voxel(i);
-        const HashGridCell c = decodeHashGridKey(v.key);
+        const HashGridCell c = decoder.decode(v.key);
         if (std::find(levels.begin(), levels.end(), c.level) == levels.end()) continue;
         const int32_t octant = split ? int32_t(c.normal_bits) : -1;
         Cell& cell = groups[{c.level, octant}][v.key & ~kNormalBitsMask];
@@ -227,6 +230,8 @@ openvdb::MetaMap fileMetadata(const CacheView& cache, const VdbExportOptions& op
     meta.insertMeta("sharcbake_grid_logarithm_base", openvdb::FloatMetadata(params.logarithm_base));
     meta.insertMeta("sharcbake_grid_scene_scale", openvdb::FloatMetadata(params.scene_scale));
     meta.insertMeta("sharcbake_grid_level_bias", openvdb::FloatMetadata(params.level_bias));
+    const Float3& anchor = cache.gridAnchor();
+    meta.insertMeta("sharcbake_grid_anchor", openvdb::Vec3SMetadata(openvdb::Vec3s(anchor.x, anchor.y, anchor.z)));
     meta.insertMeta("sharcbake_display_scale", openvdb::FloatMetadata(options.scale));
     for (size_t i = 0; i < cache.metadataCount(); ++i) {
         meta.insertMeta("sharcbake_bake_" + std::string(cache.metadataKey(i)),

@@ -27,6 +27,10 @@ struct CacheData {
     /// Factor GPU buffers apply to the radiance by default (SPEC §F.8a, section RSCL): the engine's
     /// SHaRC radiance units per scene unit. Finite, > 0; 1 writes no RSCL section.
     float gpu_radiance_scale = 1.0f;
+    /// The point near which keys decode (SPEC §F.8c, section ANCR; HashGridKeyDecoder): the
+    /// centre of the scene where it reaches beyond the 17-bit grid range around the origin.
+    /// Finite; the origin writes no ANCR section.
+    Float3 grid_anchor{0.0f, 0.0f, 0.0f};
     /// Voxels sorted by key, keys unique and non-zero.
     std::vector<CacheVoxel> voxels;
     /// Empty, or one entry per voxel in the same order (SPEC §F.8b, section VMAT): for GPU buffers

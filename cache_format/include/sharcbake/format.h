@@ -30,13 +30,14 @@ inline constexpr uint8_t kCheckpointIdentifier[16] = {0xAB, 'S', 'H', 'A', 'R', 
                                                       'P',  'T', 0xBB, '\r', '\n', 0x1A, '\n', 0x00};
 
 inline constexpr uint16_t kCacheVersionMajor = 1;  ///< incompatible changes
-inline constexpr uint16_t kCacheVersionMinor = 1;  ///< compatible additions (1.1: RSCL)
+inline constexpr uint16_t kCacheVersionMinor = 2;  ///< compatible additions (1.1: RSCL, VMAT; 1.2: ANCR)
 
 /// Notable format versions (OpenVDB style), for version-gated reading code.
 enum CacheFormatVersion : uint32_t {
     kCacheFormatInterim = 0x0001,  ///< 0.1: "SHRCBAKE" + one CRC; not readable (re-bake)
     kCacheFormat_1_0 = 0x0100,     ///< 1.0: identifier, header, section table, GRID/KEYS/VOXL/LEVL/META
     kCacheFormat_1_1 = 0x0101,     ///< 1.1: RSCL, the radiance scale for GPU buffers (SPEC §F.8a)
+    kCacheFormat_1_2 = 0x0102,     ///< 1.2: ANCR, where wrapped grid coordinates decode (SPEC §F.8c)
 };
 
 // ------------------------------------------------------------------------------------------------
@@ -99,6 +100,7 @@ inline constexpr uint32_t kSectionLevels = cacheFourCC('L', 'E', 'V', 'L');
 inline constexpr uint32_t kSectionMetadata = cacheFourCC('M', 'E', 'T', 'A');
 inline constexpr uint32_t kSectionRadianceScale = cacheFourCC('R', 'S', 'C', 'L');  ///< 1.1
 inline constexpr uint32_t kSectionVoxelMaterials = cacheFourCC('V', 'M', 'A', 'T');  ///< 1.1
+inline constexpr uint32_t kSectionGridAnchor = cacheFourCC('A', 'N', 'C', 'R');      ///< 1.2
 
 // ------------------------------------------------------------------------------------------------
 // Sections (SPEC §F.5 - §F.8)
@@ -162,6 +164,16 @@ struct CacheVoxelMaterialRecord {
 };
 static_assert(sizeof(CacheVoxelMaterialRecord) == 24, "SPEC §F.8b: VMAT records are 24 bytes");
 inline constexpr uint32_t kCacheVoxelMaterialRecordSize = 24;
+
+/// ANCR (1.2): the point near which keys decode (SPEC §F.8c, HashGridKeyDecoder). Written only
+/// when the scene reaches beyond the 17-bit grid range around the origin; optional, since lookups
+/// never decode keys.
+struct CacheGridAnchorSection {
+    float anchor[3];    ///< finite
+    uint32_t reserved;  ///< 0
+};
+static_assert(sizeof(CacheGridAnchorSection) == 16, "SPEC §F.8c: ANCR is 16 bytes");
+inline constexpr uint32_t kCacheGridAnchorSize = 16;
 
 /// @brief CRC-32 (ISO-HDLC / zlib / PNG: reflected polynomial 0xEDB88320, init and xorout
 /// 0xFFFFFFFF). Pass the previous result as `crc` to continue over several ranges.

@@ -201,8 +201,9 @@ SHARCBAKE_RUNTIME_API uint64_t hashGridKeyAtLevel(const Float3& position, const 
 /// voxelSize(L + 1) is exactly b * voxelSize(L) in float32, so every point of the voxel has the
 /// returned key at level + 1 (grid coordinates floor-divided by b). For other bases a coarse voxel
 /// straddles fine ones and the voxel's centre decides. Grid coordinates that wrapped at 17 bits
-/// are divided as stored (the parent of a wrapped cell is then wrong, as its position already
-/// is; the bake warns about wrapping). Level 511 (the last) returns 0 (no coarser level).
+/// are divided as decodeHashGridKey() gives them (the parent of a wrapped cell is then wrong, as
+/// its position already is); HashGridKeyDecoder::coarserKey() unwraps them around an anchor
+/// first. Level 511 (the last) returns 0 (no coarser level).
 SHARCBAKE_RUNTIME_API uint64_t coarserKey(uint64_t key, const HashGridParameters& params);
 
 /// @brief Decodes a key: grid coordinates sign-extended from 17 bits, level, normal bits and the
@@ -211,8 +212,39 @@ SHARCBAKE_RUNTIME_API HashGridCell decodeHashGridKey(uint64_t key);
 
 /// @brief Centre of a key's voxel in world units: (g + 0.5) * voxelSize(level), float32, as the
 /// SDK's HashGridGetPositionFromKey. The +1e-4 bias is not removed. Coordinates that wrapped at
-/// 17 bits decode to the wrapped cell (SPEC §H.6).
+/// 17 bits decode to the wrapped cell (SPEC §H.6); HashGridKeyDecoder decodes them near an anchor.
 SHARCBAKE_RUNTIME_API Float3 voxelCenter(uint64_t key, const HashGridParameters& params);
+
+/// @brief Decodes keys into the cells they were made from, also where the scene lies beyond the
+/// 17-bit grid range around the origin (SPEC §H.6a).
+///
+/// A key keeps the low 17 bits of each grid coordinate, so it names its cell only up to multiples
+/// of 2^17 cells: a 1 m room 10 km from the origin in 2 mm voxels has coordinates near 5 million,
+/// and keys that hash and look up correctly (keys never need decoding), but decodeHashGridKey()
+/// would put its voxels 5 million mod 2^17 cells from the origin. The decoder picks, per axis,
+/// the cell within [-2^16, 2^16) cells of the anchor's own cell at the key's level. With the
+/// anchor at the origin it decodes exactly as decodeHashGridKey(), voxelCenter() and coarserKey();
+/// a bake whose scene reaches beyond that range records the centre of the scene's bounds as the
+/// file's anchor (SPEC §F.8c; CacheView::gridAnchor()).
+class SHARCBAKE_RUNTIME_API HashGridKeyDecoder {
+public:
+    explicit HashGridKeyDecoder(const HashGridParameters& params, const Float3& anchor = Float3{0.0f, 0.0f, 0.0f});
+
+    /// decodeHashGridKey(), with grid coordinates the cell nearest the anchor's.
+    HashGridCell decode(uint64_t key) const;
+    /// voxelCenter() of the decoded cell: (g + 0.5) * voxelSize(level) in float32.
+    Float3 voxelCenter(uint64_t key) const;
+    /// coarserKey() of the decoded cell: exact nesting for power-of-two bases also where the
+    /// coordinates wrapped.
+    uint64_t coarserKey(uint64_t key) const;
+    const Float3& anchor() const { return anchor_; }
+
+private:
+    float logarithm_base_;
+    Float3 anchor_;
+    std::vector<float> voxel_size_;  ///< voxelSize(L) for L = 0..511
+    std::vector<Int3> anchor_cell_;  ///< the anchor's cell at level L = 0..511
+};
 
 // ------------------------------------------------------------------------------------------------
 // Hash and bucket (SPEC §H.7)

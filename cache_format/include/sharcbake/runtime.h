@@ -164,6 +164,10 @@ public:
     /// The factor GPU buffers apply to the radiance unless told otherwise (SPEC §F.8a, section
     /// RSCL; 1 when the file has none). Lookups are not scaled: they return the file's radiance.
     float gpuRadianceScale() const { return gpu_radiance_scale_; }
+    /// The point near which this cache's keys decode (SPEC §F.8c, section ANCR; the origin when
+    /// the file has none): pass it to HashGridKeyDecoder to find where a voxel is. Lookups do not
+    /// need it.
+    const Float3& gridAnchor() const { return grid_anchor_; }
 
     // Voxels (sorted by key) ---------------------------------------------------------------------
     uint64_t voxelCount() const { return voxel_count_; }
@@ -258,6 +262,7 @@ private:
         const CacheSectionInfo* meta = nullptr;
         const CacheSectionInfo* radiance_scale = nullptr;  ///< RSCL (1.1)
         const CacheSectionInfo* voxel_materials = nullptr;  ///< VMAT (1.1)
+        const CacheSectionInfo* grid_anchor = nullptr;      ///< ANCR (1.2)
     };
     CacheFileStatus parse(CacheError* error);
     CacheFileStatus parseHeader(CacheError* error, SectionTable* table);
@@ -269,6 +274,7 @@ private:
     CacheFileStatus parseMetadata(const CacheSectionInfo* meta, CacheError* error);
     CacheFileStatus parseRadianceScale(const CacheSectionInfo* section, CacheError* error);
     CacheFileStatus parseVoxelMaterials(const CacheSectionInfo* section, CacheError* error);
+    CacheFileStatus parseGridAnchor(const CacheSectionInfo* section, CacheError* error);
 
     const uint8_t* data_ = nullptr;
     uint64_t size_ = 0;
@@ -283,6 +289,7 @@ private:
     uint32_t bucket_size_ = kHashGridBucketSize;
     uint32_t bake_capacity_ = 0;
     float gpu_radiance_scale_ = 1.0f;
+    Float3 grid_anchor_{0.0f, 0.0f, 0.0f};
     uint64_t voxel_count_ = 0;
     const uint8_t* keys_ = nullptr;    ///< voxel_count_ little-endian u64
     const uint8_t* voxels_ = nullptr;  ///< voxel_count_ records of 16 bytes
