@@ -392,9 +392,10 @@ private:
         eligible_ = eligible;
     }
 
-    /// Far from the origin the tracer's self-intersection guard (256 float32 steps) grows with the
-    /// coordinates: a 4 m room 1e6 units out moves ray origins 16 units, and its render came out
-    /// 67% dark with no word said (the bake's stability report warns against its voxels).
+    /// Far from the origin the tracer's self-intersection guard grows with the coordinates (it is
+    /// a few float32 roundings of them: rayOffsetFor): a 4 m room 1e8 units out moves ray origins
+    /// 165 units. (With the guard of 256 float steps it replaced, a 4 m room 1e6 units out moved
+    /// them 16 units and its render came out 67% dark with no word said.)
     void warnAboutRayOffset() const {
         const glm::vec3 far = glm::max(glm::abs(scene_.bounds_min), glm::abs(scene_.bounds_max));
         const float far_coordinate = std::max({far.x, far.y, far.z});
@@ -403,23 +404,13 @@ private:
         if (scene_.triangles.empty() || !(largest_side > 0.0f)) return;  // nothing to leak through
         const float offset = largestRayOffset(far_coordinate);
         if (!(offset > kRayOffsetWarningShare * largest_side)) return;
-        const bool near_origin = far_coordinate < kRayOffsetOriginRegion;
-        char guard[96];
-        if (near_origin) {
-            std::snprintf(guard, sizeof guard, "a fixed distance within %.3g of the origin",
-                          double(kRayOffsetOriginRegion));
-        } else {
-            std::snprintf(guard, sizeof guard, "256 float32 steps at %.3g from the origin", double(far_coordinate));
-        }
         std::fprintf(stderr,
                      "warning: the tracer moves ray origins up to %.3g off surfaces (its self-intersection guard: "
-                     "%s), %.3g%% of the scene's largest side (%.3g): light leaks through thin walls and corners "
-                     "darken or brighten; %s\n",
-                     double(offset), guard, 100.0 * double(offset / largest_side), double(largest_side),
-                     near_origin || far_coordinate <= largest_side
-                         ? "the scene is very small in its units: scale it up (a scale on its root node, or the "
-                           "exporter's unit setting)"
-                         : "move the scene towards the origin");
+                     "%g float32 roundings of coordinates %.3g from the origin), %.3g%% of the scene's largest side "
+                     "(%.3g): light leaks through thin walls and corners darken or brighten; move the scene towards "
+                     "the origin\n",
+                     double(offset), double(kRayOffsetRoundings), double(far_coordinate),
+                     100.0 * double(offset / largest_side), double(largest_side));
     }
 
     /// In a scene that keeps its light (a closed room of near-white walls) Russian roulette keeps

@@ -99,20 +99,14 @@ void addWarnings(StabilityReport& r) {
                    double(r.max_grid_coordinate), double(r.finest_level)));
     }
     if (r.finest_voxel_size > 0.0 && r.ray_offset > r.finest_voxel_size) {
-        // Within kRayOffsetOriginRegion of the origin the guard is a fixed distance: a scene lying
-        // wholly there lowers it against its voxels by growing in its units, not by moving.
-        const bool near_origin = r.far_corner_distance < double(kRayOffsetOriginRegion);
+        // The guard is a few float32 roundings of the coordinates (rayOffsetFor): only the
+        // scene's distance from the origin makes it large against the scene's own voxels.
         r.warnings.push_back(
-            format(near_origin ? "the tracer moves ray origins %.3g off surfaces (its self-intersection guard, a fixed "
-                                 "distance within %.3g of the origin, where this whole scene lies: it reaches %.3g)"
-                               : "the tracer moves ray origins %.3g off surfaces at the scene's far corner (256 "
-                                 "float32 steps there, its self-intersection guard)",
-                   r.ray_offset, double(kRayOffsetOriginRegion), r.far_corner_distance) +
-            format(", more than the finest voxel (%.3g): light leaks through walls thinner than that; ",
-                   r.finest_voxel_size) +
-            (near_origin ? "the scene is very small in its units: scale it up (a scale on its root node, or the "
-                           "exporter's unit setting)"
-                         : "move the scene towards the origin"));
+            format("the tracer moves ray origins up to %.3g off surfaces at the scene's far corner "
+                   "(%g float32 roundings of its coordinates there, its self-intersection guard), "
+                   "more than the finest voxel (%.3g): light leaks through walls thinner than "
+                   "that; move the scene towards the origin",
+                   r.ray_offset, double(kRayOffsetRoundings), r.finest_voxel_size));
     }
     if (r.float_spacing > kPositionBiasWarningFactor * double(kHashGridPositionBias)) {
         // Centring a scene puts its far corner at half its largest side; when the corner is no

@@ -263,7 +263,7 @@ bool LightTest::reachesInside(glm::vec3 center) {
         if (!tracer.intersect(Ray{from, d}, hit)) return sky && leavesScene(tracer, from, d);
         const SurfaceHit surface = makeSurfaceHit(scene, hit, d);
         if (maxComponent(emittedRadiance(surface, evaluateMaterial(scene, surface))) > 0.0f) return true;
-        const glm::vec3 at = offsetRayOrigin(surface.position, surface.geometric_normal);
+        const glm::vec3 at = offsetRayOrigin(surface.position, surface.geometric_normal, surface.ray_offset);
         receivers.push_back(at);
         landed.emplace_back(at, surface.geometric_normal);
         return false;
@@ -293,7 +293,7 @@ bool LightTest::reachesInside(glm::vec3 center) {
             const float facing = glm::dot(at - e.position, e.face_normal);
             if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
             const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
-            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side))) return true;
+            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side, e.ray_offset))) return true;
         }
     }
     return false;

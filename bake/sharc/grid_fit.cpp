@@ -101,8 +101,8 @@ PointSides seenSidesOfPoints(const Tracer& tracer, const std::vector<glm::vec3>&
                              const std::vector<SurfacePoint>& points) {
     // Both ways (visibleBothWays): a ray slipping through a shared edge would count a point of a
     // 10 km ground plane as seen from inside a closed room (1/4096 of the plane's area).
-    const auto seenFromAny = [&](glm::vec3 position, glm::vec3 side) {
-        const glm::vec3 origin = offsetRayOrigin(position, side);
+    const auto seenFromAny = [&](const SurfacePoint& p, glm::vec3 side) {
+        const glm::vec3 origin = offsetRayOrigin(p.position, side, p.ray_offset);
         return std::any_of(viewpoints.begin(), viewpoints.end(), [&](const glm::vec3& v) {
             return glm::dot(v - origin, side) > 0.0f && visibleBothWays(tracer, origin, v);
         });
@@ -121,13 +121,12 @@ PointSides seenSidesOfPoints(const Tracer& tracer, const std::vector<glm::vec3>&
             for (size_t i = range.begin(); i != range.end(); ++i) {
                 const SurfacePoint& p = points[i];
                 if (p.double_sided) {
-                    const uint64_t seen = uint64_t(seenFromAny(p.position, p.normal)) +
-                                          uint64_t(seenFromAny(p.position, -p.normal));
+                    const uint64_t seen = uint64_t(seenFromAny(p, p.normal)) + uint64_t(seenFromAny(p, -p.normal));
                     sum.seen += seen;
                     sum.unseen_double_sided += 2 - seen;
                     sum.sides += 2;
                 } else {
-                    sum.seen += seenFromAny(p.position, p.normal) || seenFromAny(p.position, -p.normal);
+                    sum.seen += seenFromAny(p, p.normal) || seenFromAny(p, -p.normal);
                     sum.sides += 1;
                 }
             }

@@ -121,7 +121,7 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
                 const SurfaceHit a = makeSurfaceHit(tracer.scene(), first, primary.direction);
                 // A diffuse bounce, as most runtime paths take; SHaRC queries the hit it reaches.
                 const glm::vec3 direction = Frame(a.geometric_normal).toWorld(sampleCosineHemisphere(sampler.next2D()));
-                const Ray bounce{offsetRayOrigin(a.position, a.geometric_normal), direction};
+                const Ray bounce{offsetRayOrigin(a.position, a.geometric_normal, a.ray_offset), direction};
                 RayHit second;
                 if (!tracer.intersect(bounce, second)) continue;
                 const SurfaceHit b = makeSurfaceHit(tracer.scene(), second, bounce.direction);

@@ -320,7 +320,7 @@ bool UpdateWavefront::depositAndContinue(Path& path, uint32_t bounce, uint32_t d
     path.previous_bsdf_pdf = s.pdf;
     path.previous_position = path.hit.position;
     path.previous_shading_normal = path.hit.shading_normal;
-    path.ray = Ray{offsetRayOrigin(path.hit.position, path.hit.geometric_normal), s.wi};
+    path.ray = Ray{offsetRayOrigin(path.hit.position, path.hit.geometric_normal, path.hit.ray_offset), s.wi};
     return true;
 }
 

@@ -94,7 +94,8 @@ bool leaksBeyondWall(const Tracer& tracer, const HashGridKeyer& keyer, const std
             if (scene.materials[beyond.material].isEmissive()) continue;
             if (keyer.key(toFloat3(beyond.position), toFloat3(beyond.geometric_normal), toFloat3(camera)) != key)
                 continue;
-            const glm::vec3 beyond_origin = offsetRayOrigin(beyond.position, beyond.geometric_normal);
+            const glm::vec3 beyond_origin = offsetRayOrigin(beyond.position, beyond.geometric_normal,
+                                                            beyond.ray_offset);
             const Waypoints beyond_seen_by = waypointsSeeing(tracer, beyond_origin, waypoints);
             if (beyond_seen_by.count == 0 || shareOne(seen_by, beyond_seen_by)) continue;
             // Off the surface and both ways along the wall, in the wall's plane: a partition meets
@@ -157,7 +158,7 @@ WallLeakReport findWallLeaks(const Tracer& tracer, const HashGridParameters& gri
         const SurfacePoint& p = surface[i / 2];
         if (scene.materials[scene.triangle_materials[p.triangle]].isEmissive()) return;
         const glm::vec3 normal = (i & 1) ? -p.normal : p.normal;
-        const glm::vec3 origin = offsetRayOrigin(p.position, normal);
+        const glm::vec3 origin = offsetRayOrigin(p.position, normal, p.ray_offset);
         const Waypoints seen_by = waypointsSeeing(tracer, origin, waypoints);
         if (seen_by.count == 0) return;
         seen[i] = 1;

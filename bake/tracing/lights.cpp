@@ -459,7 +459,8 @@ void LightSampler::learnWhereLightArrives(const Tracer& tracer) {
                 const double value = double(luminance(light.radiance)) * double(cosine) / (double(light.pdf) * drawn);
                 if (!(cosine > 0.0f) || !(value > 0.0) || !std::isfinite(value)) continue;
                 Ray shadow;
-                if (!shadowRayTo(at.position, at.geometric_normal, light.wi, light.distance, shadow)) continue;
+                if (!shadowRayTo(at.position, at.geometric_normal, at.ray_offset, light.wi, light.distance, shadow))
+                    continue;
                 ++rays[cell];
                 if (tracer.occluded(shadow)) continue;
                 sides[s & 1u].push_back({uint32_t(g), value});

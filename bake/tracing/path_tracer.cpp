@@ -17,7 +17,8 @@ ShadowQuery prepareDirectLight(const LightSampler& lights, const SurfaceHit& hit
     if (maxComponent(e.f_cos) <= 0.0f) return query;
 
     Ray shadow;
-    if (!shadowRayTo(hit.position, hit.geometric_normal, light.wi, light.distance, shadow)) return query;
+    if (!shadowRayTo(hit.position, hit.geometric_normal, hit.ray_offset, light.wi, light.distance, shadow))
+        return query;
     const float weight = light.is_delta ? 1.0f : powerHeuristic(light.pdf, e.pdf);
     query.ray = shadow;
     query.unoccluded = e.f_cos * light.radiance * (weight / light.pdf);
@@ -117,7 +118,7 @@ glm::vec3 PathTracer::radiance(const Ray& camera_ray, PixelSampler& sampler,
         previous_bsdf_pdf = s.pdf;
         previous_position = hit.position;
         previous_shading_normal = hit.shading_normal;
-        ray = Ray{offsetRayOrigin(hit.position, hit.geometric_normal), s.wi};
+        ray = Ray{offsetRayOrigin(hit.position, hit.geometric_normal, hit.ray_offset), s.wi};
     }
     const bool finite = isFiniteColor(result);
     counts.non_finite_samples += !finite;

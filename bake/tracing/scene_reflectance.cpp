@@ -101,7 +101,7 @@ SideShare measureSide(const Tracer& tracer, const LightTests* light, const Surfa
     const GltfBsdf bsdf(material, hit);
     const double albedo = double(maxComponent(bsdf.albedo(hit.shading_normal)));
     const Frame frame(hit.geometric_normal);
-    const glm::vec3 origin = offsetRayOrigin(hit.position, hit.geometric_normal);
+    const glm::vec3 origin = offsetRayOrigin(hit.position, hit.geometric_normal, hit.ray_offset);
     for (uint32_t d = 0; d < kDirectionsPerSide; ++d) {
         // Stratified in the first dimension, jittered per point.
         const glm::vec2 u((float(d) + bitsToUnitFloat(hashCombine(stream, 2 * d))) / float(kDirectionsPerSide),

@@ -61,6 +61,7 @@ SurfaceHit interpolate(const Scene& scene, uint32_t triangle, float b1, float b2
     const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
     s.position = b0 * p0 + b1 * p1 + b2 * p2;
     s.face_normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    s.ray_offset = rayOffsetFor(p0, p1, p2, s.face_normal);
     s.geometric_normal = s.face_normal;
     s.shading_normal = s.face_normal;
     if (!scene.normals.empty()) {
@@ -128,6 +129,7 @@ EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, f
     const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
     e.position = barycentric(scene.positions, tri, b0, b1, b2);
     e.face_normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    e.ray_offset = rayOffsetFor(p0, p1, p2, e.face_normal);
     const Material& m = scene.materials[scene.triangle_materials[triangle]];
     e.double_sided = m.double_sided;
     if (!m.isEmissive()) return e;

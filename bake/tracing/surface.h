@@ -17,6 +17,7 @@ struct SurfaceHit {
     glm::vec3 geometric_normal{0.0f, 0.0f, 1.0f};  ///< unit, facing the incoming ray
     glm::vec3 shading_normal{0.0f, 0.0f, 1.0f};    ///< unit, same hemisphere as geometric_normal
     glm::vec3 face_normal{0.0f, 0.0f, 1.0f};       ///< unit, from the winding (not flipped)
+    float ray_offset = 0.0f;                       ///< rayOffsetFor the triangle: how far rays leaving it start off it
     bool front_face = true;  ///< the ray hit the side the winding's normal points to
     glm::vec2 uv0{0.0f};
     glm::vec2 uv1{0.0f};
@@ -47,6 +48,7 @@ SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, flo
 struct EmitterPoint {
     glm::vec3 position{0.0f};
     glm::vec3 face_normal{0.0f, 0.0f, 1.0f};  ///< unit, from the winding
+    float ray_offset = 0.0f;                  ///< rayOffsetFor the triangle
     glm::vec3 emission{0.0f};                 ///< ShadingMaterial::emission there
     bool double_sided = false;
 };

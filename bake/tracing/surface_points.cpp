@@ -78,6 +78,7 @@ SurfacePoint surfacePoint(const Scene& scene, uint32_t t, glm::vec2 b) {
     SurfacePoint point;
     point.position = (1.0f - b.x - b.y) * p0 + b.x * p1 + b.y * p2;
     point.normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    point.ray_offset = rayOffsetFor(p0, p1, p2, point.normal);
     point.triangle = t;
     point.barycentrics = b;
     point.double_sided = scene.materials[scene.triangle_materials[t]].double_sided;

@@ -16,6 +16,7 @@ namespace sharcbake {
 struct SurfacePoint {
     glm::vec3 position;
     glm::vec3 normal;  ///< geometric, unit, the triangle's front side
+    float ray_offset = 0.0f;  ///< rayOffsetFor the triangle
     uint32_t triangle = 0;
     glm::vec2 barycentrics{0.0f};  ///< (b1, b2) of vertices 1 and 2 in the triangle
     bool double_sided = false;  ///< the material is seen from both sides

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -187,27 +188,45 @@ void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const
     }
 }
 
-glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal) {
-    // Near the origin floats are dense, so a fixed tiny offset is used there; elsewhere the
-    // position is nudged by a number of ULPs proportional to the normal component.
-    constexpr float kIntScale = 256.0f;
-    glm::vec3 result;
+float rayOffsetFor(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 normal) {
+    constexpr float kRounding = 0x1p-24f;
+    const glm::vec3 largest = glm::max(glm::max(glm::abs(p0), glm::abs(p1)), glm::abs(p2));
+    const float bound = kRayOffsetRoundings * kRounding * glm::dot(glm::abs(normal), largest);
+    // Written so that a NaN bound (a NaN normal) gives the least offset.
+    return std::max(kRounding * std::max({largest.x, largest.y, largest.z}), bound);
+}
+
+float rayOffsetFor(const Scene& scene, uint32_t triangle) {
+    const glm::uvec3 tri = scene.triangles[triangle];
+    const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
+    return rayOffsetFor(p0, p1, p2, glm::normalize(glm::cross(p1 - p0, p2 - p0)));
+}
+
+namespace {
+
+/// The next float from `x` towards +infinity (`up`) or -infinity; infinities and NaN stay.
+float nextFloat(float x, bool up) {
+    if (!std::isfinite(x)) return x;
+    if (x == 0.0f) return up ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+    return intAsFloat(floatAsInt(x) + ((x > 0.0f) == up ? 1 : -1));
+}
+
+}  // namespace
+
+glm::vec3 offsetRayOrigin(glm::vec3 position, glm::vec3 normal, float offset) {
+    glm::vec3 result = position + offset * normal;
     for (int axis = 0; axis < 3; ++axis) {
-        const int32_t offset = int32_t(kIntScale * normal[axis]);
-        const float p = position[axis];
-        const float stepped = intAsFloat(floatAsInt(p) + (p < 0.0f ? -offset : offset));
-        result[axis] = std::abs(p) < kRayOffsetOriginRegion ? p + kRayOffsetNearOrigin * normal[axis] : stepped;
+        if (normal[axis] != 0.0f) result[axis] = nextFloat(result[axis], normal[axis] > 0.0f);
     }
     return result;
 }
 
-bool shadowRayTo(glm::vec3 position, glm::vec3 normal, glm::vec3 wi, float distance, Ray& out) {
-    out = Ray{offsetRayOrigin(position, normal), wi, distance};
+bool shadowRayTo(glm::vec3 position, glm::vec3 normal, float offset, glm::vec3 wi, float distance, Ray& out) {
+    out = Ray{offsetRayOrigin(position, normal, offset), wi, distance};
     if (!std::isfinite(distance)) return true;
     // Aim from the offset origin at the light point itself. Going `distance` along wi from the
     // offset origin would end up to one offset beyond the light and hit the emitter, wherever the
-    // offset is not small against the distance: near the light, and everywhere in a scene
-    // modelled at millimetre scale (the offset is absolute there).
+    // offset is not small against the distance: near the light, and far from the origin.
     const glm::vec3 to_light = position + wi * distance - out.origin;
     const float length = glm::length(to_light);
     if (!(length > 0.0f)) return false;
@@ -244,7 +263,8 @@ std::vector<float> hitDistancesAround(const Tracer& tracer, glm::vec3 from, uint
 
 float largestRayOffset(float far_coordinate) {
     const glm::vec3 corner(far_coordinate);
-    return glm::length(offsetRayOrigin(corner, glm::vec3(1.0f, 0.0f, 0.0f)) - corner);
+    const glm::vec3 diagonal = glm::normalize(glm::vec3(1.0f));
+    return glm::length(offsetRayOrigin(corner, diagonal, rayOffsetFor(corner, corner, corner, diagonal)) - corner);
 }
 
 }  // namespace sharcbake

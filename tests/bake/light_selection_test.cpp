@@ -157,7 +157,8 @@ std::pair<double, double> directLightEstimate(const Tracer& tracer, const LightS
         if (lights.sample(hit, u_select.x, u, light)) {
             const float cosine = glm::dot(hit.geometric_normal, light.wi);
             Ray shadow;
-            if (cosine > 0.0f && shadowRayTo(hit.position, hit.geometric_normal, light.wi, light.distance, shadow) &&
+            if (cosine > 0.0f &&
+                shadowRayTo(hit.position, hit.geometric_normal, hit.ray_offset, light.wi, light.distance, shadow) &&
                 !tracer.occluded(shadow))
                 value = double(luminance(light.radiance)) * double(cosine) / double(light.pdf);
         }

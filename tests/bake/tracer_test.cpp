@@ -5,10 +5,12 @@
 #include "test_bake_scene.h"
 #include "test_rooms.h"
 #include "tracing/sampling.h"
+#include "tracing/surface.h"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/quaternion.hpp>
 
+#include <limits>
 #include <random>
 
 namespace sharcbake {
@@ -151,6 +153,104 @@ TEST(TracerWatertight, ARayLeavingASurfaceFromAPointOnItDoesNotHitIt) {
             EXPECT_FALSE(tracer.occluded(blocked));
         }
     }
+}
+
+/// `scene` scaled by `half` (a box of side 2 becomes one of side 2 half) and moved to `at`.
+Scene placed(Scene scene, float half, glm::vec3 at) {
+    scene.bounds_min = glm::vec3(std::numeric_limits<float>::max());
+    scene.bounds_max = glm::vec3(-std::numeric_limits<float>::max());
+    for (glm::vec3& p : scene.positions) {
+        p = half * p + at;
+        scene.bounds_min = glm::min(scene.bounds_min, p);
+        scene.bounds_max = glm::max(scene.bounds_max, p);
+    }
+    return scene;
+}
+
+/// Rays leaving hit points on the inside of a box, `offset_share` of rayOffsetFor off them, in
+/// random directions of the hemisphere and grazing it: how many meet the face they left.
+size_t selfHits(const Scene& box, float offset_share, uint32_t seed) {
+    const Tracer tracer(box);
+    const glm::vec3 centre = 0.5f * (box.bounds_min + box.bounds_max);
+    const float half = 0.5f * (box.bounds_max.x - box.bounds_min.x);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    size_t self = 0;
+    for (int i = 0; i < 4000; ++i) {
+        const glm::vec3 jitter(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f);
+        const Ray ray{centre + 0.3f * half * jitter, sampleUniformSphere({unit(rng), unit(rng)})};
+        RayHit hit;
+        if (!tracer.intersect(ray, hit)) continue;
+        const SurfaceHit at = makeSurfaceHit(box, hit, ray.direction);
+        const glm::vec3 origin = offsetRayOrigin(at.position, at.geometric_normal, offset_share * at.ray_offset);
+        for (const bool grazing : {false, true}) {
+            glm::vec3 d = sampleUniformSphere({unit(rng), unit(rng)});
+            if (glm::dot(d, at.geometric_normal) < 0.0f) d = -d;
+            if (grazing) d = glm::normalize(d - at.geometric_normal * (glm::dot(d, at.geometric_normal) - 1e-3f));
+            RayHit next;
+            if (!tracer.intersect(Ray{origin, d}, next)) continue;
+            const glm::vec3 n = makeSurfaceHit(box, next, d).face_normal;
+            self += std::abs(glm::dot(n, at.geometric_normal)) > 0.999f && next.t < 1e-2f * half;
+        }
+    }
+    return self;
+}
+
+// The tracer's self-intersection guard is a few float32 roundings of the triangle's coordinates
+// (rayOffsetFor). Boxes 2 mm to 2 km wide, of 2 or 32 triangles a side, turned, at the origin and
+// up to 10^5 units from it: no ray leaving a hit point meets the face it left, and a sixteenth
+// of the guard (one rounding) lets some do, so the guard is tight to within its factor.
+TEST(RayOffset, NoRayMeetsTheSurfaceItLeavesAndAFractionOfTheGuardIsNotEnough) {
+    const glm::quat turn = glm::normalize(glm::quat(0.9f, 0.2f, -0.3f, 0.15f));
+    size_t too_little = 0;
+    uint32_t seed = 1;
+    for (const int cells : {1, 4}) {
+        for (const float half : {1e-3f, 1.0f, 1e3f}) {
+            for (const float distance : {0.0f, 1.0f, 1e3f, 1e5f}) {
+                if (half < 1.0f && distance > 1e4f) continue;  // smaller than float32 resolves there
+                const Scene box = placed(tessellatedBox(cells, turn), half, distance * glm::vec3(1.0f, -0.37f, 0.61f));
+                EXPECT_EQ(selfHits(box, 1.0f, seed), 0u) << cells << " cells, half " << half << ", at " << distance;
+                too_little += selfHits(box, 1.0f / kRayOffsetRoundings, seed);
+                ++seed;
+            }
+        }
+    }
+    EXPECT_GT(too_little, 0u);
+}
+
+// The guard follows the triangle, not the point and not the origin: a 1 m room 10 km out gets
+// centimetres (the 256 float steps it replaced: 0.25), a point near the origin on a triangle 2 km
+// wide gets what the triangle's far vertices need, and a 1 mm scene gets a thousandth of the
+// same scene's guard in metres.
+TEST(RayOffset, TheGuardFollowsTheTrianglesCoordinates) {
+    const glm::vec3 up(0.0f, 1.0f, 0.0f);
+    const float far = rayOffsetFor(glm::vec3(1e4f, 0.0f, 0.0f), glm::vec3(1e4f + 1.0f, 0.0f, 0.0f),
+                                   glm::vec3(1e4f, 0.0f, 1.0f), up);
+    // Flat at y = 0, nothing rounds off the plane: the least guard, one rounding of 10^4.
+    EXPECT_EQ(far, (1e4f + 1.0f) * 0x1p-24f);
+    const glm::vec3 tilted = glm::normalize(glm::vec3(1.0f, 1.0f, 0.0f));
+    const float room = rayOffsetFor(glm::vec3(1e4f, 1.0f, 0.0f), glm::vec3(1e4f + 1.0f, 0.0f, 0.0f),
+                                    glm::vec3(1e4f, 1.0f, 1.0f), tilted);
+    EXPECT_GT(room, 1e-3f);
+    EXPECT_LT(room, 0.02f);
+    const float wide = rayOffsetFor(glm::vec3(-1e3f, -1e3f, 0.0f), glm::vec3(1e3f, 1e3f, 0.0f),
+                                    glm::vec3(1e3f, 1e3f, 1e3f), tilted);
+    EXPECT_GT(wide, 1e-3f);
+    const float metre = rayOffsetFor(glm::vec3(1.0f, 1.0f, 0.0f), glm::vec3(2.0f, 0.0f, 0.0f),
+                                     glm::vec3(1.0f, 1.0f, 1.0f), tilted);
+    const float millimetre = rayOffsetFor(glm::vec3(1e-3f, 1e-3f, 0.0f), glm::vec3(2e-3f, 0.0f, 0.0f),
+                                          glm::vec3(1e-3f, 1e-3f, 1e-3f), tilted);
+    EXPECT_NEAR(millimetre / metre, 1e-3f, 1e-5f);
+    // A zero-area triangle's NaN normal gives the least guard, not NaN.
+    const glm::vec3 nan_normal(std::numeric_limits<float>::quiet_NaN());
+    EXPECT_EQ(rayOffsetFor(glm::vec3(2.0f), glm::vec3(2.0f), glm::vec3(2.0f), nan_normal), 2.0f * 0x1p-24f);
+    // The origin moves along the normal and at least one float step on each axis it leans along.
+    const glm::vec3 p(1e4f, 0.5f, -3.0f);
+    const glm::vec3 moved = offsetRayOrigin(p, up, 0.0f);
+    EXPECT_EQ(moved.x, p.x);
+    EXPECT_GT(moved.y, p.y);
+    EXPECT_EQ(moved.z, p.z);
+    EXPECT_LT(offsetRayOrigin(p, -tilted, 0.01f).x, p.x);
 }
 
 }  // namespace

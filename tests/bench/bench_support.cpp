@@ -138,7 +138,7 @@ std::vector<RayPair> makeRayPairs(const Tracer& tracer, const LightSampler& ligh
             RayHit ray_hit;
             if (!tracer.intersect(ray, ray_hit)) break;
             const SurfaceHit hit = makeSurfaceHit(tracer.scene(), ray_hit, ray.direction);
-            const glm::vec3 origin = offsetRayOrigin(hit.position, hit.geometric_normal);
+            const glm::vec3 origin = offsetRayOrigin(hit.position, hit.geometric_normal, hit.ray_offset);
             LightSample light;
             if (lights.sample(hit, uniform(rng), {uniform(rng), uniform(rng)}, light) &&
                 glm::dot(light.wi, hit.geometric_normal) > 0.0f) {

@@ -223,12 +223,13 @@ TEST(TablePressure, FailedInsertsAndTheirEnergyAreCountedAndReported) {
     EXPECT_GT(report.deposited_energy, report.failed_insert_energy);
 }
 
-/// The precision warnings' advice depends on the cause. The ray offset: a scene wholly near the
-/// origin gets the tracer's fixed guard (moving it cannot help; scaling it up does), one far from
-/// the origin gets 256 float32 steps (moving it does). The float spacing: a scene whose own size
-/// puts its far corner there must scale down; one far from the origin must move.
+/// The precision warnings' advice depends on the cause. The ray offset: the tracer's guard is a
+/// few float32 roundings of the coordinates, so a scene tiny in its units is as safe as the same
+/// scene in larger units (no warning; with the fixed guard near the origin it had, it was told to
+/// scale up), and only one far from the origin is told to move. The float spacing: a scene whose
+/// own size puts its far corner there must scale down; one far from the origin must move.
 /// Voxel sizes of the grid fit's choices for a 1 mm Cornell box and for larger scenes.
-TEST(ExtremeScaleAdvice, TinySceneIsToldToScaleUpHugeOneToScaleDownAndAFarOneToMove) {
+TEST(ExtremeScaleAdvice, TinySceneIsSafeHugeOneIsToldToScaleDownAndAFarOneToMove) {
     SharcSettings settings;
     settings.grid.capacity = 1024;
     settings.grid.scene_scale = 50.0f;
@@ -236,10 +237,8 @@ TEST(ExtremeScaleAdvice, TinySceneIsToldToScaleUpHugeOneToScaleDownAndAFarOneToM
     const SharcCache tiny_cache(settings, 1.0);
     const StabilityReport tiny =
         makeStabilityReport(tiny_cache, UpdateCounters{}, glm::vec3(0.0f), glm::vec3(1e-3f), {1});
-    EXPECT_GT(tiny.ray_offset, tiny.finest_voxel_size);
-    ASSERT_EQ(tiny.warnings.size(), 1u);
-    EXPECT_NE(tiny.warnings.front().find("scale it up"), std::string::npos) << tiny.warnings.front();
-    EXPECT_EQ(tiny.warnings.front().find("towards the origin"), std::string::npos) << tiny.warnings.front();
+    EXPECT_LT(tiny.ray_offset, 0.01 * tiny.finest_voxel_size);
+    EXPECT_TRUE(tiny.warnings.empty()) << tiny.warnings.front();
 
     settings.grid.level_bias = -2.0f;  // level 1 several centimetres wide
     const SharcCache far_cache(settings, 1.0);

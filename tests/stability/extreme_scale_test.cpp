@@ -4,7 +4,8 @@
 // geometry) gives the unit scene's answer within tolerance, or the bake warns that precision
 // cannot hold. It cannot at 1e5 units (the far corner's float spacing, 0.03, dwarfs SHaRC's 1e-4
 // position bias: walls on voxel boundaries split between voxels; room B measures +8.6 %) nor
-// 1e5 / 1e6 from the origin (ray offsets of 2 and 16 units cross the 0.2 m wall).
+// 1e5 / 1e6 from the origin (float spacing of 0.008 and 0.06 there; at 1e6 ray offsets of up to
+// 1.7 units cross the 0.2 m wall).
 //
 // SHaRC voxels grow with the distance to the camera (level = log_b(distance) + bias), so a scene
 // scaled by k keeps its voxel layout when the level bias moves by -log_b(k). --scene-scale alone
