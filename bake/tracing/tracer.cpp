@@ -196,12 +196,6 @@ float rayOffsetFor(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 normal) {
     return std::max(kRounding * std::max({largest.x, largest.y, largest.z}), bound);
 }
 
-float rayOffsetFor(const Scene& scene, uint32_t triangle) {
-    const glm::uvec3 tri = scene.triangles[triangle];
-    const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
-    return rayOffsetFor(p0, p1, p2, glm::normalize(glm::cross(p1 - p0, p2 - p0)));
-}
-
 namespace {
 
 /// The next float from `x` towards +infinity (`up`) or -infinity; infinities and NaN stay.

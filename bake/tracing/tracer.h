@@ -106,8 +106,6 @@ inline constexpr float kRayOffsetRoundings = 16.0f;
 /// across gets offsets 1000 times smaller than the same scene 1 m across. NaN normals (zero-area
 /// triangles) give the least offset.
 float rayOffsetFor(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 normal);
-/// rayOffsetFor the scene's triangle `triangle`, along its face normal.
-float rayOffsetFor(const Scene& scene, uint32_t triangle);
 
 /// Moves a ray origin `offset` (rayOffsetFor its triangle) off a surface along the unit `normal`
 /// of the side the ray leaves from, and one float step further on each axis the normal leans
