@@ -94,8 +94,8 @@ void addWarnings(StabilityReport& r) {
         r.warnings.push_back(
             format("the scene reaches %.0f grid cells from the grid anchor at level %.0f, beyond "
                    "the key's 17-bit range (+-65536): keys stay unique near the camera, but voxel "
-                   "positions decoded from keys (export-vdb) wrap; lower --scene-scale or raise "
-                   "--level-bias (or use --level-bias auto)",
+                   "positions decoded from keys (export-vdb) wrap; lower --level-bias or --scene-scale "
+                   "(wider voxels), or use --level-bias auto",
                    double(r.max_grid_coordinate), double(r.finest_level)));
     }
     if (r.finest_voxel_size > 0.0 && r.ray_offset > r.finest_voxel_size) {
