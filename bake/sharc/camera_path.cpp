@@ -215,7 +215,9 @@ bool givesLight(const PunctualLight& light) {
 }
 
 /// Whether most of what `center` sees emits: inside a glowing object (a closed emissive model,
-/// double-sided), or inside a sky dome modelled as an emissive mesh. 64 rays.
+/// double-sided), or inside a sky dome modelled as an emissive mesh. 64 rays. "Emits" here is the
+/// radiance at the point the ray meets (textures and sides included: a dark texel does not glow),
+/// as a view from `center` would show it; hasEmissiveMaterial asks of the material alone.
 bool mostlyEmittersAround(const Tracer& tracer, glm::vec3 center) {
     const Scene& scene = tracer.scene();
     uint32_t emitting = 0;
@@ -544,7 +546,10 @@ namespace {
 /// Rays from outside the scene towards its content that must all meet a glowing shell first.
 constexpr uint32_t kShellRays = 16;
 
-bool emits(const Scene& scene, uint32_t triangle) {
+/// Whether the triangle's material emits at all, whatever its texture says at any one point: a
+/// dome whose texture has dark texels is still a shell (unlike mostlyEmittersAround, which asks
+/// what a view shows).
+bool hasEmissiveMaterial(const Scene& scene, uint32_t triangle) {
     return scene.materials[scene.triangle_materials[triangle]].isEmissive();
 }
 
@@ -604,7 +609,7 @@ std::optional<Camera> cameraInsideGlowingShell(const Tracer& tracer, const Camer
     const Scene& scene = tracer.scene();
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (size_t t = 0; t < scene.triangles.size(); ++t) {
-        if (emits(scene, uint32_t(t))) continue;
+        if (hasEmissiveMaterial(scene, uint32_t(t))) continue;
         for (int k = 0; k < 3; ++k) {
             lo = glm::min(lo, scene.positions[scene.triangles[t][k]]);
             hi = glm::max(hi, scene.positions[scene.triangles[t][k]]);
@@ -618,7 +623,8 @@ std::optional<Camera> cameraInsideGlowingShell(const Tracer& tracer, const Camer
     // negative where its first hit does not emit or it meets nothing.
     const auto shellDistance = [&](glm::vec3 d) {
         RayHit hit;
-        if (!tracer.intersect(Ray{content + far * d, -d}, hit) || !emits(scene, hit.triangle)) return -1.0f;
+        if (!tracer.intersect(Ray{content + far * d, -d}, hit) || !hasEmissiveMaterial(scene, hit.triangle))
+            return -1.0f;
         return far - hit.t;
     };
     uint32_t shell_hits = 0;

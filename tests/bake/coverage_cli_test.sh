@@ -62,21 +62,23 @@ sys.exit(0 if ok else 1)
 PY
 done
 
-# The same room in millimetres (x1000) and in kilometres (x0.001): a root node scales it.
-scaled() {  # scaled FACTOR NAME
-    mkdir -p "$work/$2"
-    cp "$scenes/cornell_box/cornell_box.bin" "$work/$2/"
-    python3 - "$cornell" "$1" "$work/$2/cornell_box.gltf" <<'PY'
+# The Cornell box under a new root node with the given TRS properties, in $work/NAME/.
+rooted() {  # rooted NAME NODE_JSON
+    mkdir -p "$work/$1"
+    cp "$scenes/cornell_box/cornell_box.bin" "$work/$1/"
+    python3 - "$cornell" "$2" "$work/$1/cornell_box.gltf" <<'PY'
 import json, sys
 g = json.load(open(sys.argv[1]))
-k = float(sys.argv[2])
-g["nodes"].append({"name": "units", "scale": [k, k, k], "children": g["scenes"][0]["nodes"]})
+root = json.loads(sys.argv[2])
+root["children"] = g["scenes"][0]["nodes"]
+g["nodes"].append(root)
 g["scenes"][0]["nodes"] = [len(g["nodes"]) - 1]
 json.dump(g, open(sys.argv[3], "w"))
 PY
 }
-scaled 1000 mm
-scaled 0.001 km
+# The same room in millimetres (x1000) and in kilometres (x0.001): a root node scales it.
+rooted mm '{"name": "units", "scale": [1000, 1000, 1000]}'
+rooted km '{"name": "units", "scale": [0.001, 0.001, 0.001]}'
 small="--iterations 64 --resolution 640x360"
 for units in unit mm km; do
     scene="$work/$units/cornell_box.gltf"
@@ -106,15 +108,7 @@ PY
 # the grid it has at the origin (before the anchor: voxels 5x wider, 2000 / 58982 units), with no
 # warning but the light leak (the tracer's guard of 256 float steps there, before the bound from
 # the triangle's coordinates, was warned about as larger than the voxels).
-mkdir -p "$work/moved"
-cp "$scenes/cornell_box/cornell_box.bin" "$work/moved/"
-python3 - "$cornell" "$work/moved/cornell_box.gltf" <<'PY'
-import json, sys
-g = json.load(open(sys.argv[1]))
-g["nodes"].append({"name": "site", "translation": [2000.0, 0.0, 0.0], "children": g["scenes"][0]["nodes"]})
-g["scenes"][0]["nodes"] = [len(g["nodes"]) - 1]
-json.dump(g, open(sys.argv[2], "w"))
-PY
+rooted moved '{"name": "site", "translation": [2000.0, 0.0, 0.0]}'
 expect 0 "bake moved 2 km" "$sharcbake" bake "$work/moved/cornell_box.gltf" -o "$work/moved.sharc" $small --stats-json "$work/moved.json"
 grep -v "warning: emissive material 'light'" "$work/err.txt" > "$work/other_warnings.txt"
 [ -s "$work/other_warnings.txt" ] && fail "the moved bake warned: $(cat "$work/other_warnings.txt")"
