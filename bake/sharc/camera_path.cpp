@@ -181,8 +181,15 @@ constexpr uint32_t kEnclosureRays = 64;
 /// behind the space's own walls) still gets some.
 constexpr uint32_t kEmitterPoints = 64;
 
+/// A point on an emissive triangle and how far rays leaving it start off it (rayOffsetFor; light
+/// sampling's EmitterPoint does not carry it, since its rays end on the emitter).
+struct LitPoint {
+    EmitterPoint point;
+    float ray_offset = 0.0f;
+};
+
 /// Points on the scene's emissive triangles (where their emission is not black).
-std::vector<EmitterPoint> sampleEmitterPoints(const Scene& scene) {
+std::vector<LitPoint> sampleEmitterPoints(const Scene& scene) {
     std::vector<uint32_t> emitters;
     std::vector<double> cumulative_area;
     double area = 0.0;
@@ -194,7 +201,7 @@ std::vector<EmitterPoint> sampleEmitterPoints(const Scene& scene) {
         emitters.push_back(t);
         cumulative_area.push_back(area);
     }
-    std::vector<EmitterPoint> points;
+    std::vector<LitPoint> points;
     if (emitters.empty()) return points;
     for (uint32_t i = 0; i < 2 * kEmitterPoints; ++i) {
         const double u = (double(i % kEmitterPoints) + 0.5) / double(kEmitterPoints);
@@ -203,8 +210,12 @@ std::vector<EmitterPoint> sampleEmitterPoints(const Scene& scene) {
                                       cumulative_area.begin())
                              : size_t(u * double(emitters.size()));
         const glm::vec2 b = sampleUniformTriangle({hashToUnitFloat(i, 0, 1), hashToUnitFloat(i, 0, 2)});
-        const EmitterPoint e = makeEmitterPoint(scene, emitters[std::min(k, emitters.size() - 1)], b.x, b.y);
-        if (maxComponent(e.emission) > 0.0f) points.push_back(e);
+        const uint32_t t = emitters[std::min(k, emitters.size() - 1)];
+        const EmitterPoint e = makeEmitterPoint(scene, t, b.x, b.y);
+        if (!(maxComponent(e.emission) > 0.0f)) continue;
+        const glm::uvec3 tri = scene.triangles[t];
+        points.push_back(LitPoint{e, rayOffsetFor(scene.positions[tri.x], scene.positions[tri.y],
+                                                  scene.positions[tri.z], e.face_normal)});
     }
     return points;
 }
@@ -248,7 +259,7 @@ public:
 
 private:
     const Tracer& tracer_;
-    std::optional<std::vector<EmitterPoint>> emitters_;  ///< sampleEmitterPoints, once drawn
+    std::optional<std::vector<LitPoint>> emitters_;  ///< sampleEmitterPoints, once drawn
 };
 
 bool LightTest::reachesInside(glm::vec3 center) {
@@ -290,12 +301,12 @@ bool LightTest::reachesInside(glm::vec3 center) {
         }
     }
     if (!emitters_) emitters_ = sampleEmitterPoints(scene);
-    for (const EmitterPoint& e : *emitters_) {
+    for (const auto& [e, ray_offset] : *emitters_) {
         for (const glm::vec3& at : receivers) {
             const float facing = glm::dot(at - e.position, e.face_normal);
             if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
             const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
-            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side, e.ray_offset))) return true;
+            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side, ray_offset))) return true;
         }
     }
     return false;

@@ -356,7 +356,6 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
     HashGridParameters fitted = grid;
     fitted.level_bias = fit.level_bias;
     fit.finest_voxel_size = voxelSize(kHashGridLevelMin, fitted);
-    fit.grid_anchor = gridAnchorFor(scene, fit.finest_voxel_size);
     fit.estimated_voxels = fit.surface_area / (double(fit.finest_voxel_size) * double(fit.finest_voxel_size));
     if (fit.fitted_to_view_distances)
         fit.estimated_voxels = voxelsAtViewDistances(fit.surface_area, *samples, grid, fit.level_bias);

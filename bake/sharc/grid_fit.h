@@ -68,8 +68,6 @@ struct GridFit {
     /// What limited them: the scene's size against the 17-bit grid range around the anchor, or
     /// float32 precision at its farthest coordinate (voxels at least 20 float steps wide there).
     enum class RangeLimit { kSceneSize, kFloatPrecision } range_limit = RangeLimit::kSceneSize;
-    /// gridAnchorFor(scene, finest_voxel_size): where the cache's keys decode.
-    Float3 grid_anchor{0.0f, 0.0f, 0.0f};
     bool fitted_to_seen = false;         ///< surface_area is the part the viewpoints see (SeenSurface)
     /// Sides of double-sided surfaces no viewpoint sees, left out of surface_area (where it is not
     /// fitted to the seen part alone).

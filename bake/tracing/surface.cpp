@@ -129,7 +129,6 @@ EmitterPoint makeEmitterPoint(const Scene& scene, uint32_t triangle, float b1, f
     const glm::vec3 &p0 = scene.positions[tri.x], &p1 = scene.positions[tri.y], &p2 = scene.positions[tri.z];
     e.position = barycentric(scene.positions, tri, b0, b1, b2);
     e.face_normal = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-    e.ray_offset = rayOffsetFor(p0, p1, p2, e.face_normal);
     const Material& m = scene.materials[scene.triangle_materials[triangle]];
     e.double_sided = m.double_sided;
     if (!m.isEmissive()) return e;

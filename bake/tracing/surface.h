@@ -48,7 +48,6 @@ SurfaceHit makeSurfacePoint(const Scene& scene, uint32_t triangle, float b1, flo
 struct EmitterPoint {
     glm::vec3 position{0.0f};
     glm::vec3 face_normal{0.0f, 0.0f, 1.0f};  ///< unit, from the winding
-    float ray_offset = 0.0f;                  ///< rayOffsetFor the triangle
     glm::vec3 emission{0.0f};                 ///< ShadingMaterial::emission there
     bool double_sided = false;
 };

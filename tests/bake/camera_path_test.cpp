@@ -339,9 +339,10 @@ TEST(GridFit, ARoomFarFromTheOriginKeepsTheVoxelsItHasAtTheOrigin) {
     // an anchor in the room the room's own budget decides, as at the origin.
     const FarRoom near(0.0f), far(1e5f);
     EXPECT_FALSE(near.fit.limited_by_range);
-    EXPECT_EQ(near.fit.grid_anchor.x, 0.0f);
-    EXPECT_EQ(far.fit.grid_anchor.x, 1e5f);  // the centre of the room's bounds
-    EXPECT_EQ(far.fit.grid_anchor.y, 1.5f);
+    EXPECT_EQ(gridAnchorFor(near.scene, near.fit.finest_voxel_size).x, 0.0f);
+    const Float3 anchor = gridAnchorFor(far.scene, far.fit.finest_voxel_size);
+    EXPECT_EQ(anchor.x, 1e5f);  // the centre of the room's bounds
+    EXPECT_EQ(anchor.y, 1.5f);
     EXPECT_LT(far.fit.finest_voxel_size, 0.2f);
     EXPECT_LE(far.fit.finest_voxel_size, 1.5f * near.fit.finest_voxel_size + 0.16f);
     EXPECT_EQ(far.warning, "");

@@ -132,12 +132,14 @@ Scene moved(Scene scene, glm::vec3 offset) {
 // float precision decides.
 TEST(GridFit, FarFromTheOriginFloatPrecisionWins) {
     const GridFit home = fitLevelBias(square(1.0f), HashGridParameters{}, 1u << 16);
-    EXPECT_EQ(home.grid_anchor.x, 0.0f);  // the origin: no ANCR section
-    const GridFit away = fitLevelBias(moved(square(1.0f), glm::vec3(1e3f, 0.0f, 0.0f)), HashGridParameters{}, 1u << 16);
+    EXPECT_EQ(gridAnchorFor(square(1.0f), home.finest_voxel_size).x, 0.0f);  // the origin: no ANCR section
+    const Scene away_scene = moved(square(1.0f), glm::vec3(1e3f, 0.0f, 0.0f));
+    const GridFit away = fitLevelBias(away_scene, HashGridParameters{}, 1u << 16);
     EXPECT_FALSE(away.limited_by_range);
     EXPECT_EQ(away.level_bias, home.level_bias);
     EXPECT_GT(1e3f / away.finest_voxel_size, 65536.0f);  // beyond the 17 bits: decoded near the anchor
-    EXPECT_EQ(away.grid_anchor.x, 1e3f + 0.5f * (square(1.0f).bounds_min.x + square(1.0f).bounds_max.x));
+    EXPECT_EQ(gridAnchorFor(away_scene, away.finest_voxel_size).x,
+              1e3f + 0.5f * (square(1.0f).bounds_min.x + square(1.0f).bounds_max.x));
     const GridFit far = fitLevelBias(moved(square(1.0f), glm::vec3(1e6f, 0.0f, 0.0f)), HashGridParameters{}, 1u << 16);
     EXPECT_TRUE(far.limited_by_range);
     EXPECT_EQ(far.range_limit, GridFit::RangeLimit::kFloatPrecision);
