@@ -349,6 +349,10 @@ struct ImageDecoding {
     };
     uint32_t max_side = 0;  ///< --max-texture-size
     std::map<int, NotDecoded> not_decoded;
+    /// Images stored in a bufferView, set aside while tinygltf parses (it passes their bytes on
+    /// unchecked) and decoded once their view's range is checked.
+    std::vector<int> in_buffer_views;
+    bool buffer_views_checked = false;
 };
 
 /// Where an accessor's elements live in memory, after range checks.
@@ -829,6 +833,12 @@ private:
     static bool loadImageBounded(tinygltf::Image* image, const int index, std::string* err, std::string* warn,
                                  int req_width, int req_height, const unsigned char* bytes, int size, void* user) {
         ImageDecoding& decoding = *static_cast<ImageDecoding*>(user);
+        if (image->bufferView >= 0 && !decoding.buffer_views_checked) {
+            // tinygltf hands over a bufferView's bytes without checking that the view lies inside
+            // its buffer: decodeImagesInBufferViews checks, then comes back here.
+            decoding.in_buffer_views.push_back(index);
+            return true;
+        }
         if (isEmptyImageFile(bytes, size)) {
             decoding.not_decoded.emplace(index, ImageDecoding::NotDecoded{"the file is empty (0 bytes)", false});
             return true;
@@ -915,6 +925,7 @@ private:
         if (ok) {
             recordMissingImages(access);
             warnAboutWindowsPaths(access);
+            decodeImagesInBufferViews();
         }
         const std::set<std::string> superseded = tinygltfLinesAboutMissingImages();
         std::istringstream lines(warnings);
@@ -936,6 +947,35 @@ private:
         const std::string problem = gltfVersionProblem(model_.asset.version, model_.asset.minVersion);
         if (!problem.empty()) fail(problem);
         warnAboutUndecodedImages();
+    }
+
+    /// The images stored in bufferViews, which loadImageBounded set aside, decoded now that the
+    /// views can be checked against their buffers (tinygltf found both indices valid). An image
+    /// whose view reaches past its buffer is left without texels, as a missing file is.
+    void decodeImagesInBufferViews() {
+        image_decoding_.buffer_views_checked = true;
+        for (const int index : image_decoding_.in_buffer_views) {
+            tinygltf::Image& image = model_.images[size_t(index)];
+            const tinygltf::BufferView& view = model_.bufferViews[size_t(image.bufferView)];
+            std::optional<std::string> problem = viewOutsideBuffer(image.bufferView);
+            if (!problem && view.byteLength > size_t(std::numeric_limits<int>::max()))
+                problem = "bufferView " + std::to_string(image.bufferView) + " holds more than 2 GiB";
+            if (problem) {
+                image_decoding_.not_decoded.emplace(index, ImageDecoding::NotDecoded{*problem, false});
+                continue;
+            }
+            const tinygltf::Buffer& buffer = model_.buffers[size_t(view.buffer)];
+            std::string err;
+            std::string warnings;
+            if (!loadImageBounded(&image, index, &err, &warnings, 0, 0, buffer.data.data() + view.byteOffset,
+                                  int(view.byteLength), &image_decoding_)) {
+                while (!err.empty() && err.back() == '\n') err.pop_back();
+                fail(err);  // over --max-texture-size
+            }
+            std::istringstream lines(warnings);
+            for (std::string line; std::getline(lines, line);)
+                if (!line.empty()) warn("tinygltf: " + line);
+        }
     }
 
     /// Images whose file is not beside the scene: tinygltf leaves them without texels, and says
@@ -1121,6 +1161,19 @@ private:
         return model_.accessors[index];
     }
 
+    /// What is wrong when bufferView `viewIndex` (whose buffer exists) reaches past its buffer's
+    /// bytes; nothing when it fits.
+    std::optional<std::string> viewOutsideBuffer(int viewIndex) const {
+        const tinygltf::BufferView& view = model_.bufferViews[size_t(viewIndex)];
+        const tinygltf::Buffer& buffer = model_.buffers[size_t(view.buffer)];
+        if (view.byteOffset <= buffer.data.size() && view.byteLength <= buffer.data.size() - view.byteOffset)
+            return std::nullopt;
+        return "bufferView " + std::to_string(viewIndex) + " spans bytes [" + std::to_string(view.byteOffset) + ", " +
+               std::to_string(view.byteOffset + view.byteLength) + ") but buffer " + std::to_string(view.buffer) +
+               (buffer.uri.empty() || buffer.uri.rfind("data:", 0) == 0 ? "" : " (" + quoted(buffer.uri) + ")") +
+               " holds only " + std::to_string(buffer.data.size()) + " bytes (missing or short buffer)";
+    }
+
     /// Validates that `count` elements of `components` x `componentType`, starting at
     /// `byteOffset` within buffer view `viewIndex`, lie inside the view and the view inside
     /// its buffer, and returns where they are.
@@ -1133,12 +1186,7 @@ private:
             fail(what + ": bufferView " + std::to_string(viewIndex) + " names missing buffer " +
                  std::to_string(view.buffer));
         const tinygltf::Buffer& buffer = model_.buffers[view.buffer];
-        if (view.byteOffset > buffer.data.size() || view.byteLength > buffer.data.size() - view.byteOffset)
-            fail(what + ": bufferView " + std::to_string(viewIndex) + " spans bytes [" +
-                 std::to_string(view.byteOffset) + ", " + std::to_string(view.byteOffset + view.byteLength) +
-                 ") but buffer " + std::to_string(view.buffer) +
-                 (buffer.uri.empty() || buffer.uri.rfind("data:", 0) == 0 ? "" : " (" + quoted(buffer.uri) + ")") +
-                 " holds only " + std::to_string(buffer.data.size()) + " bytes (missing or short buffer)");
+        if (const std::optional<std::string> problem = viewOutsideBuffer(viewIndex)) fail(what + ": " + *problem);
 
         const int componentSize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(componentType));
         if (componentSize <= 0 || componentType == TINYGLTF_COMPONENT_TYPE_DOUBLE)

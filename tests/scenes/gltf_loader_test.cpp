@@ -1526,6 +1526,43 @@ TEST(GltfLoaderImages, UndecodableImageWarnsAndDropsOnlyItsTextures) {
     EXPECT_EQ(warningsWith(scene, {"texture 4: image 5 could not be decoded; texture ignored"}), 1u);
 }
 
+// tinygltf hands an image's bufferView bytes to the decoder without checking that the view lies
+// inside its buffer (a fuzzed file read past the buffer's end this way). Such an image is left
+// undecoded with a warning, as a missing file is; a view that fits still decodes, in a GLB too.
+TEST(GltfLoaderImages, ImageWhoseBufferViewRunsPastItsBufferIsNotRead) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);
+    const std::vector<uint8_t> png = tinyPng();
+    const int good_view = b.addView(png.data(), png.size());
+    const int short_view = b.addView(png.data(), png.size());
+    b.doc["bufferViews"][size_t(short_view)]["byteLength"] = png.size() + 64;            // 64 bytes past the buffer
+    b.doc["images"].push_back({{"bufferView", good_view}, {"mimeType", "image/png"}});   // image 1
+    b.doc["images"].push_back({{"bufferView", short_view}, {"mimeType", "image/png"}});  // image 2
+    b.doc["textures"].push_back({{"source", 1}});                                        // texture 1
+    b.doc["textures"].push_back({{"source", 2}});                                        // texture 2
+    prim["material"] = b.addMaterial(
+        {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 1}}}, {"metallicRoughnessTexture", {{"index", 2}}}}},
+         {"emissiveTexture", {{"index", 0}}}});
+    b.setScene({b.addMeshNode(prim)});
+    for (const std::string& path : {b.writeEmbedded(dir, "views.gltf"), b.writeGlb(dir, "views.glb")}) {
+        const Scene scene = loadGltf(path);
+        const Material& m = scene.materials.at(0);
+        ASSERT_TRUE(m.base_color_texture.isSet()) << path;
+        EXPECT_EQ(scene.textures.at(size_t(m.base_color_texture.texture)).width, 2);
+        EXPECT_TRUE(m.emissive_texture.isSet());
+        EXPECT_FALSE(m.metallic_roughness_texture.isSet());
+        const std::string end = std::to_string(b.doc["bufferViews"][size_t(short_view)]["byteOffset"].get<size_t>() +
+                                               png.size() + 64);
+        EXPECT_EQ(warningsWith(
+                      scene, {"image 2 cannot be decoded: bufferView " + std::to_string(short_view) + " spans bytes [",
+                              ", " + end + ") but buffer 0 holds only " + std::to_string(b.bin.size()) + " bytes",
+                              "textures using it are ignored"}),
+                  1u)
+            << ::testing::PrintToString(scene.stats.warnings);
+    }
+}
+
 // A 0-byte image file is an image that cannot be decoded, like any other: tinygltf refuses an empty
 // file before the loader's decoder sees it (here as a missing image, with its own "File read
 // error" lines; in some versions as a failed parse), so the loader catches it at the read.
