@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file equirect_exr.cpp
 /// @brief Reads an equirectangular environment map from OpenEXR into a linear float Texture.
+#include "sharcbake/image.h"
 #include "sharcbake/scene_loader.h"
 
 #include <ImfChannelList.h>
@@ -11,7 +12,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -103,11 +106,16 @@ void checkAndClampTexels(const std::string& path, std::vector<glm::vec4>& texels
 Texture loadEquirectExr(const std::string& path) {
     if (!std::filesystem::exists(path)) failExr(path, "file not found");
     try {
+        checkExrHeaders(path);  // damage OpenEXR would first allocate for, and maps of over 2^27 texels
         Imf::InputFile file(path.c_str());
         const Imath::Box2i window = file.header().dataWindow();
-        const int width = window.max.x - window.min.x + 1;
-        const int height = window.max.y - window.min.y + 1;
-        if (width <= 0 || height <= 0) failExr(path, "empty data window");
+        const int64_t width64 = int64_t(window.max.x) - window.min.x + 1;
+        const int64_t height64 = int64_t(window.max.y) - window.min.y + 1;
+        if (width64 <= 0 || height64 <= 0) failExr(path, "empty data window");
+        if (width64 > std::numeric_limits<int>::max() || height64 > std::numeric_limits<int>::max())
+            failExr(path, "the data window is wider or taller than 2^31 texels");
+        const int width = int(width64);
+        const int height = int(height64);
 
         const ChannelLayout layout = chooseChannels(path, file.header().channels());
         Texture tex;
@@ -125,6 +133,8 @@ Texture loadEquirectExr(const std::string& path) {
         return tex;
     } catch (const SceneLoadError&) {
         throw;
+    } catch (const ImageError& e) {
+        throw SceneLoadError(e.what());
     } catch (const std::exception& e) {
         // Iex exceptions derive from std::exception; their text says what OpenEXR disliked.
         failExr(path, std::string("cannot read OpenEXR file: ") + e.what());

@@ -13,6 +13,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <vector>
 
@@ -112,6 +116,38 @@ TEST(EquirectExr, NoColourChannelsIsAnError) {
     } catch (const SceneLoadError& e) {
         EXPECT_NE(std::string(e.what()).find("Z"), std::string::npos) << e.what();
     }
+}
+
+// A damaged map is refused before OpenEXR allocates what its header claims (an attribute larger
+// than the file; a window of 2^28 texels in a file of one): as a SceneLoadError naming the file.
+TEST(EquirectExr, HeaderThatClaimsMoreThanTheFileIsRefusedAtOnce) {
+    TempDir dir;
+    const std::string path = dir.file("sky.exr");
+    writeExr(path, 1, 1, {"R", "G", "B"}, {1.0f, 1.0f, 1.0f});
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<char> whole((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    auto patched = [&](const std::string& attribute, size_t offset, int32_t value) {
+        std::vector<char> bytes = whole;
+        const auto at = std::search(bytes.begin(), bytes.end(), attribute.begin(), attribute.end());
+        EXPECT_NE(at, bytes.end()) << attribute;
+        std::memcpy(&*at + attribute.size() + offset, &value, 4);  // little-endian, as on this machine
+        const std::string damaged = dir.file("damaged.exr");
+        test::writeFile(damaged, bytes.data(), bytes.size());
+        try {
+            loadEquirectExr(damaged);
+        } catch (const SceneLoadError& e) {
+            EXPECT_NE(std::string(e.what()).find(damaged), std::string::npos) << e.what();
+            return std::string(e.what());
+        }
+        ADD_FAILURE() << "expected SceneLoadError";
+        return std::string();
+    };
+    const std::string compression("compression\0compression\0", 24);
+    EXPECT_NE(patched(compression, 0, 1 << 30).find("header attribute 'compression' (compression) claims 1073741824"),
+              std::string::npos);
+    const std::string window("dataWindow\0box2i\0", 17);
+    const std::string refused = patched(window, 4 + 12, 1 << 28);  // max.y
+    EXPECT_NE(refused.find("1x268435457 is more pixels than sharcbake reads"), std::string::npos) << refused;
 }
 
 TEST(EquirectExr, NonFiniteRadianceIsAnError) {

@@ -2,6 +2,7 @@
 // Linear images from other renderers: OpenEXR (readExr), PFM (pbrt, Mitsuba, many research
 // renderers) and Radiance HDR (RGBE), told apart by their first bytes; display images (PNG, JPEG,
 // ...) are refused with the reason.
+#include "image_internal.h"
 #include "sharcbake/image.h"
 
 #include <algorithm>
@@ -17,11 +18,6 @@
 
 namespace sharcbake {
 namespace {
-
-/// Larger images are refused before their pixels are allocated: a corrupt header must not ask
-/// for gigabytes (a run-length HDR of a few bytes can claim any size). 2^26 pixels is an 8k x 8k
-/// render, 768 MiB as float RGB.
-constexpr uint64_t kMaxPixels = uint64_t(1) << 26;
 
 [[noreturn]] void fail(const std::string& path, const char* format, const std::string& reason) {
     throw ImageError("cannot read " + std::string(format) + " '" + path + "': " + reason);
@@ -106,8 +102,8 @@ Image readPfm(const std::string& path, const std::vector<unsigned char>& bytes) 
     }
     if (cursor.at >= bytes.size() || !std::isspace(bytes[cursor.at])) fail(path, "PFM", "the header ends early");
     ++cursor.at;  // exactly one white-space character before the pixels
-    if (uint64_t(width) * uint64_t(height) > kMaxPixels) {
-        fail(path, "PFM", std::to_string(width) + "x" + std::to_string(height) + " is larger than sharcbake reads");
+    if (uint64_t(width) * uint64_t(height) > detail::kMaxImagePixels) {
+        fail(path, "PFM", std::to_string(width) + "x" + std::to_string(height) + " is " + detail::kTooManyPixels);
     }
     const uint64_t expected = uint64_t(width) * uint64_t(height) * uint64_t(channels) * 4u;
     const uint64_t present = bytes.size() - cursor.at;
@@ -190,9 +186,9 @@ Image readRadianceHdr(const std::string& path, const std::vector<unsigned char>&
         !parseDimension(width_text, width)) {
         fail(path, "Radiance HDR", "the resolution line '" + line + "' is not \"-Y height +X width\"");
     }
-    if (uint64_t(width) * uint64_t(height) > kMaxPixels) {
+    if (uint64_t(width) * uint64_t(height) > detail::kMaxImagePixels) {
         fail(path, "Radiance HDR",
-             std::to_string(width) + "x" + std::to_string(height) + " is larger than sharcbake reads");
+             std::to_string(width) + "x" + std::to_string(height) + " is " + detail::kTooManyPixels);
     }
     const bool bottom_up = y_axis == "+Y";
     size_t at = cursor.at;

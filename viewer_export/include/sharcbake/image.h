@@ -37,6 +37,12 @@ using ImageMetadata = std::map<std::string, std::string>;
 /// Writes a 32-bit float RGB OpenEXR file. Throws ImageError.
 void writeExr(const std::string& path, const Image& image, const ImageMetadata& metadata = {});
 
+/// Refuses (ImageError) an OpenEXR file that OpenEXR 3.1 would make allocate what it claims
+/// before finding the damage: a header attribute larger than the rest of the file, or a data
+/// window of more than 2^27 pixels (16384 x 8192). readExr calls it; call it before reading an
+/// EXR with OpenEXR elsewhere.
+void checkExrHeaders(const std::string& path);
+
 /// Reads the R, G, B channels of an OpenEXR file (any pixel type) as float. A missing channel
 /// reads as 0; a single Y (luminance) channel is replicated. A layered file without plain R, G, B
 /// (Blender's multilayer EXR) is read from its only layer with R, G and B, or its single
