@@ -2068,18 +2068,25 @@ private:
 
     /// Drops triangles with a repeated index or (numerically) zero area: they cannot be hit
     /// and would give NaN geometric normals. Zero area is judged relative to the edge lengths
-    /// so that tiny but well-shaped triangles survive.
+    /// so that tiny but well-shaped triangles survive, down to where float can no longer hold
+    /// their normal: a cross product of the float edges below 2^-60 (edges of about 1e-9 units)
+    /// underflows in the squared lengths that normalise it, and a fuzzed file's instances scaled
+    /// by 1e-43 gave NaN normals, rays and a failed Embree assertion.
     void dropDegenerateTriangles(PrimitiveGeometry& geo) {
         const auto flat = [](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
             const glm::dvec3 e1 = b - a, e2 = c - a;
             const double crossLength = glm::length(glm::cross(e1, e2));  // NaN-safe: !(x > y)
             return !(crossLength > 1e-7 * glm::length(e1) * glm::length(e2));
         };
+        const auto tooSmallForFloat = [](const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+            const glm::vec3 n = glm::cross(b - a, c - a);
+            return !(glm::dot(n, n) >= 0x1p-120f);  // float's smallest normal number is 2^-126
+        };
         const std::vector<glm::dvec3>& exact = geo.exact_positions;
         auto degenerate = [&](const glm::uvec3& t) {
             if (t.x == t.y || t.y == t.z || t.x == t.z) return true;
-            if (!flat(glm::dvec3(geo.positions[t.x]), glm::dvec3(geo.positions[t.y]), glm::dvec3(geo.positions[t.z])))
-                return false;
+            const glm::vec3 &a = geo.positions[t.x], &b = geo.positions[t.y], &c = geo.positions[t.z];
+            if (!flat(glm::dvec3(a), glm::dvec3(b), glm::dvec3(c))) return tooSmallForFloat(a, b, c);
             // Flat in float but not in double: rounding the world positions to float collapsed it
             // (a model far from the origin, where float steps are as large as its detail).
             if (exact.size() == geo.positions.size() && !flat(exact[t.x], exact[t.y], exact[t.z])) {

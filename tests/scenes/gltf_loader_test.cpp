@@ -226,6 +226,40 @@ TEST(GltfLoader, DegenerateTrianglesDroppedAndCounted) {
     expectVec3Near(scene.bounds_max, {1, 1, 0});
 }
 
+// Tiny, well-shaped triangles are kept down to where float can hold their normal: a fuzzed file
+// scaled instances by 1e-43, whose float normals came out NaN and failed an Embree assertion.
+TEST(GltfLoader, TrianglesTooSmallForAFloatNormalAreDropped) {
+    TempDir dir;
+    GltfBuilder b;
+    const int pos = b.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int mesh = b.addMesh(json::array({{{"attributes", {{"POSITION", pos}}}}}));
+    std::vector<int> roots;
+    for (const double scale : {1e-6, 1e-9, 1e-20, 1e-43}) {  // edges of these lengths, at (10, 10, 10)
+        roots.push_back(b.addNode({{"mesh", mesh}, {"translation", {10, 10, 10}}, {"scale", {scale, scale, scale}}}));
+    }
+    b.setScene(roots);
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "tiny.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 1u);  // the 1e-6 triangle; at 10 the 1e-9 one is flat in float
+    EXPECT_EQ(scene.stats.degenerate_triangles_dropped, 3u);
+    const glm::uvec3 t = scene.triangles[0];
+    const glm::vec3 n = glm::normalize(
+        glm::cross(scene.positions[t.y] - scene.positions[t.x], scene.positions[t.z] - scene.positions[t.x]));
+    EXPECT_NEAR(n.z, 1.0f, 1e-6f);
+
+    // At the origin float holds a 1e-8 triangle's corners and its normal; not a 1e-20 one's normal.
+    GltfBuilder near;
+    const int near_pos = near.addPositions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int near_mesh = near.addMesh(json::array({{{"attributes", {{"POSITION", near_pos}}}}}));
+    std::vector<int> near_roots;
+    for (const double scale : {1e-8, 1e-20}) {
+        near_roots.push_back(near.addNode({{"mesh", near_mesh}, {"scale", {scale, scale, scale}}}));
+    }
+    near.setScene(near_roots);
+    const Scene origin = loadGltf(near.writeEmbedded(dir, "tiny_origin.gltf"));
+    EXPECT_EQ(origin.triangles.size(), 1u);
+    EXPECT_EQ(origin.stats.degenerate_triangles_dropped, 1u);
+}
+
 TEST(GltfLoader, AnEmitterOnlyOnTrianglesWithoutAreaIsNamed) {
     // A lamp modelled as a collapsed plane: its triangles are dropped, and "no emissive surfaces"
     // alone read as if its emission had not been loaded.
