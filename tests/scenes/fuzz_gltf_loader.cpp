@@ -6,7 +6,8 @@
 ///
 /// Each input is written to a file of a private folder and loaded from there: as "scene.glb"
 /// when it starts with the GLB magic, else as "scene.gltf". A file that loads must make a scene
-/// whose every triangle and vertex is finite; a file that does not must fail with
+/// whose vertices, shading normals and triangles' geometric normals are finite and whose
+/// indices and material indices are in range; a file that does not load must fail with
 /// SceneLoadError (never another exception, a crash or a sanitizer report).
 #include "sharcbake/scene_loader.h"
 
@@ -64,9 +65,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             const glm::uvec3& t = scene.triangles[i];
             const size_t vertices = scene.positions.size();
             check(t.x < vertices && t.y < vertices && t.z < vertices, "an index is out of range");
+            // What the tracer does with each triangle it hits: no NaN geometric normal.
+            const glm::vec3 normal = glm::normalize(
+                glm::cross(scene.positions[t.y] - scene.positions[t.x], scene.positions[t.z] - scene.positions[t.x]));
+            check(finite(normal), "a triangle's geometric normal is not finite");
             check(scene.triangle_materials[i] < scene.materials.size(), "a material index is out of range");
         }
         check(scene.normals.empty() || scene.normals.size() == scene.positions.size(), "normals of another count");
+        for (const glm::vec3& n : scene.normals) check(finite(n), "a shading normal is not finite");
         check(scene.texcoords0.empty() || scene.texcoords0.size() == scene.positions.size(),
               "texcoords of another count");
         check(scene.tangents.empty() || scene.tangents.size() == scene.positions.size(), "tangents of another count");
