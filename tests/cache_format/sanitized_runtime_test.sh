@@ -37,29 +37,16 @@ if [ -z "$CXX_FUZZ" ]; then
     exit 77
 fi
 rm -rf "$WORK/fuzz" && mkdir -p "$WORK/fuzz"
+. "$SRC/tests/fuzz_support.sh"
 # fuzz NAME SEED_GLOB SECONDS: build tests/cache_format/fuzz_NAME.cpp, run its seeds, then fuzz.
 fuzz() {
     local name=$1 seeds=$2 seconds=$3 dir="$WORK/fuzz/$1"
-    mkdir -p "$dir/corpus" "$dir/artifacts"
+    mkdir -p "$dir/corpus"
     "$CXX_FUZZ" -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
         -ffp-contract=off -I"$SRC/cache_format/include" \
         "$SRC/tests/cache_format/fuzz_$name.cpp" "$SRC"/cache_format/src/*.cpp -o "$dir/fuzz_$name"
     cp $seeds "$dir/corpus/"
-    # Every seed first (as a plain regression run), then the bounded fuzzing run.
-    "$dir/fuzz_$name" -runs=0 "$dir/corpus"
-    set +e
-    "$dir/fuzz_$name" "$dir/corpus" -max_total_time="$seconds" -timeout=10 \
-        -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 -artifact_prefix="$dir/artifacts/" \
-        >"$dir/fuzz.log" 2>&1
-    local rc=$?
-    set -e
-    grep -E '^(stat::|Done )' "$dir/fuzz.log" || true
-    if [ $rc -ne 0 ] || ls "$dir/artifacts/" | grep -q .; then
-        tail -n 60 "$dir/fuzz.log"
-        echo "FAIL: fuzz_$name found a problem (exit $rc); reproducer(s) in $dir/artifacts/:"
-        ls -l "$dir/artifacts/"
-        exit 1
-    fi
+    run_fuzzer "$dir/fuzz_$name" "$dir" "$seconds" -rss_limit_mb=2048 -max_len=8192
 }
 fuzz cache_file "$SRC/tests/cache_format/golden/*.sharc" "$FUZZ_SECONDS"
 fuzz checkpoint_file "$SRC/tests/cache_format/golden/*.ckpt" "$CHECKPOINT_FUZZ_SECONDS"

@@ -36,28 +36,11 @@ EXR_LIBS=(-lOpenEXR-3_1 -lOpenEXRCore-3_1 -lIex-3_1 -lIlmThread-3_1 -lImath-3_1 
 IMAGE_SOURCES=("$SRC/viewer_export/src/image_exr.cpp" "$SRC/viewer_export/src/image_file.cpp"
                "$SRC"/cache_format/src/*.cpp)
 
-# run NAME DICT_ARGS...: the harness over its seeds once, then fuzzing for $SECONDS_FOR_RUN.
-run() {
-    local name=$1 dir="$WORK/$1"
-    shift
-    "$dir/$name" -runs=0 "$dir/corpus" >"$dir/seeds.log" 2>&1 || { tail -n 40 "$dir/seeds.log"; exit 1; }
-    set +e
-    "$dir/$name" "$dir/corpus" "$@" -max_total_time="$SECONDS_FOR_RUN" -timeout=10 -rss_limit_mb=3000 \
-        -print_final_stats=1 -artifact_prefix="$dir/artifacts/" >"$dir/fuzz.log" 2>&1
-    local rc=$?
-    set -e
-    grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb|Done )' "$dir/fuzz.log" || true
-    if [ $rc -ne 0 ] || ls "$dir/artifacts/" | grep -q .; then
-        tail -n 60 "$dir/fuzz.log"
-        echo "FAIL: $name found a problem (exit $rc); reproducer(s) in $dir/artifacts/:"
-        ls -l "$dir/artifacts/"
-        exit 1
-    fi
-}
+. "$SRC/tests/fuzz_support.sh"
 
 echo "== fuzz_gltf_loader"
 dir="$WORK/fuzz_gltf_loader"
-rm -rf "$dir" && mkdir -p "$dir/artifacts" "$dir/packed"
+rm -rf "$dir" && mkdir -p "$dir/packed"
 "$CXX_FUZZ" "${FLAGS[@]}" "$SRC/tests/scenes/fuzz_gltf_loader.cpp" "$SRC"/scenes/src/*.cpp "${IMAGE_SOURCES[@]}" \
     -o "$dir/fuzz_gltf_loader" -ltinygltf -lstb -lmeshoptimizer -lwebp -ldraco "${EXR_LIBS[@]}"
 scenes=()
@@ -70,11 +53,12 @@ if command -v gltfpack >/dev/null; then
     done
 fi
 python3 "$SRC/tests/scenes/fuzz_seeds.py" "$dir/corpus" "${scenes[@]}"
-SECONDS_FOR_RUN=$GLTF_FUZZ_SECONDS run fuzz_gltf_loader -dict="$SRC/tests/scenes/fuzz_gltf.dict" -max_len=65536
+run_fuzzer "$dir/fuzz_gltf_loader" "$dir" "$GLTF_FUZZ_SECONDS" -dict="$SRC/tests/scenes/fuzz_gltf.dict" \
+    -max_len=65536 -rss_limit_mb=3000
 
 echo "== fuzz_linear_image"
 dir="$WORK/fuzz_linear_image"
-rm -rf "$dir" && mkdir -p "$dir/artifacts" "$dir/corpus"
+rm -rf "$dir" && mkdir -p "$dir/corpus"
 "$CXX_FUZZ" "${FLAGS[@]}" "$SRC/tests/viewer_export/fuzz_linear_image.cpp" "$SRC/viewer_export/src/image_linear.cpp" \
     "${IMAGE_SOURCES[@]}" -o "$dir/fuzz_linear_image" "${EXR_LIBS[@]}"
 "$SHARCBAKE" render "$SRC/scenes/cornell_box/cornell_box.gltf" --resolution 8x8 --spp 1 \
@@ -109,5 +93,5 @@ with open(os.path.join(out, "rle.hdr"), "wb") as f:
         for c in range(4):
             f.write(bytes([128 + 10, pixels[0][c], width - 10]) + bytes(p[c] for p in pixels[10:]))
 PY
-SECONDS_FOR_RUN=$IMAGE_FUZZ_SECONDS run fuzz_linear_image -max_len=8192
+run_fuzzer "$dir/fuzz_linear_image" "$dir" "$IMAGE_FUZZ_SECONDS" -max_len=8192 -rss_limit_mb=3000
 echo "OK: the glTF loader fuzzed ${GLTF_FUZZ_SECONDS}s and the image reader ${IMAGE_FUZZ_SECONDS}s without a finding"
