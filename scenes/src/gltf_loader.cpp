@@ -925,7 +925,7 @@ private:
         if (ok) {
             recordMissingImages(access);
             warnAboutWindowsPaths(access);
-            decodeImagesInBufferViews();
+            decodeImagesInBufferViews(warnings);
         }
         const std::set<std::string> superseded = tinygltfLinesAboutMissingImages();
         std::istringstream lines(warnings);
@@ -951,8 +951,9 @@ private:
 
     /// The images stored in bufferViews, which loadImageBounded set aside, decoded now that the
     /// views can be checked against their buffers (tinygltf found both indices valid). An image
-    /// whose view reaches past its buffer is left without texels, as a missing file is.
-    void decodeImagesInBufferViews() {
+    /// whose view reaches past its buffer is left without texels, as a missing file is. The
+    /// decoder's warnings join tinygltf's `warnings`, reported with them.
+    void decodeImagesInBufferViews(std::string& warnings) {
         image_decoding_.buffer_views_checked = true;
         for (const int index : image_decoding_.in_buffer_views) {
             tinygltf::Image& image = model_.images[size_t(index)];
@@ -966,15 +967,11 @@ private:
             }
             const tinygltf::Buffer& buffer = model_.buffers[size_t(view.buffer)];
             std::string err;
-            std::string warnings;
             if (!loadImageBounded(&image, index, &err, &warnings, 0, 0, buffer.data.data() + view.byteOffset,
                                   int(view.byteLength), &image_decoding_)) {
                 while (!err.empty() && err.back() == '\n') err.pop_back();
                 fail(err);  // over --max-texture-size
             }
-            std::istringstream lines(warnings);
-            for (std::string line; std::getline(lines, line);)
-                if (!line.empty()) warn("tinygltf: " + line);
         }
     }
 

@@ -242,7 +242,6 @@ Image readExr(const std::string& path, ImageMetadata* metadata) {
             height64 > std::numeric_limits<int>::max()) {
             throwReadError(path, "invalid data window");
         }
-
         const int width = int(width64);
         const int height = int(height64);
 
