@@ -8,11 +8,14 @@
 #include <cstdio>
 #include <cstring>
 #include <new>
+#include <optional>
 #include <string>
 #include <vector>
 
 struct sharcbake_cache {
     sharcbake::CacheView view;
+    /// Turns the view's keys into places (sharcbake_cache_voxel_location), near its anchor.
+    std::optional<sharcbake::HashGridKeyDecoder> decoder;
 };
 
 namespace {
@@ -40,6 +43,13 @@ sharcbake_status finishOpen(CacheFileStatus status, CacheView& view, const Cache
     if (status != CacheFileStatus::kOk) return sharcbake_status(status);
     sharcbake_cache* cache = new (std::nothrow) sharcbake_cache;
     if (!cache) {
+        copyMessage("out of memory", message, message_size);
+        return SHARCBAKE_IO_ERROR;
+    }
+    try {
+        cache->decoder.emplace(view.gridParameters(), view.gridAnchor());
+    } catch (const std::bad_alloc&) {
+        delete cache;
         copyMessage("out of memory", message, message_size);
         return SHARCBAKE_IO_ERROR;
     }
@@ -197,6 +207,31 @@ int sharcbake_cache_voxel(const sharcbake_cache* cache, uint64_t index, uint64_t
     if (radiance) std::memcpy(radiance, v.radiance, sizeof v.radiance);
     if (sample_weight) *sample_weight = v.sample_weight;
     return 1;
+}
+
+int sharcbake_cache_voxel_location(const sharcbake_cache* cache, uint64_t index, float center[3], float* size,
+                                   uint32_t* level, uint32_t* normal_bits) {
+    if (!cache || index >= cache->view.voxelCount()) return 0;
+    const uint64_t key = cache->view.voxel(index).key;
+    const sharcbake::HashGridCell cell = cache->decoder->decode(key);
+    if (center) {
+        const Float3 c = cache->decoder->voxelCenter(key);
+        center[0] = c.x;
+        center[1] = c.y;
+        center[2] = c.z;
+    }
+    if (size) *size = sharcbake::voxelSize(cell.level, cache->view.gridParameters());
+    if (level) *level = cell.level;
+    if (normal_bits) *normal_bits = cell.normal_bits;
+    return 1;
+}
+
+void sharcbake_cache_grid_anchor(const sharcbake_cache* cache, float anchor[3]) {
+    if (!cache || !anchor) return;
+    const Float3& a = cache->view.gridAnchor();
+    anchor[0] = a.x;
+    anchor[1] = a.y;
+    anchor[2] = a.z;
 }
 
 int sharcbake_cache_metadata(const sharcbake_cache* cache, const char* key, char* value, size_t value_size) {

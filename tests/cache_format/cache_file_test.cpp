@@ -1029,6 +1029,83 @@ TEST(Runtime, MemoryAndMappedViewsAgree) {
     std::remove(path.c_str());
 }
 
+TEST(RuntimeC, VoxelLocationsAreTheBakedPlacesAlsoFarFromTheOrigin) {
+    // A 2 m patch 10 km out in 4 cm voxels (level 1 at scene scale 50): grid coordinates near
+    // 250 000 that the keys keep only modulo 2^17. Located near the file's anchor, each voxel's
+    // centre is where its key was made, and looking up that centre finds the voxel.
+    CacheData data = goldenData();
+    const Float3 site{10000.3f, 2.0f, -3.0f};
+    data.grid_anchor = site;
+    data.voxels.clear();
+    std::map<uint64_t, CacheVoxel> by_key;
+    std::map<uint64_t, Float3> baked_at;
+    for (int i = 0; i < 64; ++i) {
+        const Float3 p{site.x + 0.031f * float(i % 8), site.y - 0.029f * float(i / 8), site.z + 0.017f * float(i)};
+        const Float3 n = normalFromBits(uint32_t(i) % 8);
+        CacheVoxel v;
+        v.key = hashGridKeyAtLevel(p, n, 1 + uint32_t(i) % 4, data.gridParameters());
+        v.radiance[0] = float(i);
+        v.radiance[1] = 1.0f;
+        v.radiance[2] = 2.0f;
+        v.sample_weight = 4.0f;
+        by_key.emplace(v.key, v);
+        baked_at.emplace(v.key, p);
+    }
+    for (const auto& kv : by_key) data.voxels.push_back(kv.second);
+    const std::vector<uint8_t> bytes = encode(data);
+    sharcbake_cache* cache = nullptr;
+    ASSERT_EQ(sharcbake_cache_open_memory(bytes.data(), bytes.size(), &cache, nullptr, nullptr, 0), SHARCBAKE_OK);
+    float anchor[3] = {0, 0, 0};
+    sharcbake_cache_grid_anchor(cache, anchor);
+    EXPECT_EQ(anchor[0], site.x);
+    EXPECT_EQ(anchor[2], site.z);
+    for (uint64_t i = 0; i < data.voxels.size(); ++i) {
+        const CacheVoxel& v = data.voxels[i];
+        float c[3], size = 0.0f;
+        uint32_t level = 0, normal_bits = 9;
+        ASSERT_EQ(sharcbake_cache_voxel_location(cache, i, c, &size, &level, &normal_bits), 1);
+        EXPECT_EQ(level, decodeHashGridKey(v.key).level);
+        EXPECT_EQ(normal_bits, decodeHashGridKey(v.key).normal_bits);
+        EXPECT_EQ(size, voxelSize(level, data.gridParameters()));
+        const Float3 p = baked_at.at(v.key);
+        // The centre is within half a voxel (plus the SDK's 1e-4 bias and a float step) per axis.
+        const float reach = 0.5f * size + 2e-3f;
+        EXPECT_LE(std::fabs(c[0] - p.x), reach) << i;
+        EXPECT_LE(std::fabs(c[1] - p.y), reach) << i;
+        EXPECT_LE(std::fabs(c[2] - p.z), reach) << i;
+        // Where the cell index passed 2^16 (levels 1 and 2 here), voxelCenter() without the anchor
+        // puts the voxel thousands of metres away: the test can tell.
+        if (site.x / size >= 65536.0f) {
+            EXPECT_GT(std::fabs(voxelCenter(v.key, data.gridParameters()).x - p.x), 1000.0f) << i;
+        }
+        const Float3 camera = cameraForLevel(Float3{c[0], c[1], c[2]}, level);
+        const Float3 n = normalFromBits(normal_bits);
+        const float cam[3] = {camera.x, camera.y, camera.z}, nrm[3] = {n.x, n.y, n.z};
+        float r[3] = {-1, -1, -1};
+        ASSERT_EQ(sharcbake_cache_lookup(cache, c, nrm, cam, r), 1) << i;
+        EXPECT_EQ(r[0], v.radiance[0]);
+    }
+    EXPECT_EQ(sharcbake_cache_voxel_location(cache, data.voxels.size(), nullptr, nullptr, nullptr, nullptr), 0);
+    sharcbake_cache_close(cache);
+
+    // Without an anchor the locations are voxelCenter()'s, and the anchor reads as the origin.
+    const CacheData golden = goldenData();
+    const std::vector<uint8_t> golden_bytes = encode(golden);
+    ASSERT_EQ(sharcbake_cache_open_memory(golden_bytes.data(), golden_bytes.size(), &cache, nullptr, nullptr, 0),
+              SHARCBAKE_OK);
+    sharcbake_cache_grid_anchor(cache, anchor);
+    EXPECT_EQ(anchor[0], 0.0f);
+    for (uint64_t i = 0; i < golden.voxels.size(); ++i) {
+        float c[3];
+        ASSERT_EQ(sharcbake_cache_voxel_location(cache, i, c, nullptr, nullptr, nullptr), 1);
+        const Float3 expected = voxelCenter(golden.voxels[i].key, golden.gridParameters());
+        EXPECT_EQ(c[0], expected.x);
+        EXPECT_EQ(c[1], expected.y);
+        EXPECT_EQ(c[2], expected.z);
+    }
+    sharcbake_cache_close(cache);
+}
+
 TEST(RuntimeC, OpenLookupGpuBuffers) {
     const CacheData data = goldenData();
     const std::vector<uint8_t> bytes = encode(data);

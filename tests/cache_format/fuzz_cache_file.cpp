@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file fuzz_cache_file.cpp
 /// @brief libFuzzer harness for the runtime's .sharc reader (CacheView::openMemory and every
-/// accessor on a cache that validates). Built and run by sanitized_runtime_test.sh:
+/// accessor on a cache that validates, and the C API's that wrap them). Built and run by sanitized_runtime_test.sh:
 ///   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -Icache_format/include \
 ///       tests/cache_format/fuzz_cache_file.cpp cache_format/src/*.cpp -o fuzz_cache_file
 ///   ./fuzz_cache_file CORPUS_COPY -max_total_time=60      (seed: tests/cache_format/golden/)
@@ -11,6 +11,7 @@
 /// the accessors instead of dying at V-rule "checksum mismatch".
 #include "sharcbake/format.h"
 #include "sharcbake/runtime.h"
+#include "sharcbake/runtime_c.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -141,6 +142,21 @@ void exercise(const uint8_t* data, size_t size) {
             if (list.keys.size() != n || list.values.size() != n) __builtin_trap();
         }
     }
+
+    // The C API over the same bytes: it opens what CacheView opened, and places every voxel
+    // (keys decoded near the file's anchor).
+    sharcbake_cache* cache = nullptr;
+    if (sharcbake_cache_open_memory(data, size, &cache, nullptr, nullptr, 0) != SHARCBAKE_OK) __builtin_trap();
+    float anchor[3], center[3], voxel_size = 0.0f;
+    uint32_t voxel_level = 0, normal_bits = 0;
+    sharcbake_cache_grid_anchor(cache, anchor);
+    for (uint64_t i = 0; i < limit; ++i) {
+        if (!sharcbake_cache_voxel_location(cache, i, center, &voxel_size, &voxel_level, &normal_bits))
+            __builtin_trap();
+        g_sink = center[0] + center[1] + center[2] + voxel_size + anchor[0];
+    }
+    if (sharcbake_cache_voxel_location(cache, n, center, nullptr, nullptr, nullptr)) __builtin_trap();
+    sharcbake_cache_close(cache);
 }
 
 }  // namespace

@@ -70,6 +70,17 @@ SHARCBAKE_RUNTIME_API void sharcbake_cache_grid(const sharcbake_cache* cache, fl
 /** Voxel `index` (sorted by key); returns 0 if out of range. Output pointers may be NULL. */
 SHARCBAKE_RUNTIME_API int sharcbake_cache_voxel(const sharcbake_cache* cache, uint64_t index, uint64_t* key,
                                                 float radiance[3], float* sample_weight);
+/** Where voxel `index` (sorted by key) lies, for tools that draw or export voxels: its centre in
+ *  world units (float32, as the SDK's HashGridGetPositionFromKey: the +1e-4 position bias is not
+ *  removed), its edge length, its level and its 3 normal sign bits (bit 0 set: x < 0, bit 1: y,
+ *  bit 2: z). A key keeps 17 bits of each grid coordinate; they are decoded to the cell nearest
+ *  the file's grid anchor, so voxels of a scene far from the origin are placed where they were
+ *  baked. Lookups never need this. Returns 0 if out of range; output pointers may be NULL. */
+SHARCBAKE_RUNTIME_API int sharcbake_cache_voxel_location(const sharcbake_cache* cache, uint64_t index, float center[3],
+                                                         float* size, uint32_t* level, uint32_t* normal_bits);
+/** The grid anchor keys are decoded near (SPEC F.8c): the centre of the scene's bounds for a
+ *  scene that reaches beyond 2^16 voxels of the origin, else the origin. */
+SHARCBAKE_RUNTIME_API void sharcbake_cache_grid_anchor(const sharcbake_cache* cache, float anchor[3]);
 /** Metadata value of `key` (NUL-terminated copy into `value`); returns 1 if present. */
 SHARCBAKE_RUNTIME_API int sharcbake_cache_metadata(const sharcbake_cache* cache, const char* key, char* value,
                                                    size_t value_size);

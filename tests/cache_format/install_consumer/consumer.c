@@ -13,7 +13,9 @@ int main(int argc, char** argv) {
     const float origin[3] = {0.0f, 0.0f, 0.0f};
     const char* path = argc > 1 ? argv[1] : NULL;
     float exact[3] = {0.0f, 0.0f, 0.0f}, scratch[3];
-    int exact_hit, camera_hit, right;
+    float center[3] = {0.0f, 0.0f, 0.0f}, anchor[3] = {1.0f, 1.0f, 1.0f}, size = 0.0f;
+    uint32_t voxel_level = 0;
+    int exact_hit, camera_hit, located, right;
     if (!path) return 2;
     /* readme-begin */
     sharcbake_cache* cache = NULL;
@@ -37,7 +39,12 @@ int main(int argc, char** argv) {
            (unsigned long long)sharcbake_cache_voxel_count(cache), sharcbake_cache_level_count(cache),
            exact_hit ? "hit" : "miss", exact[0], exact[1], exact[2], camera_hit ? "hit" : "miss", level, radiance[0],
            radiance[1], radiance[2]);
-    right = sharcbake_cache_voxel_count(cache) == 40 && sharcbake_cache_level_count(cache) == 4 && exact_hit &&
+    /* Voxel 0's place (the golden file has no anchor: the origin) is its key's cell. */
+    located = sharcbake_cache_voxel_location(cache, 0, center, &size, &voxel_level, NULL);
+    sharcbake_cache_grid_anchor(cache, anchor);
+    printf("C: voxel 0 at (%g %g %g), %g wide, level %u\n", center[0], center[1], center[2], size, voxel_level);
+    right = located && voxel_level >= 1 && size == (float)(1 << voxel_level) / 50.0f && anchor[0] == 0.0f &&
+            sharcbake_cache_voxel_count(cache) == 40 && sharcbake_cache_level_count(cache) == 4 && exact_hit &&
             exact[0] == 0.0f && exact[1] == 0.5f && exact[2] == 1.0f && !camera_hit && level == 1 &&
             radiance[0] == 0.0f && radiance[1] == 0.5f && radiance[2] == 1.0f;
     sharcbake_cache_close(cache);
