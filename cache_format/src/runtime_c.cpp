@@ -226,6 +226,11 @@ int sharcbake_cache_voxel_location(const sharcbake_cache* cache, uint64_t index,
     return 1;
 }
 
+sharcbake_status sharcbake_cache_build_lookup_index(sharcbake_cache* cache) {
+    if (!cache) return SHARCBAKE_INVALID_ARGUMENT;
+    return sharcbake_status(cache->view.buildLookupIndex());
+}
+
 void sharcbake_cache_grid_anchor(const sharcbake_cache* cache, float anchor[3]) {
     if (!cache || !anchor) return;
     const Float3& a = cache->view.gridAnchor();

@@ -1126,6 +1126,32 @@ TEST(RuntimeC, OpenLookupGpuBuffers) {
     float r[3];
     ASSERT_EQ(sharcbake_cache_lookup(cache, pos, nrm, camera, r), 1);
     EXPECT_EQ(r[0], v.radiance[0]);
+    // Indexed, every voxel answers as before, singly and in a batch; a miss stays a miss.
+    std::vector<float> positions, normals;
+    for (const CacheVoxel& voxel : data.voxels) {
+        const HashGridCell voxel_cell = decodeHashGridKey(voxel.key);
+        const Float3 centre = voxelCenter(voxel.key, params);
+        const Float3 voxel_normal = normalFromBits(voxel_cell.normal_bits);
+        positions.insert(positions.end(), {centre.x, centre.y, centre.z});
+        normals.insert(normals.end(), {voxel_normal.x, voxel_normal.y, voxel_normal.z});
+    }
+    const float far_camera[3] = {1000.0f, 0.0f, 0.0f};
+    std::vector<float> unindexed(positions.size()), indexed(positions.size());
+    std::vector<uint8_t> unindexed_hits(data.voxels.size()), indexed_hits(data.voxels.size());
+    const size_t hits = sharcbake_cache_lookup_batch(cache, data.voxels.size(), positions.data(), normals.data(),
+                                                     far_camera, unindexed.data(), unindexed_hits.data(), 1);
+    EXPECT_EQ(hits, data.voxels.size());  // the nearest level answers each
+    ASSERT_EQ(sharcbake_cache_build_lookup_index(cache), SHARCBAKE_OK);
+    EXPECT_EQ(sharcbake_cache_build_lookup_index(nullptr), SHARCBAKE_INVALID_ARGUMENT);
+    r[0] = -1.0f;
+    ASSERT_EQ(sharcbake_cache_lookup(cache, pos, nrm, camera, r), 1);
+    EXPECT_EQ(r[0], v.radiance[0]);
+    EXPECT_EQ(sharcbake_cache_lookup(cache, pos, nrm, far_camera, r), 0);
+    EXPECT_EQ(sharcbake_cache_lookup_batch(cache, data.voxels.size(), positions.data(), normals.data(), far_camera,
+                                           indexed.data(), indexed_hits.data(), 1),
+              hits);
+    EXPECT_EQ(indexed, unindexed);
+    EXPECT_EQ(indexed_hits, unindexed_hits);
     char value[32];
     EXPECT_EQ(sharcbake_cache_metadata(cache, "seed", value, sizeof value), 1);
     EXPECT_STREQ(value, "7");

@@ -6,6 +6,7 @@
 
 #include "sharcbake/cache_file.h"
 #include "sharcbake/runtime.h"
+#include "sharcbake/runtime_c.h"
 
 #include <algorithm>
 #include <chrono>
@@ -105,5 +106,22 @@ int main(int argc, char** argv) {
                 "\"lookups\": %zu, \"hits\": %zu, \"binary_search_lookups_per_second\": %.4g, \"checksum\": %g}\n",
                 live, bytes.size(), double(bytes.size()) / double(live), open_seconds,
                 double(bytes.size()) / open_seconds / 1e9, queries, hits, double(queries) / lookup_seconds, sum);
-    return hits == queries && hits_indexed == queries ? 0 : 1;
+    // The same random batch through the C API, before and after sharcbake_cache_build_lookup_index.
+    sharcbake_cache* c_cache = nullptr;
+    if (sharcbake_cache_open_memory(bytes.data(), bytes.size(), &c_cache, nullptr, nullptr, 0) != SHARCBAKE_OK)
+        return 1;
+    const float origin[3] = {0.0f, 0.0f, 0.0f};
+    auto c_batch = [&](size_t& c_hits) {
+        const auto t = clock::now();
+        c_hits = sharcbake_cache_lookup_batch(c_cache, queries, &qp[0].x, &qn[0].x, origin, &out[0].x, nullptr, 0);
+        return std::chrono::duration<double>(clock::now() - t).count();
+    };
+    size_t c_hits = 0, c_hits_indexed = 0;
+    const double c_seconds = c_batch(c_hits);
+    if (sharcbake_cache_build_lookup_index(c_cache) != SHARCBAKE_OK) return 1;
+    const double c_indexed_seconds = c_batch(c_hits_indexed);
+    sharcbake_cache_close(c_cache);
+    std::printf("{\"c_batch_binary_search_lookups_per_second\": %.4g, \"c_batch_indexed_lookups_per_second\": %.4g}\n",
+                double(queries) / c_seconds, double(queries) / c_indexed_seconds);
+    return hits == queries && hits_indexed == queries && c_hits == queries && c_hits_indexed == queries ? 0 : 1;
 }
