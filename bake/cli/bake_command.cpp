@@ -1733,7 +1733,8 @@ void registerBakeCommand(CLI::App& app) {
         });
     pathOption(cmd->add_option("--camera-path", o->camera_path,
                                "Camera path file (overrides --camera-source): one waypoint per line, "
-                               "\"px py pz tx ty tz [fov_degrees]\", '#' comments"));
+                               "\"px py pz tx ty tz [fov_degrees]\" (eye, the point it looks at, the vertical field "
+                               "of view, 90 if not given; spaces or commas between), '#' comments"));
     cmd->add_option("--explore-points", o->explore_points,
                     "Free-space points the exploring camera visits, and as many views from around a scene looked "
                     "at from outside (see --camera-source)")

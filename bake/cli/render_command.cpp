@@ -9,6 +9,7 @@
 #include "sharcbake/cache_file.h"
 #include "sharcbake/hash_grid.h"
 #include "sharcbake/image.h"
+#include "sharcbake/scene.h"
 #include "support/json.h"
 #include "support/progress.h"
 #include "support/stopwatch.h"
@@ -183,6 +184,9 @@ Camera chooseCamera(const Scene& scene, const RenderOptions& o, const Tracer* tr
                 throw CommandError(kExitUsage, "--look-at: expected \"ex,ey,ez,tx,ty,tz\", got \"" +
                                                    o.look_at + "\"");
             }
+        }
+        if (!withinWorldLimit(glm::dvec3(v[0], v[1], v[2])) || !withinWorldLimit(glm::dvec3(v[3], v[4], v[5]))) {
+            throw CommandError(kExitUsage, "--look-at: a coordinate beyond +-1e9, where nothing of a scene may lie");
         }
         Camera c;
         c.name = "--look-at";

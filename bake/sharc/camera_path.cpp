@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/camera_path.h"
+#include "sharcbake/scene.h"
 #include "support/box.h"
 
 #include "tracing/sampling.h"
@@ -140,6 +141,7 @@ std::vector<CameraPose> readCameraPathFile(const std::string& path) {
     for (int line_number = 1; std::getline(in, line); ++line_number) {
         const size_t first = line.find_first_not_of(" \t\r");
         if (first == std::string::npos || line[first] == '#') continue;
+        std::replace(line.begin(), line.end(), ',', ' ');
         std::istringstream fields(line);
         float v[6];
         for (float& value : v) {
@@ -159,6 +161,10 @@ std::vector<CameraPose> readCameraPathFile(const std::string& path) {
         std::string rest;
         if (fields >> rest) {
             throw CameraPathError(path + ":" + std::to_string(line_number) + ": unexpected \"" + rest + "\"");
+        }
+        if (!withinWorldLimit(glm::dvec3(v[0], v[1], v[2])) || !withinWorldLimit(glm::dvec3(v[3], v[4], v[5]))) {
+            throw CameraPathError(path + ":" + std::to_string(line_number) +
+                                  ": a coordinate beyond +-1e9, where nothing of a scene may lie");
         }
         CameraPose pose;
         if (!makeLookAtPose({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, fov_degrees * kPi / 180.0f, pose)) {

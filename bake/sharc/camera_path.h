@@ -45,7 +45,8 @@ public:
 };
 
 /// Reads a camera path file: one waypoint per line, "px py pz tx ty tz [fov_degrees]" (eye
-/// position and the point it looks at, world units; the field of view defaults to 90).
+/// position and the point it looks at, world units; the field of view defaults to 90), the
+/// values separated by spaces or commas (as --look-at writes them, or a spreadsheet's CSV).
 /// Blank lines and lines starting with '#' are ignored. Throws CameraPathError naming the file
 /// and line on malformed input or when the file has no waypoint.
 std::vector<CameraPose> readCameraPathFile(const std::string& path);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/view_region.h"
+#include "sharcbake/scene.h"
 
 #include <algorithm>
 #include <cmath>
@@ -82,6 +83,13 @@ ViewRegion parseViewRegion(const std::string& text) {
     std::vector<float> values;
     if (text.rfind("box:", 0) == 0) {
         if (!parseFloats(text.substr(4), 6, values)) throw std::invalid_argument("box: needs six numbers; " + forms);
+        // Views are traced from inside the box; beyond the world's limit Embree refuses the rays.
+        if (!withinWorldLimit(glm::dvec3(values[0], values[1], values[2])) ||
+            !withinWorldLimit(glm::dvec3(values[3], values[4], values[5]))) {
+            throw std::invalid_argument(
+                "box: a coordinate beyond +-1e9, where nothing of a scene may lie (for "
+                "cameras anywhere, give free)");
+        }
         region.kind = ViewRegion::Kind::Box;
         region.box_min = glm::min(glm::vec3(values[0], values[1], values[2]), glm::vec3(values[3], values[4], values[5]));
         region.box_max = glm::max(glm::vec3(values[0], values[1], values[2]), glm::vec3(values[3], values[4], values[5]));

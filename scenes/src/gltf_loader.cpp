@@ -731,9 +731,6 @@ private:
     /// parser recurses per level, so 20,000 nested arrays would overflow its stack.
     static constexpr int kMaxJsonNesting = 256;
 
-    /// The largest |coordinate| of a vertex in world space (metres) the loader accepts.
-    static constexpr double kMaxWorldCoordinate = 1e9;
-
     /// Refuses absurd nesting in the glTF's JSON (the file, or a GLB's JSON chunk) before parsing.
     void checkJsonNesting(const std::string& bytes) {
         size_t begin = 0, end = bytes.size();
@@ -1948,9 +1945,7 @@ private:
     void transformToWorld(PrimitiveGeometry& geo, const glm::dmat4& world, const std::string& label) {
         for (size_t i = 0; i < geo.positions.size(); ++i) {
             const glm::dvec3 p = glm::dvec3(world * glm::dvec4(glm::dvec3(geo.positions[i]), 1.0));
-            // Embree's BVH needs bounded coordinates (it asserts near 1e19); 1e9 m is far beyond any scene.
-            if (!(std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
-                  std::abs(p.z) <= kMaxWorldCoordinate)) {
+            if (!withinWorldLimit(p)) {
                 char at[96];
                 std::snprintf(at, sizeof at, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
                 fail(label + ": vertex " + std::to_string(i) + " lies at " + at +
@@ -2017,8 +2012,7 @@ private:
             unweighted += !(total[i] > 0.0);
             const glm::dmat4 m = total[i] > 0.0 ? blend[i] / total[i] : world;
             const glm::dvec3 p = glm::dvec3(m * glm::dvec4(glm::dvec3(geo.positions[i]), 1.0));
-            if (!(std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
-                  std::abs(p.z) <= kMaxWorldCoordinate))
+            if (!withinWorldLimit(p))
                 fail(label + ": vertex " + std::to_string(i) + " lies beyond +-1e9 m after skinning");
             geo.positions[i] = glm::vec3(p);
             geo.exact_positions.push_back(p);
@@ -3007,12 +3001,13 @@ private:
             return std::nullopt;
         }
         const glm::dvec3 position(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
-        if (!fitsFloat(position.x) || !fitsFloat(position.y) || !fitsFloat(position.z)) {
+        if (light.type != LightType::Directional && !withinWorldLimit(position)) {
             warn(label + ": the node's transform puts the light at " + vec3Text(position) +
-                 ", beyond float32's range (at most " + numberText(kLargestFloat) + "); skipped");
+                 ", beyond +-1e9 m, where nothing of a scene may lie (a sun is a directional light); skipped");
             return std::nullopt;
         }
-        light.position = glm::vec3(position);
+        // A directional light's position means nothing (and may be anywhere).
+        light.position = withinWorldLimit(position) ? glm::vec3(position) : glm::vec3(0.0f);
         // The node's -Z in world space, through the whole world matrix (a mirror turns it). Where a
         // scale of zero collapses that axis (how some tools hide an object), the rotations along
         // the node's path orient the light, as glTF says; a singular matrix has none.
@@ -3073,7 +3068,13 @@ private:
             warn(label + ": " + printable(src.type) + " cameras are not supported; skipped");
             return;
         }
-        cam.position = glm::vec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        const glm::dvec3 position(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+        if (!withinWorldLimit(position)) {
+            warn(label + ": the node's transform puts the camera at " + vec3Text(position) +
+                 ", beyond +-1e9 m, where nothing of a scene may lie; skipped");
+            return;
+        }
+        cam.position = glm::vec3(position);
         const glm::dmat3 linear(world);
         const glm::dvec3 forward = glm::normalize(linear * glm::dvec3(0.0, 0.0, -1.0));
         // Scale or shear in the node matrix can tilt +Y off perpendicular; project it back.
@@ -3089,10 +3090,12 @@ private:
             // glTF: xmag and ymag are half the view's width and height; zero is invalid, and a
             // negative value (a mirrored view) is read by its size.
             const double xmag = std::abs(src.orthographic.xmag), ymag = std::abs(src.orthographic.ymag);
-            if (!(xmag > 0.0 && ymag > 0.0 && std::isfinite(xmag) && std::isfinite(ymag) && float(xmag) > 0.0f &&
-                  float(ymag) > 0.0f)) {
-                warn(label + ": orthographic xmag " + std::to_string(src.orthographic.xmag) + " and ymag " +
-                     std::to_string(src.orthographic.ymag) + " must be finite and non-zero; skipped");
+            // Rays start across the view rectangle: one wider than the world's limit starts them
+            // where Embree refuses rays.
+            if (!(xmag > 0.0 && ymag > 0.0 && xmag <= kMaxWorldCoordinate && ymag <= kMaxWorldCoordinate &&
+                  float(xmag) > 0.0f && float(ymag) > 0.0f)) {
+                warn(label + ": orthographic xmag " + numberText(src.orthographic.xmag) + " and ymag " +
+                     numberText(src.orthographic.ymag) + " must be non-zero and at most 1e9; skipped");
                 return;
             }
             cam.orthographic_half_height = float(ymag);

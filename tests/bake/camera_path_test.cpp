@@ -10,6 +10,7 @@
 #include "sharc/hit_rate.h"
 #include "sharcbake/scene_loader.h"
 #include "tracing/lights.h"
+#include "tracing/sampling.h"
 #include "tracing/tracer.h"
 
 #include "gltf_builder.h"
@@ -1163,6 +1164,50 @@ TEST(AutomaticCamera, LooksFromInsideAClosedDoubleSidedRoomLitFromWithin) {
     Scene unlit = loadRoom(dir, {true, false, false, true});
     unlit.sky.uniform = glm::vec3(1.0f);
     expectFramedFromOutside(unlit, "a closed double-sided room without lights inside");
+}
+
+/// readCameraPathFile's message for a file of `text`, or "" when it reads.
+std::string cameraPathError(const test::TempDir& dir, const std::string& text) {
+    const std::string path = dir.file("path.txt");
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+    try {
+        readCameraPathFile(path);
+        return "";
+    } catch (const CameraPathError& e) {
+        return e.what();
+    }
+}
+
+TEST(CameraPathFile, WaypointsReadWithSpacesOrCommasAndRefusedNamingTheLine) {
+    test::TempDir dir;
+    const std::string path = dir.file("path.txt");
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    // Comments, blank lines, CRLF line ends, spaces and tabs, and --look-at's commas.
+    std::fputs("# eye then target\r\n\n0 1 5   0 1 0\r\n\t2,1,5,0,1,0,45\n3, 1, 5, 0, 1, 0\n", f);
+    std::fclose(f);
+    const std::vector<CameraPose> poses = readCameraPathFile(path);
+    ASSERT_EQ(poses.size(), 3u);
+    EXPECT_EQ(poses[0].position, glm::vec3(0, 1, 5));
+    EXPECT_NEAR(poses[0].forward.z, -1.0f, 1e-6f);
+    EXPECT_NEAR(poses[0].yfov, 90.0f * kPi / 180.0f, 1e-6f);
+    EXPECT_EQ(poses[1].position, glm::vec3(2, 1, 5));
+    EXPECT_NEAR(poses[1].yfov, 45.0f * kPi / 180.0f, 1e-6f);
+    EXPECT_EQ(poses[2].position, glm::vec3(3, 1, 5));
+
+    const auto refused = [&](const std::string& text, const std::string& message) {
+        const std::string error = cameraPathError(dir, text);
+        EXPECT_NE(error.find(message), std::string::npos) << "file \"" << text << "\": " << error;
+    };
+    refused("0 1 5 0 1 0\n1 2 3\n", "path.txt:2: expected \"px py pz tx ty tz [fov_degrees]\"");
+    refused("0 1 5 0 1 nan\n", "path.txt:1: expected");
+    refused("0 1 5 0 1 0 180\n", "path.txt:1: field of view must be in (0, 180) degrees");
+    refused("0 1 5 0 1 0 60 extra\n", "path.txt:1: unexpected \"extra\"");
+    refused("# only\n0 1 5 0 1 5\n", "path.txt:2: the eye and the target are the same point");
+    // Eye and target 2e19 apart were called "the same point" (their distance overflowed float).
+    refused("1e19 0 0 -1e19 0 0\n", "path.txt:1: a coordinate beyond +-1e9, where nothing of a scene may lie");
+    refused("# nothing\n\n", "path.txt: the camera path file has no waypoint");
 }
 
 }  // namespace

@@ -84,6 +84,13 @@ expect 1 "render --exposure inf" "$sharcbake" render "$furnace" -o "$work/n.exr"
 expect 1 "bake --time-budget nan" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --time-budget nan $quick
 expect 1 "bake --sky-scale nan" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --sky-scale nan $quick
 expect 1 "bake --sky with a negative radiance" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --sky=-1,0,0 $quick
+# Cameras beyond +-1e9 (where no vertex may lie): rays from 1e20 failed Embree's ray.valid()
+# assertion (SIGABRT), and eye and target 2e19 apart were called "the same point".
+expect 1 "render --look-at 1e20 out" "$sharcbake" render "$furnace" -o "$work/n.exr" --look-at 1e20,0,0,0,0,0 --resolution 8 --spp 1 -q
+says "$work/err.txt" "--look-at: a coordinate beyond +-1e9, where nothing of a scene may lie" "the far --look-at is named"
+printf '# a waypoint far out\n0 0 3 0 0 0\n1e19 0 0 -1e19 0 0 60\n' >"$work/far_path.txt"
+expect 3 "bake --camera-path with a waypoint 1e19 out" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --camera-path "$work/far_path.txt" $quick
+says "$work/err.txt" "far_path.txt:3: a coordinate beyond +-1e9, where nothing of a scene may lie" "the far waypoint is named"
 
 # 7. A CRC-valid checkpoint claiming 0xFFFFFFFF iterations is refused at once (rule C8).
 expect 0 "bake with a checkpoint" "$sharcbake" bake "$furnace" -o "$work/c.sharc" --checkpoint "$work/c.ckpt" $quick

@@ -34,6 +34,16 @@ TEST(ViewRegion, ParsesEveryFormAndRefusesOthers) {
                             "distance:5:2", "distance:1:2:3", "box:1,2,3,4,5,6,7"}) {
         EXPECT_THROW(parseViewRegion(bad), std::invalid_argument) << bad;
     }
+    // A box beyond +-1e9 (rays from inside it failed Embree's ray.valid() assertion) is refused,
+    // naming free for cameras anywhere; one at the limit is a box.
+    try {
+        parseViewRegion("box:-1e30,-1e30,-1e30,1e30,1e30,1e30");
+        ADD_FAILURE() << "a box to 1e30 was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("beyond +-1e9"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("give free"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(parseViewRegion("box:-1e9,-1e9,-1e9,1e9,1e9,1e9").kind, ViewRegion::Kind::Box);
 }
 
 TEST(DepositLevels, EachRegionPicksTheFinestLevelItsCamerasAskFor) {

@@ -1973,10 +1973,13 @@ TEST(GltfLoaderLights, ValuesBeyondFloat32AreNamedAsTheFileGivesThem) {
     EXPECT_EQ(said("inf"), 0);
 }
 
-TEST(GltfLoaderLights, ANodeTransformBeyondFloat32SkipsTheLightNamingLightAndNode) {
+TEST(GltfLoaderLights, ANodeTransformBeyondTheWorldLimitSkipsTheLightNamingLightAndNode) {
     // A light at infinity or NaN (a translation beyond float32's range, or scales along the path
     // overflowing a double) was kept: its distance to every point was infinite or NaN, so it lit
-    // nothing and nothing said why. It is skipped, naming the light and its node.
+    // nothing and nothing said why. One within float32 but beyond about 1.8e18 made its shadow
+    // rays fail Embree's ray.valid() assertion (SIGABRT). Point and spot lights beyond +-1e9 m,
+    // where no vertex may lie, are skipped, naming the light and its node; a directional light's
+    // position means nothing, so a sun is kept wherever its node is.
     TempDir dir;
     GltfBuilder b;
     b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
@@ -1984,7 +1987,8 @@ TEST(GltfLoaderLights, ANodeTransformBeyondFloat32SkipsTheLightNamingLightAndNod
         {{{"name", "Far bulb"}, {"type", "point"}, {"intensity", 683.0}},
          {{"name", "Huge spot"}, {"type", "spot"}, {"intensity", 683.0}, {"spot", json::object()}},
          {{"name", "Far sun"}, {"type", "directional"}, {"intensity", 683.0}},
-         {{"name", "Bulb"}, {"type", "point"}, {"intensity", 683.0}}});
+         {{"name", "Bulb"}, {"type", "point"}, {"intensity", 683.0}},
+         {{"name", "Astronomical bulb"}, {"type", "point"}, {"intensity", 683.0}}});
     const auto light = [](int index) { return json{{"KHR_lights_punctual", {{"light", index}}}}; };
     std::vector<int> roots;
     roots.push_back(b.addNode({{"name", "Far away"}, {"translation", {1e39, 0, 0}}, {"extensions", light(0)}}));
@@ -1994,22 +1998,59 @@ TEST(GltfLoaderLights, ANodeTransformBeyondFloat32SkipsTheLightNamingLightAndNod
     const int sun = b.addNode({{"name", "Sun holder"}, {"translation", {0, -1e39, 0}}, {"extensions", light(2)}});
     roots.push_back(sun);
     roots.push_back(b.addNode({{"translation", {1, 2, 3}}, {"extensions", light(3)}}));
+    roots.push_back(b.addNode({{"name", "Sun distance"}, {"translation", {0, 1.5e11, 0}}, {"extensions", light(4)}}));
     b.setScene(roots);
     const Scene scene = loadGltf(b.writeEmbedded(dir, "far_lights.gltf"));
-    ASSERT_EQ(scene.lights.size(), 1u) << testing::PrintToString(scene.stats.warnings);
-    EXPECT_EQ(scene.lights[0].name, "Bulb");
-    expectVec3Near(scene.lights[0].position, {1, 2, 3});
+    ASSERT_EQ(scene.lights.size(), 2u) << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(scene.lights[0].name, "Far sun");
+    expectVec3Near(scene.lights[0].position, {0, 0, 0});
+    EXPECT_EQ(scene.lights[1].name, "Bulb");
+    expectVec3Near(scene.lights[1].position, {1, 2, 3});
     const auto said = [&](const std::string& text) {
         return std::count_if(scene.stats.warnings.begin(), scene.stats.warnings.end(),
                              [&](const std::string& w) { return w.find(text) != std::string::npos; });
     };
     EXPECT_EQ(said("light 0 'Far bulb' on node 0 'Far away': the node's transform puts the light at (1e+39, 0, 0), "
-                   "beyond float32's range (at most 3.40282e+38); skipped"),
+                   "beyond +-1e9 m, where nothing of a scene may lie (a sun is a directional light); skipped"),
               1)
         << testing::PrintToString(scene.stats.warnings);
     EXPECT_EQ(said("light 1 'Huge spot' on node 1 'Spot holder': the node's world transform is not finite"), 1);
-    EXPECT_EQ(said("light 2 'Far sun' on node 3 'Sun holder': the node's transform puts the light at (0, -1e+39, 0)"),
-              1);
+    EXPECT_EQ(said("light 4 'Astronomical bulb' on node 5 'Sun distance': the node's transform puts the light at "
+                   "(0, 1.5e+11, 0), beyond +-1e9 m"),
+              1)
+        << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(said("'Far sun'"), 0);
+}
+
+TEST(GltfLoaderCameras, ACameraBeyondTheWorldLimitIsSkipped) {
+    // A camera 1e20 m out made every camera ray fail Embree's ray.valid() assertion (SIGABRT in
+    // bake and render). Beyond +-1e9 m, where no vertex may lie, it is skipped with a warning.
+    TempDir dir;
+    GltfBuilder b;
+    // So is an orthographic view wider than that: its rays start across it.
+    b.doc["cameras"] = json::array(
+        {{{"name", "Lost"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 0.1}}}},
+         {{"name", "Kept"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 0.1}}}},
+         {{"name", "Wide"},
+          {"type", "orthographic"},
+          {"orthographic", {{"xmag", 2e20}, {"ymag", 1e20}, {"znear", 0.1}, {"zfar", 10}}}}});
+    const int lost = b.addNode({{"name", "Orbit"}, {"camera", 0}, {"translation", {0, 1e20, 3}}});
+    const int kept = b.addNode({{"camera", 1}, {"translation", {0, 1e9, 3}}});  // at the limit: kept
+    const int wide = b.addNode({{"camera", 2}, {"translation", {0, 0, 3}}});
+    b.setScene({lost, kept, wide});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "far_camera.gltf"));
+    ASSERT_EQ(scene.cameras.size(), 1u) << testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(scene.cameras[0].name, "Kept");
+    EXPECT_EQ(scene.cameras[0].index, 0);
+    ASSERT_EQ(scene.stats.warnings.size(), 2u) << testing::PrintToString(scene.stats.warnings);
+    EXPECT_NE(scene.stats.warnings[0].find("camera 'Orbit' (glTF camera 'Lost'): the node's transform puts the camera "
+                                           "at (0, 1e+20, 3), beyond +-1e9 m"),
+              std::string::npos)
+        << scene.stats.warnings[0];
+    EXPECT_NE(scene.stats.warnings[1].find("camera 'Wide': orthographic xmag 2e+20 and ymag 1e+20 must be non-zero "
+                                           "and at most 1e9; skipped"),
+              std::string::npos)
+        << scene.stats.warnings[1];
 }
 
 TEST(GltfLoaderLights, MissingLightIndexIsAnError) {

@@ -20,6 +20,17 @@
 
 namespace sharcbake {
 
+/// The largest |coordinate| (scene units) anything may have in world space: the loader refuses
+/// vertices beyond it and skips cameras and lights beyond it, and camera paths may not leave it.
+/// Embree asserts on rays that start beyond about 1.8e18; 1e9 m is far beyond any real scene.
+inline constexpr double kMaxWorldCoordinate = 1e9;
+
+/// Whether every coordinate of `p` lies within +-kMaxWorldCoordinate (false for NaN).
+inline bool withinWorldLimit(const glm::dvec3& p) {
+    return p.x >= -kMaxWorldCoordinate && p.x <= kMaxWorldCoordinate && p.y >= -kMaxWorldCoordinate &&
+           p.y <= kMaxWorldCoordinate && p.z >= -kMaxWorldCoordinate && p.z <= kMaxWorldCoordinate;
+}
+
 /// How texture coordinates outside [0,1] are mapped (glTF sampler wrap modes).
 enum class WrapMode : uint8_t { Repeat, ClampToEdge, MirroredRepeat };
 
