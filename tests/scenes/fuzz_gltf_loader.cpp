@@ -6,8 +6,9 @@
 ///
 /// Each input is written to a file of a private folder and loaded from there: as "scene.glb"
 /// when it starts with the GLB magic, else as "scene.gltf". A file that loads must make a scene
-/// whose vertices, shading normals and triangles' geometric normals are finite and whose
-/// indices and material indices are in range; a file that does not load must fail with
+/// whose vertices, shading normals and triangles' geometric normals are finite, whose indices
+/// and material indices are in range, and whose cameras, lights, materials and sky are what the
+/// tracer assumes (checkCamerasAndLights); a file that does not load must fail with
 /// SceneLoadError (never another exception, a crash or a sanitizer report).
 #include "sharcbake/scene_loader.h"
 
@@ -43,6 +44,43 @@ void check(bool ok, const char* what) {
 }
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool unit(const glm::vec3& v) { return finite(v) && std::abs(glm::length(v) - 1.0f) < 1e-3f; }
+bool nonNegative(const glm::vec3& v) { return finite(v) && v.x >= 0.0f && v.y >= 0.0f && v.z >= 0.0f; }
+
+/// What the tracer assumes of cameras and lights: rays from them start inside the world's limit
+/// (Embree aborts on rays from beyond about 1.8e18), in unit directions, with finite amounts.
+void checkCamerasAndLights(const sharcbake::Scene& scene) {
+    for (const sharcbake::Camera& c : scene.cameras) {
+        check(sharcbake::withinWorldLimit(c.position), "a camera beyond the world's limit");
+        check(unit(c.forward) && unit(c.up), "a camera's forward or up is not a unit vector");
+        check(c.yfov > 0.0f && c.yfov < 3.1416f, "a camera's yfov is outside (0, pi)");
+        check(!c.aspect_ratio || (*c.aspect_ratio > 0.0f && std::isfinite(*c.aspect_ratio)),
+              "a camera's aspect ratio is not positive");
+        check(!c.orthographic_half_height ||
+                  (*c.orthographic_half_height > 0.0f && *c.orthographic_half_height <= sharcbake::kMaxWorldCoordinate),
+              "an orthographic view is not positive or wider than the world's limit");
+    }
+    for (const sharcbake::PunctualLight& l : scene.lights) {
+        check(l.type == sharcbake::LightType::Directional || sharcbake::withinWorldLimit(l.position),
+              "a point or spot light beyond the world's limit");
+        check(unit(l.direction), "a light's direction is not a unit vector");
+        check(nonNegative(l.intensity), "a light's intensity is negative or not finite");
+        check(std::isfinite(l.range) && l.range >= 0.0f, "a light's range is negative or not finite");
+        check(std::isfinite(l.inner_cone_angle) && std::isfinite(l.outer_cone_angle) && l.inner_cone_angle >= 0.0f &&
+                  l.inner_cone_angle <= l.outer_cone_angle && l.outer_cone_angle <= 1.5708f,
+              "a spot's cone angles are outside 0 <= inner <= outer <= pi/2");
+    }
+    for (const sharcbake::Material& m : scene.materials) {
+        check(nonNegative(m.base_color) && nonNegative(m.emissive) && nonNegative(m.specular_color),
+              "a material's colour is negative or not finite");
+        check(std::isfinite(m.emissive_strength) && m.emissive_strength >= 0.0f, "an emissive strength");
+        check(std::isfinite(m.metallic) && std::isfinite(m.roughness) && std::isfinite(m.ior) &&
+                  std::isfinite(m.transmission) && std::isfinite(m.clearcoat) && std::isfinite(m.normal_scale),
+              "a material's factor is not finite");
+    }
+    check(nonNegative(scene.sky.uniform) && std::isfinite(scene.sky.scale) && scene.sky.scale >= 0.0f,
+          "the sky is negative or not finite");
+}
 
 }  // namespace
 
@@ -76,6 +114,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         check(scene.texcoords0.empty() || scene.texcoords0.size() == scene.positions.size(),
               "texcoords of another count");
         check(scene.tangents.empty() || scene.tangents.size() == scene.positions.size(), "tangents of another count");
+        checkCamerasAndLights(scene);
     } catch (const sharcbake::SceneLoadError&) {
         // The expected outcome for most inputs.
     }
