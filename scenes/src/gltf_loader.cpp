@@ -3001,13 +3001,14 @@ private:
             return std::nullopt;
         }
         const glm::dvec3 position(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
-        if (light.type != LightType::Directional && !withinWorldLimit(position)) {
+        const bool within_world = withinWorldLimit(position);
+        if (light.type != LightType::Directional && !within_world) {
             warn(label + ": the node's transform puts the light at " + vec3Text(position) +
                  ", beyond +-1e9 m, where nothing of a scene may lie (a sun is a directional light); skipped");
             return std::nullopt;
         }
         // A directional light's position means nothing (and may be anywhere).
-        light.position = withinWorldLimit(position) ? glm::vec3(position) : glm::vec3(0.0f);
+        light.position = within_world ? glm::vec3(position) : glm::vec3(0.0f);
         // The node's -Z in world space, through the whole world matrix (a mirror turns it). Where a
         // scale of zero collapses that axis (how some tools hide an object), the rotations along
         // the node's path orient the light, as glTF says; a singular matrix has none.

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 /// @file fuzz_cache_file.cpp
 /// @brief libFuzzer harness for the runtime's .sharc reader (CacheView::openMemory and every
-/// accessor on a cache that validates, and the C API's that wrap them). Built and run by sanitized_runtime_test.sh:
+/// accessor on a cache that validates, and the C API's that wrap them). Built and run by
+/// sanitized_runtime_test.sh:
 ///   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -Icache_format/include \
 ///       tests/cache_format/fuzz_cache_file.cpp cache_format/src/*.cpp -o fuzz_cache_file
 ///   ./fuzz_cache_file CORPUS_COPY -max_total_time=60      (seed: tests/cache_format/golden/)
