@@ -351,6 +351,11 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
             }
             fit.fitted_to_view_distances = lo > 0;
             fit.level_bias += float(lo) / 64.0f;
+            // Stopped by the grid range with budget to spare: the range, not the budget, decides.
+            if (lo == most_steps && useful_exact == finest_exact && fits(most_steps + 1)) {
+                fit.limited_by_range = true;
+                fit.range_limit = range_reason;
+            }
         }
     }
     HashGridParameters fitted = grid;
@@ -385,9 +390,10 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
                           farthestCoordinate(scene));
         }
         std::snprintf(text, sizeof text,
-                      "level bias %.9g: finest voxels %.4g wide, %s (%s, about %.3g voxels at level 1; the budget "
+                      "level bias %.9g: finest voxels %.4g wide, %s (%s, about %.3g voxels at %s; the budget "
                       "would allow finer)",
-                      double(fit.level_bias), double(fit.finest_voxel_size), limit, surface, fit.estimated_voxels);
+                      double(fit.level_bias), double(fit.finest_voxel_size), limit, surface, fit.estimated_voxels,
+                      fit.fitted_to_view_distances ? "the levels the view region's cameras ask for" : "level 1");
     } else if (fit.fitted_to_view_distances) {
         std::snprintf(text, sizeof text,
                       "level bias %.9g: finest voxels %.4g wide, so the %s take about %.3g voxels at the levels the "
@@ -461,21 +467,45 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
     char why[400], fix[480];
     // Each region's distance samples are drawn once for all the budgets tried.
     const auto fitWithBudget = [&](uint64_t budget, const ViewRegion* fit_region,
-                                   std::optional<DistanceSamples>& samples) {
+                                   std::optional<DistanceSamples>& samples, GridFit& budget_fit) {
+        budget_fit = fitLevelBiasReusing(scene, grid, budget, seen, fit_region, samples);
         HashGridParameters fitted = grid;
-        fitted.level_bias = fitLevelBiasReusing(scene, grid, budget, seen, fit_region, samples).level_bias;
+        fitted.level_bias = budget_fit.level_bias;
         return voxelAtDistance(fitted, room);
     };
-    // The smallest of 4, 16, ... 4096 times the budget that makes the voxels fine enough, or 0.
+    // The smallest of 4, 16, ... 4096 times the budget (at most 2^28) that makes the voxels fine
+    // enough, or 0; `largest` and `reached` are then the last budget tried and its voxels' width,
+    // and `largest_fit` its fit, which stops the search where the grid range decided it: past the
+    // range a larger budget changes nothing.
+    uint64_t largest = 0;
+    GridFit largest_fit;
     const auto budgetFor = [&](const ViewRegion* fit_region, std::optional<DistanceSamples>& samples, float& reached) {
         uint64_t budget = voxel_budget;
         for (int step = 0; step < 6; ++step) {
             budget *= 4;
             if (budget > (uint64_t(1) << 28)) break;
-            reached = fitWithBudget(budget, fit_region, samples);
+            largest = budget;
+            reached = fitWithBudget(budget, fit_region, samples, largest_fit);
             if (reached <= enough) return budget;
+            if (largest_fit.limited_by_range) break;
         }
         return uint64_t(0);
+    };
+    // Why no budget makes the voxels finer than `largest` does.
+    const auto rangeNote = [&](GridFit::RangeLimit limit) {
+        char note[240];
+        if (limit == GridFit::RangeLimit::kSceneSize) {
+            std::snprintf(note, sizeof note,
+                          "the finest SHaRC's keys tell apart across a scene %.4g units wide; baking the parts the "
+                          "cameras see as separate scenes allows finer ones",
+                          2.0 * halfExtent(scene));
+        } else {
+            std::snprintf(note, sizeof note,
+                          "the finest float32 positions %.4g units from the origin resolve; moving the scene towards "
+                          "the origin allows finer ones",
+                          farthestCoordinate(scene));
+        }
+        return std::string(note);
     };
     if (fit && fit->limited_by_range && fit->range_limit == GridFit::RangeLimit::kSceneSize) {
         std::snprintf(why, sizeof why,
@@ -511,7 +541,8 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
         at_cameras.kind = ViewRegion::Kind::Points;
         for (const Camera& camera : scene.cameras) at_cameras.points.push_back(camera.position);
         std::optional<DistanceSamples> at_cameras_samples, no_samples;
-        const float at_cameras_voxel = fitWithBudget(voxel_budget, &at_cameras, at_cameras_samples);
+        GridFit at_cameras_fit;
+        const float at_cameras_voxel = fitWithBudget(voxel_budget, &at_cameras, at_cameras_samples, at_cameras_fit);
         if (at_cameras_voxel <= enough) {
             std::snprintf(fix, sizeof fix,
                           "If the runtime's cameras stay near the glTF cameras, --view-region gltf fits the voxels to "
@@ -539,9 +570,16 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
             } else if (free_budget) {
                 std::snprintf(fix, sizeof fix, "%s", anywhere);
             } else {
+                char alone[320] = "";
+                if (largest)
+                    std::snprintf(alone, sizeof alone, " (--voxel-budget %llu alone: %.3g wide%s%s)",
+                                  (unsigned long long)largest, double(free_reached),
+                                  largest_fit.limited_by_range ? ", " : "",
+                                  largest_fit.limited_by_range ? rangeNote(largest_fit.range_limit).c_str() : "");
                 std::snprintf(fix, sizeof fix,
-                              "a view region that keeps the runtime's cameras near where they will be "
-                              "(--view-region gltf, path or box) and a larger --voxel-budget make them finer");
+                              "A view region that keeps the runtime's cameras near where they will be "
+                              "(--view-region gltf, path or box) and a larger --voxel-budget make them finer%s",
+                              alone);
             }
         }
     } else {
@@ -554,8 +592,16 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
         if (const uint64_t budget = budgetFor(&region, region_samples, reached)) {
             std::snprintf(fix, sizeof fix, "--voxel-budget %llu makes them %.3g wide", (unsigned long long)budget,
                           double(reached));
+        } else if (largest && largest_fit.limited_by_range) {
+            std::snprintf(fix, sizeof fix, "--voxel-budget %llu makes them %.3g wide, %s", (unsigned long long)largest,
+                          double(reached), rangeNote(largest_fit.range_limit).c_str());
+        } else if (largest) {
+            std::snprintf(fix, sizeof fix,
+                          "A larger --voxel-budget makes them finer, though not that fine within 2^28 voxels "
+                          "(--voxel-budget %llu: %.3g wide)",
+                          (unsigned long long)largest, double(reached));
         } else {
-            std::snprintf(fix, sizeof fix, "a larger --voxel-budget makes them finer");
+            std::snprintf(fix, sizeof fix, "A larger --voxel-budget makes them finer");
         }
     }
     char text[1400];

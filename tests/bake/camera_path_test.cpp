@@ -403,6 +403,60 @@ TEST(GridFit, AStreetCameraInAWideCityIsToldBothBudgets) {
     }
 }
 
+TEST(GridFit, ACameraAtAWallOfAHugeGroundIsToldTheBudgetBeyondWhichOnlyTheGridRangeDecides) {
+    // A camera 5 cm from a wall on a ground 10 km wide wants voxels of a few centimetres. Kept to
+    // the glTF camera, a larger budget makes them finer until SHaRC's 17-bit keys cannot tell
+    // finer cells apart across 10 km; the warning names that budget, the width it gets (which a
+    // fit with it gets) and the range as the reason, not a budget that cannot help.
+    Scene scene = emptyTestScene();
+    scene.materials.emplace_back();
+    addInwardBox(scene, glm::vec3(-5000.0f, -1.0f, -5000.0f), glm::vec3(5000.0f, 0.0f, 5000.0f), 0);
+    addInwardBox(scene, glm::vec3(-5.0f, 0.0f, 0.05f), glm::vec3(5.0f, 4.0f, 8.0f), 0);
+    Camera camera;
+    camera.name = "at the wall";
+    camera.position = glm::vec3(0.0f, 1.7f, 0.0f);
+    scene.cameras.push_back(camera);
+    const Tracer tracer(scene);
+    const HashGridParameters grid{};
+    ViewRegion at_camera;
+    at_camera.kind = ViewRegion::Kind::Points;
+    at_camera.points = {camera.position};
+    const GridFit near = fitLevelBias(scene, grid, kDefaultVoxelBudget, nullptr, &at_camera);
+    EXPECT_FALSE(near.limited_by_range);
+    HashGridParameters fitted = grid;
+    fitted.level_bias = near.level_bias;
+    const std::string warning = checkVoxelsAroundCameras(tracer, fitted, at_camera, &near, kDefaultVoxelBudget,
+                                                         nullptr);
+    const std::string named = "the view region's cameras ask for. --voxel-budget ";
+    const size_t at = warning.find(named);
+    ASSERT_NE(at, std::string::npos) << warning;
+    EXPECT_NE(warning.find("the finest SHaRC's keys tell apart across a scene 1e+04 units wide; baking the parts"),
+              std::string::npos)
+        << warning;
+    size_t used = 0;
+    const std::string rest = warning.substr(at + named.size());
+    const uint64_t budget = std::stoull(rest, &used);
+    const std::string width_text = " makes them ";
+    ASSERT_EQ(rest.substr(used, width_text.size()), width_text) << warning;
+    const float named_width = std::stof(rest.substr(used + width_text.size()));
+    // The named budget is the first the range stops, and four times it gets nothing finer.
+    const auto widthWith = [&](uint64_t voxels, bool range_decides) {
+        const GridFit with = fitLevelBias(scene, grid, voxels, nullptr, &at_camera);
+        EXPECT_EQ(with.limited_by_range, range_decides) << voxels;
+        EXPECT_EQ(with.range_limit, GridFit::RangeLimit::kSceneSize) << voxels;
+        HashGridParameters budget_grid = grid;
+        budget_grid.level_bias = with.level_bias;
+        const std::string still = checkVoxelsAroundCameras(tracer, budget_grid, at_camera, &with, voxels, nullptr);
+        const std::string around = "the voxels around camera 'at the wall', ";
+        EXPECT_EQ(still.find(around), 0u) << still;
+        return std::stof(still.substr(around.size()));
+    };
+    EXPECT_NEAR(widthWith(budget, true), named_width, 0.01f * named_width);
+    EXPECT_NEAR(widthWith(4 * budget, true), named_width, 0.01f * named_width);
+    EXPECT_GT(widthWith(budget / 4, false), 1.02f * named_width);
+    std::printf("[voxel warning] %s\n", warning.c_str());
+}
+
 TEST(GridFit, ARoomItsCamerasSeeWholeKeepsTheWholeSurfaceFit) {
     // The seen surface replaces the whole only when it is a small part: a room explored from its
     // camera sees all of it, and its fit is the one without the estimate, bit for bit.
