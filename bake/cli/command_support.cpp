@@ -293,7 +293,12 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
         }
         what = "no light from its punctual lights (" + dark + ")";
     }
-    std::fprintf(stderr, "warning: the scene has %s, no emissive surfaces and a black sky: the %s will be black\n",
+    // Models made for glTF viewers (sample collections, asset stores) carry no lights: viewers light
+    // them with an environment, which is what --sky gives.
+    std::fprintf(stderr,
+                 "warning: the scene has %s, no emissive surfaces and a black sky: the %s will be black. A model made "
+                 "for glTF viewers is lit by their environment: give it one with --sky r,g,b (e.g. --sky 1,1,1) or "
+                 "--sky-exr FILE\n",
                  what.c_str(), result);
 }
 

@@ -62,6 +62,7 @@ expect 1 "capacity below one bucket" "$sharcbake" bake "$scenes/cornell_box/corn
 expect 0 "closed scene with no light" "$sharcbake" bake "$work/dark.gltf" -o "$work/dark.sharc" --iterations 4 \
     --resolution 32x32 --stats-json "$work/dark.json"
 says "$work/err.txt" "the cache will be black" "dark scene: warned"
+says "$work/err.txt" "give it one with --sky r,g,b" "dark scene: the warning names the fix"
 says "$work/dark.json" '"non_finite_dropped": 0' "dark scene: no NaN/Inf"
 # Its black render as a --reference has no scale for the image measures' epsilons: said, as
 # compare says it.
