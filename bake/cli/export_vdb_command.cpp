@@ -23,6 +23,7 @@ struct ExportVdbOptions {
     float scale = 1.0f;
     bool split_normals = false;
     std::string up = "y";
+    double length_scale = 1.0;
     bool quiet = false;
 };
 
@@ -49,6 +50,7 @@ void run(const ExportVdbOptions& o) {
     options.scale = o.scale;
     options.split_normals = o.split_normals;
     options.up = o.up == "z" ? VdbUpAxis::kZ : VdbUpAxis::kY;
+    options.length_scale = o.length_scale;
     options.source_path = o.input;
     options.writer = "sharcbake " SHARCBAKE_VERSION " export-vdb";
 
@@ -59,7 +61,10 @@ void run(const ExportVdbOptions& o) {
     if (result == VdbExportStatus::kUnrepresentable) throw CommandError(kExitInvalidInput, o.input + ": " + message);
     if (result != VdbExportStatus::kOk) throw CommandError(kExitUsage, message);
     if (o.quiet) return;
-    std::printf("%s: %zu grids from %" PRIu64 " cache voxels\n", o.output.c_str(), grids.size(), view.voxelCount());
+    std::printf("%s: %zu grids from %" PRIu64 " cache voxels", o.output.c_str(), grids.size(), view.voxelCount());
+    if (o.length_scale != 1.0)
+        std::printf(", positions and sizes x %.9g (voxel sizes below: the cache's)", o.length_scale);
+    std::printf("\n");
     for (const VdbGridInfo& g : grids) {
         std::printf("  %-28s level %3u  voxel size %-10g  %10" PRIu64 " active voxels\n", g.name.c_str(), g.level,
                     double(g.voxel_size), g.active_voxels);
@@ -75,7 +80,8 @@ void registerExportVdbCommand(CLI::App& app) {
         "Write a .sharc cache as OpenVDB grids to look at it in vdb_view, Houdini or Blender.\n\n"
         "Each SHaRC level present becomes its own grid set with its own voxel size: a VDB voxel is\n"
         "one cache voxel, placed where the cache has it (glTF units, metres, +Y up; --up z turns\n"
-        "it +Z up for Blender and other Z-up viewers).\n"
+        "it +Z up for Blender and other Z-up viewers; --length-scale 1000 writes it in millimetres,\n"
+        "for a small model whose finest voxels are too small for OpenVDB).\n"
         "Grids, in file order:\n"
         "  density, color          the finest level exported again under the names viewers look\n"
         "                          for; 'density' is first, so vdb_render renders it\n"
@@ -99,7 +105,8 @@ void registerExportVdbCommand(CLI::App& app) {
         "  Raise --scale when a dim cache looks empty; lower it when it looks solid.\n\n"
         "Examples:\n"
         "  sharcbake export-vdb out/cornell_box.sharc -o out/cornell_box.vdb\n"
-        "  sharcbake export-vdb cache.sharc -o fine.vdb --levels 3,4 --channels density,color --scale 4\n\n"
+        "  sharcbake export-vdb cache.sharc -o fine.vdb --levels 3,4 --channels density,color --scale 4\n"
+        "  sharcbake export-vdb ring.sharc -o ring_mm.vdb --length-scale 1000\n\n"
         "Exit codes: 1 bad option (or a --levels level the cache lacks), or an output that is the\n"
         "input; 2 cannot read/write (an existing output that is not a regular file included);\n"
         "3 invalid cache, or one OpenVDB cannot hold (no voxels, a voxel size out of its range).");
@@ -120,6 +127,12 @@ void registerExportVdbCommand(CLI::App& app) {
                     "glTF (x, y, z) at (x, -z, y), for Blender and other Z-up viewers)")
         ->capture_default_str()
         ->check(CLI::IsMember({"y", "z"}));
+    cmd->add_option("--length-scale", o->length_scale,
+                    "Multiply every position and voxel size by this: 1000 writes metres as millimetres, for "
+                    "voxels too small for OpenVDB (under about 1e-5) or a viewer that expects other units")
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber)
+        ->check(kFiniteNumber);
     cmd->add_flag("-q,--quiet", o->quiet, "Print nothing on success but warnings");
     cmd->callback([o] { run(*o); });
 }

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -127,7 +128,9 @@ TEST_F(VdbExportTest, GridNamesOrderAndCounts) {
     }
 }
 
-TEST_F(VdbExportTest, TransformsPutVoxelCentresWhereTheCacheHasThem) {
+TEST_F(VdbExportTest, TransformsPutVoxelCentresWhereTheirPointsAre) {
+    // A key's cell holds the points p whose p + 1e-4 (SHaRC's position bias) falls in it: its
+    // centre in the world is voxelCenter() (the SDK's, bias kept) less the bias.
     const auto grids = exportAndRead(VdbExportOptions{});
     const HashGridParameters params = view_.gridParameters();
     for (uint64_t i = 0; i < view_.voxelCount(); ++i) {
@@ -137,7 +140,8 @@ TEST_F(VdbExportTest, TransformsPutVoxelCentresWhereTheCacheHasThem) {
         ASSERT_TRUE(grid);
         EXPECT_NEAR(grid->voxelSize()[0], voxelSize(c.level, params), 1e-7);
         const openvdb::Vec3d world = grid->indexToWorld(openvdb::Coord(c.grid.x, c.grid.y, c.grid.z));
-        const float expected[3] = {centre.x, centre.y, centre.z};
+        const float expected[3] = {centre.x - kHashGridPositionBias, centre.y - kHashGridPositionBias,
+                                   centre.z - kHashGridPositionBias};
         for (int k = 0; k < 3; ++k) {
             EXPECT_NEAR(world[k], expected[k], 1e-6 * std::max(1.0, std::abs(double(expected[k])))) << i << " " << k;
         }
@@ -158,9 +162,10 @@ TEST_F(VdbExportTest, ZUpTurnsTheWorldForZUpViewers) {
         const auto grid = find(grids, "level" + std::to_string(c.level) + "_radiance");
         ASSERT_TRUE(grid);
         EXPECT_NEAR(grid->voxelSize()[0], voxelSize(c.level, params), 1e-6);
-        // glTF (x, y, z) is Blender's (x, -z, y).
+        // glTF (x, y, z) is Blender's (x, -z, y); the centre of the voxel's points, as above.
         const openvdb::Vec3d world = grid->indexToWorld(openvdb::Coord(c.grid.x, c.grid.y, c.grid.z));
-        const float expected[3] = {centre.x, -centre.z, centre.y};
+        const float b = kHashGridPositionBias;
+        const float expected[3] = {centre.x - b, -(centre.z - b), centre.y - b};
         for (int k = 0; k < 3; ++k) {
             EXPECT_NEAR(world[k], expected[k], 1e-5 * std::max(1.0, std::abs(double(expected[k])))) << i << " " << k;
         }
@@ -300,6 +305,54 @@ TEST(VdbExportUnrepresentable, MicrometreVoxelsNameTheLevelsThatFit) {
     coarse.levels = {5};
     EXPECT_EQ(exportCacheToVdb(view, out, coarse, nullptr, &message), VdbExportStatus::kOk) << message;
     std::remove(out.c_str());
+}
+
+// The refusal also names a length scale at which every level fits; written at it, each voxel's
+// centre is the cache's, scaled, and the file says so.
+TEST(VdbExportUnrepresentable, MicrometreVoxelsFitAtTheLengthScaleNamed) {
+    openvdb::initialize();
+    CacheData data;
+    data.bake_capacity = 1024;
+    data.level_bias = 14.0f;  // level 1: 2.44e-6 wide
+    const HashGridParameters params = data.gridParameters();
+    const Float3 p{1.0e-4f, 2.0e-4f, -3.0e-4f};
+    data.voxels.push_back(CacheVoxel{hashGridKeyAtLevel(p, Float3{0, 1, 0}, 1, params), {1.0f, 1.0f, 1.0f}, 1.0f});
+    std::vector<uint8_t> bytes;
+    CacheView view;
+    ASSERT_NO_FATAL_FAILURE(openInMemory(data, bytes, view));
+    std::string message;
+    const std::string out = ::testing::TempDir() + "sharcbake_scaled_" + std::to_string(::getpid()) + ".vdb";
+    ASSERT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kUnrepresentable);
+    const std::string named = "--length-scale ";
+    const size_t at = message.find(named);
+    ASSERT_NE(at, std::string::npos) << message;
+    EXPECT_EQ(message.find("--levels"), std::string::npos) << message;  // no level fits unscaled
+    VdbExportOptions scaled;
+    scaled.length_scale = std::stod(message.substr(at + named.size()));
+    EXPECT_GE(scaled.length_scale, 10.0);
+    EXPECT_LE(scaled.length_scale, 1000.0);
+    ASSERT_EQ(exportCacheToVdb(view, out, scaled, nullptr, &message), VdbExportStatus::kOk) << message;
+    openvdb::io::File file(out);
+    file.open();
+    const auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("level1_radiance"));
+    const openvdb::MetaMap::Ptr meta = file.getMetadata();
+    file.close();
+    std::remove(out.c_str());
+    ASSERT_TRUE(grid);
+    ASSERT_EQ(grid->activeVoxelCount(), 1u);
+    const openvdb::Vec3d centre = grid->indexToWorld(grid->cbeginValueOn().getCoord());
+    const double size = double(voxelSize(1, params));
+    EXPECT_NEAR(centre.x() / scaled.length_scale, double(p.x), 0.5 * size);
+    EXPECT_NEAR(centre.y() / scaled.length_scale, double(p.y), 0.5 * size);
+    EXPECT_NEAR(centre.z() / scaled.length_scale, double(p.z), 0.5 * size);
+    EXPECT_NEAR(grid->voxelSize().x(), size * scaled.length_scale, 1e-6 * size * scaled.length_scale);
+    EXPECT_EQ(meta->metaValue<double>("sharcbake_length_scale"), scaled.length_scale);
+    EXPECT_NE(meta->metaValue<std::string>("units").find("one VDB unit is 1/"), std::string::npos);
+    // Not finite or not positive: refused as a request.
+    for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity()}) {
+        scaled.length_scale = bad;
+        EXPECT_EQ(exportCacheToVdb(view, out, scaled, nullptr, &message), VdbExportStatus::kInvalidArgument) << bad;
+    }
 }
 
 // A room 10 km from the origin in 1 cm voxels: its cells lie near 10^6, beyond the 17 bits a key

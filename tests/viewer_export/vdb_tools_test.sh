@@ -54,4 +54,19 @@ PY
 [ $? -eq 1 ] || fail "--levels 511 should exit 1"
 "$sharcbake" export-vdb "$work/missing.sharc" -o "$work/x.vdb" >/dev/null 2>&1
 [ $? -eq 2 ] || fail "missing cache should exit 2"
+"$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/x.vdb" --length-scale 0 >/dev/null 2>&1
+[ $? -eq 1 ] || fail "--length-scale 0 should exit 1"
+
+# --length-scale 1000: the same voxels in millimetres, and the file says so.
+"$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/mm.vdb" --levels 1 --length-scale 1000 >"$work/mm.txt" \
+    || fail "export-vdb --length-scale 1000"
+grep -q 'positions and sizes x 1000' "$work/mm.txt" || fail "export-vdb does not say the length scale"
+vdb_print -l -m "$work/mm.vdb" >"$work/mm_meta.txt" 2>&1 || fail "vdb_print of the scaled export"
+grep -q 'sharcbake_length_scale: 1000' "$work/mm_meta.txt" || fail "no sharcbake_length_scale metadata"
+grep -q 'one VDB unit is 1/1000 glTF unit' "$work/mm_meta.txt" || fail "units metadata does not say the scale"
+"$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/m.vdb" --levels 1 -q || fail "export-vdb --levels 1"
+vdb_print -l "$work/m.vdb" | awk '/voxel size/ {print $3; exit}' >"$work/m_size.txt"
+vdb_print -l "$work/mm.vdb" | awk '/voxel size/ {print $3; exit}' >"$work/mm_size.txt"
+awk -v m="$(cat "$work/m_size.txt")" -v mm="$(cat "$work/mm_size.txt")" \
+    'BEGIN { r = mm / m; exit !(r > 999 && r < 1001) }' || fail "voxel size $(cat "$work/mm_size.txt") is not 1000x $(cat "$work/m_size.txt")"
 echo "ok: export-vdb, vdb_print and vdb_render"

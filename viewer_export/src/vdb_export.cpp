@@ -142,11 +142,15 @@ std::string selectLevels(const CacheView& cache, const VdbExportOptions& options
 }
 
 /// Index-to-world transform of one level: VDB voxel centres sit at index x s, and the cache voxel
-/// g spans [g s, (g+1) s), so the index space is shifted by half a voxel. For a Z-up viewer the
-/// world is then turned +90 degrees about X: glTF's (x, y, z) becomes (x, -z, y).
-openvdb::math::Transform::Ptr levelTransform(float voxel_size, VdbUpAxis up) {
-    auto xform = openvdb::math::Transform::createLinearTransform(double(voxel_size));
-    xform->postTranslate(openvdb::Vec3d(0.5 * double(voxel_size)));
+/// g holds the points p whose biased position p + 1e-4 (SHaRC's position bias, per component)
+/// lies in [g s, (g+1) s), so the index space is shifted by half a voxel less the bias; s and the
+/// shift are then multiplied by the length scale. (A surface of a model 0.1 mm across baked in
+/// micrometre voxels would otherwise sit 1e-4 units, a hundred voxels, from its voxels.) For a
+/// Z-up viewer the world is then turned +90 degrees about X: glTF's (x, y, z) becomes (x, -z, y).
+openvdb::math::Transform::Ptr levelTransform(float voxel_size, double length_scale, VdbUpAxis up) {
+    const double s = double(voxel_size) * length_scale;
+    auto xform = openvdb::math::Transform::createLinearTransform(s);
+    xform->postTranslate(openvdb::Vec3d((0.5 * double(voxel_size) - double(kHashGridPositionBias)) * length_scale));
     if (up == VdbUpAxis::kZ) xform->postRotate(0.5 * openvdb::math::pi<double>(), openvdb::math::X_AXIS);
     return xform;
 }
@@ -220,9 +224,15 @@ openvdb::MetaMap fileMetadata(const CacheView& cache, const VdbExportOptions& op
     meta.insertMeta("sharcbake_format_version", openvdb::StringMetadata(std::to_string(cache.versionMajor()) + "." +
                                                                         std::to_string(cache.versionMinor())));
     meta.insertMeta("sharcbake_writer", openvdb::StringMetadata(options.writer));
-    meta.insertMeta("units", openvdb::StringMetadata(options.up == VdbUpAxis::kZ
-                                                         ? "glTF metres, turned +Z up (glTF (x, y, z) is (x, -z, y))"
-                                                         : "glTF metres, +Y up"));
+    char scaled[96] = "";
+    if (options.length_scale != 1.0)
+        std::snprintf(scaled, sizeof scaled, " x %.9g (one VDB unit is 1/%.9g glTF unit)", options.length_scale,
+                      options.length_scale);
+    meta.insertMeta("units",
+                    openvdb::StringMetadata(
+                        std::string("glTF metres") + scaled +
+                        (options.up == VdbUpAxis::kZ ? ", turned +Z up (glTF (x, y, z) is (x, -z, y))" : ", +Y up")));
+    meta.insertMeta("sharcbake_length_scale", openvdb::DoubleMetadata(options.length_scale));
     meta.insertMeta("sharcbake_up_axis", openvdb::StringMetadata(options.up == VdbUpAxis::kZ ? "z" : "y"));
     meta.insertMeta("sharcbake_octants",
                     openvdb::StringMetadata(options.split_normals ? "split: one grid set per normal octant"
@@ -283,6 +293,8 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
     if (grids_out) grids_out->clear();
     if (!cache.isOpen()) return fail(VdbExportStatus::kInvalidArgument, "no cache open");
     if (!std::isfinite(options.scale)) return fail(VdbExportStatus::kInvalidArgument, "scale must be finite");
+    if (!(std::isfinite(options.length_scale) && options.length_scale > 0.0))
+        return fail(VdbExportStatus::kInvalidArgument, "length scale must be finite and positive");
     std::vector<uint32_t> levels;
     if (const std::string problem = selectLevels(cache, options, levels); !problem.empty()) {
         return fail(VdbExportStatus::kInvalidArgument, problem);
@@ -290,33 +302,48 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
     if (levels.empty()) return fail(VdbExportStatus::kUnrepresentable, "the cache holds no voxels: nothing to export");
 
     openvdb::initialize();
+    // A level's transform at a length scale, or null where OpenVDB refuses its voxel size
+    // (micrometre voxels in metres: OpenVDB takes a scale near zero for a singular map).
+    const auto transformAt = [&](uint32_t level, double length_scale) -> openvdb::math::Transform::Ptr {
+        try {
+            return levelTransform(voxelSize(level, cache.gridParameters()), length_scale, options.up);
+        } catch (const std::exception&) {
+            return nullptr;
+        }
+    };
     std::map<uint32_t, openvdb::math::Transform::Ptr> transforms;
     for (const uint32_t l : levels) {
         const float s = voxelSize(l, cache.gridParameters());
         if (!std::isfinite(s) || s <= 0.0f) {
             return fail(VdbExportStatus::kUnrepresentable, "level " + std::to_string(l) + " has no finite voxel size");
         }
-        try {
-            transforms[l] = levelTransform(s, options.up);
-        } catch (const std::exception& e) {
-            // Name the levels that do fit (a model of a millimetre has micrometre voxels at its
-            // finest levels, which OpenVDB's transforms refuse, and coarser ones it holds).
-            std::string fitting;
-            for (const CacheLevel& present : cache.levels()) {
-                try {
-                    levelTransform(voxelSize(present.level, cache.gridParameters()), options.up);
-                    fitting += (fitting.empty() ? "" : ",") + std::to_string(present.level);
-                } catch (const std::exception&) {}
-            }
-            char size[32];
-            std::snprintf(size, sizeof size, "%.3g", double(s));
-            return fail(VdbExportStatus::kUnrepresentable,
-                        "level " + std::to_string(l) + ": voxel size " + size + " is out of OpenVDB's range (" +
-                            e.what() + "); " +
-                            (fitting.empty()
-                                 ? std::string("no level of this cache fits (scale the scene up before baking)")
-                                 : "export the levels that fit with --levels " + fitting));
+        if ((transforms[l] = transformAt(l, options.length_scale))) continue;
+        // Name the levels that do fit (a model of a millimetre has micrometre voxels at its
+        // finest levels, and coarser ones OpenVDB holds), and a power-of-ten length scale at which
+        // every level asked for fits.
+        std::string fitting;
+        for (const CacheLevel& present : cache.levels()) {
+            if (transformAt(present.level, options.length_scale))
+                fitting += (fitting.empty() ? "" : ",") + std::to_string(present.level);
         }
+        double all_fit = 0.0;
+        for (double candidate = options.length_scale * 10.0; all_fit == 0.0 && candidate <= options.length_scale * 1e15;
+             candidate *= 10.0) {
+            bool fits = true;
+            for (const uint32_t level : levels) fits = fits && transformAt(level, candidate) != nullptr;
+            if (fits) all_fit = candidate;
+        }
+        char size[32], scaled[200] = "";
+        std::snprintf(size, sizeof size, "%.3g", double(s) * options.length_scale);
+        if (all_fit > 0.0)
+            std::snprintf(scaled, sizeof scaled, "write them %.9g times larger with --length-scale %.9g", all_fit,
+                          all_fit);
+        std::string fix;
+        if (!fitting.empty()) fix = "export the levels that fit with --levels " + fitting;
+        if (all_fit > 0.0) fix += (fix.empty() ? "" : ", or ") + std::string(scaled);
+        if (fix.empty()) fix = "no level of this cache fits at any length scale";
+        return fail(VdbExportStatus::kUnrepresentable,
+                    "level " + std::to_string(l) + ": voxel size " + size + " is out of OpenVDB's range; " + fix);
     }
     GridList list(grids_out);
     addFinestGrids(cache, levels.front(), transforms[levels.front()], options, list);

@@ -5,9 +5,10 @@
 /// The cache is read only through the runtime library (CacheView). Grid layout (docs/design.md §4.3):
 ///
 ///  * One grid set per SHaRC level present, each with its own transform: a linear transform of
-///    voxel size s = voxelSize(level) translated by 0.5·s, so VDB index g (the key's grid
-///    coordinate) has its centre at world (g + 0.5)·s, the centre of the cache voxel
-///    [g·s, (g+1)·s). World units are the scene's glTF units (metres, +Y up), unchanged.
+///    voxel size s = voxelSize(level) translated by 0.5·s − 1e-4, so VDB index g (the key's grid
+///    coordinate) has its centre at world (g + 0.5)·s − 1e-4, the centre of the points the cache
+///    voxel holds: SHaRC quantises p + 1e-4 (its position bias) into [g·s, (g+1)·s). World units
+///    are the scene's glTF units (metres, +Y up), times the options' length scale (1 unless asked).
 ///  * Per level L the grids `levelL_density` (float, luminance of radiance × scale; fog volume),
 ///    `levelL_color` (Vec3S, radiance × scale), `levelL_radiance` (Vec3S, unscaled mean radiance)
 ///    and `levelL_samples` (float, effective sample count), as chosen by the channels.
@@ -47,6 +48,9 @@ struct VdbExportOptions {
     float scale = 1.0f;            ///< display scale applied to density and color
     bool split_normals = false;    ///< one grid set per normal octant instead of merging
     VdbUpAxis up = VdbUpAxis::kY;  ///< kZ: turn the world +90 degrees about X for Z-up viewers
+    /// Every world position and voxel edge is multiplied by this: 1000 writes a model in metres
+    /// as millimetres, whose micrometre voxels OpenVDB's transforms refuse in metres.
+    double length_scale = 1.0;
     std::string source_path;       ///< recorded in the file metadata
     std::string writer = "sharcbake";  ///< recorded in the file metadata
 };
@@ -62,14 +66,17 @@ struct VdbGridInfo {
 
 enum class VdbExportStatus {
     kOk,
-    kInvalidArgument,  ///< the request: a level the cache lacks, a scale that is not finite
+    kInvalidArgument,  ///< the request: a level the cache lacks, a scale or length scale not finite and > 0
     kIoError,
     kUnrepresentable,  ///< a valid cache VDB cannot hold: no voxels, a voxel size out of VDB's range
 };
 
 /// @brief Writes the grids of `cache` to `out_path` (.vdb). kInvalidArgument: a requested level
-/// is not in the cache or the scale is not finite; kUnrepresentable: the cache holds no voxels or
-/// a voxel size OpenVDB cannot take; kIoError: the file could not be written. `grids` (optional) receives what was written; `message` the reason.
+/// is not in the cache, the scale is not finite or the length scale not finite and positive;
+/// kUnrepresentable: the cache holds no voxels or a voxel size OpenVDB cannot take at the length
+/// scale (the message names the levels that fit and a length scale at which all of them do);
+/// kIoError: the file could not be written. `grids` (optional) receives what was written;
+/// `message` the reason.
 VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_path, const VdbExportOptions& options,
                                  std::vector<VdbGridInfo>* grids, std::string* message);
 
