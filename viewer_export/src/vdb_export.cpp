@@ -327,8 +327,10 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
                 fitting += (fitting.empty() ? "" : ",") + std::to_string(present.level);
         }
         double all_fit = 0.0;
-        for (double candidate = options.length_scale * 10.0; all_fit == 0.0 && candidate <= options.length_scale * 1e15;
-             candidate *= 10.0) {
+        double candidate = options.length_scale;
+        for (int step = 0; step < 15 && all_fit == 0.0; ++step) {
+            candidate *= 10.0;
+            if (!std::isfinite(candidate)) break;
             bool fits = true;
             for (const uint32_t level : levels) fits = fits && transformAt(level, candidate) != nullptr;
             if (fits) all_fit = candidate;
@@ -341,7 +343,8 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
         std::string fix;
         if (!fitting.empty()) fix = "export the levels that fit with --levels " + fitting;
         if (all_fit > 0.0) fix += (fix.empty() ? "" : ", or ") + std::string(scaled);
-        if (fix.empty()) fix = "no level of this cache fits at any length scale";
+        if (fix.empty())
+            fix = "no level of this cache fits at this length scale; a larger --length-scale makes them fit";
         return fail(VdbExportStatus::kUnrepresentable,
                     "level " + std::to_string(l) + ": voxel size " + size + " is out of OpenVDB's range; " + fix);
     }
