@@ -1014,7 +1014,7 @@ private:
         warnAboutLeaks();
         if (autoCapacity()) chooseAutoCapacity();
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
-                                         SharcCache::chooseRadianceScale(estimateMaxRadiance(scene_)));
+                                         SharcCache::chooseRadianceScale(estimateMaxRadiance(*tracer_)));
         resume_settings_ = resumeSettings(metadata(std::nullopt), job_);
         for (auto& setting : cacheNeutralSettings(o_)) resume_settings_.push_back(std::move(setting));
         if (!o_.resume_path.empty()) {

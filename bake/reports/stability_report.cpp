@@ -52,8 +52,9 @@ void addWarnings(StabilityReport& r) {
                    "%.3g, where the brightest radiance the scene's lights give, %.3g, is 2^40 steps): "
                    "dithered rounding keeps them on average, but the voxels they feed hold a few steps "
                    "at most and read as noise or 0. The scene's radiance spans more than the fixed point "
-                   "holds: a small, very bright emitter (or a punctual light, whose radiance counts as "
-                   "seen from 1 cm) sets the scale far above what these surfaces receive. Give such an "
+                   "holds: a small, very bright emitter (or a point or spot light, whose radiance counts as "
+                   "seen from an eighth of its distance to the nearest surface) sets the scale far above what these "
+                   "surfaces receive. Give such an "
                    "emitter more area and less radiance (the same power), or bake the dim part as a "
                    "scene of its own",
                    100.0 * double(r.sub_step_deposits) / double(r.deposits),

@@ -9,6 +9,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 
 namespace sharcbake {
@@ -29,7 +30,8 @@ SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels) {
     return sharc;
 }
 
-double estimateMaxRadiance(const Scene& scene) {
+double estimateMaxRadiance(const Tracer& tracer) {
+    const Scene& scene = tracer.scene();
     double max_radiance = 0.0;
     for (const Material& m : scene.materials) {
         if (m.isEmissive()) max_radiance = std::max(max_radiance, double(maxComponent(m.emissive) * m.emissive_strength));
@@ -40,9 +42,25 @@ double estimateMaxRadiance(const Scene& scene) {
             max_radiance = std::max(max_radiance, double(maxComponent(glm::vec3(t)) * scene.sky.scale));
         }
     }
+    const double diagonal = double(glm::length(scene.bounds_max - scene.bounds_min));
     for (const PunctualLight& light : scene.lights) {
         const double peak = double(maxComponent(light.intensity));
-        max_radiance = std::max(max_radiance, light.type == LightType::Directional ? peak / kPi : peak * 1e4 / kPi);
+        if (light.type == LightType::Directional) {
+            max_radiance = std::max(max_radiance, peak / kPi);
+            continue;
+        }
+        constexpr uint32_t kDirections = 64;
+        const std::vector<float> hits = hitDistancesAround(tracer, light.position, kDirections);
+        double nearest = 0.0;
+        if (!hits.empty()) {
+            nearest = double(*std::min_element(hits.begin(), hits.end())) / 8.0;
+        } else {
+            const glm::vec3 outside = glm::max(glm::max(scene.bounds_min - light.position, glm::vec3(0.0f)),
+                                               light.position - scene.bounds_max);
+            nearest = double(glm::length(glm::max(outside, glm::vec3(0.0f))));
+        }
+        nearest = std::max(nearest, 1e-4 * diagonal);
+        if (nearest > 0.0) max_radiance = std::max(max_radiance, peak / (nearest * nearest) / kPi);
     }
     return max_radiance;
 }

@@ -98,8 +98,14 @@ DepositLevels levelsFor(const Scene& scene, const BakeSettings& settings);
 /// `sharc` with the coarsest level its written cache covers (SharcSettings::coarsest_level).
 SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels);
 
-/// The brightest radiance the scene can put into a voxel, for the fixed-point scale:
-/// emission, sky, and the radiance a white surface facing a punctual light at 1 cm would have.
-double estimateMaxRadiance(const Scene& scene);
+/// The brightest radiance the scene can put into a voxel, for the fixed-point scale: emission,
+/// sky, and for each point or spot light the radiance a white surface facing it would have at an
+/// eighth of the distance to the nearest surface 64 rays from it hit (a surface the rays pass
+/// between, nearer still, fits the scale's 2^22 headroom). That distance is never taken below
+/// 1e-4 of the scene's diagonal (a light touching a surface would otherwise put every other
+/// deposit below one step), and where the rays hit nothing it is the distance to the scene's
+/// bounds. The light's own scene units decide, so a lamp kilometres from the surfaces of a scene
+/// in millimetres does not put the scale where a lamp 1 cm from a wall would.
+double estimateMaxRadiance(const Tracer& tracer);
 
 }  // namespace sharcbake

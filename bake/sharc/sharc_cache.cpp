@@ -170,8 +170,9 @@ double SharcCache::chooseRadianceScale(double max_radiance) {
     // Deposits are float32, so the scale follows the estimate across float32's whole range: from
     // its smallest value (2^-149) to its largest (below 2^128), where one deposit's 2^62 steps
     // still hold 2^22 times the largest float. (A floor at 2^-60 held radiance up to 2^122 = 5.3e36
-    // and clamped an emitter of 1e37 47% low.) An estimate beyond float32 (a punctual light's
-    // 1 cm one can be) takes the largest float's scale; none at all (no light, NaN) takes 1's.
+    // and clamped an emitter of 1e37 47% low.) An estimate beyond float32 (a bright punctual light
+    // next to a surface can give one) takes the largest float's scale; none at all (no light, NaN)
+    // takes 1's.
     constexpr double kLargestFloat = std::numeric_limits<float>::max();
     constexpr double kSmallestFloat = std::numeric_limits<float>::denorm_min();
     const double magnitude = max_radiance > 0.0 ? std::clamp(max_radiance, kSmallestFloat, kLargestFloat) : 1.0;

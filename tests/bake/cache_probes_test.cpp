@@ -35,7 +35,7 @@ struct ShortBake {
         settings.width = settings.height = resolution;
         settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.grid.scene_scale = scene_scale;
-        Baker baker(*tracer, *lights, *path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        Baker baker(*tracer, *lights, *path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(*tracer)));
         for (uint32_t i = 0; i < iterations; ++i) baker.runIteration();
         data = toCacheData(baker.cache());
     }

@@ -103,7 +103,7 @@ protected:
         settings.width = settings.height = 128;
         settings.sharc.grid.capacity = 1u << 18;
         settings.sharc.grid.scene_scale = 5.0f;
-        Baker baker(*tracer_, *lights_, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(*scene_)));
+        Baker baker(*tracer_, *lights_, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(*tracer_)));
         for (uint32_t i = 0; i < 2048; ++i) baker.runIteration();
 
         const SharcCache& cache = baker.cache();

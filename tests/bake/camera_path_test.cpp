@@ -886,7 +886,7 @@ TEST(ExploreFreeSpace, ViewsFromAroundReachTheSurfaceNoFreePointSees) {
     settings.width = settings.height = 320;
     settings.sharc.grid.capacity = 1u << 18;
     const auto unreachedFinest = [&](const CameraPath& path) {
-        Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+        Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(tracer)));
         for (int i = 0; i < 128; ++i) baker.runIteration();
         const CoverageReport report = measureCoverage(scene, baker.cache(), levelsPresent(baker.cache()), 4000);
         return report.unreached_finest_area;

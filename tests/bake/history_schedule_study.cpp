@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
             HistorySchedule::parse(history, settings.sharc.history);
             settings.sharc.propagation_depth = depth;
             settings.path.max_bounces = std::max(8u, depth + 2);
-            Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+            Baker baker(tracer, lights, path, settings, SharcCache::chooseRadianceScale(estimateMaxRadiance(tracer)));
             const auto start = std::chrono::steady_clock::now();
             std::printf("%-9s depth %u:", history, depth);
             for (uint32_t i = 1; i <= 512; ++i) {

@@ -41,7 +41,7 @@ struct TestBakeScene {
     /// A fresh bake of this scene, with the fixed-point scale `sharcbake bake` would choose.
     std::unique_ptr<Baker> makeBaker(const BakeSettings& settings) const {
         return std::make_unique<Baker>(*tracer, *lights, *path, settings,
-                                       SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+                                       SharcCache::chooseRadianceScale(estimateMaxRadiance(*tracer)));
     }
 };
 

@@ -250,7 +250,7 @@ BakeRun runBake(const BakeScene& s, const BakeSettings& settings, uint32_t itera
     BakeRun run;
     const auto setup_start = std::chrono::steady_clock::now();
     Baker baker(s.tracer, s.lights, s.camera_path, settings,
-                SharcCache::chooseRadianceScale(estimateMaxRadiance(s.scene)));
+                SharcCache::chooseRadianceScale(estimateMaxRadiance(s.tracer)));
     run.setup_seconds = secondsSince(setup_start);
     for (uint32_t i = 0; i < warmup; ++i) baker.runIteration();
     const UpdateCounters before = baker.counters();

@@ -188,11 +188,81 @@ TEST(FixedPoint, RadianceAcrossFloat32sRangeIsStoredExactly) {
         EXPECT_EQ(cache.numerics().clamped_deposits, 0u);
         EXPECT_EQ(cache.numerics().sub_step_deposits, 0u);
     }
-    // An estimate beyond float32 (a punctual light's 1 cm one can be) takes the largest float's
+    // An estimate beyond float32 (a bright punctual light next to a surface can give one) takes the largest float's
     // scale; it took 1's, where every deposit above 2^22 was clamped.
     EXPECT_EQ(SharcCache::chooseRadianceScale(std::numeric_limits<double>::infinity()),
               SharcCache::chooseRadianceScale(std::numeric_limits<float>::max()));
     EXPECT_EQ(SharcCache::chooseRadianceScale(1e300), SharcCache::chooseRadianceScale(1e39));
+}
+
+/// A room 6 x 6 x 6 scene units, its walls facing in, with a point light of intensity `intensity`
+/// at (0, height, 0).
+Scene roomWithPointLight(float height, float intensity) {
+    Scene scene;
+    scene.materials.emplace_back();
+    const glm::vec3 lo(-3.0f, 0.0f, -3.0f), hi(3.0f, 6.0f, 3.0f);
+    for (int i = 0; i < 8; ++i)
+        scene.positions.push_back(glm::vec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
+    const int faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+    for (const auto& f : faces) {
+        scene.triangles.push_back(glm::uvec3(f[0], f[1], f[2]));
+        scene.triangles.push_back(glm::uvec3(f[0], f[2], f[3]));
+        scene.triangle_materials.insert(scene.triangle_materials.end(), 2, 0u);
+    }
+    scene.bounds_min = lo;
+    scene.bounds_max = hi;
+    PunctualLight light;
+    light.position = glm::vec3(0.0f, height, 0.0f);
+    light.intensity = glm::vec3(intensity);
+    scene.lights.push_back(light);
+    return scene;
+}
+
+/// A point light's share of the fixed-point scale follows its distance to the surfaces around it
+/// in the scene's own units: a radiance of I / (d/8)^2 / pi, d the nearest of 64 probe rays' hits.
+/// It was I / (1 cm)^2 / pi in any units, so the same room modelled in millimetres, its lamp 10^6
+/// brighter so that the walls receive the same light, had a scale 2^20 coarser and its walls'
+/// light 2^20 fewer steps deep (a few steps, for a lamp 3 m from the walls: noise, and a warning
+/// that blamed the lamp).
+TEST(FixedPoint, APointLightCountsAtItsDistanceToTheSurfacesInTheScenesOwnUnits) {
+    const float intensity = 100.0f;
+    Scene metres = roomWithPointLight(5.0f, intensity);  // 1 m below the ceiling
+    const Tracer metres_tracer(metres);
+    const double estimate = estimateMaxRadiance(metres_tracer);
+    const double at_an_eighth = intensity * 64.0 / kPi;
+    EXPECT_LE(estimate, at_an_eighth * (1.0 + 1e-5));
+    EXPECT_GE(estimate, 0.8 * at_an_eighth);  // the probe ray nearest the ceiling's normal
+
+    Scene millimetres = roomWithPointLight(5.0f, intensity * 1e6f);
+    transformScene(millimetres, 1000.0f, glm::vec3(0.0f));
+    const Tracer millimetres_tracer(millimetres);
+    EXPECT_NEAR(estimateMaxRadiance(millimetres_tracer) / estimate, 1.0, 1e-5);
+    EXPECT_EQ(SharcCache::chooseRadianceScale(estimateMaxRadiance(millimetres_tracer)),
+              SharcCache::chooseRadianceScale(estimate));
+
+    // A light on the floor: 1e-4 of the room's diagonal, not the distance to the floor, so that
+    // the rest of the room keeps its steps.
+    Scene touching = roomWithPointLight(1e-7f, intensity);
+    const Tracer touching_tracer(touching);
+    const double diagonal = double(glm::length(touching.bounds_max - touching.bounds_min));
+    EXPECT_NEAR(estimateMaxRadiance(touching_tracer), intensity / (1e-8 * diagonal * diagonal) / kPi,
+                1e-4 * intensity / (1e-8 * diagonal * diagonal));
+
+    // Far outside a small scene, where no probe ray hits: the distance to its bounds.
+    Scene far;
+    far.materials.emplace_back();
+    far.positions = {{-0.5f, 0.0f, -0.5f}, {0.5f, 0.0f, -0.5f}, {0.5f, 0.0f, 0.5f}, {-0.5f, 0.0f, 0.5f}};
+    far.triangles = {{0, 2, 1}, {0, 3, 2}};
+    far.triangle_materials = {0, 0};
+    far.bounds_min = glm::vec3(-0.5f, 0.0f, -0.5f);
+    far.bounds_max = glm::vec3(0.5f, 0.0f, 0.5f);
+    PunctualLight lamp;
+    lamp.position = glm::vec3(0.0f, 1000.0f, 0.0f);
+    lamp.intensity = glm::vec3(intensity);
+    far.lights.push_back(lamp);
+    const Tracer far_tracer(far);
+    ASSERT_TRUE(hitDistancesAround(far_tracer, lamp.position, 64).empty());
+    EXPECT_NEAR(estimateMaxRadiance(far_tracer), intensity / 1e6 / kPi, 1e-5 * intensity / 1e6 / kPi);
 }
 
 /// A clamp happens only where radiance is 2^22 times the brightest the scale was chosen for;

@@ -121,7 +121,7 @@ private:
         settings.sharc.propagation_depth = config_.propagation_depth;
         settings.sharc.resample_at_end = config_.resample_at_end;
         baker = std::make_unique<Baker>(*tracer, *lights, camera_path, settings,
-                                        SharcCache::chooseRadianceScale(estimateMaxRadiance(scene)));
+                                        SharcCache::chooseRadianceScale(estimateMaxRadiance(*tracer)));
     }
     BakeConfig config_;
 };
