@@ -166,12 +166,14 @@ std::vector<std::string> resumeFromCheckpoint(const std::string& path, const Bak
         cache.grow(data.capacity);
     }
     if (baker.iterationsDone() != 0 || data.capacity != cache.capacity() ||
-        data.bucket_size != cache.table().bucketSize() || data.radiance_scale != cache.radianceScale()) {
+        data.bucket_size != cache.table().bucketSize()) {
         throw CheckpointError(CheckpointError::Kind::kInvalid, path + ": the table (capacity " +
-                                                  std::to_string(data.capacity) + ", radiance scale " +
-                                                  std::to_string(data.radiance_scale) +
-                                                  ") does not match this bake's");
+                                                                   std::to_string(data.capacity) +
+                                                                   ") does not match this bake's");
     }
+    // The fixed-point scale is the checkpoint's: the same settings give the same one, unless the
+    // sharcbake that wrote it chose scales by another rule (point lights counted at 1 cm before).
+    cache.adoptRadianceScale(data.radiance_scale);
     for (const CheckpointSlot& s : data.slots) {
         ResolvedEntry r;
         r.mean = glm::vec3(s.mean[0], s.mean[1], s.mean[2]);

@@ -191,6 +191,12 @@ SharcCache::SharcCache(const SharcSettings& settings, double radiance_scale)
     }
 }
 
+void SharcCache::adoptRadianceScale(double radiance_scale) {
+    if (!touched_.empty() || !(radiance_scale > 0.0) || !std::isfinite(radiance_scale))
+        throw std::logic_error("adoptRadianceScale: a positive, finite scale, before anything is accumulated");
+    radiance_scale_ = radiance_scale;
+}
+
 const ResolvedEntry* SharcCache::findResolved(uint64_t key) const {
     const Probe probe = probeBucket(key, bucketBaseOf(key));
     return probe.found ? &resolved_[probe.slot] : nullptr;

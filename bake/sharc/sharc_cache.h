@@ -168,6 +168,9 @@ public:
     const SharcSettings& settings() const { return settings_; }
     uint32_t capacity() const { return table_.capacity(); }
     double radianceScale() const { return radiance_scale_; }
+    /// Takes a restored bake's scale (a checkpoint's), which a later sharcbake may choose
+    /// differently for the same scene; only while nothing is accumulated, so no sum mixes scales.
+    void adoptRadianceScale(double radiance_scale);
 
     /// The resolved entry of a key, or nullptr when the key is absent. Safe to call from many
     /// threads while no commit or resolve runs.

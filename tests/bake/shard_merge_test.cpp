@@ -30,8 +30,8 @@ namespace {
 /// these tests compare.
 struct BakeScene : TestBakeScene {
     using TestBakeScene::TestBakeScene;
-    std::unique_ptr<Baker> baker(uint32_t shard_index, uint32_t shard_count, uint32_t capacity = 1u << 16,
-                                 bool grow = false) const {
+    static BakeSettings settings(uint32_t shard_index, uint32_t shard_count, uint32_t capacity = 1u << 16,
+                                 bool grow = false) {
         BakeSettings settings;
         settings.width = settings.height = 96;
         settings.shard_index = shard_index;
@@ -39,7 +39,11 @@ struct BakeScene : TestBakeScene {
         settings.sharc.grid.capacity = capacity;
         settings.sharc.grow_when_loaded = grow;
         settings.sharc.grid.scene_scale = 5.0f;  // coarse voxels: a few hundred in the room
-        return makeBaker(settings);
+        return settings;
+    }
+    std::unique_ptr<Baker> baker(uint32_t shard_index, uint32_t shard_count, uint32_t capacity = 1u << 16,
+                                 bool grow = false) const {
+        return makeBaker(settings(shard_index, shard_count, capacity, grow));
     }
     CacheData bake(uint32_t iterations, uint32_t shard_index = 0, uint32_t shard_count = 1) const {
         std::unique_ptr<Baker> b = baker(shard_index, shard_count);
@@ -158,6 +162,18 @@ TEST(Checkpoint, ResumedBakeIsTheUninterruptedBake) {
     ASSERT_EQ(encodeCacheFile(toCacheData(uninterrupted->cache()), &b, nullptr), CacheFileStatus::kOk);
     EXPECT_EQ(a, b);
     EXPECT_EQ(resumed->counters().segments, uninterrupted->counters().segments);
+
+    // A checkpoint whose fixed-point scale this version would choose differently (the rule for
+    // point lights changed) goes on at its own scale: the same bake as before.
+    std::unique_ptr<Baker> rescaled = std::make_unique<Baker>(*cornell.tracer, *cornell.lights, *cornell.path,
+                                                              BakeScene::settings(1, 3),
+                                                              4.0 * first->cache().radianceScale());
+    resumeFromCheckpoint(file, settings, *rescaled);
+    EXPECT_EQ(rescaled->cache().radianceScale(), first->cache().radianceScale());
+    for (int i = 0; i < 7; ++i) rescaled->runIteration();
+    std::vector<uint8_t> c;
+    ASSERT_EQ(encodeCacheFile(toCacheData(rescaled->cache()), &c, nullptr), CacheFileStatus::kOk);
+    EXPECT_EQ(c, b);
 
     // Other settings, or a baker that already ran, are refused.
     std::unique_ptr<Baker> other = cornell.baker(1, 3);
