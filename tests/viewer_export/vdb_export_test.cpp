@@ -19,6 +19,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sharcbake {
@@ -269,6 +270,17 @@ void openInMemory(const CacheData& data, std::vector<uint8_t>& bytes, CacheView&
     ASSERT_EQ(CacheView::openMemory(bytes.data(), bytes.size(), &view, &error), CacheFileStatus::kOk) << error.message;
 }
 
+/// The `level1_radiance` grid and the file metadata of the export at `path`, which is then removed.
+std::pair<openvdb::Vec3SGrid::Ptr, openvdb::MetaMap::Ptr> readLevelOneRadianceAndRemove(const std::string& path) {
+    openvdb::io::File file(path);
+    file.open();
+    const auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("level1_radiance"));
+    const openvdb::MetaMap::Ptr meta = file.getMetadata();
+    file.close();
+    std::remove(path.c_str());
+    return {grid, meta};
+}
+
 // Issue 19: a valid cache that VDB cannot hold is kUnrepresentable (export-vdb exit 3), not a
 // usage error; nothing is written.
 TEST(VdbExportUnrepresentable, EmptyCache) {
@@ -332,12 +344,7 @@ TEST(VdbExportUnrepresentable, MicrometreVoxelsFitAtTheLengthScaleNamed) {
     EXPECT_GE(scaled.length_scale, 10.0);
     EXPECT_LE(scaled.length_scale, 1000.0);
     ASSERT_EQ(exportCacheToVdb(view, out, scaled, nullptr, &message), VdbExportStatus::kOk) << message;
-    openvdb::io::File file(out);
-    file.open();
-    const auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("level1_radiance"));
-    const openvdb::MetaMap::Ptr meta = file.getMetadata();
-    file.close();
-    std::remove(out.c_str());
+    const auto [grid, meta] = readLevelOneRadianceAndRemove(out);
     ASSERT_TRUE(grid);
     ASSERT_EQ(grid->activeVoxelCount(), 1u);
     const openvdb::Vec3d centre = grid->indexToWorld(grid->cbeginValueOn().getCoord());
@@ -381,12 +388,7 @@ TEST(VdbExportFarFromTheOrigin, VoxelsStayInTheRoom) {
     const std::string out = ::testing::TempDir() + "sharcbake_far_" + std::to_string(::getpid()) + ".vdb";
     std::string message;
     ASSERT_EQ(exportCacheToVdb(view, out, VdbExportOptions{}, nullptr, &message), VdbExportStatus::kOk) << message;
-    openvdb::io::File file(out);
-    file.open();
-    const auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("level1_radiance"));
-    const openvdb::MetaMap::Ptr meta = file.getMetadata();
-    file.close();
-    std::remove(out.c_str());
+    const auto [grid, meta] = readLevelOneRadianceAndRemove(out);
     ASSERT_TRUE(grid);
     EXPECT_EQ(grid->activeVoxelCount(), data.voxels.size());
     for (auto it = grid->cbeginValueOn(); it; ++it) {
