@@ -55,9 +55,10 @@ double estimateMaxRadiance(const Tracer& tracer) {
         if (!hits.empty()) {
             nearest = double(*std::min_element(hits.begin(), hits.end())) / 8.0;
         } else {
+            // Per axis, how far the light lies outside the bounds (0 within them).
             const glm::vec3 outside = glm::max(glm::max(scene.bounds_min - light.position, glm::vec3(0.0f)),
                                                light.position - scene.bounds_max);
-            nearest = double(glm::length(glm::max(outside, glm::vec3(0.0f))));
+            nearest = double(glm::length(outside));
         }
         nearest = std::max(nearest, 1e-4 * diagonal);
         if (nearest > 0.0) max_radiance = std::max(max_radiance, peak / (nearest * nearest) / kPi);
