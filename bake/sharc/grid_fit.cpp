@@ -66,6 +66,20 @@ std::pair<double, GridFit::RangeLimit> finestVoxelAllowed(const Scene& scene) {
                                         : std::pair{float_steps, GridFit::RangeLimit::kFloatPrecision};
 }
 
+/// What sets the finest voxels where the grid range does, for the "Grid:" line and the voxel
+/// warning.
+std::string rangeLimitText(const Scene& scene, GridFit::RangeLimit limit) {
+    char text[160];
+    if (limit == GridFit::RangeLimit::kSceneSize) {
+        std::snprintf(text, sizeof text, "the smallest the 17-bit grid allows across a scene %.4g units wide",
+                      2.0 * halfExtent(scene));
+    } else {
+        std::snprintf(text, sizeof text, "the smallest float32 positions %.4g units from the origin resolve",
+                      farthestCoordinate(scene));
+    }
+    return text;
+}
+
 }  // namespace
 
 Float3 gridAnchorFor(const Scene& scene, float finest_voxel_size) {
@@ -381,18 +395,12 @@ GridFit fitLevelBiasReusing(const Scene& scene, const HashGridParameters& grid, 
     }
     char text[640];
     if (fit.limited_by_range) {
-        char limit[160];
-        if (fit.range_limit == GridFit::RangeLimit::kSceneSize) {
-            std::snprintf(limit, sizeof limit, "the smallest the 17-bit grid allows across a scene %.4g units wide",
-                          2.0 * halfExtent(scene));
-        } else {
-            std::snprintf(limit, sizeof limit, "the smallest float32 positions %.4g units from the origin resolve",
-                          farthestCoordinate(scene));
-        }
+        const std::string limit = rangeLimitText(scene, fit.range_limit);
         std::snprintf(text, sizeof text,
                       "level bias %.9g: finest voxels %.4g wide, %s (%s, about %.3g voxels at %s; the budget "
                       "would allow finer)",
-                      double(fit.level_bias), double(fit.finest_voxel_size), limit, surface, fit.estimated_voxels,
+                      double(fit.level_bias), double(fit.finest_voxel_size), limit.c_str(), surface,
+                      fit.estimated_voxels,
                       fit.fitted_to_view_distances ? "the levels the view region's cameras ask for" : "level 1");
     } else if (fit.fitted_to_view_distances) {
         std::snprintf(text, sizeof text,
@@ -491,21 +499,12 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
         }
         return uint64_t(0);
     };
-    // Why no budget makes the voxels finer than `largest` does.
+    // Why no budget makes the voxels finer than `largest` does, and what would.
     const auto rangeNote = [&](GridFit::RangeLimit limit) {
-        char note[240];
-        if (limit == GridFit::RangeLimit::kSceneSize) {
-            std::snprintf(note, sizeof note,
-                          "the finest SHaRC's keys tell apart across a scene %.4g units wide; baking the parts the "
-                          "cameras see as separate scenes allows finer ones",
-                          2.0 * halfExtent(scene));
-        } else {
-            std::snprintf(note, sizeof note,
-                          "the finest float32 positions %.4g units from the origin resolve; moving the scene towards "
-                          "the origin allows finer ones",
-                          farthestCoordinate(scene));
-        }
-        return std::string(note);
+        return rangeLimitText(scene, limit) + (limit == GridFit::RangeLimit::kSceneSize
+                                                   ? "; baking the parts the cameras see as separate scenes allows "
+                                                     "finer ones"
+                                                   : "; moving the scene towards the origin allows finer ones");
     };
     if (fit && fit->limited_by_range && fit->range_limit == GridFit::RangeLimit::kSceneSize) {
         std::snprintf(why, sizeof why,
