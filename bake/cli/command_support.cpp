@@ -288,8 +288,7 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
         std::string dark;
         for (const uint32_t i : lights.darkLights()) {
             const PunctualLight& light = scene.lights[i];
-            dark += std::string(dark.empty() ? "" : ", ") + "light " +
-                    (light.name.empty() ? "#" + std::to_string(i) : "'" + light.name + "'") + ": " + whyDark(light);
+            dark += std::string(dark.empty() ? "" : ", ") + lightLabel(scene, i) + ": " + whyDark(light);
         }
         what = "no light from its punctual lights (" + dark + ")";
     }

@@ -24,11 +24,6 @@ constexpr uint32_t kMinPointsPerMaterial = 16;
 /// before it gives up.
 constexpr int kMaxEmissiveCrossings = 4;
 
-std::string materialLabel(const Scene& scene, uint32_t material) {
-    const std::string& name = scene.materials[material].name;
-    return name.empty() ? "material #" + std::to_string(material) : "material '" + name + "'";
-}
-
 /// The nearest surface behind an emitter that could share its voxels.
 struct SurfaceBehind {
     bool found = false;

@@ -2949,6 +2949,7 @@ private:
                                               const glm::dmat4& world, const OrientationOfPath& orientationOfPath) {
         PunctualLight light;
         light.name = src.name;
+        light.node_name = model_.nodes[size_t(nodeIndex)].name;
         const std::string label = "light " + std::to_string(lightIndex) +
                                   (src.name.empty() ? "" : " " + quoted(src.name)) + " on " + nodeLabel(nodeIndex);
         if (src.type == "directional") light.type = LightType::Directional;

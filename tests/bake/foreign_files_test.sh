@@ -124,7 +124,7 @@ grep -q "no lights" "$work/err.txt" && fail "a spot with a narrow cone is called
 # A light that gives nothing is named, with why.
 scene "$work/dark.gltf" Top/Camera --spot 0.5 --dark
 expect 0 "render under a spot of intensity 0" render "$work/dark.gltf"
-says "$work/err.txt" "no light from its punctual lights (light 'Needle': intensity 0 or a black colour)" \
+says "$work/err.txt" "no light from its punctual lights (spot light 'Needle': intensity 0 or a black colour)" \
     "a light that gives no light is named"
 
 # --- An absurd aspect ratio: ignored with a warning naming the camera; a large image blames it.

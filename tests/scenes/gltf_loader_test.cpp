@@ -1874,6 +1874,27 @@ TEST(GltfLoaderLights, AZeroScaleKeepsTheDirectionOfTheNodesRotation) {
     EXPECT_EQ(said, 1) << testing::PrintToString(scene.stats.warnings);
 }
 
+TEST(GltfLoaderLights, ALightIsLabelledByItsNodesNameAsBlenderNamesTheObject) {
+    // Blender names the node after the object ("Desk lamp") and the light after its data
+    // ("Point"): messages name the object, with the light's own name where it differs.
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"name", "Point"}, {"type", "point"}, {"intensity", 683.0}},
+         {{"name", "Sun"}, {"type", "directional"}},
+         {{"type", "spot"}, {"spot", json::object()}}});
+    const auto light = [](int index) { return json{{"KHR_lights_punctual", {{"light", index}}}}; };
+    b.setScene({b.addNode({{"name", "Desk lamp"}, {"extensions", light(0)}}),
+                b.addNode({{"name", "Sun"}, {"extensions", light(1)}}), b.addNode({{"extensions", light(2)}})});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "named.gltf"));
+    ASSERT_EQ(scene.lights.size(), 3u);
+    EXPECT_EQ(scene.lights[0].node_name, "Desk lamp");
+    EXPECT_EQ(lightLabel(scene, 0), "point light 'Desk lamp' (glTF light 'Point')");
+    EXPECT_EQ(lightLabel(scene, 1), "directional light 'Sun'");
+    EXPECT_EQ(lightLabel(scene, 2), "spot light #2");
+}
+
 TEST(GltfLoaderLights, ALightOfAnUnknownTypeIsSkippedWithAWarning) {
     // KHR_lights_punctual's schema takes any string as a light's type, for types to come; one
     // such light refused the whole file ("unknown type 'area'", exit 3). It is now left out and

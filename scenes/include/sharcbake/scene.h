@@ -169,7 +169,11 @@ struct Material {
 enum class LightType : uint8_t { Point, Spot, Directional };
 
 struct PunctualLight {
-    std::string name;
+    std::string name;  ///< the KHR_lights_punctual light's own name (Blender: the light data's)
+    /// The name of the glTF node that places the light; empty when it has none. Blender names the
+    /// node after the object ("Lamp") and the light after its data ("Point"), and users know a
+    /// light by the object's name.
+    std::string node_name;
     LightType type = LightType::Point;
     glm::vec3 position{0.0f};            ///< world space (point, spot)
     glm::vec3 direction{0.0f, 0.0f, -1.0f};  ///< world-space direction the light travels (spot, directional)
@@ -275,5 +279,13 @@ struct Scene {
 
     bool empty() const { return triangles.empty(); }
 };
+
+/// "material 'Wood'", or "material #3" for one without a name. Names are made printable.
+std::string materialLabel(const Scene& scene, uint32_t material);
+
+/// "point light 'Lamp' (glTF light 'Point')", "directional light 'Sun'", "spot light #2": the
+/// light's kind and its node's name, with the glTF light's where that differs, else the glTF
+/// light's name, else its index. Names are made printable.
+std::string lightLabel(const Scene& scene, size_t light);
 
 }  // namespace sharcbake

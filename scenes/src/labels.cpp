@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-/// @file camera_names.cpp
-/// @brief How messages name a camera: by its node's name, its glTF camera's name or its index.
+/// @file labels.cpp
+/// @brief How messages name a camera, a material and a light: by name where they have one, else by
+/// index.
 #include "message_text.h"
 #include "sharcbake/scene.h"
 
@@ -26,6 +27,26 @@ std::string cameraListEntry(const Camera& camera) {
         entry += std::string(camera.node_name.empty() ? "" : ",") + " glTF camera " + quoted(camera.name);
     if (camera.node_name.empty() && camera.name.empty()) entry += " (no names)";
     return entry;
+}
+
+std::string materialLabel(const Scene& scene, uint32_t material) {
+    const std::string& name = scene.materials[material].name;
+    if (!name.empty()) return "material " + quoted(name);
+    return std::string("material #").append(std::to_string(material));
+}
+
+std::string lightLabel(const Scene& scene, size_t light) {
+    const PunctualLight& l = scene.lights[light];
+    const std::string kind = l.type == LightType::Directional ? "directional light "
+                             : l.type == LightType::Spot      ? "spot light "
+                                                              : "point light ";
+    if (!l.node_name.empty()) {
+        std::string label = kind + quoted(l.node_name);
+        if (!l.name.empty() && l.name != l.node_name) label += " (glTF light " + quoted(l.name) + ")";
+        return label;
+    }
+    if (!l.name.empty()) return kind + quoted(l.name);
+    return kind + std::string("#").append(std::to_string(light));
 }
 
 }  // namespace sharcbake
