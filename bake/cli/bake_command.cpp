@@ -21,6 +21,7 @@
 #include "support/json.h"
 #include "support/progress.h"
 #include "support/stopwatch.h"
+#include "tracing/light_reach.h"
 #include "tracing/render.h"
 #include "tracing/tracer.h"
 
@@ -1001,12 +1002,10 @@ private:
         warnWhenUnlit(scene_, *lights_, "cache");
         warnAboutPunctualLightUnits(*tracer_);
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_, cameras_in_solids_));
+        warnWhenNoLightArrives();
         // The automatic grid fits what the roaming camera's positions (and the scene's cameras) see.
         if (job_.level_bias_auto) {
-            std::vector<glm::vec3> viewpoints;
-            for (const CameraPose& pose : camera_path_->waypoints()) viewpoints.push_back(pose.position);
-            for (const Camera& camera : scene_.cameras) viewpoints.push_back(camera.position);
-            seen_ = surfaceSeenFrom(*tracer_, viewpoints, kSeenSurfaceSamples, job_.settings.seed);
+            seen_ = surfaceSeenFrom(*tracer_, bakeViewpoints(), kSeenSurfaceSamples, job_.settings.seed);
         }
         grid_decision_ = decideGrid(job_, *tracer_, seen_ ? &*seen_ : nullptr);
         for (const std::string& warning : grid_decision_.warnings)
@@ -1196,6 +1195,36 @@ private:
         stability_ = makeStabilityReport(cache, baker_->counters(), scene_.bounds_min, scene_.bounds_max, levels_);
         if (lights_->hasLights())
             addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, &*lights_, 2048, job_.settings.seed));
+    }
+
+    /// The roaming camera's waypoints and the scene's glTF cameras: where the bake looks from.
+    std::vector<glm::vec3> bakeViewpoints() const {
+        std::vector<glm::vec3> viewpoints;
+        for (const CameraPose& pose : camera_path_->waypoints()) viewpoints.push_back(pose.position);
+        for (const Camera& camera : scene_.cameras) viewpoints.push_back(camera.position);
+        return viewpoints;
+    }
+
+    /// The roaming camera's rays: 64 poses spread over its path, `rays_per_pose` rays each.
+    std::vector<Ray> probeRays(uint32_t rays_per_pose) const {
+        return sampleCameraPathRays(*camera_path_, job_.settings.width, job_.settings.height, 64, rays_per_pose,
+                                    job_.settings.seed);
+    }
+
+    /// A scene with lights whose light never reaches what the bake's camera sees (a sun inside a
+    /// sky dome modelled as a plain sphere, a lamp inside a closed bulb) bakes a cache of zeros,
+    /// which nothing numerical flags: said before baking, with what stops each light, when paths
+    /// along 4096 of the roaming camera's rays meet surfaces but no light.
+    void warnWhenNoLightArrives() {
+        if (!lights_->hasLights()) return;  // warnWhenUnlit said so
+        const std::vector<Ray> rays = probeRays(64);
+        const LightProbe probe = probeLight(*tracer_, *lights_, rays, job_.settings.seed);
+        if (probe.met_light || probe.surface_hits < kProbeHitsForAVerdict) return;
+        warned_no_light_ = true;
+        std::fprintf(stderr,
+                     "warning: none of %u paths from the roaming camera met light (%u of them met a surface), so "
+                     "the cache will be black: %s\n",
+                     probe.paths, probe.surface_hits, whyNoLightArrives(*tracer_, rays).c_str());
     }
 
     /// Light leaks the voxels will cause, seen from the scene's own cameras (render's automatic
@@ -1422,6 +1451,13 @@ private:
                          "%s\n",
                          100.0 * unreached, coverage_.points, sight, remedies);
         }
+        if (live_voxels_ > 0 && stability_.deposits > 0 && !(stability_.deposited_energy > 0.0) &&
+            lights_->hasLights() && !warned_no_light_) {
+            // The probe before the bake found light the bake's own paths never did, or too few of
+            // its rays met a surface to tell; more of the camera's rays find what it sees.
+            std::fprintf(stderr, "warning: the cache is black: none of its %llu deposits carried light: %s\n",
+                         (unsigned long long)stability_.deposits, whyNoLightArrives(*tracer_, probeRays(1024)).c_str());
+        }
         if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
         // Without the summary (-q) its Stability section's warnings would go unsaid.
         if (o_.quiet) {
@@ -1459,6 +1495,7 @@ private:
     std::optional<SeenSurface> seen_;  ///< what the roaming camera's positions see (--level-bias auto)
     std::string camera_description_;
     std::vector<std::string> cameras_in_solids_;  ///< makeCameraPath's, for the hit-rate warning
+    bool warned_no_light_ = false;                ///< warnWhenNoLightArrives warned that the cache will be black
     std::optional<CameraPath> camera_path_;
     CapacityChoice capacity_choice_;
     std::string capacity_choice_text_;  ///< empty for a fixed --capacity

@@ -13,6 +13,7 @@
 #include "support/json.h"
 #include "support/progress.h"
 #include "support/stopwatch.h"
+#include "tracing/light_reach.h"
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
@@ -461,11 +462,19 @@ private:
             if (p != glm::vec3(0.0f)) return;
         }
         const std::string camera = camera_.index >= 0 ? cameraLabel(camera_) : "camera '" + camera_.name + "'";
+        // What the camera sees, and what stops each light on its way there: a 64 x 64 grid of its rays.
+        constexpr int kGrid = 64;
+        const CameraRays rays_of(camera_, width_, height_);
+        std::vector<Ray> rays;
+        for (int y = 0; y < kGrid; ++y) {
+            for (int x = 0; x < kGrid; ++x)
+                rays.push_back(rays_of.generate(x * width_ / kGrid, y * height_ / kGrid, glm::vec2(0.5f)));
+        }
         std::fprintf(stderr,
                      "warning: every pixel of the image is black: no light reaches what %s at (%g, %g, %g) "
-                     "sees. It may stand inside a closed object, or every light may be behind walls from it; "
-                     "--camera or --look-at choose another view\n",
-                     camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z);
+                     "sees: %s. --camera or --look-at choose another view\n",
+                     camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z,
+                     whyNoLightArrives(*tracer_, rays).c_str());
     }
 
     void warnAboutHitRate() const {

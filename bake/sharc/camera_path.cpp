@@ -3,6 +3,8 @@
 #include "sharcbake/scene.h"
 #include "support/box.h"
 
+#include "tracing/light_reach.h"
+#include "tracing/render.h"
 #include "tracing/sampling.h"
 #include "tracing/surface.h"
 #include "tracing/surface_points.h"
@@ -27,11 +29,6 @@ const char* toString(CameraPathSource source) {
     return "explore";
 }
 namespace {
-
-/// Uniform random numbers for values that are not per-pixel samples (camera placement).
-float hashToUnitFloat(uint32_t seed, uint32_t a, uint32_t b) {
-    return bitsToUnitFloat(hashCombine(hashCombine(hashUint32(seed), a), b));
-}
 
 /// Probes in the axis directions plus the eight diagonals: enough to tell a closed solid from open
 /// space.
@@ -182,55 +179,6 @@ namespace {
 /// Rays from the centre of a closed space, and one bounce on from where each lands: the surfaces
 /// a view from inside would see, and where light falling into the space would show.
 constexpr uint32_t kEnclosureRays = 64;
-/// Points on emitters tested against those surfaces: this many spread by area, as many again one
-/// on each of evenly spaced emissive triangles, so a small bulb beside a large lit panel (or
-/// behind the space's own walls) still gets some.
-constexpr uint32_t kEmitterPoints = 64;
-
-/// A point on an emissive triangle and how far rays leaving it start off it (rayOffsetFor; light
-/// sampling's EmitterPoint does not carry it, since its rays end on the emitter).
-struct LitPoint {
-    EmitterPoint point;
-    float ray_offset = 0.0f;
-};
-
-/// Points on the scene's emissive triangles (where their emission is not black).
-std::vector<LitPoint> sampleEmitterPoints(const Scene& scene) {
-    std::vector<uint32_t> emitters;
-    std::vector<double> cumulative_area;
-    double area = 0.0;
-    for (uint32_t t = 0; t < uint32_t(scene.triangles.size()); ++t) {
-        if (!scene.materials[scene.triangle_materials[t]].isEmissive()) continue;
-        const glm::uvec3 tri = scene.triangles[t];
-        area += 0.5 * double(glm::length(glm::cross(scene.positions[tri.y] - scene.positions[tri.x],
-                                                    scene.positions[tri.z] - scene.positions[tri.x])));
-        emitters.push_back(t);
-        cumulative_area.push_back(area);
-    }
-    std::vector<LitPoint> points;
-    if (emitters.empty()) return points;
-    for (uint32_t i = 0; i < 2 * kEmitterPoints; ++i) {
-        const double u = (double(i % kEmitterPoints) + 0.5) / double(kEmitterPoints);
-        const size_t k = i < kEmitterPoints
-                             ? size_t(std::lower_bound(cumulative_area.begin(), cumulative_area.end(), u * area) -
-                                      cumulative_area.begin())
-                             : size_t(u * double(emitters.size()));
-        const glm::vec2 b = sampleUniformTriangle({hashToUnitFloat(i, 0, 1), hashToUnitFloat(i, 0, 2)});
-        const uint32_t t = emitters[std::min(k, emitters.size() - 1)];
-        const EmitterPoint e = makeEmitterPoint(scene, t, b.x, b.y);
-        if (!(maxComponent(e.emission) > 0.0f)) continue;
-        const glm::uvec3 tri = scene.triangles[t];
-        points.push_back(LitPoint{e, rayOffsetFor(scene.positions[tri.x], scene.positions[tri.y],
-                                                  scene.positions[tri.z], e.face_normal)});
-    }
-    return points;
-}
-
-/// True when a punctual light gives any light at all (the light sampler skips the others).
-bool givesLight(const PunctualLight& light) {
-    return maxComponent(light.intensity) > 0.0f && (light.type != LightType::Spot || light.outer_cone_angle > 0.0f);
-}
-
 /// Whether most of what `center` sees emits: inside a glowing object (a closed emissive model,
 /// double-sided), or inside a sky dome modelled as an emissive mesh. 64 rays. "Emits" here is the
 /// radiance at the point the ray meets (textures and sides included: a dark texel does not glow),
@@ -738,6 +686,23 @@ CameraPose CameraPath::poseAt(uint32_t iteration) const {
         pose.position += (2.0f * u - 1.0f) * position_jitter_;
     }
     return pose;
+}
+
+std::vector<Ray> sampleCameraPathRays(const CameraPath& path, int width, int height, uint32_t poses,
+                                      uint32_t rays_per_pose, uint32_t seed) {
+    std::vector<Ray> rays;
+    rays.reserve(size_t(poses) * rays_per_pose);
+    const uint64_t period = path.period();
+    for (uint32_t k = 0; k < poses; ++k) {
+        const CameraRays camera(toCamera(path.poseAt(uint32_t(uint64_t(k) * period / poses))), width, height);
+        for (uint32_t i = 0; i < rays_per_pose; ++i) {
+            const uint32_t id = k * rays_per_pose + i;
+            const int x = std::min(int(hashToUnitFloat(seed, id, 5) * float(width)), width - 1);
+            const int y = std::min(int(hashToUnitFloat(seed, id, 6) * float(height)), height - 1);
+            rays.push_back(camera.generate(x, y, {hashToUnitFloat(seed, id, 7), hashToUnitFloat(seed, id, 8)}));
+        }
+    }
+    return rays;
 }
 
 std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,

@@ -174,6 +174,13 @@ private:
     uint32_t seed_;
 };
 
+/// Rays of the roaming camera: `poses` poses spread evenly over one loop of the path (its
+/// period), `rays_per_pose` rays from each through pixels of a `width` x `height` image drawn at
+/// random, as the bake's update paths leave it. What a probe before the bake traces to learn what
+/// the bake's paths will meet. Deterministic for a seed.
+std::vector<Ray> sampleCameraPathRays(const CameraPath& path, int width, int height, uint32_t poses,
+                                      uint32_t rays_per_pose, uint32_t seed);
+
 /// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's
 /// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
 /// new random direction. A scene whose free space is open (escaped_fraction at least

@@ -96,6 +96,12 @@ inline uint32_t reversedSobolDimension1(uint32_t index) {
 /// Maps 32 random bits to a float in [0, 1).
 inline float bitsToUnitFloat(uint32_t bits) { return float(bits >> 8) * 0x1p-24f; }
 
+/// A uniform number in [0, 1) from a seed and two indices: for values that are not per-pixel
+/// samples (camera placement, probes before a bake), deterministic and independent of any sampler.
+inline float hashToUnitFloat(uint32_t seed, uint32_t a, uint32_t b) {
+    return bitsToUnitFloat(hashCombine(hashCombine(hashUint32(seed), a), b));
+}
+
 // --- The per-pixel sampler ---------------------------------------------------------------------
 
 /// Sample stream for one (pixel, sample index). Dimensions are consumed in a fixed order by the

@@ -313,6 +313,30 @@ expect 0 "render from inside the box" "$sharcbake" render "$work/box.gltf" -o "$
     --spp 1 --no-png --sky 1,1,1 --look-at 0,0.8,0,0,0.8,-1
 says "$work/err.txt" "warning: every pixel of the image is black: no light reaches what camera '--look-at' at (0, 0.8, 0)" \
     "a black image from inside a closed object is warned about"
+says "$work/err.txt" "no ray from them leaves the scene, so the sky lights only its outside" \
+    "the black image's warning says the sky does not get in"
+# The box as a sky dome modelled as a plain mesh, around a camera, under a sun: the sun never gets
+# in, and the bake said "no problems found" of a cache of zeros. The probe before the bake says the
+# cache will be black, and names the dome's material as what blocks the sun.
+python3 - "$work/box.gltf" "$work/dome.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+g["materials"][0]["name"] = "dome"
+g["extensionsUsed"] = ["KHR_lights_punctual"]
+g["extensions"] = {"KHR_lights_punctual": {"lights": [{"name": "Sun", "type": "directional", "intensity": 3}]}}
+g["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}]
+g["nodes"] += [{"camera": 0, "translation": [0, 0.8, 0]},
+               {"extensions": {"KHR_lights_punctual": {"light": 0}}, "rotation": [-0.7071068, 0, 0, 0.7071068]}]
+g["scenes"][0]["nodes"] += [1, 2]
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "bake a camera and a sun inside a closed dome" "$sharcbake" bake "$work/dome.gltf" -o "$work/dome.sharc" \
+    --iterations 4
+says "$work/err.txt" "warning: none of 4096 paths from the roaming camera met light (4096 of them met a surface), so the cache will be black" \
+    "a sun inside a closed dome is warned about before the bake"
+says "$work/err.txt" "directional light 'Sun': every ray towards it from the [0-9]* of them facing it is blocked, 100% first by material 'dome'" \
+    "the warning names the dome's material as what keeps the sun out"
+says "$work/out.txt" "energy: [0-9]* deposits, 0 deposited" "the cache the warning foretold is black"
 # Baked without a camera, the box is seen from around: its inside, where the roaming camera
 # stood before, is black and no runtime camera sees it, and 387 of the automatic camera's 401
 # primary hits found no voxel.
