@@ -61,7 +61,7 @@ struct BakeOptions {
     float log_base = kHashGridDefaultLogarithmBase;
     std::string level_bias = "auto";   // a number, or "auto": fitted to the scene (grid_fit.h)
     uint64_t voxel_budget = kDefaultVoxelBudget;
-    std::string view_region = "free";
+    std::string view_region = "auto";
     uint32_t prediction_views = 32;
     std::string capacity = "4194304";  // the SDK default, or "auto"
     uint32_t update_stride = 5;
@@ -674,7 +674,7 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
                              ? "The roaming camera never reached part of the surface: give more --iterations, a "
                                "--camera-path through the places the views see, or --camera-source gltf."
                              : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
-                               "holds the views (free, the default, holds every camera position).";
+                               "holds the views (free holds every camera position).";
     // A lowest camera that stands inside a solid by the winding may be inside a closed object by
     // mistake, where no bake reaches what it sees: more iterations would not help it.
     std::string inside;
@@ -705,6 +705,45 @@ struct GridDecision {
     }
 };
 
+/// SHaRC refusing this share of the glTF cameras' lookups on free space's grid or more makes
+/// `--view-region auto` keep the grid to the glTF cameras; it keeps it there only where their
+/// grid refuses less than kServedRefusedShare.
+constexpr double kFreeFailsRefusedShare = 0.9;
+constexpr double kServedRefusedShare = 0.5;
+
+/// `--view-region auto` (the default) is free space, unless the scene's glTF cameras would get
+/// nothing from it: a few small objects on a ground plane 2000 times their size get level-1
+/// voxels 30 units wide in the voxel budget, every bounce from the camera is shorter than its voxel,
+/// and SHaRC's eligibility tests refuse all of its lookups. Where free space's grid has 90% or more
+/// of the glTF cameras' lookups refused and the grid fitted to the glTF cameras has fewer than
+/// half refused, the region becomes the glTF cameras (`region` and its `source`, which says why).
+void keepToGltfCamerasWhereFreeFails(uint64_t voxel_budget, const Tracer& tracer, const SeenSurface* seen,
+                                     const HashGridParameters& grid, ViewRegion& region) {
+    const Scene& scene = tracer.scene();
+    if (scene.cameras.empty()) return;
+    HashGridParameters free_grid = grid;
+    free_grid.level_bias = fitLevelBias(scene, grid, voxel_budget, seen, &region).level_bias;
+    const float free_voxel = voxelSize(kHashGridLevelMin, free_grid);
+    const double free_refused = refusedLookupShare(tracer, free_grid, gridAnchorFor(scene, free_voxel));
+    if (free_refused < kFreeFailsRefusedShare) return;
+    ViewRegion at_cameras;
+    at_cameras.kind = ViewRegion::Kind::Points;
+    for (const Camera& c : scene.cameras) at_cameras.points.push_back(c.position);
+    HashGridParameters camera_grid = grid;
+    camera_grid.level_bias = fitLevelBias(scene, grid, voxel_budget, seen, &at_cameras).level_bias;
+    const double camera_refused = refusedLookupShare(tracer, camera_grid,
+                                                     gridAnchorFor(scene, voxelSize(kHashGridLevelMin, camera_grid)));
+    if (!(camera_refused < kServedRefusedShare)) return;
+    char why[320];
+    std::snprintf(why, sizeof why,
+                  "the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels %.3g wide would "
+                  "have SHaRC refuse %.0f%% of their lookups (each bounce shorter than its voxel), here %.0f%%; "
+                  "--view-region free keeps runtime cameras anywhere",
+                  double(free_voxel), 100.0 * free_refused, 100.0 * camera_refused);
+    region = at_cameras;
+    region.source = why;
+}
+
 /// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
 /// or checks the given one against the scene.
 GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* seen) {
@@ -728,6 +767,10 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
     }
     GridDecision decision;
     HashGridParameters& grid = settings.sharc.grid;
+    if (region.kind == ViewRegion::Kind::FreeSpace && region.source == "auto") {
+        region.source.clear();
+        if (job.level_bias_auto) keepToGltfCamerasWhereFreeFails(job.voxel_budget, tracer, seen, grid, region);
+    }
     if (job.level_bias_auto) {
         const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen, &region);
         grid.level_bias = fit.level_bias;
@@ -1663,8 +1706,9 @@ void registerBakeCommand(CLI::App& app) {
         "its hash-grid voxel, and resolves the voxels. The result is written as a .sharc file.\n"
         "Same scene, options and --seed give a byte-identical cache for any --threads.\n\n"
         "SHaRC picks a lookup's level from the runtime camera's distance, so each vertex is cached\n"
-        "at every level a camera of --view-region (default: anywhere) can ask for there, on a grid\n"
-        "whose finest level is fitted to the scene's units (--level-bias auto). After the bake the\n"
+        "at every level a camera of --view-region can ask for there (default: anywhere, unless that\n"
+        "leaves the glTF cameras nothing), on a grid whose finest level is fitted to the scene's\n"
+        "units (--level-bias auto). After the bake the\n"
         "share of SHaRC's exact lookups the cache answers from the scene's cameras and sampled\n"
         "viewpoints is printed as the predicted hit rate (a warning below 95%).\n\n"
         "Examples:\n"
@@ -1714,12 +1758,15 @@ void registerBakeCommand(CLI::App& app) {
                     "place instead (finer voxels where they stand, coarse far away)")
         ->capture_default_str()
         ->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
-    cmd->add_option("--view-region", o->view_region,
-                    "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
-                    "level such a camera can ask for there. free: anywhere (every level from the finest up); gltf: "
-                    "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "
-                    "distance:MIN[:MAX]: never nearer than MIN to what it looks up; bake-camera: only the "
-                    "roaming camera's own levels (the SDK's rule, no coverage)")
+    cmd->add_option(
+           "--view-region", o->view_region,
+           "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
+           "level such a camera can ask for there. auto: free, unless in free space SHaRC would refuse 90% "
+           "or more of the glTF cameras' lookups (voxels far wider than what they see: small objects on a "
+           "vast ground) and gltf would not, then gltf; free: anywhere (every level from the finest up); gltf: "
+           "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "
+           "distance:MIN[:MAX]: never nearer than MIN to what it looks up; bake-camera: only the "
+           "roaming camera's own levels (the SDK's rule, no coverage)")
         ->capture_default_str();
     cmd->add_option("--prediction-views", o->prediction_views,
                     "Viewpoints of the region, besides the glTF cameras, from which the bake predicts its hit rate")

@@ -491,8 +491,8 @@ private:
             // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
             std::fprintf(stderr,
                          "warning: the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); "
-                         "the rest were traced. It was baked for other views: bake with --view-region free (the "
-                         "default) or a region holding this camera, and check the bake's \"predicted hit rate\"%s\n",
+                         "the rest were traced. It was baked for other views: bake with --view-region free or a "
+                         "region holding this camera, and check the bake's \"predicted hit rate\"%s\n",
                          100.0 * hit_rate_, describeLevels(cache_->levels()).c_str(), o_.cache_path.c_str(),
                          o_.cache_lookup == "nearest"
                              ? ""

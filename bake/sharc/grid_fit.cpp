@@ -532,7 +532,7 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
                       bias, double(voxelAtDistance(finer, room)));
     } else if (region.kind == ViewRegion::Kind::FreeSpace) {
         std::snprintf(why, sizeof why,
-                      "They are that wide because --view-region free (the default) lets a runtime camera stand "
+                      "They are that wide because --view-region free lets a runtime camera stand "
                       "anywhere the roaming camera reaches, so all %.3g units^2 it sees get level 1 within "
                       "--voxel-budget %llu.",
                       fit->surface_area, (unsigned long long)voxel_budget);

@@ -54,6 +54,22 @@ std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion
     return views;
 }
 
+double refusedLookupShare(const Tracer& tracer, const HashGridParameters& grid, Float3 grid_anchor) {
+    CacheData empty;
+    empty.logarithm_base = grid.logarithm_base;
+    empty.scene_scale = grid.scene_scale;
+    empty.level_bias = grid.level_bias;
+    empty.grid_anchor = grid_anchor;
+    empty.bake_capacity = grid.capacity;
+    // Declared, as the bake's prediction has them: a camera with few lookups at 64 x 64 (small
+    // objects in its frame) is replayed larger, so its share rests on enough of them.
+    std::vector<PredictionView> views;
+    for (const Camera& c : tracer.scene().cameras) views.push_back(PredictionView{c, true});
+    const HitRatePrediction p = predictHitRate(tracer, empty, ViewRegion{}, views);
+    const uint64_t lookups = p.eligible + p.refused;
+    return lookups >= kLookupsForARate ? double(p.refused) / double(lookups) : 0.0;
+}
+
 std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
                                             uint32_t seed) {
     const Scene& scene = tracer.scene();

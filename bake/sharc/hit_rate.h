@@ -60,6 +60,14 @@ std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion
 std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
                                             uint32_t seed);
 
+/// The share of the lookups from the scene's glTF cameras (replayed as predictHitRate replays
+/// declared views: 64 x 64 pixels, larger for a camera with few lookups; one diffuse bounce per
+/// pixel) that SHaRC's eligibility tests refuse on `grid` whose keys decode near `grid_anchor`:
+/// near 1 where the voxels are far larger than what the cameras see (a bounce shorter than its
+/// voxel is refused). What the cache holds does not matter. 0 when the cameras make fewer than
+/// kLookupsForARate lookups in all.
+double refusedLookupShare(const Tracer& tracer, const HashGridParameters& grid, Float3 grid_anchor);
+
 /// A declared view with fewer lookups than this at the prediction's size (a small model in its
 /// frame) is replayed at 4 and then 16 times the size in each direction (kDeclaredViewMaxScale).
 inline constexpr uint64_t kDeclaredViewMinLookups = 1000;

@@ -50,7 +50,8 @@ std::string ViewRegion::describe() const {
     case Kind::FreeSpace:
         return "free space (any camera position)";
     case Kind::Points:
-        return std::to_string(points.size()) + " camera positions (" + source + ")";
+        return std::to_string(points.size()) + (points.size() == 1 ? " camera position (" : " camera positions (") +
+               source + ")";
     case Kind::Box:
         return "box " + formatVec3(box_min) + "-" + formatVec3(box_max);
     case Kind::Distance:
@@ -69,8 +70,12 @@ std::string ViewRegion::describe() const {
 ViewRegion parseViewRegion(const std::string& text) {
     ViewRegion region;
     const std::string forms =
-        "expected free, gltf, path, box:x0,y0,z0,x1,y1,z1, distance:MIN, distance:MIN:MAX or bake-camera";
+        "expected auto, free, gltf, path, box:x0,y0,z0,x1,y1,z1, distance:MIN, distance:MIN:MAX or bake-camera";
     if (text == "free") return region;
+    if (text == "auto") {
+        region.source = "auto";
+        return region;
+    }
     if (text == "bake-camera") {
         region.kind = ViewRegion::Kind::BakeCamera;
         return region;

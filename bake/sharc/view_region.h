@@ -52,8 +52,9 @@ struct ViewRegion {
 };
 
 /// Parses --view-region: "free", "box:x0,y0,z0,x1,y1,z1", "distance:MIN" or "distance:MIN:MAX",
-/// "bake-camera". "gltf" and "path" need the scene's cameras / the path file and are resolved by
-/// the caller (they return Kind::Points with no points and `source` set to "gltf" / "path").
+/// "bake-camera". "gltf", "path" and "auto" need the scene's cameras / the path file and are
+/// resolved by the caller (gltf and path return Kind::Points with no points and `source` set to
+/// "gltf" / "path"; auto returns Kind::FreeSpace with `source` "auto").
 /// Throws std::invalid_argument with a message naming the accepted forms.
 ViewRegion parseViewRegion(const std::string& text);
 

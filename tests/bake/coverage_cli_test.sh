@@ -171,7 +171,7 @@ expect 0 "a region box" "$sharcbake" bake "$cornell" -o "$work/box.sharc" --iter
 says "$work/out.txt" "Views: box" "a box region is described"
 expect 0 "the glTF cameras as the region" "$sharcbake" bake "$cornell" -o "$work/gltf.sharc" --iterations 8 \
     --resolution 160x90 --view-region gltf
-says "$work/out.txt" "Views: 1 camera positions" "a glTF camera region is described"
+says "$work/out.txt" "Views: 1 camera position" "a glTF camera region is described"
 expect 0 "a distance range" "$sharcbake" bake "$cornell" -o "$work/far.sharc" --iterations 8 --resolution 160x90 \
     --view-region distance:1.5
 says "$work/out.txt" "ask for finer levels and miss" "the bake says which camera distances will miss"
@@ -184,9 +184,14 @@ expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.shar
 # gives the whole ground level 1, in voxels wider than the rooms, and the bake says so with the fix;
 # the glTF cameras as the region count each part of the surface at their distance's level, and the
 # budget the warning names makes the voxels fine enough. A bias given by hand gets a bias as its fix.
+# By default (auto) the region is the glTF cameras: in free space SHaRC refuses their lookups.
 python3 "$(dirname "$0")/../bench/light_selection_scenes.py" "$work" || failures=$((failures + 1))
-expect 0 "a flat on a 2 km ground" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
+expect 0 "a flat on a 2 km ground by default" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
     --iterations 2 --resolution 64x64
+says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels 5.58 wide" \
+    "by default the flat's grid is kept to its glTF cameras"
+expect 0 "a flat on a 2 km ground in free space" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
+    --iterations 2 --resolution 64x64 --view-region free
 says "$work/err.txt" "warning: the voxels around camera 'room_[0-3]', 5.58 wide, are wider than 1/8 of the distance" \
     "voxels wider than the rooms around the cameras are warned about"
 says "$work/err.txt" "view-region gltf --voxel-budget 524288 fits the voxels to their distances (0.0329 wide here" \
