@@ -129,6 +129,7 @@ struct BakeJob {
     bool scene_scale_auto = true;
     bool capacity_auto = false;
     uint64_t voxel_budget = kDefaultVoxelBudget;  ///< what an auto level bias fits to
+    bool voxel_budget_given = false;              ///< --voxel-budget is not the default (auto region keeps it)
     bool light_selection_by_power = false;        ///< --light-selection power
 };
 
@@ -559,6 +560,9 @@ BakeJob bakeJobFromOptions(const BakeOptions& o) {
     job.scene_scale_auto = o.scene_scale == "auto";
     job.capacity_auto = o.capacity == "auto";
     job.voxel_budget = o.voxel_budget;
+    // A budget other than the default is the user's: --view-region auto keeps it. (Not whether the
+    // option was given: --print-config writes the default into the file it makes.)
+    job.voxel_budget_given = o.voxel_budget != kDefaultVoxelBudget;
     return job;
 }
 
@@ -706,42 +710,62 @@ struct GridDecision {
 };
 
 /// SHaRC refusing this share of the glTF cameras' lookups on free space's grid or more makes
-/// `--view-region auto` keep the grid to the glTF cameras; it keeps it there only where their
-/// grid refuses less than kServedRefusedShare.
+/// `--view-region auto` consider keeping the grid to the glTF cameras; it keeps it there only where
+/// their grid refuses less than kServedRefusedShare.
 constexpr double kFreeFailsRefusedShare = 0.9;
 constexpr double kServedRefusedShare = 0.5;
+/// The most `--view-region auto` multiplies the default voxel budget by to give the glTF cameras
+/// voxels fine enough (2^21 voxels, a file of about 50 MB).
+constexpr uint64_t kAutoBudgetGrowth = 16;
 
 /// `--view-region auto` (the default) is free space, unless the scene's glTF cameras would get
-/// nothing from it: a few small objects on a ground plane 2000 times their size get level-1
-/// voxels 30 units wide in the voxel budget, every bounce from the camera is shorter than its voxel,
-/// and SHaRC's eligibility tests refuse all of its lookups. Where free space's grid has 90% or more
-/// of the glTF cameras' lookups refused and the grid fitted to the glTF cameras has fewer than
-/// half refused, the region becomes the glTF cameras (`region` and its `source`, which says why).
-void keepToGltfCamerasWhereFreeFails(uint64_t voxel_budget, const Tracer& tracer, const SeenSurface* seen,
+/// nothing from it: small objects on a ground plane 2000 times their size get level-1 voxels 30
+/// units wide in the voxel budget, every bounce from the camera is shorter than its voxel, and
+/// SHaRC's eligibility tests refuse all of its lookups (the runtime traces every path: right, but
+/// no cache). Where free space's grid has 90% or more of the glTF cameras' lookups refused, the
+/// region becomes the glTF cameras (`region`, its `source` saying why) if their grid serves them:
+/// fewer than half refused, and voxels no wider than the voxel warning allows
+/// (checkVoxelsAroundCameras), in the budget or, where it is the default, in up to 16 times it
+/// (`job.voxel_budget` grows). Otherwise free space it stays: passing lookups into voxels
+/// about a room wide would be worse than refusing them (the flat of 4 m rooms on a 2 km ground,
+/// kept to its cameras in the default budget, rendered through the cache 110% too bright).
+void keepToGltfCamerasWhereFreeFails(BakeJob& job, const Tracer& tracer, const SeenSurface* seen,
                                      const HashGridParameters& grid, ViewRegion& region) {
     const Scene& scene = tracer.scene();
     if (scene.cameras.empty()) return;
     HashGridParameters free_grid = grid;
-    free_grid.level_bias = fitLevelBias(scene, grid, voxel_budget, seen, &region).level_bias;
+    free_grid.level_bias = fitLevelBias(scene, grid, job.voxel_budget, seen, &region).level_bias;
     const float free_voxel = voxelSize(kHashGridLevelMin, free_grid);
     const double free_refused = refusedLookupShare(tracer, free_grid, gridAnchorFor(scene, free_voxel));
     if (free_refused < kFreeFailsRefusedShare) return;
     ViewRegion at_cameras;
     at_cameras.kind = ViewRegion::Kind::Points;
     for (const Camera& c : scene.cameras) at_cameras.points.push_back(c.position);
-    HashGridParameters camera_grid = grid;
-    camera_grid.level_bias = fitLevelBias(scene, grid, voxel_budget, seen, &at_cameras).level_bias;
-    const double camera_refused = refusedLookupShare(tracer, camera_grid,
-                                                     gridAnchorFor(scene, voxelSize(kHashGridLevelMin, camera_grid)));
-    if (!(camera_refused < kServedRefusedShare)) return;
-    char why[320];
-    std::snprintf(why, sizeof why,
-                  "the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels %.3g wide would "
-                  "have SHaRC refuse %.0f%% of their lookups (each bounce shorter than its voxel), here %.0f%%; "
-                  "--view-region free keeps runtime cameras anywhere",
-                  double(free_voxel), 100.0 * free_refused, 100.0 * camera_refused);
-    region = at_cameras;
-    region.source = why;
+    const uint64_t most = job.voxel_budget_given ? job.voxel_budget : job.voxel_budget * kAutoBudgetGrowth;
+    for (uint64_t budget = job.voxel_budget; budget <= most; budget *= 4) {
+        const GridFit fit = fitLevelBias(scene, grid, budget, seen, &at_cameras);
+        HashGridParameters camera_grid = grid;
+        camera_grid.level_bias = fit.level_bias;
+        if (!checkVoxelsAroundCameras(tracer, camera_grid, at_cameras, &fit, budget, seen).empty()) continue;
+        const double camera_refused =
+            refusedLookupShare(tracer, camera_grid, gridAnchorFor(scene, voxelSize(kHashGridLevelMin, camera_grid)));
+        if (!(camera_refused < kServedRefusedShare)) continue;
+        char grown[96] = "";
+        if (budget != job.voxel_budget) {
+            std::snprintf(grown, sizeof grown, " in --voxel-budget %llu (%llu times the default)",
+                          (unsigned long long)budget, (unsigned long long)(budget / job.voxel_budget));
+        }
+        char why[400];
+        std::snprintf(why, sizeof why,
+                      "the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels %.3g wide would "
+                      "have SHaRC refuse %.0f%% of their lookups (each bounce shorter than its voxel), here %.0f%%%s; "
+                      "--view-region free keeps runtime cameras anywhere",
+                      double(free_voxel), 100.0 * free_refused, 100.0 * camera_refused, grown);
+        region = at_cameras;
+        region.source = why;
+        job.voxel_budget = budget;
+        return;
+    }
 }
 
 /// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
@@ -769,7 +793,7 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
     HashGridParameters& grid = settings.sharc.grid;
     if (region.kind == ViewRegion::Kind::FreeSpace && region.source == "auto") {
         region.source.clear();
-        if (job.level_bias_auto) keepToGltfCamerasWhereFreeFails(job.voxel_budget, tracer, seen, grid, region);
+        if (job.level_bias_auto) keepToGltfCamerasWhereFreeFails(job, tracer, seen, grid, region);
     }
     if (job.level_bias_auto) {
         const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen, &region);
@@ -1758,15 +1782,16 @@ void registerBakeCommand(CLI::App& app) {
                     "place instead (finer voxels where they stand, coarse far away)")
         ->capture_default_str()
         ->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
-    cmd->add_option(
-           "--view-region", o->view_region,
-           "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
-           "level such a camera can ask for there. auto: free, unless in free space SHaRC would refuse 90% "
-           "or more of the glTF cameras' lookups (voxels far wider than what they see: small objects on a "
-           "vast ground) and gltf would not, then gltf; free: anywhere (every level from the finest up); gltf: "
-           "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "
-           "distance:MIN[:MAX]: never nearer than MIN to what it looks up; bake-camera: only the "
-           "roaming camera's own levels (the SDK's rule, no coverage)")
+    cmd->add_option("--view-region", o->view_region,
+                    "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
+                    "level such a camera can ask for there. auto: free, unless in free space SHaRC would refuse 90% "
+                    "or more of the glTF cameras' lookups (voxels far wider than what they see: small objects on a "
+                    "vast ground) and gltf, in the --voxel-budget or, where that is the default, up to 16 times it, "
+                    "serves them with voxels fine enough, then gltf; free: anywhere (every level from the finest up); "
+                    "gltf: "
+                    "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "
+                    "distance:MIN[:MAX]: never nearer than MIN to what it looks up; bake-camera: only the "
+                    "roaming camera's own levels (the SDK's rule, no coverage)")
         ->capture_default_str();
     cmd->add_option("--prediction-views", o->prediction_views,
                     "Viewpoints of the region, besides the glTF cameras, from which the bake predicts its hit rate")

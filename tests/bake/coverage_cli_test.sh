@@ -188,8 +188,15 @@ expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.shar
 python3 "$(dirname "$0")/../bench/light_selection_scenes.py" "$work" || failures=$((failures + 1))
 expect 0 "a flat on a 2 km ground by default" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
     --iterations 2 --resolution 64x64
-says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels 5.58 wide" \
-    "by default the flat's grid is kept to its glTF cameras"
+says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels 5.58 wide would have SHaRC refuse 100% of their lookups (each bounce shorter than its voxel), here [0-9]*% in --voxel-budget 524288 (4 times the default)" \
+    "by default the flat's grid is kept to its glTF cameras, in the budget that makes their voxels fine enough"
+grep -q "the voxels around" "$work/err.txt" && fail "the default region's choice is warned about: $(cat "$work/err.txt")"
+# A budget other than the default is kept: in 200,000 voxels the cameras' grid gets 0.19 m voxels,
+# wider than the voxel warning allows around cameras 1.14 m from their walls (0.76 m ones, the
+# default budget's, rendered the flat 110% too bright), so free space it stays, warned about.
+expect 0 "a flat on a 2 km ground in a budget given" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
+    --iterations 2 --resolution 64x64 --voxel-budget 200000
+says "$work/out.txt" "Views: free space" "a budget given keeps the flat in free space"
 expect 0 "a flat on a 2 km ground in free space" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
     --iterations 2 --resolution 64x64 --view-region free
 says "$work/err.txt" "warning: the voxels around camera 'room_[0-3]', 5.58 wide, are wider than 1/8 of the distance" \
