@@ -729,18 +729,18 @@ constexpr uint64_t kAutoBudgetGrowth = 16;
 /// (`job.voxel_budget` grows). Otherwise free space it stays: passing lookups into voxels
 /// about a room wide would be worse than refusing them (the flat of 4 m rooms on a 2 km ground,
 /// kept to its cameras in the default budget, rendered through the cache 110% too bright).
-void keepToGltfCamerasWhereFreeFails(BakeJob& job, const Tracer& tracer, const SeenSurface* seen,
-                                     const HashGridParameters& grid, ViewRegion& region) {
+/// `free_fit` is free space's fit; returns the cameras' fit where the region became theirs.
+std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Tracer& tracer, const SeenSurface* seen,
+                                                       const HashGridParameters& grid, const GridFit& free_fit,
+                                                       ViewRegion& region) {
     const Scene& scene = tracer.scene();
-    if (scene.cameras.empty()) return;
+    if (scene.cameras.empty()) return std::nullopt;
     HashGridParameters free_grid = grid;
-    free_grid.level_bias = fitLevelBias(scene, grid, job.voxel_budget, seen, &region).level_bias;
-    const float free_voxel = voxelSize(kHashGridLevelMin, free_grid);
+    free_grid.level_bias = free_fit.level_bias;
+    const float free_voxel = free_fit.finest_voxel_size;
     const double free_refused = refusedLookupShare(tracer, free_grid, gridAnchorFor(scene, free_voxel));
-    if (free_refused < kFreeFailsRefusedShare) return;
-    ViewRegion at_cameras;
-    at_cameras.kind = ViewRegion::Kind::Points;
-    for (const Camera& c : scene.cameras) at_cameras.points.push_back(c.position);
+    if (free_refused < kFreeFailsRefusedShare) return std::nullopt;
+    const ViewRegion at_cameras = atGltfCameras(scene);
     const uint64_t most = job.voxel_budget_given ? job.voxel_budget : job.voxel_budget * kAutoBudgetGrowth;
     for (uint64_t budget = job.voxel_budget; budget <= most; budget *= 4) {
         const GridFit fit = fitLevelBias(scene, grid, budget, seen, &at_cameras);
@@ -764,8 +764,9 @@ void keepToGltfCamerasWhereFreeFails(BakeJob& job, const Tracer& tracer, const S
         region = at_cameras;
         region.source = why;
         job.voxel_budget = budget;
-        return;
+        return fit;
     }
+    return std::nullopt;
 }
 
 /// Resolves the view region's cameras (gltf, path) and fits the level bias (--level-bias auto),
@@ -778,8 +779,7 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
         if (scene.cameras.empty()) {
             throw CommandError(kExitInvalidInput, job.scene_path + ": --view-region gltf, but the scene has no camera");
         }
-        for (const Camera& c : scene.cameras) region.points.push_back(c.position);
-        region.source = "the glTF cameras";
+        region = atGltfCameras(scene);
     } else if (region.kind == ViewRegion::Kind::Points && region.source == "path") {
         if (job.camera.path_file.empty()) throw CommandError(kExitUsage, "--view-region path needs --camera-path FILE");
         try {
@@ -791,15 +791,19 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
     }
     GridDecision decision;
     HashGridParameters& grid = settings.sharc.grid;
-    if (region.kind == ViewRegion::Kind::FreeSpace && region.source == "auto") {
-        region.source.clear();
-        if (job.level_bias_auto) keepToGltfCamerasWhereFreeFails(job, tracer, seen, grid, region);
-    }
+    const bool auto_region = region.kind == ViewRegion::Kind::FreeSpace && region.source == "auto";
+    if (auto_region) region.source.clear();  // free space, unless the glTF cameras get it below
     if (job.level_bias_auto) {
-        const GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen, &region);
+        GridFit fit = fitLevelBias(scene, grid, job.voxel_budget, seen, &region);
+        // Kept to the glTF cameras, the fit already passed the voxel warning's check.
+        const std::optional<GridFit> kept = auto_region
+                                                ? keepToGltfCamerasWhereFreeFails(job, tracer, seen, grid, fit, region)
+                                                : std::nullopt;
+        if (kept) fit = *kept;
         grid.level_bias = fit.level_bias;
         decision.choice = "auto, " + fit.reason;
-        const std::string warning = checkVoxelsAroundCameras(tracer, grid, region, &fit, job.voxel_budget, seen);
+        const std::string warning = kept ? std::string()
+                                         : checkVoxelsAroundCameras(tracer, grid, region, &fit, job.voxel_budget, seen);
         if (!warning.empty()) decision.warnings.push_back(warning);
     } else {
         char text[96];

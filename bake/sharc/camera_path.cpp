@@ -255,15 +255,7 @@ bool LightTest::reachesInside(glm::vec3 center) {
         }
     }
     if (!emitters_) emitters_ = sampleEmitterPoints(scene);
-    for (const auto& [e, ray_offset] : *emitters_) {
-        for (const glm::vec3& at : receivers) {
-            const float facing = glm::dot(at - e.position, e.face_normal);
-            if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
-            const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
-            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side, ray_offset))) return true;
-        }
-    }
-    return false;
+    return seesLitEmitter(tracer, receivers, *emitters_);
 }
 
 /// A candidate camera position that passed the free-space test.

@@ -536,9 +536,7 @@ std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParamet
                       "anywhere the roaming camera reaches, so all %.3g units^2 it sees get level 1 within "
                       "--voxel-budget %llu.",
                       fit->surface_area, (unsigned long long)voxel_budget);
-        ViewRegion at_cameras;
-        at_cameras.kind = ViewRegion::Kind::Points;
-        for (const Camera& camera : scene.cameras) at_cameras.points.push_back(camera.position);
+        const ViewRegion at_cameras = atGltfCameras(scene);
         std::optional<DistanceSamples> at_cameras_samples, no_samples;
         GridFit at_cameras_fit;
         const float at_cameras_voxel = fitWithBudget(voxel_budget, &at_cameras, at_cameras_samples, at_cameras_fit);

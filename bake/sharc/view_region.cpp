@@ -115,6 +115,14 @@ ViewRegion parseViewRegion(const std::string& text) {
     throw std::invalid_argument("\"" + text + "\": " + forms);
 }
 
+ViewRegion atGltfCameras(const Scene& scene) {
+    ViewRegion region;
+    region.kind = ViewRegion::Kind::Points;
+    for (const Camera& camera : scene.cameras) region.points.push_back(camera.position);
+    region.source = "the glTF cameras";
+    return region;
+}
+
 DepositLevels::DepositLevels(const HashGridParameters& grid, const ViewRegion& region, glm::vec3 bounds_min,
                              glm::vec3 bounds_max)
     : region_(region), keyer_(grid) {

@@ -31,6 +31,8 @@
 
 namespace sharcbake {
 
+struct Scene;
+
 /// Where the runtime's cameras may be when they look the cache up (`--view-region`).
 struct ViewRegion {
     enum class Kind : uint8_t {
@@ -57,6 +59,10 @@ struct ViewRegion {
 /// "gltf" / "path"; auto returns Kind::FreeSpace with `source` "auto").
 /// Throws std::invalid_argument with a message naming the accepted forms.
 ViewRegion parseViewRegion(const std::string& text);
+
+/// The region at the scene's glTF cameras (`--view-region gltf`): Kind::Points at their positions,
+/// `source` "the glTF cameras".
+ViewRegion atGltfCameras(const Scene& scene);
 
 /// The level each path vertex is deposited at, and the levels the written cache covers.
 class DepositLevels {

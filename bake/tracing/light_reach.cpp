@@ -173,24 +173,22 @@ std::string punctualLightText(const Tracer& tracer, size_t index, const std::vec
     return text;
 }
 
-/// Whether any receiver sees a lit side of an emitter point.
-bool seesAnEmitter(const Tracer& tracer, const std::vector<Receiver>& receivers,
-                   const std::vector<LitPoint>& emitters) {
-    for (const auto& [e, ray_offset] : emitters) {
-        for (const Receiver& r : receivers) {
-            const float facing = glm::dot(r.at - e.position, e.face_normal);
-            if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
-            const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
-            if (visibleBothWays(tracer, r.at, offsetRayOrigin(e.position, lit_side, ray_offset))) return true;
-        }
-    }
-    return false;
-}
-
 }  // namespace
 
 bool givesLight(const PunctualLight& light) {
     return maxComponent(light.intensity) > 0.0f && (light.type != LightType::Spot || light.outer_cone_angle > 0.0f);
+}
+
+bool seesLitEmitter(const Tracer& tracer, const std::vector<glm::vec3>& points, const std::vector<LitPoint>& emitters) {
+    for (const auto& [e, ray_offset] : emitters) {
+        for (const glm::vec3& at : points) {
+            const float facing = glm::dot(at - e.position, e.face_normal);
+            if (facing == 0.0f || (facing < 0.0f && !e.double_sided)) continue;
+            const glm::vec3 lit_side = facing > 0.0f ? e.face_normal : -e.face_normal;
+            if (visibleBothWays(tracer, at, offsetRayOrigin(e.position, lit_side, ray_offset))) return true;
+        }
+    }
+    return false;
 }
 
 std::vector<LitPoint> sampleEmitterPoints(const Scene& scene) {
@@ -263,7 +261,9 @@ std::string whyNoLightArrives(const Tracer& tracer, const std::vector<Ray>& rays
     }
     const std::vector<LitPoint> emitters = sampleEmitterPoints(scene);
     if (!emitters.empty()) {
-        if (seesAnEmitter(tracer, receivers, emitters)) {
+        std::vector<glm::vec3> points;
+        for (const Receiver& r : receivers) points.push_back(r.at);
+        if (seesLitEmitter(tracer, points, emitters)) {
             reached = true;
         } else {
             causes.push_back("none of them sees an emissive surface");

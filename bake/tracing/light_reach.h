@@ -39,6 +39,10 @@ struct LitPoint {
 /// panel still gets some. Deterministic.
 std::vector<LitPoint> sampleEmitterPoints(const Scene& scene);
 
+/// Whether any of `points` sees the lit side of any of the `emitters` (its front, or either side
+/// of a double-sided one), unblocked both ways (visibleBothWays).
+bool seesLitEmitter(const Tracer& tracer, const std::vector<glm::vec3>& points, const std::vector<LitPoint>& emitters);
+
 /// What paths of the reference path tracer along `rays` (one path each) found: whether any brings
 /// back light, as the bake's update paths along such rays will, and how many of the rays meet a
 /// surface. The probe stops at the first path that meets light.
