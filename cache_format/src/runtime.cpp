@@ -991,6 +991,10 @@ namespace {
 
 /// What gpuBuffers() and gpuInsertList() share: the checked options and the packing of a voxel
 /// into the SDK's resolved entry (SPEC §G.4, §G.6).
+/// The share of the cache's light (its channels' values summed) that may be stored as 0 in fp16
+/// without a warning.
+constexpr double kFlushedLightShareWarned = 0.001;
+
 struct GpuPacker {
     float scale = 1.0f;
     float max_count = 65504.0f;
@@ -998,7 +1002,8 @@ struct GpuPacker {
     bool separate_emissive = false;  ///< store radiance - the voxel's emission (SPEC §G.3)
     bool demodulate = false;         ///< store radiance / the voxel's demodulation factor (SPEC §G.3)
     GpuRadianceReport report;
-    uint64_t packed_voxels = 0;
+    double light = 0.0;          ///< every stored channel's value, summed
+    double flushed_light = 0.0;  ///< the values of the channels stored as 0, summed
 
     /// What the engine's build keeps in the voxel: the whole radiance, less the emission it adds
     /// back itself, divided by the factor it multiplies back itself.
@@ -1017,12 +1022,14 @@ struct GpuPacker {
             const float scaled = stored * scale;  // may overflow to +Inf: clipped below
             clipped = clipped || scaled > 65504.0f;
             packed.radiance[c] = floatToHalf(std::min(scaled, 65504.0f));
-            flushed = flushed || (stored > 0.0f && packed.radiance[c] == 0);
+            const bool lost = stored > 0.0f && packed.radiance[c] == 0;
+            flushed = flushed || lost;
+            light += std::max(double(stored), 0.0);
+            flushed_light += lost ? double(stored) : 0.0;
             report.brightest = std::max(report.brightest, stored);
         }
         report.clipped_voxels += clipped ? 1 : 0;
         report.flushed_voxels += flushed ? 1 : 0;
-        ++packed_voxels;
         packed.radiance[3] = floatToHalf(std::min(v.sample_weight, max_count));
         if (packed.radiance[3] == 0) packed.radiance[3] = 1;  // weight > 0 stays usable (> threshold 0)
         packed.sample_data = frames;  // staleFrameNum (bits 16-31) = 0: the longest life Resolve gives
@@ -1048,14 +1055,20 @@ struct GpuPacker {
                           double(report.brightest), double(report.fitting_radiance_scale));
             report.warning = buf;
         }
-        // A few near-black voxels stored as 0 change nothing visible; a scene whose light is
-        // mostly below fp16's range (wrong units) does.
-        if (report.flushed_voxels * 100 > packed_voxels) {
-            std::snprintf(buf, sizeof buf,
-                          "%s%llu voxels with light are stored as 0 in fp16 (below 6e-8 after radiance scale %g); "
-                          "a larger radiance scale keeps them",
-                          report.warning.empty() ? "" : "; ", static_cast<unsigned long long>(report.flushed_voxels),
-                          double(report.radiance_scale));
+        // Near-black voxels stored as 0 change nothing visible, however many there are (a sunlit
+        // room's shadowed voxels outside, 1.5% of them, twenty decades below the sun); a scene
+        // whose light is below fp16's range (wrong units, a scale far too small) loses what it
+        // shows. So the warning weighs the light lost, not the voxels.
+        if (flushed_light > kFlushedLightShareWarned * light) {
+            std::snprintf(
+                buf, sizeof buf,
+                "%s%llu voxels with light are stored as 0 in fp16 (below 6e-8 after radiance scale %g), "
+                "%.3g%% of the cache's light; %s",
+                report.warning.empty() ? "" : "; ", static_cast<unsigned long long>(report.flushed_voxels),
+                double(report.radiance_scale), 100.0 * flushed_light / light,
+                report.fitting_radiance_scale > report.radiance_scale
+                    ? "a larger radiance scale (up to the fitting one, which clips nothing) keeps more of them"
+                    : "the cache's light spans more than fp16's range");
             report.warning += buf;
         }
     }
