@@ -30,6 +30,7 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -37,8 +38,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -714,22 +715,31 @@ struct GridDecision {
 /// their grid refuses less than kServedRefusedShare.
 constexpr double kFreeFailsRefusedShare = 0.9;
 constexpr double kServedRefusedShare = 0.5;
-/// The most `--view-region auto` multiplies the default voxel budget by to give the glTF cameras
-/// voxels fine enough (2^21 voxels, a file of about 50 MB).
-constexpr uint64_t kAutoBudgetGrowth = 16;
+/// The budgets `--view-region auto` tries for the glTF cameras, in times the default voxel budget,
+/// smallest first: the least that makes their voxels fine enough, since every voxel more takes
+/// samples from the others (a room with a window, 1.37 times the budget would do: in 4 times it, its
+/// finer voxels rendered 5% too dark after the default 512 iterations and 0.5% after 2048). At most
+/// 16 times (2^21 voxels, a file of about 50 MB).
+constexpr std::array<std::pair<uint64_t, uint64_t>, 9> kAutoBudgetGrowth = {
+    {{1, 1}, {3, 2}, {2, 1}, {3, 1}, {4, 1}, {6, 1}, {8, 1}, {12, 1}, {16, 1}}};
 
 /// `--view-region auto` (the default) is free space, unless the scene's glTF cameras would get
-/// nothing from it: small objects on a ground plane 2000 times their size get level-1 voxels 30
-/// units wide in the voxel budget, every bounce from the camera is shorter than its voxel, and
-/// SHaRC's eligibility tests refuse all of its lookups (the runtime traces every path: right, but
-/// no cache). Where free space's grid has 90% or more of the glTF cameras' lookups refused, the
-/// region becomes the glTF cameras (`region`, its `source` saying why) if their grid serves them:
-/// fewer than half refused, and voxels no wider than the voxel warning allows
-/// (checkVoxelsAroundCameras), in the budget or, where it is the default, in up to 16 times it
-/// (`job.voxel_budget` grows). Otherwise free space it stays: passing lookups into voxels
-/// about a room wide would be worse than refusing them (the flat of 4 m rooms on a 2 km ground,
-/// kept to its cameras in the default budget, rendered through the cache 110% too bright).
-/// `free_fit` is free space's fit; returns the cameras' fit where the region became theirs.
+/// nothing, or something wrong, from it. Nothing: small objects on a ground plane 2000 times their
+/// size get level-1 voxels 30 units wide in the voxel budget, every bounce from the camera is
+/// shorter than its voxel, and SHaRC's eligibility tests refuse all of its lookups (the runtime
+/// traces every path: right, but no cache). Wrong: a room with a window on a ground 200 m wide
+/// gets level-1 voxels 0.56 m wide, wider than the room's 0.2 m walls, and the sunlit ground's
+/// light leaks in through them (rendered from the room's cameras through the cache: +317% and
+/// +415% too bright). So where free space's grid has 90% or more of the glTF cameras' lookups
+/// refused, or gives the typical glTF camera voxels wider than the voxel warning allows
+/// (voxelsAroundCameras), the region becomes the glTF cameras (`region`, its `source` saying why)
+/// if their grid serves them: fewer than half refused, and voxels no wider than that warning
+/// allows, in the budget or, where it is the default, in up to 16 times it (`job.voxel_budget`
+/// grows). Otherwise free space it stays: passing lookups into voxels about a room wide would be
+/// worse than refusing them (the flat of 4 m rooms on a 2 km ground, kept to its cameras in the
+/// default budget, rendered through the cache 110% too bright), and the voxel warning says what
+/// would make them finer. `free_fit` is free space's fit; returns the cameras' fit where the region
+/// became theirs.
 std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Tracer& tracer, const SeenSurface* seen,
                                                        const HashGridParameters& grid, const GridFit& free_fit,
                                                        ViewRegion& region) {
@@ -739,28 +749,44 @@ std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Trace
     free_grid.level_bias = free_fit.level_bias;
     const float free_voxel = free_fit.finest_voxel_size;
     const double free_refused = refusedLookupShare(tracer, free_grid, gridAnchorFor(scene, free_voxel));
-    if (free_refused < kFreeFailsRefusedShare) return std::nullopt;
+    const VoxelsAroundCameras free_around = free_refused < kFreeFailsRefusedShare
+                                                ? voxelsAroundCameras(tracer, free_grid)
+                                                : VoxelsAroundCameras{};
+    if (free_refused < kFreeFailsRefusedShare && !free_around.tooWide()) return std::nullopt;
     const ViewRegion at_cameras = atGltfCameras(scene);
-    const uint64_t most = job.voxel_budget_given ? job.voxel_budget : job.voxel_budget * kAutoBudgetGrowth;
-    for (uint64_t budget = job.voxel_budget; budget <= most; budget *= 4) {
+    for (const auto& [times, per] : kAutoBudgetGrowth) {
+        if (job.voxel_budget_given && times != per) break;  // a budget given is kept
+        const uint64_t budget = job.voxel_budget * times / per;
         const GridFit fit = fitLevelBias(scene, grid, budget, seen, &at_cameras);
         HashGridParameters camera_grid = grid;
         camera_grid.level_bias = fit.level_bias;
-        if (!checkVoxelsAroundCameras(tracer, camera_grid, at_cameras, &fit, budget, seen).empty()) continue;
+        const VoxelsAroundCameras around = voxelsAroundCameras(tracer, camera_grid);
+        if (around.tooWide()) continue;
         const double camera_refused =
             refusedLookupShare(tracer, camera_grid, gridAnchorFor(scene, voxelSize(kHashGridLevelMin, camera_grid)));
         if (!(camera_refused < kServedRefusedShare)) continue;
         char grown[96] = "";
         if (budget != job.voxel_budget) {
-            std::snprintf(grown, sizeof grown, " in --voxel-budget %llu (%llu times the default)",
-                          (unsigned long long)budget, (unsigned long long)(budget / job.voxel_budget));
+            std::snprintf(grown, sizeof grown, " in --voxel-budget %llu (%g times the default)",
+                          (unsigned long long)budget, double(times) / double(per));
         }
-        char why[400];
-        std::snprintf(why, sizeof why,
-                      "the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels %.3g wide would "
-                      "have SHaRC refuse %.0f%% of their lookups (each bounce shorter than its voxel), here %.0f%%%s; "
-                      "--view-region free keeps runtime cameras anywhere",
-                      double(free_voxel), 100.0 * free_refused, 100.0 * camera_refused, grown);
+        char why[640];
+        if (free_refused >= kFreeFailsRefusedShare) {
+            std::snprintf(why, sizeof why,
+                          "the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels %.3g wide "
+                          "would have SHaRC refuse %.0f%% of their lookups (each bounce shorter than its voxel), "
+                          "here %.0f%%%s; --view-region free keeps runtime cameras anywhere",
+                          double(free_voxel), 100.0 * free_refused, 100.0 * camera_refused, grown);
+        } else {
+            std::snprintf(why, sizeof why,
+                          "the glTF cameras, chosen by --view-region auto: in free space, %s would get voxels %.3g "
+                          "wide, wider than 1/%g of the distance to what it sees (a median %.3g), which blur its view "
+                          "and leak light through walls thinner than one; here %.3g%s; --view-region free keeps "
+                          "runtime cameras anywhere",
+                          cameraLabel(*free_around.camera).c_str(), double(free_around.voxel),
+                          double(kDistancePerVoxelAroundCameras), double(free_around.distance), double(around.voxel),
+                          grown);
+        }
         region = at_cameras;
         region.source = why;
         job.voxel_budget = budget;
@@ -1788,9 +1814,10 @@ void registerBakeCommand(CLI::App& app) {
         ->check(CLI::Range(uint64_t(64), uint64_t(1) << 28));
     cmd->add_option("--view-region", o->view_region,
                     "Where the runtime's cameras may be; each surface point the bake reaches is cached at every "
-                    "level such a camera can ask for there. auto: free, unless in free space SHaRC would refuse 90% "
-                    "or more of the glTF cameras' lookups (voxels far wider than what they see: small objects on a "
-                    "vast ground) and gltf, in the --voxel-budget or, where that is the default, up to 16 times it, "
+                    "level such a camera can ask for there. auto: free, unless free space fails the glTF cameras "
+                    "(SHaRC would refuse 90% or more of their lookups, or their voxels would be wider than 1/8 of the "
+                    "distance to what they see, leaking light through walls: a house on a vast ground) and gltf, in "
+                    "the --voxel-budget or, where that is the default, the least of 1.5 to 16 times it that does, "
                     "serves them with voxels fine enough, then gltf; free: anywhere (every level from the finest up); "
                     "gltf: "
                     "at the scene's glTF cameras; path: at the --camera-path waypoints; box:x0,y0,z0,x1,y1,z1; "

@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <limits>
 #include <optional>
+#include <tuple>
 
 namespace sharcbake {
 namespace {
@@ -431,13 +432,6 @@ GridFit fitLevelBias(const Scene& scene, const HashGridParameters& grid, uint64_
 
 namespace {
 
-/// A camera's lookups need voxels no wider than this fraction of the distance to what it sees: a
-/// flat of 4 m rooms whose cameras see their walls a median 1.14 m away, baked with voxels of
-/// 0.76 / 0.38 / 0.19 / 0.095 / 0.048 m (`--level-bias` -4.25 to -0.25), renders through the cache
-/// with a relative MSE of 1.28 / 0.215 / 0.021 / 0.0079 / 0.0062 in its dimmest room: light leaks
-/// through its 10 cm partitions until the voxels are a few times thinner than the room.
-constexpr float kDistancePerVoxelAroundCameras = 8.0f;
-
 /// The glTF camera with the median space around it (the median distance of rays in 64 directions
 /// to what they hit; cameras that see open sky in most directions have none to compare): one
 /// camera against a wall among hundreds says nothing of the scene's voxels.
@@ -464,14 +458,23 @@ float voxelAtDistance(const HashGridParameters& grid, float distance) {
 
 }  // namespace
 
+VoxelsAroundCameras voxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid) {
+    VoxelsAroundCameras around;
+    if (tracer.scene().cameras.empty()) return around;
+    std::tie(around.camera, around.distance) = typicalCamera(tracer);
+    if (!around.camera) return around;
+    around.widest = around.distance / kDistancePerVoxelAroundCameras;
+    around.voxel = voxelAtDistance(grid, around.distance);
+    return around;
+}
+
 std::string checkVoxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid, const ViewRegion& region,
                                      const GridFit* fit, uint64_t voxel_budget, const SeenSurface* seen) {
     const Scene& scene = tracer.scene();
-    if (scene.cameras.empty()) return {};
-    const auto [typical, room] = typicalCamera(tracer);
-    const float enough = room / kDistancePerVoxelAroundCameras;
-    const float voxel = typical ? voxelAtDistance(grid, room) : 0.0f;
-    if (!typical || !(voxel > enough)) return {};
+    const VoxelsAroundCameras around = voxelsAroundCameras(tracer, grid);
+    if (!around.tooWide()) return {};
+    const Camera* typical = around.camera;
+    const float room = around.distance, enough = around.widest, voxel = around.voxel;
     char why[400], fix[480];
     // Each region's distance samples are drawn once for all the budgets tried.
     const auto fitWithBudget = [&](uint64_t budget, const ViewRegion* fit_region,

@@ -184,13 +184,22 @@ expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.shar
 # gives the whole ground level 1, in voxels wider than the rooms, and the bake says so with the fix;
 # the glTF cameras as the region count each part of the surface at their distance's level, and the
 # budget the warning names makes the voxels fine enough. A bias given by hand gets a bias as its fix.
-# By default (auto) the region is the glTF cameras: in free space SHaRC refuses their lookups.
+# By default (auto) the region is the glTF cameras: in free space SHaRC refuses their lookups. On a
+# lawn 200 m wide free space refuses few, but its voxels are wider than the partitions: the same.
 python3 "$(dirname "$0")/../bench/light_selection_scenes.py" "$work" || failures=$((failures + 1))
 expect 0 "a flat on a 2 km ground by default" "$sharcbake" bake "$work/flat_on_ground.gltf" -o "$work/ground.sharc" \
     --iterations 2 --resolution 64x64
-says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels 5.58 wide would have SHaRC refuse 100% of their lookups (each bounce shorter than its voxel), here [0-9]*% in --voxel-budget 524288 (4 times the default)" \
-    "by default the flat's grid is kept to its glTF cameras, in the budget that makes their voxels fine enough"
+says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels 5.58 wide would have SHaRC refuse 100% of their lookups (each bounce shorter than its voxel), here [0-9]*% in --voxel-budget 262144 (2 times the default)" \
+    "by default the flat's grid is kept to its glTF cameras, in the least budget that makes their voxels fine enough"
 grep -q "the voxels around" "$work/err.txt" && fail "the default region's choice is warned about: $(cat "$work/err.txt")"
+expect 0 "a flat on a 200 m lawn by default" "$sharcbake" bake "$work/flat_on_lawn.gltf" -o "$work/lawn.sharc" \
+    --iterations 2 --resolution 64x64
+says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, camera 'room_2' would get voxels 0.556 wide, wider than 1/8 of the distance to what it sees (a median 1.14), which blur its view and leak light through walls thinner than one; here 0.0854 in --voxel-budget 196608 (1.5 times the default)" \
+    "voxels wider than the partitions in free space keep the lawn's flat to its glTF cameras"
+grep -q "the voxels around" "$work/err.txt" && fail "the lawn's default region is warned about: $(cat "$work/err.txt")"
+expect 0 "the lawn's flat in free space" "$sharcbake" bake "$work/flat_on_lawn.gltf" -o "$work/lawn.sharc" \
+    --iterations 2 --resolution 64x64 --view-region free
+says "$work/err.txt" "warning: the voxels around camera 'room_2', 0.556 wide" "given free space, the same voxels are warned about"
 # A budget other than the default is kept: in 200,000 voxels the cameras' grid gets 0.19 m voxels,
 # wider than the voxel warning allows around cameras 1.14 m from their walls (0.76 m ones, the
 # default budget's, rendered the flat 110% too bright), so free space it stays, warned about.

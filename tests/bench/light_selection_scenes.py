@@ -14,6 +14,9 @@ flat.gltf        four rooms in a row joined by doorways: a sun and a sky through
 flat_on_ground.gltf
                  the same flat on a sunlit ground 2 km wide: the scene-wide grid's cells are 62.5 m,
                  and by power the lamps get 1e-8 of the picks (their light all but missing).
+flat_on_lawn.gltf
+                 the same flat on a lawn 200 m wide: free space's level-1 voxels, 0.56 m, are
+                 wider than its 10 cm partitions (bake --view-region's test).
 
 Usage: light_selection_scenes.py OUT_DIR
 """
@@ -199,3 +202,4 @@ if __name__ == "__main__":
     thin_walls(sys.argv[1] + "/thin_walls_off_grid.gltf", wall_x=0.37, camera_in_a=True)
     flat(sys.argv[1] + "/flat.gltf")
     flat(sys.argv[1] + "/flat_on_ground.gltf", ground=2000.0)
+    flat(sys.argv[1] + "/flat_on_lawn.gltf", ground=200.0)
