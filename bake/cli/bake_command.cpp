@@ -704,6 +704,7 @@ struct GridDecision {
     uint32_t finest_level = 1;
     uint32_t coarsest_level = 0;
     std::string misses;  ///< which camera distances find no voxel, or empty
+    bool auto_kept_to_gltf_cameras = false;  ///< `--view-region auto` chose the glTF cameras
     std::string levelsCovered() const {
         if (coarsest_level == 0) return "the bake camera's";
         return std::to_string(finest_level) + "-" + std::to_string(coarsest_level);
@@ -826,6 +827,7 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
                                                 ? keepToGltfCamerasWhereFreeFails(job, tracer, seen, grid, fit, region)
                                                 : std::nullopt;
         if (kept) fit = *kept;
+        decision.auto_kept_to_gltf_cameras = kept.has_value();
         grid.level_bias = fit.level_bias;
         decision.choice = "auto, " + fit.reason;
         const std::string warning = kept ? std::string()
@@ -1105,6 +1107,16 @@ private:
             seen_ = surfaceSeenFrom(*tracer_, bakeViewpoints(), kSeenSurfaceSamples, job_.settings.seed);
         }
         grid_decision_ = decideGrid(job_, *tracer_, seen_ ? &*seen_ : nullptr);
+        if (grid_decision_.auto_kept_to_gltf_cameras && job_.camera.source == CameraPathSource::Explore &&
+            job_.camera.path_file.empty()) {
+            // The runtime's cameras stay at the glTF cameras: bake what they look up from there.
+            camera_path_.emplace(atGltfCameraPositions(scene_, job_.settings.seed));
+            roaming_at_gltf_cameras_ = true;
+            camera_description_ =
+                "at the glTF cameras' positions, looking their own way and around (--view-region "
+                "auto keeps the grid to them; --view-region free, or gltf with --camera-source "
+                "explore, roams free space)";
+        }
         for (const std::string& warning : grid_decision_.warnings)
             std::fprintf(stderr, "warning: %s\n", warning.c_str());
         warnAboutLeaks();
@@ -1452,7 +1464,9 @@ private:
             {"output", o_.output_path},
             {"checkpoint", checkpoint_path_.empty() ? Json(nullptr) : Json(checkpoint_path_)},
             {"camera",
-             {{"mode", job_.camera.path_file.empty() ? toString(job_.camera.source) : "file"},
+             {{"mode", roaming_at_gltf_cameras_        ? "gltf_positions"
+                       : job_.camera.path_file.empty() ? toString(job_.camera.source)
+                                                       : "file"},
               {"description", camera_description_}}},
             {"settings", metadataJson(metadata(BakeOutcome{baker_->iterationsDone(), baker_->cache().capacity()}))},
             {"iterations", baker_->iterationsDone()},
@@ -1511,7 +1525,11 @@ private:
         // Every deposit goes to the level DepositLevels gives its point (the finest for the default
         // region, the level of the distance to the region's cameras for gltf, path and box), so a
         // point without a voxel there was never reached, whatever coarser voxels cover it.
-        const double unreached = job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
+        // A roaming camera kept to the glTF cameras' positions never reaches what they never see
+        // (a lawn beyond the room's window): there the hit rate from those positions says what
+        // the cache lacks, and the surface's coverage says nothing.
+        const double unreached = roaming_at_gltf_cameras_ ? 0.0
+                                 : job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
                                      ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
         warnAboutHitRate(prediction_, unreached, cameras_in_solids_);
@@ -1590,6 +1608,7 @@ private:
     std::optional<LightSampler> lights_;
     GridDecision grid_decision_;
     std::optional<SeenSurface> seen_;  ///< what the roaming camera's positions see (--level-bias auto)
+    bool roaming_at_gltf_cameras_ = false;  ///< atGltfCameraPositions, for the auto region
     std::string camera_description_;
     std::vector<std::string> cameras_in_solids_;  ///< makeCameraPath's, for the hit-rate warning
     bool warned_no_light_ = false;                ///< warnWhenNoLightArrives warned that the cache will be black

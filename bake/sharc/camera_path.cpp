@@ -697,6 +697,19 @@ std::vector<Ray> sampleCameraPathRays(const CameraPath& path, int width, int hei
     return rays;
 }
 
+CameraPath atGltfCameraPositions(const Scene& scene, uint32_t seed) {
+    std::vector<CameraPose> poses;
+    std::vector<bool> aimed;
+    for (const Camera& camera : scene.cameras) {
+        const CameraPose own{camera.position, camera.forward, camera.up, camera.yfov};
+        poses.push_back(own);
+        aimed.push_back(true);
+        poses.push_back(own);  // its direction is drawn afresh each iteration
+        aimed.push_back(false);
+    }
+    return CameraPath(std::move(poses), true, 1, 0.0f, seed, std::move(aimed));
+}
+
 std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
                                               uint32_t seed, ExplorationResult* explored) {
     std::vector<glm::vec3> starts;

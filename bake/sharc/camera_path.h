@@ -181,6 +181,15 @@ private:
 std::vector<Ray> sampleCameraPathRays(const CameraPath& path, int width, int height, uint32_t poses,
                                       uint32_t rays_per_pose, uint32_t seed);
 
+/// The roaming camera for runtime cameras that stay at the glTF cameras (`--view-region auto`
+/// keeping the grid to them): at each glTF camera's position in turn, looking alternately its own
+/// way and in a new random direction each iteration, as a camera standing there and turning looks
+/// (the hit-rate prediction's views of such a region are the same). A camera exploring free space
+/// would spend most of its paths where those cameras never look: a crate among 200,000 on a
+/// ground 900 m wide got 45% of its camera's lookups answered, 99.6% from here. No gliding between
+/// the cameras, which would cross the walls between rooms. The scene must have a camera.
+CameraPath atGltfCameraPositions(const Scene& scene, uint32_t seed);
+
 /// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's
 /// glTF cameras (from its centre when it has none), visited in turn, each iteration looking in a
 /// new random direction. A scene whose free space is open (escaped_fraction at least

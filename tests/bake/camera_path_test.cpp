@@ -22,6 +22,8 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <set>
+#include <tuple>
 #include <utility>
 
 namespace sharcbake {
@@ -522,6 +524,32 @@ TEST(ExploreFreeSpace, ExplorationIsAPureFunctionOfTheSeed) {
     const Explored a = explore(scene), b = explore(scene);
     ASSERT_EQ(a.result.points.size(), b.result.points.size());
     for (size_t i = 0; i < a.result.points.size(); ++i) EXPECT_EQ(a.result.points[i], b.result.points[i]);
+}
+
+TEST(CameraPathAtGltfCameras, StandsAtEachCameraLookingItsOwnWayAndAround) {
+    Scene scene = emptyTestScene();
+    for (const glm::vec3 position : {glm::vec3(1.0f, 1.5f, 0.0f), glm::vec3(9.0f, 1.5f, 0.0f)}) {
+        Camera camera;
+        camera.position = position;
+        camera.forward = glm::vec3(0.0f, 0.0f, -1.0f);
+        scene.cameras.push_back(camera);
+    }
+    const CameraPath path = atGltfCameraPositions(scene, 7);
+    ASSERT_EQ(path.waypoints().size(), 4u);
+    std::set<std::tuple<float, float, float>> directions;
+    for (uint32_t iteration = 0; iteration < 64; ++iteration) {
+        const CameraPose pose = path.poseAt(iteration);
+        // Never between the cameras (a glide would cross the walls between two rooms).
+        EXPECT_EQ(pose.position, scene.cameras[(iteration / 2) % 2].position) << iteration;
+        if (iteration % 2 == 0) {
+            EXPECT_EQ(pose.forward, scene.cameras[(iteration / 2) % 2].forward) << iteration;
+        } else {
+            directions.insert({pose.forward.x, pose.forward.y, pose.forward.z});
+        }
+        EXPECT_EQ(pose.position, atGltfCameraPositions(scene, 7).poseAt(iteration).position);
+        EXPECT_EQ(pose.forward, atGltfCameraPositions(scene, 7).poseAt(iteration).forward);
+    }
+    EXPECT_EQ(directions.size(), 32u);  // a new direction every time it looks around
 }
 
 /// A lone table under a white sky: a 2 x 1 m top, 10 cm thick, on four 90 cm legs, nothing else.

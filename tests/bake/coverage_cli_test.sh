@@ -193,10 +193,23 @@ says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --v
     "by default the flat's grid is kept to its glTF cameras, in the least budget that makes their voxels fine enough"
 grep -q "the voxels around" "$work/err.txt" && fail "the default region's choice is warned about: $(cat "$work/err.txt")"
 expect 0 "a flat on a 200 m lawn by default" "$sharcbake" bake "$work/flat_on_lawn.gltf" -o "$work/lawn.sharc" \
-    --iterations 2 --resolution 64x64
+    --iterations 2 --resolution 64x64 --stats-json "$work/lawn.json"
+python3 -c 'import json, sys; sys.exit(json.load(open(sys.argv[1]))["camera"]["mode"] != "gltf_positions")' \
+    "$work/lawn.json" || fail "the stats do not say the roaming camera stood at the glTF cameras' positions"
 says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, camera 'room_2' would get voxels 0.556 wide, wider than 1/8 of the distance to what it sees (a median 1.14), which blur its view and leak light through walls thinner than one; here 0.0854 in --voxel-budget 196608 (1.5 times the default)" \
     "voxels wider than the partitions in free space keep the lawn's flat to its glTF cameras"
 grep -q "the voxels around" "$work/err.txt" && fail "the lawn's default region is warned about: $(cat "$work/err.txt")"
+says "$work/out.txt" "Camera: at the glTF cameras' positions, looking their own way and around" \
+    "the roaming camera stays where the region's cameras are"
+grep -q "never reached" "$work/err.txt" && fail "the lawn no camera of the region sees is called unreached: $(cat "$work/err.txt")"
+expect 0 "the same on one thread" "$sharcbake" bake "$work/flat_on_lawn.gltf" -o "$work/lawn_1.sharc" \
+    --iterations 2 --resolution 64x64 --threads 1
+expect 0 "and on three" "$sharcbake" bake "$work/flat_on_lawn.gltf" -o "$work/lawn_3.sharc" \
+    --iterations 2 --resolution 64x64 --threads 3
+cmp -s "$work/lawn_1.sharc" "$work/lawn_3.sharc" || fail "baked from the cameras' positions, 1 and 3 threads differ"
+expect 0 "the lawn's flat kept to the glTF cameras, exploring" "$sharcbake" bake "$work/flat_on_lawn.gltf" \
+    -o "$work/lawn.sharc" --iterations 2 --resolution 64x64 --view-region gltf
+says "$work/out.txt" "Camera: exploration" "a region given keeps the exploring camera"
 expect 0 "the lawn's flat in free space" "$sharcbake" bake "$work/flat_on_lawn.gltf" -o "$work/lawn.sharc" \
     --iterations 2 --resolution 64x64 --view-region free
 says "$work/err.txt" "warning: the voxels around camera 'room_2', 0.556 wide" "given free space, the same voxels are warned about"
