@@ -1884,7 +1884,9 @@ void registerBakeCommand(CLI::App& app) {
                     "Where the roaming camera goes: explore (free space reachable from the glTF cameras; a "
                     "scene that is open around, such as a lone model, and has no camera or only cameras "
                     "outside its bounds, is also looked at from around it; a closed model without a camera "
-                    "whose inside no light reaches, from around alone) or gltf (along the glTF cameras)")
+                    "whose inside no light reaches, from around alone; where --view-region auto keeps the grid "
+                    "to the glTF cameras, at their positions instead, looking their own way and around) or gltf "
+                    "(gliding along the glTF cameras)")
         ->capture_default_str()
         ->check(CLI::IsMember({"explore", "gltf"}))
         ->each([o](const std::string& name) {
