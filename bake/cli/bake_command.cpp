@@ -731,7 +731,7 @@ constexpr std::array<std::pair<uint64_t, uint64_t>, 9> kAutoBudgetGrowth = {
 /// traces every path: right, but no cache). Wrong: a room with a window on a ground 200 m wide
 /// gets level-1 voxels 0.56 m wide, wider than the room's 0.2 m walls, and the sunlit ground's
 /// light leaks in through them (rendered from the room's cameras through the cache: +317% and
-/// +415% too bright). So where free space's grid has 90% or more of the glTF cameras' lookups
+/// +414% too bright). So where free space's grid has 90% or more of the glTF cameras' lookups
 /// refused, or gives the typical glTF camera voxels wider than the voxel warning allows
 /// (voxelsAroundCameras), the region becomes the glTF cameras (`region`, its `source` saying why)
 /// if their grid serves them: fewer than half refused, and voxels no wider than that warning

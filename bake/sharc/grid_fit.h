@@ -112,8 +112,9 @@ constexpr float kDistancePerVoxelAroundCameras = 8.0f;
 
 /// The voxels the typical glTF camera's lookups get at the distance of what it sees (the median
 /// distance of rays in 64 directions to what they hit, for the camera with the median such
-/// distance), against the widest they may be: 1/kDistancePerVoxelAroundCameras of that distance. `camera` is null where no glTF
-/// camera has surfaces around it in most directions (or there is none): nothing to compare.
+/// distance), against the widest they may be: that distance / kDistancePerVoxelAroundCameras.
+/// `camera` is null where no glTF camera has surfaces around it in most directions (or there is
+/// none): nothing to compare.
 struct VoxelsAroundCameras {
     const Camera* camera = nullptr;
     float distance = 0.0f;  ///< the median distance to what the camera sees
