@@ -750,9 +750,8 @@ std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Trace
     free_grid.level_bias = free_fit.level_bias;
     const float free_voxel = free_fit.finest_voxel_size;
     const double free_refused = refusedLookupShare(tracer, free_grid, gridAnchorFor(scene, free_voxel));
-    const VoxelsAroundCameras free_around = free_refused < kFreeFailsRefusedShare
-                                                ? voxelsAroundCameras(tracer, free_grid)
-                                                : VoxelsAroundCameras{};
+    // The typical camera is found once (rays around every glTF camera); each grid only sizes its voxel.
+    const VoxelsAroundCameras free_around = voxelsAroundCameras(tracer, free_grid);
     if (free_refused < kFreeFailsRefusedShare && !free_around.tooWide()) return std::nullopt;
     const ViewRegion at_cameras = atGltfCameras(scene);
     for (const auto& [times, per] : kAutoBudgetGrowth) {
@@ -761,7 +760,7 @@ std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Trace
         const GridFit fit = fitLevelBias(scene, grid, budget, seen, &at_cameras);
         HashGridParameters camera_grid = grid;
         camera_grid.level_bias = fit.level_bias;
-        const VoxelsAroundCameras around = voxelsAroundCameras(tracer, camera_grid);
+        const VoxelsAroundCameras around = free_around.on(camera_grid);
         if (around.tooWide()) continue;
         const double camera_refused =
             refusedLookupShare(tracer, camera_grid, gridAnchorFor(scene, voxelSize(kHashGridLevelMin, camera_grid)));
@@ -1101,22 +1100,21 @@ private:
         warnWhenUnlit(scene_, *lights_, "cache");
         warnAboutPunctualLightUnits(*tracer_);
         camera_path_.emplace(makeCameraPath(job_, scene_, *tracer_, camera_description_, cameras_in_solids_));
-        warnWhenNoLightArrives();
         // The automatic grid fits what the roaming camera's positions (and the scene's cameras) see.
         if (job_.level_bias_auto) {
             seen_ = surfaceSeenFrom(*tracer_, bakeViewpoints(), kSeenSurfaceSamples, job_.settings.seed);
         }
         grid_decision_ = decideGrid(job_, *tracer_, seen_ ? &*seen_ : nullptr);
-        if (grid_decision_.auto_kept_to_gltf_cameras && job_.camera.source == CameraPathSource::Explore &&
-            job_.camera.path_file.empty()) {
+        if (roamingAtGltfCameras()) {
             // The runtime's cameras stay at the glTF cameras: bake what they look up from there.
             camera_path_.emplace(atGltfCameraPositions(scene_, job_.settings.seed));
-            roaming_at_gltf_cameras_ = true;
             camera_description_ =
                 "at the glTF cameras' positions, looking their own way and around (--view-region "
                 "auto keeps the grid to them; --view-region free, or gltf with --camera-source "
                 "explore, roams free space)";
         }
+        // Along the rays of the camera the bake will use, the exploring one's having served the grid.
+        warnWhenNoLightArrives();
         for (const std::string& warning : grid_decision_.warnings)
             std::fprintf(stderr, "warning: %s\n", warning.c_str());
         warnAboutLeaks();
@@ -1306,6 +1304,14 @@ private:
             addSceneReflectance(stability_, estimateSceneReflectance(*tracer_, &*lights_, 2048, job_.settings.seed));
     }
 
+    /// Whether the roaming camera stands at the glTF cameras' positions (atGltfCameraPositions):
+    /// where `--view-region auto` kept the grid to them, and neither a --camera-path nor
+    /// --camera-source gltf says where else it goes.
+    bool roamingAtGltfCameras() const {
+        return grid_decision_.auto_kept_to_gltf_cameras && job_.camera.source == CameraPathSource::Explore &&
+               job_.camera.path_file.empty();
+    }
+
     /// The roaming camera's waypoints and the scene's glTF cameras: where the bake looks from.
     std::vector<glm::vec3> bakeViewpoints() const {
         std::vector<glm::vec3> viewpoints;
@@ -1464,7 +1470,7 @@ private:
             {"output", o_.output_path},
             {"checkpoint", checkpoint_path_.empty() ? Json(nullptr) : Json(checkpoint_path_)},
             {"camera",
-             {{"mode", roaming_at_gltf_cameras_        ? "gltf_positions"
+             {{"mode", roamingAtGltfCameras()          ? "gltf_positions"
                        : job_.camera.path_file.empty() ? toString(job_.camera.source)
                                                        : "file"},
               {"description", camera_description_}}},
@@ -1528,7 +1534,7 @@ private:
         // A roaming camera kept to the glTF cameras' positions never reaches what they never see
         // (a lawn beyond the room's window): there the hit rate from those positions says what
         // the cache lacks, and the surface's coverage says nothing.
-        const double unreached = roaming_at_gltf_cameras_ ? 0.0
+        const double unreached = roamingAtGltfCameras() ? 0.0
                                  : job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
                                      ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
@@ -1608,7 +1614,6 @@ private:
     std::optional<LightSampler> lights_;
     GridDecision grid_decision_;
     std::optional<SeenSurface> seen_;  ///< what the roaming camera's positions see (--level-bias auto)
-    bool roaming_at_gltf_cameras_ = false;  ///< atGltfCameraPositions, for the auto region
     std::string camera_description_;
     std::vector<std::string> cameras_in_solids_;  ///< makeCameraPath's, for the hit-rate warning
     bool warned_no_light_ = false;                ///< warnWhenNoLightArrives warned that the cache will be black
@@ -1780,8 +1785,8 @@ void registerBakeCommand(CLI::App& app) {
         "Same scene, options and --seed give a byte-identical cache for any --threads.\n\n"
         "SHaRC picks a lookup's level from the runtime camera's distance, so each vertex is cached\n"
         "at every level a camera of --view-region can ask for there (default: anywhere, unless that\n"
-        "leaves the glTF cameras nothing), on a grid whose finest level is fitted to the scene's\n"
-        "units (--level-bias auto). After the bake the\n"
+        "fails the glTF cameras: nothing to look up, or voxels wider than their walls), on a grid\n"
+        "whose finest level is fitted to the scene's units (--level-bias auto). After the bake the\n"
         "share of SHaRC's exact lookups the cache answers from the scene's cameras and sampled\n"
         "viewpoints is printed as the predicted hit rate (a warning below 95%).\n\n"
         "Examples:\n"

@@ -464,7 +464,12 @@ VoxelsAroundCameras voxelsAroundCameras(const Tracer& tracer, const HashGridPara
     std::tie(around.camera, around.distance) = typicalCamera(tracer);
     if (!around.camera) return around;
     around.widest = around.distance / kDistancePerVoxelAroundCameras;
-    around.voxel = voxelAtDistance(grid, around.distance);
+    return around.on(grid);
+}
+
+VoxelsAroundCameras VoxelsAroundCameras::on(const HashGridParameters& grid) const {
+    VoxelsAroundCameras around = *this;
+    around.voxel = camera ? voxelAtDistance(grid, distance) : 0.0f;
     return around;
 }
 

@@ -121,6 +121,8 @@ struct VoxelsAroundCameras {
     float voxel = 0.0f;     ///< the voxel width its lookups at that distance get
     float widest = 0.0f;    ///< distance / kDistancePerVoxelAroundCameras
     bool tooWide() const { return camera && voxel > widest; }
+    /// The same camera and distance, with the voxel `grid` gives its lookups there.
+    VoxelsAroundCameras on(const HashGridParameters& grid) const;
 };
 VoxelsAroundCameras voxelsAroundCameras(const Tracer& tracer, const HashGridParameters& grid);
 
