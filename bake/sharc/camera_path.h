@@ -185,9 +185,10 @@ std::vector<Ray> sampleCameraPathRays(const CameraPath& path, int width, int hei
 /// keeping the grid to them): at each glTF camera's position in turn, looking alternately its own
 /// way and in a new random direction each iteration, as a camera standing there and turning looks
 /// (the hit-rate prediction's views of such a region are the same). A camera exploring free space
-/// would spend most of its paths where those cameras never look: a crate among 200,000 on a
-/// ground 900 m wide got 45% of its camera's lookups answered, 99.6% from here. No gliding between
-/// the cameras, which would cross the walls between rooms. The scene must have a camera.
+/// would spend most of its paths where those cameras never look: a room with a window on a lawn
+/// 200 m wide rendered through the cache +3.6% too bright from its camera when the exploring
+/// camera baked it, +0.1% from here (tests/bench/window_room.sh, BENCHMARKS.md). No gliding
+/// between the cameras, which would cross the walls between rooms. The scene must have a camera.
 CameraPath atGltfCameraPositions(const Scene& scene, uint32_t seed);
 
 /// The exploring camera of a bake: up to `points` free-space positions reachable from the scene's

@@ -29,7 +29,7 @@ for light in $lights; do
     [ -e "$scene" ] || { tail -20 "$work/$light.blender.log"; exit 1; }
     for region in auto free; do
         "$sharcbake" bake "$scene" -o "$work/$light.$region.sharc" --view-region "$region" > "$work/$light.$region.log" 2>&1
-        echo "$light, $region: $(grep -o 'finest voxels [0-9.e+-]* wide' "$work/$light.$region.log"), $(grep -o '[0-9]* live voxels' "$work/$light.$region.log")"
+        echo "$light, $region: $(grep -o 'finest voxels [0-9.e+-]* wide' "$work/$light.$region.log"), $(grep -o '[0-9]* live voxels' "$work/$light.$region.log"), $(grep -o 'Baked [0-9]* iterations in [0-9.]* s' "$work/$light.$region.log"), $(grep -o 'segments [0-9]*' "$work/$light.$region.log")"
     done
     for camera in "Camera" "Window view"; do
         name=$(echo "$light.$camera" | tr ' ' '_')
