@@ -5,6 +5,10 @@
 #       then fuzzes for SECONDS with the options given (and a 10 s limit per input), reproducers
 #       going to DIR/artifacts/; prints libFuzzer's run statistics. Any crash, sanitizer report,
 #       leak, timeout or reproducer exits the calling script with 1, showing the log's end.
+#       The search is seeded with FUZZ_SEED (default 1), so that every test run mutates along
+#       the same sequence (as far as its time allows) and a failure in CI reproduces here;
+#       FUZZ_SEED=0 draws a new seed each run (libFuzzer's default), for longer searches by hand:
+#       FUZZ_SEED=0 IMAGE_FUZZ_SECONDS=600 tests/scenes/fuzzed_loaders_test.sh . /tmp/f build/bin/sharcbake
 run_fuzzer() {
     local binary=$1 dir=$2 seconds=$3 name
     name=$(basename "$binary")
@@ -16,7 +20,7 @@ run_fuzzer() {
         exit 1
     }
     set +e
-    "$binary" "$dir/corpus" "$@" -max_total_time="$seconds" -timeout=10 -print_final_stats=1 \
+    "$binary" "$dir/corpus" "$@" -max_total_time="$seconds" -seed="${FUZZ_SEED:-1}" -timeout=10 -print_final_stats=1 \
         -artifact_prefix="$dir/artifacts/" >"$dir/fuzz.log" 2>&1
     local rc=$?
     set -e

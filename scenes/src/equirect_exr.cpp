@@ -122,13 +122,22 @@ Texture loadEquirectExr(const std::string& path) {
         tex.name = std::filesystem::path(path).filename().string();
         tex.width = width;
         tex.height = height;
-        tex.texels.assign(static_cast<size_t>(width) * height, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
         // Longitude wraps around; latitude stops at the poles.
         tex.wrap_s = WrapMode::Repeat;
         tex.wrap_t = WrapMode::ClampToEdge;
 
+        // Texels are allocated as OpenEXR decodes their rows, a strip at a time, so that a
+        // damaged header of 2^27 texels in a small file costs no 2 GB clear before OpenEXR finds
+        // the rows missing. The reserved capacity (address space only) keeps the frame buffer's
+        // pointer valid while the rows grow.
+        tex.texels.reserve(static_cast<size_t>(width) * height);
         file.setFrameBuffer(makeFrameBuffer(layout, window, tex.texels));
-        file.readPixels(window.min.y, window.max.y);
+        const int rows_per_strip = exrRowsPerStrip(width);
+        for (int64_t y = window.min.y; y <= window.max.y; y += rows_per_strip) {
+            const int64_t last = std::min<int64_t>(window.max.y, y + rows_per_strip - 1);
+            tex.texels.resize(static_cast<size_t>(last - window.min.y + 1) * width, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+            file.readPixels(int(y), int(last));
+        }
         checkAndClampTexels(path, tex.texels, layout.luminance);
         return tex;
     } catch (const SceneLoadError&) {

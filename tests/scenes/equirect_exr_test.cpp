@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -148,6 +150,31 @@ TEST(EquirectExr, HeaderThatClaimsMoreThanTheFileIsRefusedAtOnce) {
     const std::string window("dataWindow\0box2i\0", 17);
     const std::string refused = patched(window, 4 + 12, 1 << 28);  // max.y
     EXPECT_NE(refused.find("1x268435457 is more pixels than sharcbake reads"), std::string::npos) << refused;
+}
+
+// A map that claims 16 rows of 2^20 texels (within what is read), holds one and has its chunk's
+// compressed bytes damaged fails at its first row: texels are allocated as their rows decode, not
+// 256 MiB up front.
+TEST(EquirectExr, MapThatClaimsMoreTexelsThanItHoldsFailsBeforeTheyAreAllocated) {
+    TempDir dir;
+    const std::string path = dir.file("sky.exr");
+    writeExr(path, 1, 1, {"R", "G", "B"}, {1.0f, 1.0f, 1.0f});
+    std::ifstream in(path, std::ios::binary);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string window("dataWindow\0box2i\0", 17);
+    const auto at = std::search(bytes.begin(), bytes.end(), window.begin(), window.end());
+    ASSERT_NE(at, bytes.end());
+    const int32_t max_xy[2] = {(1 << 20) - 1, 15};  // little-endian, as on this machine
+    std::memcpy(&*at + window.size() + 4 + 8, max_xy, sizeof(max_xy));
+    std::fill(bytes.end() - 8, bytes.end(), char(0xa5));  // the chunk's last compressed bytes
+    const std::string damaged = dir.file("damaged.exr");
+    test::writeFile(damaged, bytes.data(), bytes.size());
+    rusage before{};
+    getrusage(RUSAGE_SELF, &before);
+    EXPECT_THROW(loadEquirectExr(damaged), SceneLoadError);
+    rusage after{};
+    getrusage(RUSAGE_SELF, &after);
+    EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 128 * 1024) << "kilobytes: the whole map was allocated";
 }
 
 TEST(EquirectExr, NonFiniteRadianceIsAnError) {

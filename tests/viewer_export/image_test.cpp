@@ -12,6 +12,7 @@
 #include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
 #include <ImfStringAttribute.h>
+#include <ImfTiledOutputFile.h>
 #include <half.h>
 #include <stb_image.h>
 
@@ -28,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace sharcbake {
@@ -460,6 +462,144 @@ TEST_F(ImageTest, ExrHeadersThatClaimMoreThanTheFileHoldsAreRefusedBeforeOpenExr
         << message;
 }
 
+/// The process's peak resident memory so far, in bytes.
+uint64_t peakResidentBytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return uint64_t(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
+}
+
+// A header may claim up to 2^27 pixels in a file that holds 64. Rows are allocated as OpenEXR
+// decodes them, a few million pixels at a time, so such a file fails at its first damaged row
+// without clearing the whole image first (a fuzzed 634-byte file took over 10 s so under ASan).
+// Here 16 rows of 2^20 pixels (192 MiB as floats) whose one chunk of rows is damaged (its
+// compressed bytes overwritten).
+TEST_F(ImageTest, ExrThatClaimsMorePixelsThanItHoldsFailsBeforeItsRowsAreAllocated) {
+    const std::string whole_path = file("whole.exr");
+    writeExr(whole_path, patternImage(8, 8));
+    std::vector<unsigned char> wide = readBytes(whole_path);
+    const std::string window("dataWindow\0box2i\0", 17);
+    const size_t window_at = findAttribute(wide, window);
+    ASSERT_NE(window_at, std::string::npos);
+    storeInt32(wide, window_at + window.size() + 4 + 8, (1 << 20) - 1);  // max.x
+    storeInt32(wide, window_at + window.size() + 4 + 12, 15);            // max.y
+    std::fill(wide.end() - 64, wide.end(), 0xa5);                        // the chunk's last bytes
+    const std::string wide_path = file("wide.exr");
+    writeBytes(wide_path, wide.data(), wide.size());
+    const uint64_t peak_before = peakResidentBytes();
+    const std::string message = imageErrorOf([&] { readLinearImage(wide_path); });
+    EXPECT_NE(message.find(wide_path), std::string::npos) << message;
+    EXPECT_LT(peakResidentBytes() - peak_before, uint64_t(128) << 20) << "the whole image was allocated";
+
+    EXPECT_EQ(exrRowsPerStrip(1 << 24), 1);
+    EXPECT_EQ(exrRowsPerStrip(16384), 256);
+    EXPECT_EQ(exrRowsPerStrip(100000), 32);  // 3.2 M pixels; 64 rows would be 6.4 M
+    EXPECT_EQ(exrRowsPerStrip(1), 256);
+}
+
+// OpenEXR allocates what one chunk (a tile, or the rows compressed together) decodes to before
+// reading it: a chunk of more than 256 MiB is refused first, naming its shape.
+TEST_F(ImageTest, ExrWhoseChunkDecodesToMoreThan256MiBIsRefused) {
+    const std::string whole_path = file("whole.exr");
+    writeExr(whole_path, patternImage(8, 8));  // ZIP: 16 rows a chunk; R, G, B float
+    std::vector<unsigned char> wide = readBytes(whole_path);
+    const std::string window("dataWindow\0box2i\0", 17);
+    const size_t window_at = findAttribute(wide, window);
+    ASSERT_NE(window_at, std::string::npos);
+    storeInt32(wide, window_at + window.size() + 4 + 8, (1 << 21) - 1);  // 16 x 2^21 x 12 = 384 MiB
+    const std::string wide_path = file("wide.exr");
+    writeBytes(wide_path, wide.data(), wide.size());
+    std::string message = imageErrorOf([&] { readExr(wide_path); });
+    EXPECT_NE(message.find("a chunk of 16 rows 2097152 pixels wide of 12 bytes a pixel decodes to 384 MiB, more "
+                           "than the 256 MiB sharcbake reads"),
+              std::string::npos)
+        << message;
+    storeInt32(wide, window_at + window.size() + 4 + 8, (1 << 20) - 1);  // 192 MiB: OpenEXR's to judge
+    writeBytes(wide_path, wide.data(), wide.size());
+    EXPECT_NO_THROW(checkExrHeaders(wide_path));
+
+    const std::string tiled_path = file("tiled.exr");
+    {
+        Imf::Header header(8, 8);
+        header.channels().insert("R", Imf::Channel(Imf::HALF));
+        header.setTileDescription(Imf::TileDescription(4, 4));
+        Imf::TiledOutputFile out(tiled_path.c_str(), header);
+        std::vector<half> pixels(64, half(1.0f));
+        Imf::FrameBuffer frame;
+        frame.insert("R",
+                     Imf::Slice(Imf::HALF, reinterpret_cast<char*>(pixels.data()), sizeof(half), 8 * sizeof(half)));
+        out.setFrameBuffer(frame);
+        out.writeTiles(0, 1, 0, 1);
+    }
+    EXPECT_EQ(readExr(tiled_path).pixels.size(), 64u);
+    std::vector<unsigned char> tiled = readBytes(tiled_path);
+    const std::string tiles("tiles\0tiledesc\0", 15);
+    const size_t tiles_at = findAttribute(tiled, tiles);
+    ASSERT_NE(tiles_at, std::string::npos);
+    storeInt32(tiled, tiles_at + tiles.size() + 4, 1 << 16);      // x size
+    storeInt32(tiled, tiles_at + tiles.size() + 4 + 4, 1 << 16);  // y size: 2^32 half pixels
+    writeBytes(tiled_path, tiled.data(), tiled.size());
+    message = imageErrorOf([&] { readExr(tiled_path); });
+    EXPECT_NE(message.find("a tile of 65536x65536 pixels of 2 bytes a pixel decodes to 8192 MiB"), std::string::npos)
+        << message;
+}
+
+// OpenEXR reads a channel list up to its empty name and a fixed-size value (int, box, enum) by
+// its type, whatever size the file declares; checkExrHeaders must walk the same bytes, or it
+// checks other bytes than OpenEXR trusts. A fuzzed file whose channel list claimed 55 bytes and
+// held 19 had OpenEXR take a string's size from bytes the check had skipped as a name, and clear
+// 1.9 GB for over 10 s. A declared size that disagrees with what the value holds is refused.
+TEST_F(ImageTest, ExrAttributeSizesThatDisagreeWithTheirValuesAreRefused) {
+    const std::string whole_path = file("whole.exr");
+    writeExr(whole_path, patternImage(8, 8), {{"note", "a string attribute"}});
+    const std::vector<unsigned char> whole = readBytes(whole_path);
+
+    const std::string channels("channels\0chlist\0", 16);
+    const size_t channels_at = findAttribute(whole, channels);
+    ASSERT_NE(channels_at, std::string::npos);
+    const int32_t channels_size = 3 * (2 + 16) + 1;  // "R", "G", "B", each with its 16 bytes; end
+    std::vector<unsigned char> longer = whole;
+    storeInt32(longer, channels_at + channels.size(), channels_size + 36);
+    const std::string longer_path = file("longer_chlist.exr");
+    writeBytes(longer_path, longer.data(), longer.size());
+    std::string message = imageErrorOf([&] { readLinearImage(longer_path); });
+    EXPECT_NE(message.find("header attribute 'channels' (chlist) claims 91 bytes where its channels take 55"),
+              std::string::npos)
+        << message;
+
+    std::vector<unsigned char> shorter = whole;  // the list runs past what the file declares
+    storeInt32(shorter, channels_at + channels.size(), channels_size - 20);
+    const std::string shorter_path = file("shorter_chlist.exr");
+    writeBytes(shorter_path, shorter.data(), shorter.size());
+    message = imageErrorOf([&] { readExr(shorter_path); });
+    EXPECT_NE(message.find("'channels' (chlist) claims 35 bytes where its channels run past them"), std::string::npos)
+        << message;
+
+    std::vector<unsigned char> compression = whole;
+    const std::string compression_name("compression\0compression\0", 24);
+    const size_t compression_at = findAttribute(compression, compression_name);
+    ASSERT_NE(compression_at, std::string::npos);
+    storeInt32(compression, compression_at + compression_name.size(), 4);
+    const std::string compression_path = file("compression.exr");
+    writeBytes(compression_path, compression.data(), compression.size());
+    message = imageErrorOf([&] { readExr(compression_path); });
+    EXPECT_NE(message.find("'compression' (compression) claims 4 bytes where a compression is 1"), std::string::npos)
+        << message;
+
+    // The file as written passes, and so does an attribute of a type OpenEXR does not know (read
+    // by its declared size).
+    EXPECT_NO_THROW(checkExrHeaders(whole_path));
+    std::vector<unsigned char> unknown = whole;
+    const std::string note("note\0string\0", 12);
+    const size_t note_at = findAttribute(unknown, note);
+    ASSERT_NE(note_at, std::string::npos);
+    std::copy_n("mytype", 6, unknown.begin() + std::ptrdiff_t(note_at + 5));
+    const std::string unknown_path = file("unknown_type.exr");
+    writeBytes(unknown_path, unknown.data(), unknown.size());
+    EXPECT_NO_THROW(checkExrHeaders(unknown_path));
+    EXPECT_EQ(readExr(unknown_path).pixels.size(), 64u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // PNG
 
@@ -704,6 +844,21 @@ TEST_F(ImageTest, CorruptOrCutHdrAndPfmFilesFailCleanly) {
     const std::vector<unsigned char> huge = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 1048576 +X 1048576", {});
     writeBytes(file("huge.hdr"), huge.data(), huge.size());
     EXPECT_NE(imageErrorOf([&] { readLinearImage(file("huge.hdr")); }).find("is more pixels than sharcbake reads"), std::string::npos);
+    // Within that, rows the file cannot hold (each takes 4 bytes or more) are refused before the
+    // image is allocated (a fuzzed file claiming 900,000 rows cleared 1.6 GB first), and a file
+    // whose rows end early fails without its claimed size allocated.
+    const std::vector<unsigned char> tall = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 900000 +X 4", {10, 20, 30, 130});
+    writeBytes(file("tall.hdr"), tall.data(), tall.size());
+    const std::string message = imageErrorOf([&] { readLinearImage(file("tall.hdr")); });
+    EXPECT_NE(message.find("claims 900000 rows where the 4 bytes after it hold at most 1 (truncated)"),
+              std::string::npos)
+        << message;
+    std::vector<unsigned char> cut = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 128 +X 1000000", {});
+    cut.resize(cut.size() + 128 * 4, 7);  // 128 flat pixels: the first row cut short
+    writeBytes(file("cut.hdr"), cut.data(), cut.size());
+    const uint64_t peak_before = peakResidentBytes();
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("cut.hdr")); }).find("truncated"), std::string::npos);
+    EXPECT_LT(peakResidentBytes() - peak_before, uint64_t(256) << 20) << "the claimed 1.5 GB were allocated";
 }
 
 TEST_F(ImageTest, DisplayImagesAreRefusedWithTheReason) {

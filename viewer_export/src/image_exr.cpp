@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <new>
 #include <string>
 #include <vector>
@@ -173,12 +174,73 @@ void writeExr(const std::string& path, const Image& image, const ImageMetadata& 
     detail::writeFileAtomically(path, bytes.data(), bytes.size());
 }
 
+namespace {
+
+/// The bytes OpenEXR 3.1 reads for a value of a type whose reader ignores the size the file
+/// declares (it reads the type's own layout), or -1 for a type read by its declared size.
+int fixedValueBytes(const std::string& type) {
+    static const std::map<std::string, int> kFixed = {{"box2i", 16},      {"box2f", 16},   {"chromaticities", 32},
+                                                      {"compression", 1}, {"double", 8},   {"envmap", 1},
+                                                      {"float", 4},       {"int", 4},      {"keycode", 28},
+                                                      {"lineOrder", 1},   {"m33f", 36},    {"m33d", 72},
+                                                      {"m44f", 64},       {"m44d", 128},   {"rational", 8},
+                                                      {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+                                                      {"v2f", 8},         {"v2d", 16},     {"v3i", 12},
+                                                      {"v3f", 12},        {"v3d", 24},     {"deepImageState", 1}};
+    const auto it = kFixed.find(type);
+    return it == kFixed.end() ? -1 : it->second;
+}
+
+/// What checkExrHeaders gathers from one part's header: what OpenEXR sizes its buffers by.
+struct ExrPartShape {
+    int64_t width = 0, height = 0;            // of the data window; 0 where the header has none
+    int compression = -1;                     // OpenEXR's Compression enum; -1 where absent
+    int64_t bytes_per_pixel = 0;              // of all channels, as stored
+    int64_t tile_width = 0, tile_height = 0;  // 0 for scan lines
+};
+
+/// Rows per chunk of a scan-line file under `compression` (OpenEXR's enum); 256 (the most any
+/// compression takes) for one OpenEXR will refuse anyway.
+int64_t rowsPerChunk(int compression) {
+    switch (compression) {
+        case 0:  // none
+        case 1:  // RLE
+        case 2:  // ZIPS
+            return 1;
+        case 3:  // ZIP
+        case 5:  // PXR24
+            return 16;
+        case 4:  // PIZ
+        case 6:  // B44
+        case 7:  // B44A
+        case 8:  // DWAA
+            return 32;
+        default:  // DWAB (9) and unknown
+            return 256;
+    }
+}
+
+/// The most one chunk of an image (a tile, or a scan-line file's rows that are compressed
+/// together) may decode to: OpenEXR 3.1 allocates buffers of that size before it reads a chunk,
+/// so a 634-byte file claiming 16 rows 6.8 M pixels wide made it take 1.3 GB (and 8 s under
+/// ASan) before finding no pixels. 2^28 bytes: 256 rows (DWAB) of 16384 pixels of 16 float
+/// channels.
+constexpr uint64_t kMaxChunkBytes = uint64_t(1) << 28;
+
+}  // namespace
+
 void checkExrHeaders(const std::string& path) {
-    // OpenEXR 3.1 sizes an attribute's value by what the file claims before reading it: a
-    // 500-byte file whose string attribute claims 2 GB made `compare` allocate and clear 1.7 GB
-    // for 8 s before OpenEXR found the end of the file. An attribute is a name, a type name (each
-    // ended by a zero byte), a 32-bit little-endian size and that many bytes; a header ends with
-    // an empty name; a multi-part file has one header per part and an empty header after them.
+    // OpenEXR 3.1 sizes what it allocates by what the file claims, before reading it: an
+    // attribute's value by its declared size (a 500-byte file whose string attribute claimed 2 GB
+    // made `compare` allocate and clear 1.7 GB for 8 s before OpenEXR found the end of the file),
+    // buffers by the data window, channels and compression. An attribute is a name, a type name
+    // (each ended by a zero byte), a 32-bit little-endian size and that many bytes; a header ends
+    // with an empty name; a multi-part file has one header per part and an empty header after
+    // them. This walk must read the bytes OpenEXR reads, or it checks other bytes than OpenEXR
+    // then trusts: a channel list is read up to its empty name and a fixed-size value (an int, a
+    // box) by its type, whatever size the file declares. A declared size that disagrees with
+    // those bytes is damage, refused here (a fuzzed file whose channel list claimed 55 bytes and
+    // held 19 had OpenEXR read a string's size from where this walk saw a name).
     std::error_code error;
     const uint64_t file_size = std::filesystem::file_size(path, error);
     std::ifstream in(path, std::ios::binary);
@@ -196,10 +258,15 @@ void checkExrHeaders(const std::string& path) {
         }
         return false;
     };
+    auto refuseSize = [&](const std::string& name, const std::string& type, int32_t size, const std::string& holds) {
+        throwReadError(path, "header attribute '" + printableName(name) + "' (" + printableName(type) + ") claims " +
+                                 std::to_string(size) + " bytes where " + holds + ": the file is damaged or cut short");
+    };
     std::string name;
     std::string type;
-    bool first_header = true;
-    for (;;) {
+    std::vector<unsigned char> value;
+    for (int part = 0;; ++part) {
+        ExrPartShape shape;
         while (readName(name) && !name.empty()) {
             if (!readName(type)) return;
             unsigned char size_bytes[4] = {};
@@ -207,27 +274,68 @@ void checkExrHeaders(const std::string& path) {
             const int32_t size = int32_t(littleEndian32(size_bytes));
             const uint64_t left = file_size - std::min<uint64_t>(file_size, uint64_t(in.tellg()));
             if (size < 0 || uint64_t(size) > left) {
-                throwReadError(path, "header attribute '" + printableName(name) + "' (" + printableName(type) +
-                                         ") claims " + std::to_string(size) + " bytes where the file has " +
-                                         std::to_string(left) + " left: the file is damaged or cut short");
+                refuseSize(name, type, size, "the file has " + std::to_string(left) + " left");
             }
-            if (first_header && name == "dataWindow" && type == "box2i" && size == 16) {
-                unsigned char box[16] = {};
-                if (!in.read(reinterpret_cast<char*>(box), sizeof(box))) return;
-                const int64_t width = int64_t(int32_t(littleEndian32(box + 8))) - int32_t(littleEndian32(box)) + 1;
-                const int64_t height = int64_t(int32_t(littleEndian32(box + 12))) - int32_t(littleEndian32(box + 4)) +
-                                       1;
-                if (width > 0 && height > 0 && uint64_t(width) * uint64_t(height) > detail::kMaxImagePixels) {
-                    throwReadError(path, std::to_string(width) + "x" + std::to_string(height) + " is " +
-                                             detail::kTooManyPixels);
+            const int fixed = fixedValueBytes(type);
+            if (fixed >= 0 && size != fixed) refuseSize(name, type, size, "a " + type + " is " + std::to_string(fixed));
+            value.resize(size_t(size));
+            if (!in.read(reinterpret_cast<char*>(value.data()), size)) return;
+            if (type == "chlist") {
+                // Each channel: its name, a zero byte, then 16 bytes: the pixel type (0 uint,
+                // 1 half, 2 float), pLinear, 3 reserved bytes, x and y sampling. An empty name ends.
+                size_t at = 0;
+                for (;;) {
+                    const auto end = std::find(value.begin() + std::ptrdiff_t(at), value.end(), 0);
+                    if (end == value.end()) refuseSize(name, type, size, "its channels run past them");
+                    const size_t name_length = size_t(end - value.begin()) - at;
+                    at += name_length + 1;
+                    if (name_length == 0) break;
+                    if (at + 16 > value.size()) refuseSize(name, type, size, "its channels run past them");
+                    shape.bytes_per_pixel += littleEndian32(value.data() + at) == 1 ? 2 : 4;
+                    at += 16;
                 }
-                continue;
+                if (at != value.size()) refuseSize(name, type, size, "its channels take " + std::to_string(at));
+            } else if (name == "dataWindow" && type == "box2i") {
+                shape.width = int64_t(int32_t(littleEndian32(&value[8]))) - int32_t(littleEndian32(&value[0])) + 1;
+                shape.height = int64_t(int32_t(littleEndian32(&value[12]))) - int32_t(littleEndian32(&value[4])) + 1;
+            } else if (name == "compression" && type == "compression") {
+                shape.compression = value[0];
+            } else if (name == "tiles" && type == "tiledesc") {
+                shape.tile_width = littleEndian32(&value[0]);
+                shape.tile_height = littleEndian32(&value[4]);
             }
-            in.seekg(size, std::ios::cur);
         }
-        if (!in || !name.empty() || !multi_part || in.peek() == 0) return;
-        first_header = false;
+        if (!in || !name.empty()) return;
+        const std::string where = multi_part ? " (part " + std::to_string(part) + ")" : std::string();
+        if (shape.width > 0 && shape.height > 0 &&
+            uint64_t(shape.width) * uint64_t(shape.height) > detail::kMaxImagePixels) {
+            throwReadError(path, std::to_string(shape.width) + "x" + std::to_string(shape.height) + where + " is " +
+                                     detail::kTooManyPixels);
+        }
+        const bool tiled = shape.tile_width > 0 || shape.tile_height > 0;
+        const double chunk_pixels = tiled ? double(shape.tile_width) * double(shape.tile_height)
+                                          : double(rowsPerChunk(shape.compression)) *
+                                                double(std::max<int64_t>(shape.width, 0));
+        const double chunk_bytes = chunk_pixels * double(shape.bytes_per_pixel);
+        if (chunk_bytes > double(kMaxChunkBytes)) {
+            const std::string chunk = tiled ? "a tile of " + std::to_string(shape.tile_width) + "x" +
+                                                  std::to_string(shape.tile_height) + " pixels"
+                                            : "a chunk of " + std::to_string(rowsPerChunk(shape.compression)) +
+                                                  " rows " + std::to_string(shape.width) + " pixels wide";
+            throwReadError(path, chunk + where + " of " + std::to_string(shape.bytes_per_pixel) +
+                                     " bytes a pixel decodes to " + std::to_string(int64_t(chunk_bytes / 1048576.0)) +
+                                     " MiB, more than the 256 MiB sharcbake reads (256 rows 16384 pixels wide of 16 "
+                                     "float channels)");
+        }
+        if (!multi_part || in.peek() == 0) return;
     }
+}
+
+int exrRowsPerStrip(int width) {
+    constexpr int64_t kPixelsPerStrip = int64_t(1) << 22;
+    int rows = 256;
+    while (rows > 1 && int64_t(rows) * width > kPixelsPerStrip) rows /= 2;
+    return rows;
 }
 
 Image readExr(const std::string& path, ImageMetadata* metadata) {
@@ -267,7 +375,13 @@ Image readExr(const std::string& path, ImageMetadata* metadata) {
         if (!has_rgb && luminance != nullptr && has_chroma) {
             image = readLuminanceChroma(path, dw);
         } else {
-            image = Image(width, height);
+            // Rows are allocated as OpenEXR decodes them, a strip at a time: a damaged header of
+            // 108 M pixels (16 rows 6.8 M wide) in a 634-byte file made clearing the whole image
+            // up front take over 10 s under ASan before OpenEXR found no pixels. The reserved capacity is address
+            // space only, and keeps the frame buffer's pointer valid while the rows grow.
+            image.width = width;
+            image.height = height;
+            image.pixels.reserve(size_t(width) * size_t(height));
             char* first = reinterpret_cast<char*>(image.pixels.data());
             const size_t x_stride = sizeof(glm::vec3);
             const size_t y_stride = x_stride * size_t(width);
@@ -288,7 +402,12 @@ Image readExr(const std::string& path, ImageMetadata* metadata) {
                 }
             }
             file.setFrameBuffer(frame);
-            file.readPixels(dw.min.y, dw.max.y);
+            const int rows_per_strip = exrRowsPerStrip(width);
+            for (int64_t y = dw.min.y; y <= dw.max.y; y += rows_per_strip) {
+                const int64_t last = std::min<int64_t>(dw.max.y, y + rows_per_strip - 1);
+                image.pixels.resize(size_t(last - dw.min.y + 1) * size_t(width), glm::vec3(0.0f));
+                file.readPixels(int(y), int(last));
+            }
             if (luminance_only) {
                 for (glm::vec3& p : image.pixels) p = glm::vec3(p.r);
             }

@@ -38,10 +38,16 @@ using ImageMetadata = std::map<std::string, std::string>;
 void writeExr(const std::string& path, const Image& image, const ImageMetadata& metadata = {});
 
 /// Refuses (ImageError) an OpenEXR file that OpenEXR 3.1 would make allocate what it claims
-/// before finding the damage: a header attribute larger than the rest of the file, or a data
-/// window of more than 2^27 pixels (16384 x 8192). readExr calls it; call it before reading an
-/// EXR with OpenEXR elsewhere.
+/// before finding the damage: a header attribute larger than the rest of the file or whose size
+/// disagrees with what its type holds, or a data window of more than 2^27 pixels (16384 x 8192).
+/// readExr calls it; call it before reading an EXR with OpenEXR elsewhere.
 void checkExrHeaders(const std::string& path);
+
+/// How many rows of an OpenEXR image `width` pixels wide to allocate and read at a time, so that
+/// a header claiming more rows than the file holds fails at the first missing one rather than
+/// after the whole image was cleared: a power of two of about 2^22 pixels, at most 256 rows (so
+/// a strip covers whole chunks of every compression), at least 1.
+int exrRowsPerStrip(int width);
 
 /// Reads the R, G, B channels of an OpenEXR file (any pixel type) as float. A missing channel
 /// reads as 0; a single Y (luminance) channel is replicated. A layered file without plain R, G, B
