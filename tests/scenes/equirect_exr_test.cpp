@@ -152,6 +152,22 @@ TEST(EquirectExr, HeaderThatClaimsMoreThanTheFileIsRefusedAtOnce) {
     EXPECT_NE(refused.find("1x268435457 is more pixels than sharcbake reads"), std::string::npos) << refused;
 }
 
+// Texels are read in strips of rows (256 at this width): a 3 x 600 map reads back exactly across
+// the seams, with A = 1 where the file has none.
+TEST(EquirectExr, MapOfSeveralStripsReadsBackExactly) {
+    TempDir dir;
+    const std::string path = dir.file("tall.exr");
+    const int width = 3, height = 600;
+    std::vector<float> values(size_t(width) * height * 3);
+    for (size_t i = 0; i < values.size(); ++i) values[i] = float(i) * 0.5f;
+    writeExr(path, width, height, {"R", "G", "B"}, values);
+    const Texture t = loadEquirectExr(path);
+    ASSERT_EQ(t.texels.size(), size_t(width) * height);
+    for (size_t i = 0; i < t.texels.size(); ++i) {
+        ASSERT_EQ(t.texels[i], glm::vec4(values[3 * i], values[3 * i + 1], values[3 * i + 2], 1.0f)) << i;
+    }
+}
+
 // A map that claims 16 rows of 2^20 texels (within what is read), holds one and has its chunk's
 // compressed bytes damaged fails at its first row: texels are allocated as their rows decode, not
 // 256 MiB up front.
