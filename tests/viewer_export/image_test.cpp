@@ -880,6 +880,12 @@ TEST_F(ImageTest, CorruptOrCutHdrAndPfmFilesFailCleanly) {
     // Within that, rows the file cannot hold (each takes 4 bytes or more) are refused before the
     // image is allocated (a fuzzed file claiming 900,000 rows cleared 1.6 GB first), and a file
     // whose rows end early fails without its claimed size allocated.
+    const std::string nul_inside("-Y 4\0\0\0 +X 4", 12);  // the fuzzed file's height was "0900000\0\0..."
+    const std::vector<unsigned char> nul = hdrBytes("FORMAT=32-bit_rle_rgbe", nul_inside,
+                                                    std::vector<unsigned char>(64, 9));
+    writeBytes(file("nul.hdr"), nul.data(), nul.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("nul.hdr")); }).find("is not \"-Y height +X width\""),
+              std::string::npos);
     const std::vector<unsigned char> tall = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 900000 +X 4", {10, 20, 30, 130});
     writeBytes(file("tall.hdr"), tall.data(), tall.size());
     const std::string message = imageErrorOf([&] { readLinearImage(file("tall.hdr")); });

@@ -60,15 +60,6 @@ uint32_t littleEndian32(const unsigned char* bytes) {
     return uint32_t(bytes[0]) | uint32_t(bytes[1]) << 8 | uint32_t(bytes[2]) << 16 | uint32_t(bytes[3]) << 24;
 }
 
-/// A header attribute's name as it may be printed: control and non-ASCII bytes as '?'.
-std::string printableName(const std::string& name) {
-    std::string out = name;
-    for (char& c : out) {
-        if (c < 0x20 || c > 0x7e) c = '?';
-    }
-    return out;
-}
-
 /// Luminance/chroma files (Y, RY, BY; possibly sub-sampled) are converted by OpenEXR's RGBA
 /// interface. Precision is half, which is what such files store.
 Image readLuminanceChroma(const std::string& path, const Imath::Box2i& dw) {
@@ -124,9 +115,9 @@ std::string pictureLayer(const std::string& path, const Imf::ChannelList& channe
         for (auto it = channels.begin(); it != channels.end(); ++it)
             names += (names.empty() ? "" : ", ") + std::string(it.name());
         throwReadError(path, "no R, G, B or Y channels and no layer with them (channels: " +
-                                 (names.empty() ? std::string("none") : names) + ")");
+                                 (names.empty() ? std::string("none") : detail::printable(names)) + ")");
     }
-    throwReadError(path, "several layers hold R, G and B (" + names +
+    throwReadError(path, "several layers hold R, G and B (" + detail::printable(names) +
                              ") and none is the single 'Combined' pass; save the picture alone (a plain RGB EXR)");
 }
 
@@ -259,8 +250,9 @@ void checkExrHeaders(const std::string& path) {
         return false;
     };
     auto refuseSize = [&](const std::string& name, const std::string& type, int32_t size, const std::string& holds) {
-        throwReadError(path, "header attribute '" + printableName(name) + "' (" + printableName(type) + ") claims " +
-                                 std::to_string(size) + " bytes where " + holds + ": the file is damaged or cut short");
+        throwReadError(path, "header attribute '" + detail::printable(name) + "' (" + detail::printable(type) +
+                                 ") claims " + std::to_string(size) + " bytes where " + holds +
+                                 ": the file is damaged or cut short");
     };
     std::string name;
     std::string type;

@@ -8,6 +8,14 @@
 
 namespace sharcbake::detail {
 
+std::string printable(const std::string& text) {
+    std::string out = text;
+    for (char& c : out) {
+        if (c < 0x20 || c > 0x7e) c = '?';
+    }
+    return out;
+}
+
 void checkImageShape(const std::string& path, const Image& image, const char* what) {
     if (image.width <= 0 || image.height <= 0) {
         throw ImageError("cannot write " + std::string(what) + " '" + path + "': image is empty (" +

@@ -23,6 +23,10 @@ constexpr const char* kTooManyPixels = "more pixels than sharcbake reads (134,21
 /// @p path and the reason.
 void writeFileAtomically(const std::string& path, const void* data, size_t size);
 
+/// Text from a file as it may be printed in a message: control and non-ASCII bytes (a zero byte
+/// would end what() early) as '?'.
+std::string printable(const std::string& text);
+
 /// Throws ImageError (naming @p path) unless @p image has positive dimensions and exactly
 /// width * height pixels.
 void checkImageShape(const std::string& path, const Image& image, const char* what);

@@ -39,8 +39,10 @@ void writeExr(const std::string& path, const Image& image, const ImageMetadata& 
 
 /// Refuses (ImageError) an OpenEXR file that OpenEXR 3.1 would make allocate what it claims
 /// before finding the damage: a header attribute larger than the rest of the file or whose size
-/// disagrees with what its type holds, or a data window of more than 2^27 pixels (16384 x 8192).
-/// readExr calls it; call it before reading an EXR with OpenEXR elsewhere.
+/// disagrees with what its type holds, a data window of more than 2^27 pixels (16384 x 8192), or
+/// a chunk (a tile, or the rows compressed together) that decodes to more than 256 MiB. Every
+/// part of a multi-part file is checked. readExr calls it; call it before reading an EXR with
+/// OpenEXR elsewhere.
 void checkExrHeaders(const std::string& path);
 
 /// How many rows of an OpenEXR image `width` pixels wide to allocate and read at a time, so that
