@@ -113,6 +113,20 @@ Image patternImage(int w, int h) {
     return image;
 }
 
+/// Writes one float channel, `values` row by row over the data window `data`, with OpenEXR
+/// itself (not writeExr, which always writes R, G, B).
+void writeFloatChannelExr(const std::string& path, const std::string& channel, const Imath::Box2i& data,
+                          Imf::Compression compression, const std::vector<float>& values) {
+    Imf::Header header(data, data);
+    header.compression() = compression;
+    header.channels().insert(channel, Imf::Channel(Imf::FLOAT));
+    Imf::FrameBuffer frame;
+    frame.insert(channel, Imf::Slice::Make(Imf::FLOAT, values.data(), data));
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(frame);
+    out.writePixels(data.max.y - data.min.y + 1);
+}
+
 void expectBitwiseEqual(const Image& a, const Image& b) {
     ASSERT_EQ(a.width, b.width);
     ASSERT_EQ(a.height, b.height);
@@ -254,15 +268,8 @@ TEST_F(ImageTest, ReadsLuminanceOnlyExrAsGrey) {
     const std::string path = file("y.exr");
     const int w = 3, h = 2;
     const std::vector<float> y_values = {0.0f, 0.75f, 3.0f, 1e6f, -2.5f, 0.125f};
-    {
-        Imf::Header header(w, h);
-        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
-        Imf::FrameBuffer frame;
-        frame.insert("Y", Imf::Slice::Make(Imf::FLOAT, y_values.data(), header.dataWindow()));
-        Imf::OutputFile out(path.c_str(), header);
-        out.setFrameBuffer(frame);
-        out.writePixels(h);
-    }
+    writeFloatChannelExr(path, "Y", Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1)), Imf::ZIP_COMPRESSION,
+                         y_values);
     const Image image = readExr(path);
     ASSERT_EQ(image.width, w);
     ASSERT_EQ(image.height, h);
@@ -480,16 +487,7 @@ TEST_F(ImageTest, ExrOfSeveralStripsReadsBackExactly) {
     for (size_t i = 0; i < red.size(); ++i) red[i] = float(i) * 0.25f;
     for (const Imf::Compression compression : {Imf::NO_COMPRESSION, Imf::ZIP_COMPRESSION, Imf::PIZ_COMPRESSION}) {
         const std::string path = file("strips.exr");
-        {
-            Imf::Header header(data, data);
-            header.compression() = compression;
-            header.channels().insert("R", Imf::Channel(Imf::FLOAT));
-            Imf::FrameBuffer frame;
-            frame.insert("R", Imf::Slice::Make(Imf::FLOAT, red.data(), data));
-            Imf::OutputFile out(path.c_str(), header);
-            out.setFrameBuffer(frame);
-            out.writePixels(h);
-        }
+        writeFloatChannelExr(path, "R", data, compression, red);
         const Image image = readExr(path);
         ASSERT_EQ(image.width, w);
         ASSERT_EQ(image.height, h);
