@@ -519,6 +519,7 @@ public:
         warnAboutFlatEmitters();
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
         settleAlphaModes();
+        writeMaterialWarnings();
         computeBounds();
         scene_.stats.triangles_loaded = scene_.triangles.size();
         warnAboutCollapsedTriangles();
@@ -555,6 +556,9 @@ private:
     std::set<size_t> unusable_lights_;
     std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
+    /// Warnings many materials can share, by their text: the labels of the materials, in order.
+    std::vector<std::pair<std::string, std::vector<std::string>>> material_warnings_;
+    std::map<std::string, size_t> material_warning_index_;
     uint64_t collapsed_triangles_ = 0;  ///< triangles flat in float but not in double (dropDegenerateTriangles)
     double collapsed_farthest_ = 0.0;   ///< the largest coordinate among their vertices
 
@@ -567,6 +571,30 @@ private:
     void warn(const std::string& what) {
         std::string line = path_ + ": " + what;
         if (warned_.insert(line).second) scene_.stats.warnings.push_back(std::move(line));
+    }
+
+    /// A warning about one material that others may share: kept until the materials are settled
+    /// (writeMaterialWarnings), then written once per text. A file whose 147 materials each carry
+    /// an occlusion texture gets one line naming the first and the count, not 147 lines burying
+    /// the warnings that matter.
+    void warnForMaterial(const std::string& label, const std::string& text) {
+        const auto [it, added] = material_warning_index_.emplace(text, material_warnings_.size());
+        if (added) material_warnings_.push_back({text, {}});
+        std::vector<std::string>& labels = material_warnings_[it->second].second;
+        if (std::find(labels.begin(), labels.end(), label) == labels.end()) labels.push_back(label);
+    }
+
+    void writeMaterialWarnings() {
+        for (const auto& [text, labels] : material_warnings_) {
+            const size_t others = labels.size() - 1;
+            warn(labels.front() +
+                 (others == 0
+                      ? ""
+                      : " and " + std::to_string(others) + (others == 1 ? " other material" : " other materials")) +
+                 ": " + text);
+        }
+        material_warnings_.clear();
+        material_warning_index_.clear();
     }
 
     std::string meshLabel(int meshIndex, size_t primIndex) const {
@@ -2360,7 +2388,7 @@ private:
         if (src.occlusionTexture.index >= 0) {
             // Not lost light: ambient occlusion is an approximation of what the path tracer
             // computes from the geometry itself.
-            warn(label + ": occlusionTexture ignored (the path tracer computes occlusion from the geometry)");
+            warnForMaterial(label, "occlusionTexture ignored (the path tracer computes occlusion from the geometry)");
         }
         readAlpha(src, m, label);
         readMaterialExtensions(src, m, label);
@@ -2568,7 +2596,7 @@ private:
         } else if (src.alphaMode == "BLEND") {
             m.alpha_mode = AlphaMode::Blend;
         } else if (src.alphaMode != "OPAQUE" && !src.alphaMode.empty()) {
-            warn(label + ": unknown alphaMode " + quoted(src.alphaMode) + " treated as OPAQUE");
+            warnForMaterial(label, "unknown alphaMode " + quoted(src.alphaMode) + " treated as OPAQUE");
         }
     }
 
@@ -2593,9 +2621,10 @@ private:
                 m.alpha_mode = AlphaMode::Opaque;
             } else if (m.alpha_mode == AlphaMode::Blend) {
                 const std::string& name = m.name;
-                warn("material " + std::to_string(i) + (name.empty() ? "" : " " + quoted(name)) +
-                     ": alphaMode BLEND is traced as a stochastic cut-out (opaque with probability alpha at each "
-                     "point, like Blender's alpha hashed); refraction and tinted transmission are not modelled");
+                warnForMaterial(
+                    "material " + std::to_string(i) + (name.empty() ? "" : " " + quoted(name)),
+                    "alphaMode BLEND is traced as a stochastic cut-out (opaque with probability alpha at each "
+                    "point, like Blender's alpha hashed); refraction and tinted transmission are not modelled");
             }
         }
     }
@@ -2699,9 +2728,11 @@ private:
             if (m.transmission > 0.0f) {
                 // Blender's glass (Principled Transmission) exports as this. Opaque, it would
                 // keep daylight out of every room behind a window.
-                warn(label + ": KHR_materials_transmission is traced as thin see-through glass: a share " +
-                     "transmissionFactor of each surface lets rays through unbent and untinted; the glass's colour " +
-                     "and the reflection of the transmitted share are not modelled");
+                warnForMaterial(label, std::string(
+                                           "KHR_materials_transmission is traced as thin see-through glass: a share ") +
+                                           "transmissionFactor of each surface lets rays through unbent and untinted; "
+                                           "the glass's colour " +
+                                           "and the reflection of the transmitted share are not modelled");
             }
         }
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_clearcoat")) {
@@ -2711,9 +2742,9 @@ private:
             m.clearcoat_texture = textureRef(textureSlot(*ext, "clearcoatTexture"), false, label);
             m.clearcoat_roughness_texture = textureRef(textureSlot(*ext, "clearcoatRoughnessTexture"), false, label);
             if (m.clearcoat > 0.0f && textureSlot(*ext, "clearcoatNormalTexture").index >= 0) {
-                warn(label +
-                     ": KHR_materials_clearcoat clearcoatNormalTexture ignored: the coat uses the "
-                     "material's shading normal");
+                warnForMaterial(label,
+                                "KHR_materials_clearcoat clearcoatNormalTexture ignored: the coat uses the "
+                                "material's shading normal");
             }
         }
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_specular")) {

@@ -1192,6 +1192,42 @@ json tinyPngTexturedTriangle(GltfBuilder& b) {
     return prim;
 }
 
+// Sample-model collections and Substance exports give every material an occlusion map: VC.glb
+// (glTF-Sample-Models) has 147 such materials, and a line for each buried the warnings that matter.
+TEST(GltfLoaderMaterials, AWarningManyMaterialsShareIsWrittenOnce) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);
+    std::vector<int> nodes;
+    for (int i = 0; i < 5; ++i) {
+        json material = {{"name", "Scrape" + std::to_string(i)}, {"occlusionTexture", {{"index", 0}}}};
+        if (i >= 3) {  // alpha 0.5 keeps BLEND from being settled as opaque
+            material["alphaMode"] = "BLEND";
+            material["pbrMetallicRoughness"] = {{"baseColorFactor", {1, 1, 1, 0.5}}};
+        }
+        prim["material"] = b.addMaterial(material);
+        nodes.push_back(b.addMeshNode(prim));
+    }
+    b.setScene(nodes);
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "occlusion_maps.gltf"));
+    EXPECT_EQ(warningsWith(scene, {"occlusionTexture ignored"}), 1u) << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"material 0 'Scrape0' and 4 other materials: occlusionTexture ignored (the path "
+                                   "tracer computes occlusion from the geometry)"}),
+              1u);
+    EXPECT_EQ(warningsWith(scene, {"material 3 'Scrape3' and 1 other material: alphaMode BLEND is traced as a "
+                                   "stochastic cut-out"}),
+              1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+    // One material keeps the form it always had.
+    GltfBuilder one;
+    json single = tinyPngTexturedTriangle(one);
+    single["material"] = one.addMaterial({{"name", "Lone"}, {"occlusionTexture", {{"index", 0}}}});
+    one.setScene({one.addMeshNode(single)});
+    const Scene lone = loadGltf(one.writeEmbedded(dir, "one_occlusion_map.gltf"));
+    EXPECT_EQ(warningsWith(lone, {"material 0 'Lone': occlusionTexture ignored"}), 1u)
+        << ::testing::PrintToString(lone.stats.warnings);
+}
+
 float srgb(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
 // ------------------------------------------------------------------------ KHR_materials_clearcoat
