@@ -2395,7 +2395,10 @@ private:
         if (const tinygltf::Value* ext = extension(src.extensions, "KHR_materials_pbrSpecularGlossiness")) {
             const Material fallback = m;
             readSpecularGlossiness(*ext, m, label);
-            warnWhenFallbackDiffers(fallback, m, label);
+            // A material without pbrMetallicRoughness has no fallback to disagree with: glTF's
+            // defaults (white metal) stand in, which no one wrote.
+            if (!(src.pbrMetallicRoughness == tinygltf::PbrMetallicRoughness()))
+                warnWhenFallbackDiffers(fallback, m, label);
         }
         leaveOutEmissionBeyondFloat(src, m, label);
         clampToGltfRanges(m, label);

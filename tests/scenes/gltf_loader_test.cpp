@@ -1324,9 +1324,9 @@ TEST(SpecularGlossiness, AFallbackThatDescribesAnotherMaterialIsWarnedAbout) {
         TempDir dir;
         GltfBuilder b;
         json prim = unitTrianglePrimitive(b);
-        prim["material"] = b.addMaterial({{"name", name},
-                                          {"pbrMetallicRoughness", fallback},
-                                          {"extensions", {{"KHR_materials_pbrSpecularGlossiness", extension}}}});
+        json material = {{"name", name}, {"extensions", {{"KHR_materials_pbrSpecularGlossiness", extension}}}};
+        if (!fallback.is_null()) material["pbrMetallicRoughness"] = fallback;
+        prim["material"] = b.addMaterial(material);
         b.setScene({b.addMeshNode(prim)});
         b.doc["extensionsUsed"] = {"KHR_materials_pbrSpecularGlossiness"};
         std::string found;
@@ -1348,6 +1348,9 @@ TEST(SpecularGlossiness, AFallbackThatDescribesAnotherMaterialIsWarnedAbout) {
     EXPECT_EQ(load(dielectric, {{"diffuseFactor", {0.6, 0.6, 0.6, 1}}, {"specularFactor", {0.04, 0.04, 0.04}}},
                    "agrees"),
               "");
+    // Nor does a material that writes no fallback (glTF-Sample-Models' SpecGlossVsMetalRough):
+    // glTF's defaults (white metal) stand in, which no one wrote.
+    EXPECT_EQ(load(nullptr, {{"diffuseFactor", {0.6, 0.6, 0.6, 1}}, {"specularFactor", {0.5, 0.5, 0.5}}}, "none"), "");
 }
 
 TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha) {
