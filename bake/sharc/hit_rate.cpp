@@ -54,7 +54,7 @@ std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion
     return views;
 }
 
-double refusedLookupShare(const Tracer& tracer, const HashGridParameters& grid, Float3 grid_anchor) {
+RefusedLookups refusedLookups(const Tracer& tracer, const HashGridParameters& grid, Float3 grid_anchor) {
     CacheData empty;
     empty.logarithm_base = grid.logarithm_base;
     empty.scene_scale = grid.scene_scale;
@@ -62,12 +62,25 @@ double refusedLookupShare(const Tracer& tracer, const HashGridParameters& grid, 
     empty.grid_anchor = grid_anchor;
     empty.bake_capacity = grid.capacity;
     // Declared, as the bake's prediction has them: a camera with few lookups at 64 x 64 (small
-    // objects in its frame) is replayed larger, so its share rests on enough of them.
+    // objects in its frame) is replayed larger, so its share rests on enough of them. Replays
+    // gather lookups, not eligible ones: a camera whose lookups were nearly all refused was
+    // replayed until 1000 were eligible, taking the whole replay budget (VC.glb's 14 cameras:
+    // 15 M pixels, 6 of a default bake's 28 s) and a weight in the share 256 times the others'.
     std::vector<PredictionView> views;
-    for (const Camera& c : tracer.scene().cameras) views.push_back(PredictionView{c, true});
-    const HitRatePrediction p = predictHitRate(tracer, empty, ViewRegion{}, views);
+    for (const Camera& c : tracer.scene().cameras) {
+        views.push_back(PredictionView{c, true});
+        views.back().camera.name = cameraLabel(c);
+    }
+    const HitRatePrediction p = predictHitRate(tracer, empty, ViewRegion{}, views, 64, 64, LookupsCounted::kAll);
+    RefusedLookups refused;
     const uint64_t lookups = p.eligible + p.refused;
-    return lookups >= kLookupsForARate ? double(p.refused) / double(lookups) : 0.0;
+    refused.share = lookups >= kLookupsForARate ? double(p.refused) / double(lookups) : 0.0;
+    for (const ViewHitRate& view : p.views) {
+        const uint64_t own = view.eligible + view.refused;
+        if (own < kLookupsForARate || double(view.refused) < kUnservedRefusedShare * double(own)) continue;
+        if (refused.unserved++ == 0) refused.first_unserved = view.view.camera.name;
+    }
+    return refused;
 }
 
 std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
@@ -118,7 +131,8 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
 }
 
 HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, const ViewRegion& region,
-                                 const std::vector<PredictionView>& views, int width, int height) {
+                                 const std::vector<PredictionView>& views, int width, int height,
+                                 LookupsCounted counted) {
     HitRatePrediction prediction;
     BakedCache baked(cache, glm::vec3(0.0f));
     const float min_distance2 =
@@ -160,9 +174,12 @@ HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, c
         // A declared camera whose frame is mostly sky (a small model in it) gets few lookups at
         // this size: its own rate, which the bake reports, is replayed at 4 times the size each
         // way until it has enough lookups, up to kDeclaredViewMaxScale.
+        const auto lookups = [counted](const ViewHitRate& r) {
+            return counted == LookupsCounted::kAll ? r.eligible + r.refused : r.eligible;
+        };
         uint32_t pass = 0;
         for (int scale = 4;
-             views[v].declared && rate.eligible < kDeclaredViewMinLookups && scale <= kDeclaredViewMaxScale;
+             views[v].declared && lookups(rate) < kDeclaredViewMinLookups && scale <= kDeclaredViewMaxScale;
              scale *= 4) {
             const uint64_t pixels = uint64_t(width * scale) * uint64_t(height * scale);
             if (replayed_pixels + pixels > kReplayPixelBudget) break;

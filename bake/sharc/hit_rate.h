@@ -60,13 +60,24 @@ std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion
 std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegion& region, uint32_t samples,
                                             uint32_t seed);
 
-/// The share of the lookups from the scene's glTF cameras (replayed as predictHitRate replays
-/// declared views: 64 x 64 pixels, larger for a camera with few lookups; one diffuse bounce per
-/// pixel) that SHaRC's eligibility tests refuse on `grid` whose keys decode near `grid_anchor`:
-/// near 1 where the voxels are far larger than what the cameras see (a bounce shorter than its
-/// voxel is refused). What the cache holds does not matter. 0 when the cameras make fewer than
-/// kLookupsForARate lookups in all.
-double refusedLookupShare(const Tracer& tracer, const HashGridParameters& grid, Float3 grid_anchor);
+/// A glTF camera with this share of its lookups refused or more gets (next to) nothing from the
+/// cache: the runtime traces its paths in full.
+inline constexpr double kUnservedRefusedShare = 0.9;
+
+/// How SHaRC's eligibility tests treat the lookups from the scene's glTF cameras on one grid.
+struct RefusedLookups {
+    double share = 0.0;  ///< of all their lookups; 0 when they make fewer than kLookupsForARate
+    /// Cameras with kLookupsForARate lookups or more, kUnservedRefusedShare of them refused.
+    uint32_t unserved = 0;
+    std::string first_unserved;  ///< the first such camera's label ("camera 'Hall'", "camera #3")
+};
+
+/// The lookups from the scene's glTF cameras (replayed as predictHitRate replays declared views:
+/// 64 x 64 pixels, larger for a camera with fewer than kDeclaredViewMinLookups lookups; one
+/// diffuse bounce per pixel) that SHaRC's eligibility tests refuse on `grid` whose keys decode
+/// near `grid_anchor`: nearly all where the voxels are far larger than what a camera sees (a
+/// bounce shorter than its voxel is refused). What the cache holds does not matter.
+RefusedLookups refusedLookups(const Tracer& tracer, const HashGridParameters& grid, Float3 grid_anchor);
 
 /// A declared view with fewer lookups than this at the prediction's size (a small model in its
 /// frame) is replayed at 4 and then 16 times the size in each direction (kDeclaredViewMaxScale).
@@ -76,11 +87,17 @@ inline constexpr int kDeclaredViewMaxScale = 16;
 /// scene with hundreds of glTF cameras): sixteen views at 1024x1024.
 inline constexpr uint64_t kReplayPixelBudget = uint64_t(16) << 20;
 
+/// What a declared view's replay gathers kDeclaredViewMinLookups of: eligible lookups for its hit
+/// rate (hits / eligible), or all of them (eligible and refused) for the share refused.
+enum class LookupsCounted { kEligible, kAll };
+
 /// Replays the lookups of `width` x `height` pixels (one diffuse bounce each) from every view
-/// (a declared one with too few lookups again at a larger size, see kDeclaredViewMinLookups).
+/// (a declared one with too few lookups, as `counted` counts them, again at a larger size, see
+/// kDeclaredViewMinLookups).
 /// For a Distance region, lookups nearer the camera than its minimum are not counted (they are
 /// outside what was declared). The counts do not depend on the thread count.
 HitRatePrediction predictHitRate(const Tracer& tracer, const CacheData& cache, const ViewRegion& region,
-                                 const std::vector<PredictionView>& views, int width = 64, int height = 64);
+                                 const std::vector<PredictionView>& views, int width = 64, int height = 64,
+                                 LookupsCounted counted = LookupsCounted::kEligible);
 
 }  // namespace sharcbake

@@ -1030,6 +1030,34 @@ TEST(PredictHitRate, LookupsRefusedByVoxelsLargerThanTheViewAreCounted) {
     EXPECT_GT(eligible.eligible, 20u * eligible.refused);
 }
 
+TEST(RefusedLookups, EachCameraWeighsItsOwnLookupsAndOneLeftWithoutIsNamed) {
+    // The room's camera and one inside the closed 1 m cube, on level-1 voxels 1 m wide: every
+    // bounce in the cube (at most sqrt(3) m) is shorter than sqrt(3) voxels and refused; about 60%
+    // of the room's pass. The cube's camera was replayed until 1000 lookups were eligible (up to
+    // 1024x1024 pixels), which gave its refusals 256 times the room's weight: the share read 99%.
+    test::TempDir dir;
+    Scene scene = loadRoom(dir, {false, true, true, true});
+    ASSERT_EQ(scene.cameras.size(), 1u);
+    Camera cupboard;
+    cupboard.name = "cupboard";
+    cupboard.position = 0.5f * (kCubeMin + kCubeMax);
+    scene.cameras.push_back(cupboard);
+    const Tracer tracer(scene);
+    HashGridParameters grid;
+    grid.level_bias = 1.0f - std::log2(grid.scene_scale);  // level 1: 2^(1 - bias) / scale = 1 m
+    const RefusedLookups refused = refusedLookups(tracer, grid, gridAnchorFor(scene, 1.0f));
+    EXPECT_EQ(refused.unserved, 1u);
+    EXPECT_EQ(refused.first_unserved, "camera 'cupboard'");
+    EXPECT_GT(refused.share, 0.55);  // about the mean of the two cameras' shares (0.68),
+    EXPECT_LT(refused.share, 0.8);   // not the cupboard's 256-fold (above 0.99)
+    // On the room's own fit (about 3 cm voxels) the cupboard's bounces pass too.
+    grid.level_bias = fitLevelBias(scene, grid, kDefaultVoxelBudget).level_bias;
+    const RefusedLookups fitted = refusedLookups(tracer, grid,
+                                                 gridAnchorFor(scene, voxelSize(kHashGridLevelMin, grid)));
+    EXPECT_EQ(fitted.unserved, 0u);
+    EXPECT_LT(fitted.share, 0.1);
+}
+
 TEST(PredictHitRate, ReplaysStopAtTheirPixelBudget) {
     // Forty glTF cameras that each see the small table: replays stop once they would exceed
     // kReplayPixelBudget (each camera's take 256x256 + 1024x1024 pixels), so a scene with
