@@ -245,10 +245,10 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
     ExplorationResult explored;
     std::optional<CameraPath> path = exploringCameraPath(tracer, scene, job.camera.explore_points, job.settings.seed, &explored);
     if (!path) {
-        throw CommandError(kExitInvalidInput,
-                           job.scene_path + ": found no free space to place the camera in (tried " +
-                               std::to_string(explored.candidates) +
-                               " points); give a --camera-path or --camera-source gltf");
+        throw CommandError(kExitInvalidInput, job.scene_path + ": found no free space to place the camera in (tried " +
+                                                  std::to_string(explored.candidates) +
+                                                  " points); give a --camera-path" +
+                                                  (scene.cameras.empty() ? "" : " or --camera-source gltf"));
     }
     // "1 view", "64 views".
     const std::string views_around = std::to_string(explored.views_around) +
@@ -637,7 +637,7 @@ Json lightLeaksJson(const LightLeakReport& r) {
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
 /// `unreached_area`: the share of the surface no update path reached (see warnAndStop).
 void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
-                      const std::vector<std::string>& cameras_in_solids) {
+                      const std::vector<std::string>& cameras_in_solids, bool has_gltf_cameras) {
     if (p.eligible == 0 && p.refused > 0) {
         std::fprintf(stderr,
                      "warning: SHaRC's eligibility tests refuse every one of the %llu lookups from the views (each "
@@ -675,11 +675,15 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
         std::snprintf(lowest, sizeof lowest, " (lowest: %s, %.1f%%%s)", worst->view.camera.name.c_str(),
                       100.0 * worst->rate(), declared);
     }
-    const char* remedy = unreached_area > 0.05
-                             ? "The roaming camera never reached part of the surface: give more --iterations, a "
-                               "--camera-path through the places the views see, or --camera-source gltf."
-                             : "Give more --iterations (the finest level is not filled yet) or a --view-region that "
-                               "holds the views (free holds every camera position).";
+    const char* remedy = unreached_area <= 0.05
+                             ? "Give more --iterations (the finest level is not filled yet) or a --view-region that "
+                               "holds the views (free holds every camera position)."
+                         : has_gltf_cameras ? "The roaming camera never reached part of the surface: give more "
+                                              "--iterations, a --camera-path through the places the views see, or "
+                                              "--camera-source gltf."
+                                            : "The roaming camera never reached part of the surface: give more "
+                                              "--iterations, more --explore-points, or a --camera-path through the "
+                                              "places the views see.";
     // A lowest camera that stands inside a solid by the winding may be inside a closed object by
     // mistake, where no bake reaches what it sees: more iterations would not help it.
     std::string inside;
@@ -1571,7 +1575,7 @@ private:
                                  : job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
                                      ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
-        warnAboutHitRate(prediction_, unreached, cameras_in_solids_);
+        warnAboutHitRate(prediction_, unreached, cameras_in_solids_, !scene_.cameras.empty());
         if (live_voxels_ == 0) {
             // The file is valid, and every lookup from it will miss: say so once, plainly.
             const char* remedies = !job_.camera.path_file.empty() ? "a --camera-path whose cameras look at the scene"
@@ -1598,6 +1602,8 @@ private:
                                    : job_.camera.source == CameraPathSource::GltfCameras
                                        ? "--camera-source explore (the free space around the glTF cameras), or a "
                                          "--camera-path through the scene"
+                                   : scene_.cameras.empty()
+                                       ? "--explore-points, or a --camera-path through the scene"
                                        : "--explore-points, a --camera-path through the scene, or --camera-source gltf";
             std::fprintf(stderr,
                          "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "

@@ -386,6 +386,11 @@ says "$work/err.txt" "warning: every pixel of the image is black: no light reach
     "a black image from inside a closed object is warned about"
 says "$work/err.txt" "no ray from them leaves the scene, so the sky lights only its outside" \
     "the black image's warning says the sky does not get in"
+# Baked, its inside (two thirds of the sides) is never reached, and the warning's remedies leave out
+# --camera-source gltf: the scene has no camera (2CylinderEngine.glb without its camera was told so).
+expect 0 "bake the closed box" "$sharcbake" bake "$work/box.gltf" -o "$work/box.sharc" --iterations 8 --sky 1,1,1
+says "$work/err.txt" "of the surface area was never reached by the roaming camera" "the box's unreached inside is warned about"
+grep -q "camera-source gltf" "$work/err.txt" && fail "a scene without cameras is told to bake from them: $(cat "$work/err.txt")"
 # The box as a sky dome modelled as a plain mesh, around a camera, under a sun: the sun never gets
 # in, and the bake said "no problems found" of a cache of zeros. The probe before the bake says the
 # cache will be black, and names the dome's material as what blocks the sun.
