@@ -13,7 +13,9 @@ run_fuzzer() {
     local binary=$1 dir=$2 seconds=$3 name
     name=$(basename "$binary")
     shift 3
-    mkdir -p "$dir/artifacts"
+    # The harnesses' scratch files go to the work folder, not /tmp: a crash leaves them behind.
+    mkdir -p "$dir/artifacts" "$dir/tmp"
+    export TMPDIR="$dir/tmp"
     "$binary" -runs=0 "$dir/corpus" >"$dir/seeds.log" 2>&1 || {
         tail -n 60 "$dir/seeds.log"
         echo "FAIL: $name fails on a seed of $dir/corpus"

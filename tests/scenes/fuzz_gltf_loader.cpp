@@ -26,15 +26,21 @@
 
 namespace {
 
-/// The folder inputs are written into, made once per process (libFuzzer's workers are processes).
+/// The folder inputs are written into, made once per process (libFuzzer's workers are processes)
+/// and removed when it exits: a search by hand ran a dozen workers, each leaving one in /tmp.
+struct ScratchFolder {
+    std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                 ("sharcbake-fuzz-gltf-" + std::to_string(::getpid()));
+    ScratchFolder() { std::filesystem::create_directories(path); }
+    ~ScratchFolder() {
+        std::error_code ignored;
+        std::filesystem::remove_all(path, ignored);
+    }
+};
+
 const std::filesystem::path& inputFolder() {
-    static const std::filesystem::path folder = [] {
-        std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("sharcbake-fuzz-gltf-" + std::to_string(::getpid()));
-        std::filesystem::create_directories(dir);
-        return dir;
-    }();
-    return folder;
+    static const ScratchFolder folder;
+    return folder.path;
 }
 
 void check(bool ok, const char* what) {

@@ -21,11 +21,20 @@
 
 namespace {
 
-/// The file inputs are written to, named once per process (libFuzzer's workers are processes).
+/// The file inputs are written to, named once per process (libFuzzer's workers are processes)
+/// and removed when it exits.
+struct ScratchFile {
+    std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                 ("sharcbake-fuzz-image-" + std::to_string(::getpid()));
+    ~ScratchFile() {
+        std::error_code ignored;
+        std::filesystem::remove(path, ignored);
+    }
+};
+
 const std::filesystem::path& inputPath() {
-    static const std::filesystem::path path = std::filesystem::temp_directory_path() /
-                                              ("sharcbake-fuzz-image-" + std::to_string(::getpid()));
-    return path;
+    static const ScratchFile file;
+    return file.path;
 }
 
 }  // namespace
