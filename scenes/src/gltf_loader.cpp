@@ -2526,37 +2526,49 @@ private:
     /// extension show its pbrMetallicRoughness fallback. Where the two disagree (assimp writes
     /// OBJ's `Ks 0.5` as specular 0.5, ten times a dielectric's F0, and its fallback as a plain
     /// dielectric; `Tr 1` as an opaque diffuse and a transparent fallback) the render differs from
-    /// what the user saw: one warning, with both values. Factors only; textures are not compared.
+    /// what the user saw: one warning, with both values. Only values both sides give by factors
+    /// are compared.
     void warnWhenFallbackDiffers(const Material& fallback, const Material& used, const std::string& label) {
         const auto maxOf = [](glm::vec3 v) { return std::max({v.x, v.y, v.z}); };
         const float fallback_f0 = maxOf(glm::mix(glm::vec3(kDielectricF0), fallback.base_color, fallback.metallic));
         const float used_f0 = maxOf(used.specular_color) * kDielectricF0;
         const float fallback_diffuse = maxOf(fallback.base_color) * (1.0f - fallback.metallic);
         const float used_diffuse = maxOf(used.base_color);
+        // A value that comes through a texture on either side is not known from the factors (a
+        // fallback's metallic 1 times an ORM texture is the texture's metallic: Corset's
+        // spec-gloss variant in glTF-Sample-Models read "diffuse 1 against 0"), so not compared.
+        const bool fallback_metal_mapped = fallback.metallic_roughness_texture.isSet();
+        const bool fallback_colour_mapped = fallback.base_color_texture.isSet();
+        const bool f0_known = !fallback_metal_mapped && !(fallback_colour_mapped && fallback.metallic > 0.0f) &&
+                              !used.specular_color_texture.isSet();
+        const bool diffuse_known = !fallback_metal_mapped && !fallback_colour_mapped &&
+                                   !used.base_color_texture.isSet();
+        const bool alpha_known = !fallback_colour_mapped && !used.base_color_texture.isSet();
         std::string differences;
         char text[96];
-        if (std::abs(fallback_f0 - used_f0) > 0.15f) {
+        if (f0_known && std::abs(fallback_f0 - used_f0) > 0.15f) {
             std::snprintf(text, sizeof text, "specular reflectance (F0) %.3g against %.3g", double(used_f0),
                           double(fallback_f0));
             differences += text;
         }
-        if (std::abs(fallback_diffuse - used_diffuse) > 0.25f) {
+        if (diffuse_known && std::abs(fallback_diffuse - used_diffuse) > 0.25f) {
             std::snprintf(text, sizeof text, "%sdiffuse %.3g against %.3g", differences.empty() ? "" : ", ",
                           double(used_diffuse), double(fallback_diffuse));
             differences += text;
         }
-        if (std::abs(fallback.base_alpha - used.base_alpha) > 0.5f) {
+        if (alpha_known && std::abs(fallback.base_alpha - used.base_alpha) > 0.5f) {
             std::snprintf(text, sizeof text, "%salpha %.3g against %.3g", differences.empty() ? "" : ", ",
                           double(used.base_alpha), double(fallback.base_alpha));
             differences += text;
         }
         if (differences.empty()) return;
-        warn(label +
-             ": KHR_materials_pbrSpecularGlossiness and its pbrMetallicRoughness fallback (what viewers "
-             "without the extension show) describe different materials: " +
-             differences +
-             " (extension against fallback); the extension is used, as glTF asks. Check the material in the tool "
-             "that wrote it");
+        warnForMaterial(
+            label,
+            "KHR_materials_pbrSpecularGlossiness and its pbrMetallicRoughness fallback (what viewers "
+            "without the extension show) describe different materials: " +
+                differences +
+                " (extension against fallback); the extension is used, as glTF asks. Check the material in the tool "
+                "that wrote it");
     }
 
     /// A texture whose G is 1 - glossiness x A of `texture` (metallic-roughness form: G

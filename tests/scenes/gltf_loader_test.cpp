@@ -1353,6 +1353,25 @@ TEST(SpecularGlossiness, AFallbackThatDescribesAnotherMaterialIsWarnedAbout) {
     EXPECT_EQ(load(nullptr, {{"diffuseFactor", {0.6, 0.6, 0.6, 1}}, {"specularFactor", {0.5, 0.5, 0.5}}}, "none"), "");
 }
 
+TEST(SpecularGlossiness, AFallbackWhoseValuesComeFromTexturesIsNotComparedByItsFactors) {
+    // As Corset's spec-gloss variant (glTF-Sample-Models) writes it: a fallback of textures over
+    // the default factors (metallic 1 times an ORM texture) and an extension of textures. Its
+    // factors say "diffuse 1 against 0", which is no difference anyone would see.
+    TempDir dir;
+    GltfBuilder b;
+    json prim = tinyPngTexturedTriangle(b);
+    prim["material"] = b.addMaterial(
+        {{"name", "corset"},
+         {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicRoughnessTexture", {{"index", 0}}}}},
+         {"extensions",
+          {{"KHR_materials_pbrSpecularGlossiness",
+            {{"diffuseTexture", {{"index", 0}}}, {"specularGlossinessTexture", {{"index", 0}}}}}}}});
+    b.setScene({b.addMeshNode(prim)});
+    b.doc["extensionsUsed"] = {"KHR_materials_pbrSpecularGlossiness"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "corset.gltf"));
+    EXPECT_EQ(warningsWith(scene, {"fallback"}), 0u) << ::testing::PrintToString(scene.stats.warnings);
+}
+
 TEST(SpecularGlossiness, TexturesGiveDiffuseSpecularColourAndRoughnessFromAlpha) {
     TempDir dir;
     GltfBuilder b;
