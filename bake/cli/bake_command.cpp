@@ -742,8 +742,8 @@ constexpr std::array<std::pair<uint64_t, uint64_t>, 9> kAutoBudgetGrowth = {
 /// glTF cameras (`region`, its `source` saying why) if their grid serves them: fewer than half
 /// refused, every camera served that the finest grid serves, and voxels no wider than that warning
 /// allows, in the budget or, where it is the default, in up to 16 times it (`job.voxel_budget`
-/// grows). A camera no grid tried serves (a hand from a wall) counts against none. Otherwise free
-/// space it stays: passing lookups into voxels about a room wide would be
+/// grows). A camera no grid tried serves (inside a box a few millimetres wide) counts against
+/// none. Otherwise free space it stays: passing lookups into voxels about a room wide would be
 /// worse than refusing them (the flat of 4 m rooms on a 2 km ground, kept to its cameras in the
 /// default budget, rendered through the cache 110% too bright), and the voxel warning says what
 /// would make them finer. `free_fit` is free space's fit; returns the cameras' fit where the region
