@@ -65,6 +65,16 @@ says "$work/err.txt" "bad_value.toml: .*iterations" "the error names the config 
 python3 -c "print('[' + '.'.join(['b'] * 20000) + ']')" > "$work/deep.toml"
 expect 1 "a config nested 20,000 deep" timeout 20 "$sharcbake" --config "$work/deep.toml" bake "$cornell" -o "$work/x.sharc"
 says "$work/err.txt" "deep.toml:1: a section or key nested 20000 levels deep (at most 16" "the nesting is refused naming the line"
+# A list of a million values (2 MB) took it 21 s: refused at once. Commas in strings and comments
+# do not count (a scene's path may hold them).
+python3 -c "print('[bake]'); print('iterations = [' + ','.join(['1'] * 1000000) + ']')" > "$work/long_list.toml"
+expect 1 "a config with a list of a million values" timeout 20 "$sharcbake" --config "$work/long_list.toml" bake "$cornell" \
+    -o "$work/x.sharc"
+says "$work/err.txt" "long_list.toml: lists of 1000000 values or more (at most 10000 in all" "the long list is refused"
+python3 -c "print('# ' + ',' * 20000); print('[bake]'); print('output = \"a,b,c.sharc\"  # ' + ',' * 20000)" \
+    > "$work/commas.toml"
+expect 0 "commas in comments and strings" "$sharcbake" --config "$work/commas.toml" bake "$cornell" --iterations 1
+[ -f "$work/a,b,c.sharc" ] || fail "the config's output with commas in its name was not written"
 
 # Relative paths in a config file are relative to its folder (kept beside its scene), whatever the
 # current folder; paths on the command line stay relative to the current folder.
