@@ -12,6 +12,10 @@
 
 int main(int argc, char** argv) {
     using namespace sharcbake;
+    // Lines in the order they are printed among the warnings, also where both streams go to one
+    // log (a pipeline's `2>&1`): piped, stdout was buffered whole until exit while stderr is not
+    // buffered, so warnings landed above the summary they follow, or inside one of its lines.
+    std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);
     CLI::App app{
         "sharcbake " SHARCBAKE_VERSION
         ": offline baker for SHaRC-style world-space radiance caches.\n\n"

@@ -23,6 +23,12 @@ says "$work/out.txt" "Views: free space" "the bake names the view region"
 says "$work/out.txt" "predicted hit rate: " "the bake prints its predicted hit rate"
 # Its one warning is the light 1 mm below the ceiling, which shares its voxels (docs/baking.md).
 says "$work/err.txt" "warning: emissive material 'light': [0-9]*% of its area shares voxels" "the light leak is warned about"
+# Captured as a pipeline's log (2>&1), the warning stays below the Scene line it follows: piped,
+# stdout was buffered whole until exit, so every warning landed above the summary.
+"$sharcbake" bake "$cornell" -o "$work/cornell_log.sharc" --iterations 2 > "$work/log.txt" 2>&1 ||
+    fail "the bake with its output in one log failed"
+awk '/^Scene /{scene=NR} /^warning: emissive material/{warning=NR} END{exit !(scene && warning > scene)}' \
+    "$work/log.txt" || fail "in one log, the light's warning is not below the Scene line: $(head -3 "$work/log.txt")"
 grep -v "warning: emissive material 'light'" "$work/err.txt" > "$work/other_warnings.txt"
 [ -s "$work/other_warnings.txt" ] && fail "the default bake warned: $(cat "$work/other_warnings.txt")"
 expect 0 "info" "$sharcbake" info "$work/cornell.sharc"
