@@ -701,6 +701,56 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
                  100.0 * p.rate(), lowest, remedy, inside.c_str());
 }
 
+/// The bake's summary lists each glTF camera's predicted rate up to this many cameras; beyond, the
+/// lowest kListedCameras - 1 and one line for the rest (a scene with 204 cameras printed 204 lines).
+/// The stats JSON lists every one.
+constexpr size_t kListedCameras = 16;
+
+/// Which of `p`'s views the summary lists: every declared one, or where there are more than
+/// kListedCameras, those SHaRC refuses outright and then the lowest rates (in the cameras' order).
+std::vector<bool> camerasToList(const HitRatePrediction& p) {
+    std::vector<bool> listed(p.views.size(), false);
+    std::vector<size_t> declared;
+    for (size_t i = 0; i < p.views.size(); ++i)
+        if (p.views[i].view.declared) declared.push_back(i);
+    if (declared.size() <= kListedCameras) {
+        for (size_t i : declared) listed[i] = true;
+        return listed;
+    }
+    // Refused outright first, then rated views from the lowest rate, then those too few to rate.
+    const auto rank = [&p](size_t i) {
+        const ViewHitRate& v = p.views[i];
+        if (v.eligible == 0 && v.refused > 0) return -1.0;
+        return v.eligible < kLookupsForARate ? 2.0 : v.rate();
+    };
+    std::stable_sort(declared.begin(), declared.end(), [&](size_t a, size_t b) { return rank(a) < rank(b); });
+    for (size_t k = 0; k + 1 < kListedCameras; ++k) listed[declared[k]] = true;
+    return listed;
+}
+
+/// One line for the declared views camerasToList left out: how many, and the lowest rate among them.
+void printUnlistedCameras(const HitRatePrediction& p, const std::vector<bool>& listed) {
+    size_t rated = 0, unrated = 0;
+    double lowest = 1.0;
+    for (size_t i = 0; i < p.views.size(); ++i) {
+        const ViewHitRate& v = p.views[i];
+        if (!v.view.declared || listed[i]) continue;
+        if (v.eligible >= kLookupsForARate) {
+            ++rated;
+            lowest = std::min(lowest, v.rate());
+        } else {
+            ++unrated;
+        }
+    }
+    if (rated + unrated == 0) return;
+    std::string text = "    and " + std::to_string(rated + unrated) + " more cameras";
+    char rate[64];
+    std::snprintf(rate, sizeof rate, ", each %.1f%% or above", 100.0 * lowest);
+    if (rated > 0) text += rate;
+    if (unrated > 0) text += " (" + std::to_string(unrated) + " with too few lookups for a rate)";
+    std::printf("%s; the stats JSON (--stats-json) lists every one\n", text.c_str());
+}
+
 /// What the grid step decided, for the output, the metadata and the stats.
 struct GridDecision {
     std::string choice;                 ///< "auto: level bias 3.5: ..." or "given: ..."
@@ -1446,7 +1496,10 @@ private:
                 deposit_levels, coverage_.points);
         }
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
-        for (const ViewHitRate& v : prediction_.views) {
+        const std::vector<bool> listed = camerasToList(prediction_);
+        for (size_t i = 0; i < prediction_.views.size(); ++i) {
+            const ViewHitRate& v = prediction_.views[i];
+            if (!listed[i]) continue;
             if (v.view.declared && v.eligible == 0 && v.refused > 0) {
                 std::printf(
                     "    %s: no lookups pass SHaRC's tests (all %llu refused: each bounce is shorter than "
@@ -1462,6 +1515,7 @@ private:
                                                           : "");
             }
         }
+        printUnlistedCameras(prediction_, listed);
         printStabilitySection(stdout, stability_);
         std::printf("Wrote %s (%llu voxels)\n", o_.output_path.c_str(), (unsigned long long)live_voxels_);
         if (o_.voxel_materials) {

@@ -256,6 +256,23 @@ expect 0 "a hall with a camera in a cupboard by default" "$sharcbake" bake "$wor
     --iterations 2 --resolution 64x64
 says "$work/out.txt" "Views: 4 camera positions (the glTF cameras, chosen by --view-region auto: in free space, level-1 voxels 0.192 wide would have SHaRC refuse 90% or more of the lookups of camera 'cupboard' (each bounce shorter than its voxel), here [0-9]*% of all in --voxel-budget" \
     "a camera free space leaves without lookups keeps the grid to the glTF cameras, and is named"
+# With 24 cameras the summary lists the 15 lowest and one line for the rest (204 cameras printed
+# 204 lines); the stats JSON keeps every one.
+python3 - "$work/hall.gltf" "$work/hall_many.gltf" <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1]))
+for i in range(20):
+    g["nodes"].append({"name": "extra_%d" % i, "camera": 0, "translation": [-15 + 1.5 * i, 1.6, -5]})
+    g["scenes"][0]["nodes"].append(len(g["nodes"]) - 1)
+json.dump(g, open(sys.argv[2], "w"))
+PY
+expect 0 "a hall with 24 cameras" "$sharcbake" bake "$work/hall_many.gltf" -o "$work/hall_many.sharc" \
+    --iterations 2 --resolution 64x64 --stats-json "$work/hall_many.json"
+listed=$(grep -c "^    camera '" "$work/out.txt")
+[ "$listed" -eq 15 ] || fail "24 cameras: $listed listed in the summary, expected the 15 lowest"
+says "$work/out.txt" "^    and 9 more cameras" "the cameras not listed are counted in one line"
+python3 -c 'import json, sys; v = json.load(open(sys.argv[1]))["predicted_hit_rate"]["views"]; sys.exit(sum(x.get("declared", False) for x in v) != 24)' \
+    "$work/hall_many.json" || fail "the stats JSON does not list all 24 cameras"
 # A budget other than the default is kept: in 200,000 voxels the cameras' grid gets 0.19 m voxels,
 # wider than the voxel warning allows around cameras 1.14 m from their walls (0.76 m ones, the
 # default budget's, rendered the flat 110% too bright), so free space it stays, warned about.
