@@ -884,6 +884,12 @@ TEST_F(ImageTest, CorruptOrCutHdrAndPfmFilesFailCleanly) {
     writeBytes(file("nul.hdr"), nul.data(), nul.size());
     EXPECT_NE(imageErrorOf([&] { readLinearImage(file("nul.hdr")); }).find("is not \"-Y height +X width\""),
               std::string::npos);
+    // The same in a PFM's scale: "-1.0\0x" was read as -1.
+    std::string nul_scale("PF\n2 1\n-1.0\0x\n", 14);
+    nul_scale.append(2 * 3 * sizeof(float), '\0');
+    writeBytes(file("nul.pfm"), nul_scale.data(), nul_scale.size());
+    EXPECT_NE(imageErrorOf([&] { readLinearImage(file("nul.pfm")); }).find("the header's scale '-1.0?x' is not a"),
+              std::string::npos);
     const std::vector<unsigned char> tall = hdrBytes("FORMAT=32-bit_rle_rgbe", "-Y 900000 +X 4", {10, 20, 30, 130});
     writeBytes(file("tall.hdr"), tall.data(), tall.size());
     const std::string message = imageErrorOf([&] { readLinearImage(file("tall.hdr")); });

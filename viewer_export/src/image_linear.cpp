@@ -75,11 +75,16 @@ struct TextCursor {
     }
 };
 
+/// Whether a number parsed from `text` (strtol, strtod) ended at `end` = the token's end: a zero
+/// byte inside the token ends c_str() early, not the token.
+bool parsedWholeToken(const std::string& text, const char* end) {
+    return !text.empty() && end == text.c_str() + text.size();
+}
+
 bool parseDimension(const std::string& text, int& value) {
     char* end = nullptr;
     const long v = std::strtol(text.c_str(), &end, 10);
-    // The whole token must be the number: a zero byte inside it ends c_str() early, not the token.
-    if (text.empty() || end != text.c_str() + text.size() || v <= 0 || v > (1L << 20)) return false;
+    if (!parsedWholeToken(text, end) || v <= 0 || v > (1L << 20)) return false;
     value = int(v);
     return true;
 }
@@ -98,7 +103,7 @@ Image readPfm(const std::string& path, const std::vector<unsigned char>& bytes) 
     const std::string scale_text = cursor.token();
     char* end = nullptr;
     const double scale = std::strtod(scale_text.c_str(), &end);
-    if (scale_text.empty() || *end != '\0' || !std::isfinite(scale) || scale == 0.0) {
+    if (!parsedWholeToken(scale_text, end) || !std::isfinite(scale) || scale == 0.0) {
         fail(path, "PFM", "the header's scale '" + detail::printable(scale_text) + "' is not a non-zero number");
     }
     if (cursor.at >= bytes.size() || !std::isspace(bytes[cursor.at])) fail(path, "PFM", "the header ends early");
