@@ -809,8 +809,6 @@ std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Trace
     const RefusedLookups free_refused = refusedLookups(tracer, free_grid, gridAnchorFor(scene, free_voxel));
     // The typical camera is found once (rays around every glTF camera); each grid only sizes its voxel.
     const VoxelsAroundCameras free_around = voxelsAroundCameras(tracer, free_grid);
-    if (free_refused.share < kFreeFailsRefusedShare && free_refused.unserved == 0 && !free_around.tooWide())
-        return std::nullopt;
     const ViewRegion at_cameras = atGltfCameras(scene);
     const size_t budgets_tried = job.voxel_budget_given ? 1 : kAutoBudgetGrowth.size();  // a budget given is kept
     const auto cameraGrid = [&](size_t b, GridFit* fit) {
@@ -828,10 +826,9 @@ std::optional<GridFit> keepToGltfCamerasWhereFreeFails(BakeJob& job, const Trace
     if (free_refused.unserved > 0) {
         GridFit finest;
         unservable = refusedOn(cameraGrid(budgets_tried - 1, &finest)).unserved;
-        if (free_refused.share < kFreeFailsRefusedShare && free_refused.unserved <= unservable &&
-            !free_around.tooWide())
-            return std::nullopt;
     }
+    if (free_refused.share < kFreeFailsRefusedShare && free_refused.unserved <= unservable && !free_around.tooWide())
+        return std::nullopt;
     for (size_t b = 0; b < budgets_tried; ++b) {
         const auto [times, per] = kAutoBudgetGrowth[b];
         const uint64_t budget = job.voxel_budget * times / per;
@@ -1499,16 +1496,16 @@ private:
         const std::vector<bool> listed = camerasToList(prediction_);
         for (size_t i = 0; i < prediction_.views.size(); ++i) {
             const ViewHitRate& v = prediction_.views[i];
-            if (!listed[i]) continue;
-            if (v.view.declared && v.eligible == 0 && v.refused > 0) {
+            if (!listed[i]) continue;  // only declared views are listed
+            if (v.eligible == 0 && v.refused > 0) {
                 std::printf(
                     "    %s: no lookups pass SHaRC's tests (all %llu refused: each bounce is shorter than "
                     "its voxel)\n",
                     v.view.camera.name.c_str(), (unsigned long long)v.refused);
-            } else if (v.view.declared && v.eligible == 0) {
+            } else if (v.eligible == 0) {
                 std::printf("    %s: no lookups (no first bounce from it hits a surface)\n",
                             v.view.camera.name.c_str());
-            } else if (v.view.declared) {
+            } else {
                 std::printf("    %s: %.1f%% of %llu lookups%s\n", v.view.camera.name.c_str(), 100.0 * v.rate(),
                             (unsigned long long)v.eligible,
                             v.eligible < kLookupsForARate ? " (too few for a rate: its first bounces leave the scene)"

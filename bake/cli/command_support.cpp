@@ -158,8 +158,7 @@ HumanOutputOnStderr::HumanOutputOnStderr(bool active) {
         saved_stdout_ = -1;
         return;
     }
-    // Lines in the order they are printed among the warnings, which stderr does not buffer.
-    std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);
+    // stdout stays line-buffered (main sets it), so its lines keep their order among the warnings.
 }
 
 void HumanOutputOnStderr::release() {
