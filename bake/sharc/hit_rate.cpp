@@ -26,6 +26,17 @@ PredictionView sampledView(const std::string& name, glm::vec3 position, uint32_t
     return view;
 }
 
+/// The scene's glTF cameras as declared views, each named as the bake names it ("camera 'Persp'",
+/// or "camera #3" without names).
+std::vector<PredictionView> gltfCameraViews(const Scene& scene) {
+    std::vector<PredictionView> views;
+    for (const Camera& c : scene.cameras) {
+        views.push_back(PredictionView{c, true});
+        views.back().camera.name = cameraLabel(c);
+    }
+    return views;
+}
+
 }  // namespace
 
 const ViewHitRate* HitRatePrediction::worst() const {
@@ -38,12 +49,7 @@ const ViewHitRate* HitRatePrediction::worst() const {
 
 std::vector<PredictionView> declaredViews(const Tracer& tracer, const ViewRegion& region) {
     const Scene& scene = tracer.scene();
-    std::vector<PredictionView> views;
-    for (const Camera& c : scene.cameras) {
-        PredictionView view{c, true};
-        view.camera.name = cameraLabel(c);  // "camera 'Persp'", or "camera #3" without names
-        views.push_back(view);
-    }
+    std::vector<PredictionView> views = gltfCameraViews(scene);
     // Without a camera of its own, the scene is looked at first from where render's automatic
     // camera puts it (with render's default field of view).
     if (scene.cameras.empty() && region.kind != ViewRegion::Kind::Points && region.kind != ViewRegion::Kind::Box) {
@@ -66,12 +72,8 @@ RefusedLookups refusedLookups(const Tracer& tracer, const HashGridParameters& gr
     // gather lookups, not eligible ones: a camera whose lookups were nearly all refused was
     // replayed until 1000 were eligible, taking the whole replay budget (VC.glb's 14 cameras:
     // 15 M pixels, 6 of a default bake's 28 s) and a weight in the share 256 times the others'.
-    std::vector<PredictionView> views;
-    for (const Camera& c : tracer.scene().cameras) {
-        views.push_back(PredictionView{c, true});
-        views.back().camera.name = cameraLabel(c);
-    }
-    const HitRatePrediction p = predictHitRate(tracer, empty, ViewRegion{}, views, 64, 64, LookupsCounted::kAll);
+    const HitRatePrediction p = predictHitRate(tracer, empty, ViewRegion{}, gltfCameraViews(tracer.scene()), 64, 64,
+                                               LookupsCounted::kAll);
     RefusedLookups refused;
     const uint64_t lookups = p.eligible + p.refused;
     refused.share = lookups >= kLookupsForARate ? double(p.refused) / double(lookups) : 0.0;
