@@ -69,6 +69,7 @@ struct BakeOptions {
     std::string resolution = "1280x720";
     uint32_t max_bounces = 8;
     std::string light_selection = "auto";  ///< "auto" (lights.h: by where light arrives) or "power"
+    std::string trace_kernels = "avx2";    ///< "avx2", "sse4.2" or "native" (tracer.h)
     uint32_t propagation_depth = 2;
     std::string resampling = "random";
     std::string history = "ramp:8";
@@ -132,6 +133,9 @@ struct BakeJob {
     uint64_t voxel_budget = kDefaultVoxelBudget;  ///< what an auto level bias fits to
     bool voxel_budget_given = false;              ///< --voxel-budget is not the default (auto region keeps it)
     bool light_selection_by_power = false;        ///< --light-selection power
+    /// --trace-kernels; once the tracer exists, the kernels it runs (SSE4.2 where AVX2 was asked
+    /// for on a CPU without it), which the cache's metadata records.
+    TraceKernels trace_kernels = TraceKernels::kAvx2;
 };
 
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
@@ -553,6 +557,7 @@ BakeJob bakeJobFromOptions(const BakeOptions& o) {
     job.sky = o.sky;
     job.settings = settingsFromOptions(o);
     job.light_selection_by_power = o.light_selection == "power";
+    job.trace_kernels = traceKernelsNamed(o.trace_kernels);
     job.camera.source = o.camera_source;
     job.camera.path_file = o.camera_path;
     job.camera.explore_points = o.explore_points;
@@ -995,6 +1000,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job
         {"update_stride", std::to_string(settings.update_stride)},
         {"max_bounces", std::to_string(settings.path.max_bounces)},
         {"light_selection", job.light_selection_by_power ? "power" : "auto"},
+        {"trace_kernels", traceKernelsName(job.trace_kernels)},
         {"camera", camera_description},
         {"radiance_scale", radianceScaleText(radiance_scale)},
         {"scene_scale", std::to_string(settings.sharc.grid.scene_scale)},
@@ -1175,7 +1181,9 @@ private:
                                                       (why.empty() ? "" : ")"));
         }
         const auto setup_start = std::chrono::steady_clock::now();
-        tracer_.emplace(scene_);
+        tracer_.emplace(scene_, job_.trace_kernels);
+        warnWhenKernelsFellBack(job_.trace_kernels, *tracer_, "cache");
+        job_.trace_kernels = tracer_->kernels();
         if (job_.light_selection_by_power) {
             lights_.emplace(scene_);
         } else {
@@ -1273,9 +1281,12 @@ private:
                                                  ? "by power (--light-selection power)"
                                                  : lights_->spatialSelection().describe().c_str());
         std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
-        std::printf("Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads\n",
-                    baker_->pathsPerIteration(), job_.settings.width, job_.settings.height, job_.settings.update_stride,
-                    job_.settings.sharc.grid.capacity, job_.settings.sharc.history.describe().c_str(), threads_);
+        std::printf(
+            "Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads, "
+            "Embree's %s kernels\n",
+            baker_->pathsPerIteration(), job_.settings.width, job_.settings.height, job_.settings.update_stride,
+            job_.settings.sharc.grid.capacity, job_.settings.sharc.history.describe().c_str(), threads_,
+            traceKernelsName(tracer_->kernels()));
         std::fflush(stdout);
     }
 
@@ -1961,6 +1972,7 @@ void registerBakeCommand(CLI::App& app) {
                     "of its samples)")
         ->capture_default_str()
         ->check(CLI::IsMember({"auto", "power"}));
+    addTraceKernelsOption(cmd, o->trace_kernels);
     cmd->add_option("--propagation-depth", o->propagation_depth,
                     "Path vertices that receive the radiance found after them (SHARC_PROPAGATION_DEPTH); cache "
                     "resampling ends a path at a random depth up to this, so deeper paths carry more bounces per "

@@ -279,6 +279,35 @@ std::string whyDark(const PunctualLight& light) {
 
 }  // namespace
 
+void addTraceKernelsOption(CLI::App* command, std::string& kernels) {
+    command
+        ->add_option("--trace-kernels", kernels,
+                     "Which of Embree's ray-tracing kernels trace the rays. Kernels of different widths round and "
+                     "order their triangle tests differently: a ray that grazes an edge can hit the other triangle, "
+                     "and its path, and the result, go another way. avx2: the same result on every CPU with "
+                     "AVX2 (Intel Core and Xeon since 2013, AMD since 2015; SSE4.2 with a warning on CPUs without it); "
+                     "sse4.2: the same "
+                     "on every x86-64 CPU, slower; native: Embree's choice for this CPU (AVX-512 where it has "
+                     "it), the same only on CPUs where Embree makes the same choice")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"avx2", "sse4.2", "native"}));
+}
+
+TraceKernels traceKernelsNamed(const std::string& name) {
+    if (name == "sse4.2") return TraceKernels::kSse42;
+    if (name == "native") return TraceKernels::kNative;
+    return TraceKernels::kAvx2;
+}
+
+void warnWhenKernelsFellBack(TraceKernels asked, const Tracer& tracer, const char* result) {
+    if (tracer.kernels() == asked) return;
+    std::fprintf(stderr,
+                 "warning: this CPU has no AVX2 and FMA: tracing with Embree's %s kernels instead of its %s ones, and "
+                 "glibc's maths without FMA, so the %s can differ in its last bits from one made on a CPU with "
+                 "them (it is the same on every CPU without; --trace-kernels sse4.2 gives that result everywhere)\n",
+                 traceKernelsName(tracer.kernels()), traceKernelsName(asked), result);
+}
+
 void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* result) {
     if (lights.hasLights()) return;
     // "No lights" would be false for a scene whose lights all give none: name them and why.

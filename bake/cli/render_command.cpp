@@ -43,6 +43,7 @@ constexpr float kRayOffsetWarningShare = 0.01f;
 
 struct RenderOptions {
     std::string light_selection = "auto";  ///< as bake's --light-selection
+    std::string trace_kernels = "avx2";    ///< as bake's --trace-kernels
     std::string scene_path;
     std::string output_path;
     std::string camera;       // name or index
@@ -274,7 +275,7 @@ private:
         // are checked before the build.
         const bool automatic = o_.look_at.empty() && o_.camera.empty() && scene_.cameras.empty();
         const auto build_start = std::chrono::steady_clock::now();
-        if (automatic) tracer_.emplace(scene_);
+        if (automatic) tracer_.emplace(scene_, traceKernelsNamed(o_.trace_kernels));
         const Camera chosen = chooseCamera(scene_, o_, tracer_ ? &*tracer_ : nullptr);
         if (!o_.quiet && chosen.index < 0 && chosen.name == "automatic") {
             std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
@@ -284,7 +285,8 @@ private:
         camera_ = fitCameraToImage(chosen, width_, height_);
         warnAboutCameraFit(chosen, camera_, width_, height_);
 
-        if (!tracer_) tracer_.emplace(scene_);
+        if (!tracer_) tracer_.emplace(scene_, traceKernelsNamed(o_.trace_kernels));
+        warnWhenKernelsFellBack(traceKernelsNamed(o_.trace_kernels), *tracer_, "image");
         if (o_.light_selection == "power") {
             lights_.emplace(scene_);
         } else {
@@ -717,6 +719,7 @@ void registerRenderCommand(CLI::App& app) {
                     "set-up); see bake --help")
         ->capture_default_str()
         ->check(CLI::IsMember({"auto", "power"}));
+    addTraceKernelsOption(cmd, options->trace_kernels);
     cmd->add_option("--threads", options->threads, "Worker threads (0 = all cores)")->capture_default_str();
     addSkyOptions(*cmd, options->sky);
     addSceneLimitOptions(*cmd, options->limits);

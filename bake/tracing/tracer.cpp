@@ -39,23 +39,86 @@ int32_t floatAsInt(float f) {
 }
 
 /// Embree's filter for both closest-hit and occlusion queries: a candidate hit on a cut-out
-/// point of an alpha-masked or blended material is rejected, and the ray goes on.
+/// point of an alpha-masked or blended material is rejected, and the ray goes on. The point is
+/// the recomputed one (recomputeHit), so a texel's edge cuts the same rays with every kernel.
 void rejectCutOutHits(const RTCFilterFunctionNArguments* args) {
     const Scene& scene = *static_cast<const Scene*>(args->geometryUserPtr);
-    for (unsigned i = 0; i < args->N; ++i) {
+    const unsigned n = args->N;
+    for (unsigned i = 0; i < n; ++i) {
         if (args->valid[i] == 0) continue;
-        const uint32_t triangle = RTCHitN_primID(args->hit, args->N, i);
-        if (isCutOut(scene, triangle, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i))) {
-            args->valid[i] = 0;
-        }
+        const Ray ray{{RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i), RTCRayN_org_z(args->ray, n, i)},
+                      {RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i), RTCRayN_dir_z(args->ray, n, i)}};
+        RayHit hit{RTCHitN_primID(args->hit, n, i), RTCRayN_tfar(args->ray, n, i), RTCHitN_u(args->hit, n, i),
+                   RTCHitN_v(args->hit, n, i)};
+        recomputeHit(scene, ray, hit);
+        if (isCutOut(scene, hit.triangle, hit.u, hit.v)) args->valid[i] = 0;
     }
+}
+
+/// Embree's configuration for `kernels`: the kernels named, whatever else this CPU could run.
+/// SSE4.2's may fall to SSE2's on a CPU without SSE4.2 (the same arithmetic on 4 lanes).
+const char* embreeConfig(TraceKernels kernels) {
+    switch (kernels) {
+        case TraceKernels::kAvx2: return "isa=avx2";
+        case TraceKernels::kSse42: return "max_isa=sse4.2";
+        case TraceKernels::kNative: return nullptr;
+    }
+    return nullptr;
 }
 
 }  // namespace
 
-Tracer::Tracer(const Scene& scene) : scene_(scene) {
-    device_ = rtcNewDevice(nullptr);
-    if (!device_) throw std::runtime_error("Embree: cannot create a device");
+const char* traceKernelsName(TraceKernels kernels) {
+    switch (kernels) {
+        case TraceKernels::kAvx2: return "avx2";
+        case TraceKernels::kSse42: return "sse4.2";
+        case TraceKernels::kNative: return "native";
+    }
+    return "?";
+}
+
+bool cpuRunsAvx2Kernels() {
+    // What Embree's AVX2 kernels need, and what makes glibc's maths pick its FMA routines.
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi") &&
+           __builtin_cpu_supports("bmi2");
+}
+
+void recomputeHit(const Scene& scene, const Ray& ray, RayHit& hit) {
+    const glm::uvec3 corners = scene.triangles[hit.triangle];
+    const glm::dvec3 p0(scene.positions[corners.x]);
+    const glm::dvec3 e1 = glm::dvec3(scene.positions[corners.y]) - p0;
+    const glm::dvec3 e2 = glm::dvec3(scene.positions[corners.z]) - p0;
+    const glm::dvec3 d(ray.direction);
+    const glm::dvec3 p = glm::cross(d, e2);
+    const double determinant = glm::dot(e1, p);
+    // Embree found a hit, so the ray crosses the triangle's plane; a determinant that is zero
+    // in double precision all the same keeps Embree's values.
+    if (!(determinant != 0.0)) return;
+    const double inverse = 1.0 / determinant;
+    const glm::dvec3 s = glm::dvec3(ray.origin) - p0;
+    const glm::dvec3 q = glm::cross(s, e1);
+    // Embree's watertight test put the hit on the triangle: rounding that puts it a hair outside
+    // is clamped back onto it.
+    double u = std::clamp(glm::dot(s, p) * inverse, 0.0, 1.0);
+    double v = std::clamp(glm::dot(d, q) * inverse, 0.0, 1.0);
+    if (u + v > 1.0) {
+        const double sum = u + v;
+        u /= sum;
+        v /= sum;
+    }
+    hit.u = float(u);
+    hit.v = float(v);
+    hit.t = std::clamp(float(glm::dot(e2, q) * inverse), kRayTNear, ray.t_max);
+}
+
+Tracer::Tracer(const Scene& scene, TraceKernels kernels)
+    : scene_(scene),
+      kernels_(kernels == TraceKernels::kAvx2 && !cpuRunsAvx2Kernels() ? TraceKernels::kSse42 : kernels) {
+    device_ = rtcNewDevice(embreeConfig(kernels_));
+    if (!device_) {
+        throw std::runtime_error(std::string("Embree: cannot create a device with its ") + traceKernelsName(kernels_) +
+                                 " kernels");
+    }
     rtc_scene_ = rtcNewScene(device_);
     // An offline bake traces billions of rays against one build: spend time on BVH quality.
     rtcSetSceneBuildQuality(rtc_scene_, RTC_BUILD_QUALITY_HIGH);
@@ -121,10 +184,8 @@ bool Tracer::intersect(const Ray& ray, RayHit& hit) const {
     initRayHit(ray, rayhit);
     rtcIntersect1(rtc_scene_, &context, &rayhit);
     if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    hit.triangle = rayhit.hit.primID;
-    hit.t = rayhit.ray.tfar;
-    hit.u = rayhit.hit.u;
-    hit.v = rayhit.hit.v;
+    hit = RayHit{rayhit.hit.primID, rayhit.ray.tfar, rayhit.hit.u, rayhit.hit.v};
+    recomputeHit(scene_, ray, hit);
     return true;
 }
 
@@ -172,6 +233,7 @@ void Tracer::intersectMany(const Ray* rays, size_t count, RayHit* hits, uint8_t*
         for (int i = 0; i < n; ++i) {
             found[start + i] = packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
             hits[start + i] = RayHit{packet.hit.primID[i], packet.ray.tfar[i], packet.hit.u[i], packet.hit.v[i]};
+            if (found[start + i]) recomputeHit(scene_, rays[start + i], hits[start + i]);
         }
     }
 }

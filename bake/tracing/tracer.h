@@ -55,11 +55,41 @@ void initEmbreeLane(const Ray& ray, RayN& packet, int lane) {
     packet.flags[lane] = 0;
 }
 
+/// Which of Embree's kernels trace the rays. Embree would pick the widest this CPU runs, and its
+/// kernels differ in more than speed: SSE4.2's test triangles with separate multiplies and adds,
+/// AVX2's and AVX-512's with fused multiply-adds, and their BVHs are walked in other orders, so
+/// a ray that passes within a rounding of a triangle's edge, or meets two triangles at the same
+/// distance, can hit the other one: the same bake of a CAD model gave different caches with each
+/// of the three. Naming the kernels makes a cache the same on
+/// every CPU that runs them.
+enum class TraceKernels {
+    kAvx2,   ///< AVX2 with FMA: Intel Core and Xeon since Haswell (2013), AMD since Excavator (2015)
+    kSse42,  ///< SSE4.2 (SSE2 where a CPU lacks it): every x86-64 CPU; slower
+    kNative  ///< Embree's choice for this CPU (AVX-512 where it has it): caches differ between CPUs
+};
+
+/// "avx2", "sse4.2" or "native", as the command line names them.
+const char* traceKernelsName(TraceKernels kernels);
+
+/// Whether this CPU runs Embree's AVX2 kernels (AVX2, FMA, BMI1 and BMI2). Where it does not,
+/// glibc's maths routines differ from their FMA versions in the last bit of a few results per
+/// million too, so a cache baked there can differ from one baked on a newer CPU in any case.
+bool cpuRunsAvx2Kernels();
+
+/// Sets `hit`'s distance and barycentrics anew from the triangle Embree found (hit.triangle), in
+/// double precision with correctly rounded operations only. Embree's own come from a reciprocal
+/// estimate (rcpps or rcp14, whose bits differ between CPU models and vendors) refined once, with
+/// fused multiply-adds in some kernels: recomputed, they are the same bits wherever the same
+/// triangle is hit.
+void recomputeHit(const Scene& scene, const Ray& ray, RayHit& hit);
+
 /// Owns an Embree device and a committed scene built over Scene's triangles. Thread-safe for
 /// queries after construction. Holds a reference to the Scene, which must outlive it.
 class Tracer {
 public:
-    explicit Tracer(const Scene& scene);
+    /// Traces with `kernels`; kAvx2 on a CPU that cannot run them traces with kSse42 (kernels()
+    /// says which).
+    explicit Tracer(const Scene& scene, TraceKernels kernels = TraceKernels::kAvx2);
     ~Tracer();
     Tracer(const Tracer&) = delete;
     Tracer& operator=(const Tracer&) = delete;
@@ -79,12 +109,15 @@ public:
     void occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const;
 
     const Scene& scene() const { return scene_; }
+    /// The kernels tracing: those asked for, or kSse42 where the CPU cannot run kAvx2.
+    TraceKernels kernels() const { return kernels_; }
     /// The committed Embree scene, for code that calls Embree's packet or stream APIs directly
     /// (the ray-limit benchmark); read-only use only.
     RTCScene embreeScene() const { return rtc_scene_; }
 
 private:
     const Scene& scene_;
+    TraceKernels kernels_;
     RTCDevice device_ = nullptr;
     RTCScene rtc_scene_ = nullptr;
 };

@@ -49,6 +49,23 @@ cmp -s "$work/auto.sharc" "$work/power.sharc" &&
 expect 1 "an unknown light selection" "$sharcbake" bake "$outdoor" -o "$work/x.sharc" --light-selection best
 expect 0 "render --light-selection power" "$sharcbake" render "$outdoor" -o "$work/power.exr" --resolution 16 --spp 2 \
     --light-selection power -q
+# --trace-kernels: the plan names Embree's kernels, the cache records them (so a resume with others
+# is refused), and an unknown name is a usage error. (That a hit is the same bits with every kernel
+# is tracer_test's; which kernels a CPU without AVX2 falls back to cannot be shown on one with it.)
+cornell="$scenes/cornell_box/cornell_box.gltf"
+expect 0 "bake --trace-kernels sse4.2" "$sharcbake" bake "$cornell" -o "$work/sse.sharc" --iterations 2 \
+    --resolution 64x36 --trace-kernels sse4.2 --checkpoint "$work/sse.ckpt"
+grep -q "^Baking: .*, Embree's sse4.2 kernels" "$work/out.txt" || fail "the plan does not name the kernels"
+"$sharcbake" info "$work/sse.sharc" | grep -q "trace_kernels: sse4.2" || fail "info does not show the cache's kernels"
+"$sharcbake" info "$work/cornell.sharc" | grep -Eq "trace_kernels: (avx2|sse4.2)$" ||
+    fail "a default bake does not record AVX2's kernels (or SSE4.2's where the CPU lacks AVX2)"
+expect 3 "resume with other kernels" "$sharcbake" bake "$cornell" -o "$work/sse2.sharc" --iterations 4 \
+    --resolution 64x36 --resume "$work/sse.ckpt" --trace-kernels native
+grep -q 'trace_kernels: checkpoint "sse4.2", this bake "native"' "$work/err.txt" ||
+    fail "the refused resume does not name the kernels"
+expect 1 "an unknown kernel" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --trace-kernels avx512
+expect 0 "render --trace-kernels sse4.2" "$sharcbake" render "$cornell" -o "$work/sse.exr" --resolution 16 --spp 2 \
+    --trace-kernels sse4.2 -q
 grep -q '"live_voxels"' "$work/bake.json" || { echo "FAIL: bake stats JSON lacks live_voxels"; failures=$((failures + 1)); }
 # The cache records which scene it came from: FNV-1a 64 of the bytes of the glTF file and then
 # its .bin (cache_format/SPEC.md, F.8).

@@ -10,11 +10,20 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/quaternion.hpp>
 
+#include <cstdio>
+#include <cstring>
 #include <limits>
 #include <random>
 
 namespace sharcbake {
 namespace {
+
+/// A float's bits, so that -0 and +0 (and two NaNs) compare as the different values they are.
+uint32_t floatBits(float value) {
+    uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    return bits;
+}
 
 /// Rays from random points of the Cornell box's bounds in random directions, a few of them cut
 /// short so that occlusion queries see both answers.
@@ -133,6 +142,77 @@ TEST(TracerWatertight, NoRayLeavesAClosedMeshThroughASharedEdge) {
     EXPECT_EQ(escaped, 0u) << "of " << rays.size() << " rays (packets)";
     EXPECT_EQ(escaped_single, 0u) << "of " << rays.size() << " rays (single)";
     EXPECT_EQ(unoccluded, 0u) << "of " << rays.size() << " rays (occlusion)";
+}
+
+// Embree's kernels of different widths (SSE4.2, AVX2, AVX-512) compute a hit's distance and
+// barycentrics with their own roundings (a reciprocal estimate, fused multiply-adds): the same ray
+// on the same triangle gave other bits with each, and a bake other caches on other CPUs. The
+// tracer recomputes them from the triangle, so they are the same bits whichever kernels found it.
+// (Which triangle a ray meets at a shared edge can still differ between kernels; that is why a
+// bake names its kernels, --trace-kernels.)
+TEST(TracerKernels, AHitOnTheSameTriangleIsTheSameBitsWithEveryKernel) {
+    const Scene box = tessellatedBox(48, glm::normalize(glm::quat(0.9f, 0.2f, -0.3f, 0.15f)));
+    const Tracer sse(box, TraceKernels::kSse42), avx2(box, TraceKernels::kAvx2), native(box, TraceKernels::kNative);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 60000; ++i) {
+        const glm::vec3 origin = 0.55f * (2.0f * glm::vec3(unit(rng), unit(rng), unit(rng)) - 1.0f);
+        rays.push_back(Ray{origin, sampleUniformSphere({unit(rng), unit(rng)})});
+    }
+    size_t compared = 0, other_triangle = 0;
+    for (const Tracer* other : {&avx2, &native}) {
+        std::vector<RayHit> hits(rays.size()), other_hits(rays.size());
+        std::vector<uint8_t> found(rays.size()), other_found(rays.size());
+        sse.intersectMany(rays.data(), rays.size(), hits.data(), found.data());
+        other->intersectMany(rays.data(), rays.size(), other_hits.data(), other_found.data());
+        for (size_t i = 0; i < rays.size(); ++i) {
+            ASSERT_TRUE(found[i] && other_found[i]) << "ray " << i << " left the closed box";
+            RayHit single;
+            ASSERT_TRUE(other->intersect(rays[i], single));
+            EXPECT_EQ(single.triangle, other_hits[i].triangle);
+            EXPECT_EQ(floatBits(single.t), floatBits(other_hits[i].t)) << "ray " << i;
+            if (hits[i].triangle != other_hits[i].triangle) {
+                ++other_triangle;
+                continue;
+            }
+            ++compared;
+            EXPECT_EQ(floatBits(hits[i].t), floatBits(other_hits[i].t)) << "ray " << i;
+            EXPECT_EQ(floatBits(hits[i].u), floatBits(other_hits[i].u)) << "ray " << i;
+            EXPECT_EQ(floatBits(hits[i].v), floatBits(other_hits[i].v)) << "ray " << i;
+        }
+    }
+    std::printf("kernels %s and %s: %zu hits compared, %zu rays met another triangle\n",
+                traceKernelsName(avx2.kernels()), traceKernelsName(native.kernels()), compared, other_triangle);
+    EXPECT_GT(compared, 119000u);
+}
+
+// The recomputed hit is the one Embree found: its distance and barycentrics agree with Embree's
+// own to a few float roundings, and lie on the triangle.
+TEST(TracerKernels, TheRecomputedHitIsEmbreesWithinRounding) {
+    const Scene box = tessellatedBox(16, glm::normalize(glm::quat(0.7f, -0.4f, 0.3f, 0.2f)));
+    const Tracer tracer(box);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    for (int i = 0; i < 20000; ++i) {
+        const Ray ray{0.55f * (2.0f * glm::vec3(unit(rng), unit(rng), unit(rng)) - 1.0f),
+                      sampleUniformSphere({unit(rng), unit(rng)})};
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRayHit embree;
+        initEmbreeRay(ray, embree.ray);
+        embree.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(tracer.embreeScene(), &context, &embree);
+        ASSERT_NE(embree.hit.geomID, RTC_INVALID_GEOMETRY_ID);
+        RayHit hit{embree.hit.primID, embree.ray.tfar, embree.hit.u, embree.hit.v};
+        recomputeHit(box, ray, hit);
+        EXPECT_NEAR(hit.t, embree.ray.tfar, 4e-6f * embree.ray.tfar) << "ray " << i;
+        EXPECT_NEAR(hit.u, embree.hit.u, 4e-6f) << "ray " << i;
+        EXPECT_NEAR(hit.v, embree.hit.v, 4e-6f) << "ray " << i;
+        EXPECT_GE(hit.u, 0.0f);
+        EXPECT_GE(hit.v, 0.0f);
+        EXPECT_LE(hit.u + hit.v, 1.0f + 1e-7f);
+    }
 }
 
 // A ray that starts on a surface and leaves it does not hit that surface at distance 0 (robust

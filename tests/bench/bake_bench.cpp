@@ -44,7 +44,14 @@ struct Options {
     std::vector<uint32_t> triangle_list{1000, 10000, 100000, 1000000};
     std::vector<uint32_t> capacity_list{1u << 16, 1u << 18, 1u << 20, 1u << 22, 1u << 24};
     uint32_t spp = 16;  ///< render: samples per pixel
+    std::string trace_kernels = "avx2";  ///< as the baker's --trace-kernels
 };
+
+TraceKernels kernelsOf(const Options& o) {
+    return o.trace_kernels == "sse4.2"   ? TraceKernels::kSse42
+           : o.trace_kernels == "native" ? TraceKernels::kNative
+                                         : TraceKernels::kAvx2;
+}
 
 void parseResolution(const std::string& text, int& width, int& height) {
     char x = 0;
@@ -55,8 +62,8 @@ void parseResolution(const std::string& text, int& width, int& height) {
 }
 
 std::unique_ptr<BakeScene> loadBakeScene(const Options& o, uint32_t triangles) {
-    if (!o.scene_path.empty()) return std::make_unique<BakeScene>(loadGltf(o.scene_path));
-    return std::make_unique<BakeScene>(makeRoomScene(triangles));
+    if (!o.scene_path.empty()) return std::make_unique<BakeScene>(loadGltf(o.scene_path), kernelsOf(o));
+    return std::make_unique<BakeScene>(makeRoomScene(triangles), kernelsOf(o));
 }
 
 std::string sceneName(const Options& o, const BakeScene& s) {
@@ -92,20 +99,21 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
     const double ray_limit = std::max(best, after);
     const double rate = bake.segmentsPerSecond();
     std::printf(
-        "{\"series\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"threads\": %u, \"capacity\": %u, "
-        "\"ray_pairs_per_second\": {%s, \"%s_after_bake\": %.4g}, \"ray_limit\": %.4g, \"ray_limit_api\": \"%s\", "
+        "{\"series\": \"%s\", \"scene\": \"%s\", \"triangles\": %zu, \"threads\": %u, \"trace_kernels\": \"%s\", "
+        "\"capacity\": %u, \"ray_pairs_per_second\": {%s, \"%s_after_bake\": %.4g}, \"ray_limit\": %.4g, "
+        "\"ray_limit_api\": \"%s\", "
         "\"bake_segments_per_second\": %.4g, \"ratio\": %.3f, \"iterations\": %u, \"warmup\": %u, \"paths\": %llu, "
         "\"segments\": %llu, \"shadow_rays\": %llu, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
         "\"resolve\": %.4f, \"other\": %.4f, \"bake\": %.4f, \"setup\": %.4f, \"kernel\": %.4f}, "
         "\"page_faults\": %llu, \"live_voxels\": %llu, "
         "\"file_bytes\": %llu, \"file_bytes_per_live_voxel\": %.2f, \"file_fnv1a\": \"%016llx\", "
         "\"bytes_per_path_in_flight\": %zu, \"deposits_per_path\": %.2f, %s}\n",
-        series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, capacity, per_api.c_str(),
-        toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit, bake.iterations, o.warmup,
-        (unsigned long long)bake.paths, (unsigned long long)bake.segments, (unsigned long long)bake.shadow_rays,
-        bake.update_seconds, bake.commit_seconds, bake.resolve_seconds, bake.wall_seconds - bake.bakeSeconds(),
-        bake.wall_seconds, bake.setup_seconds, bake.kernel_seconds, (unsigned long long)bake.page_faults,
-        (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
+        series, sceneName(o, s).c_str(), s.scene.triangles.size(), threads, traceKernelsName(s.tracer.kernels()),
+        capacity, per_api.c_str(), toString(best_api), after, ray_limit, toString(best_api), rate, rate / ray_limit,
+        bake.iterations, o.warmup, (unsigned long long)bake.paths, (unsigned long long)bake.segments,
+        (unsigned long long)bake.shadow_rays, bake.update_seconds, bake.commit_seconds, bake.resolve_seconds,
+        bake.wall_seconds - bake.bakeSeconds(), bake.wall_seconds, bake.setup_seconds, bake.kernel_seconds,
+        (unsigned long long)bake.page_faults, (unsigned long long)bake.live_voxels, (unsigned long long)bake.file_bytes,
         bake.live_voxels ? double(bake.file_bytes) / double(bake.live_voxels) : 0.0,
         (unsigned long long)bake.file_digest, UpdateWavefront::bytesPerPathInFlight(),
         bake.paths ? double(bake.deposits) / double(bake.paths) : 0.0, cacheStagesJson(bake.cache_stages).c_str());
@@ -175,7 +183,8 @@ int runCapacitySeries(const Options& o, const std::string& self) {
     for (uint32_t capacity : o.capacity_list) {
         std::string command = "'" + self + "' one-bake --capacity " + std::to_string(capacity) + " --iterations " +
                               std::to_string(o.iterations) + " --warmup " + std::to_string(o.warmup) +
-                              " --resolution " + o.resolution + " --threads " + std::to_string(o.threads);
+                              " --resolution " + o.resolution + " --threads " + std::to_string(o.threads) +
+                              " --trace-kernels " + o.trace_kernels;
         command += o.scene_path.empty() ? " --triangles " + std::to_string(o.triangles) : " --scene '" + o.scene_path + "'";
         std::fflush(stdout);
         if (std::system(command.c_str()) != 0) {
@@ -216,6 +225,9 @@ int main(int argc, char** argv) {
         cmd->add_option("--pairs", o.pairs, "Ray pairs in the ray-limit pool")->capture_default_str();
         cmd->add_option("--repetitions", o.repetitions, "Ray-limit passes; the best counts")->capture_default_str();
         cmd->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+        cmd->add_option("--trace-kernels", o.trace_kernels, "Embree's kernels, as the baker's --trace-kernels")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"avx2", "sse4.2", "native"}));
     };
     CLI::App* limit = app.add_subcommand("limit", "Ray limit and bake throughput at one thread count");
     common(limit);
@@ -253,7 +265,7 @@ int main(int argc, char** argv) {
             }
         } else if (scene_size->parsed()) {
             for (uint32_t triangles : o.triangle_list) {
-                const BakeScene s(makeRoomScene(triangles));
+                const BakeScene s(makeRoomScene(triangles), kernelsOf(o));
                 measureLimitAndBake(o, s, "scene-size", threads, o.capacity);
             }
         } else if (capacity->parsed()) {

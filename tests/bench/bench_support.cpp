@@ -231,9 +231,9 @@ double measurePairsPerSecond(const Tracer& tracer, const std::vector<RayPair>& p
     return best;
 }
 
-BakeScene::BakeScene(Scene scene_in, uint32_t explore_points, uint32_t seed)
+BakeScene::BakeScene(Scene scene_in, TraceKernels kernels, uint32_t explore_points, uint32_t seed)
     : scene(std::move(scene_in)),
-      tracer(scene),
+      tracer(scene, kernels),
       lights(tracer),
       camera_path(exploredCameraPath(tracer, scene, explore_points, seed)) {}
 

@@ -78,7 +78,8 @@ std::string cacheStagesJson(const CacheStageSeconds& stages);
 
 /// Everything a bake needs besides its settings, built once per scene.
 struct BakeScene {
-    explicit BakeScene(Scene scene_in, uint32_t explore_points = 32, uint32_t seed = 7);
+    explicit BakeScene(Scene scene_in, TraceKernels kernels = TraceKernels::kAvx2, uint32_t explore_points = 32,
+                       uint32_t seed = 7);
     Scene scene;
     Tracer tracer;
     LightSampler lights;

@@ -101,6 +101,52 @@ BENCHMARK_CAPTURE(BM_RayPairs, stream, RayApi::Stream);
 BENCHMARK_CAPTURE(BM_RayPairs, packet8, RayApi::Packet8);
 BENCHMARK_CAPTURE(BM_RayPairs, packet16, RayApi::Packet16);
 
+/// The tracer's closest hits in blocks of 256 of the pairs' first rays (Embree's packets of 16, each
+/// hit's distance and barycentrics then recomputed), and the recomputation alone on those hits:
+/// what hits whose bits do not depend on Embree's kernels cost.
+void BM_TracerClosestHits(benchmark::State& state) {
+    RayFixture& f = RayFixture::get();
+    constexpr size_t kBlock = 256;
+    std::vector<Ray> rays;
+    for (const RayPair& pair : f.pairs) rays.push_back(pair.closest);
+    std::vector<RayHit> hits(kBlock);
+    std::vector<uint8_t> found(kBlock);
+    size_t at = 0;
+    for (auto _ : state) {
+        if (at + kBlock > rays.size()) at = 0;
+        f.scene->tracer.intersectMany(rays.data() + at, kBlock, hits.data(), found.data());
+        benchmark::DoNotOptimize(hits.data());
+        at += kBlock;
+    }
+    state.SetItemsProcessed(int64_t(state.iterations() * kBlock));
+    state.SetLabel("closest hits, Cornell box, 1 thread");
+}
+BENCHMARK(BM_TracerClosestHits);
+
+void BM_RecomputeHit(benchmark::State& state) {
+    RayFixture& f = RayFixture::get();
+    std::vector<Ray> rays;
+    std::vector<RayHit> hits;
+    for (const RayPair& pair : f.pairs) {
+        RayHit hit;
+        if (f.scene->tracer.intersect(pair.closest, hit)) {
+            rays.push_back(pair.closest);
+            hits.push_back(hit);
+        }
+    }
+    size_t at = 0;
+    for (auto _ : state) {
+        if (at == hits.size()) at = 0;
+        RayHit hit = hits[at];
+        recomputeHit(f.scene->scene, rays[at], hit);
+        benchmark::DoNotOptimize(hit);
+        ++at;
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()));
+    state.SetLabel("one hit's distance and barycentrics, Cornell box");
+}
+BENCHMARK(BM_RecomputeHit);
+
 void BM_HashGridKey(benchmark::State& state) {
     CacheFixture& f = CacheFixture::get();
     HashGridParameters params = f.view.gridParameters(kCamera);
