@@ -293,19 +293,14 @@ void addTraceKernelsOption(CLI::App* command, std::string& kernels) {
         ->check(CLI::IsMember({"avx2", "sse4.2", "native"}));
 }
 
-TraceKernels traceKernelsNamed(const std::string& name) {
-    if (name == "sse4.2") return TraceKernels::kSse42;
-    if (name == "native") return TraceKernels::kNative;
-    return TraceKernels::kAvx2;
-}
-
 void warnWhenKernelsFellBack(TraceKernels asked, const Tracer& tracer, const char* result) {
     if (tracer.kernels() == asked) return;
     std::fprintf(stderr,
-                 "warning: this CPU has no AVX2 and FMA: tracing with Embree's %s kernels instead of its %s ones, and "
-                 "glibc's maths without FMA, so the %s can differ in its last bits from one made on a CPU with "
-                 "them (it is the same on every CPU without; --trace-kernels sse4.2 gives that result everywhere)\n",
-                 traceKernelsName(tracer.kernels()), traceKernelsName(asked), result);
+                 "warning: this CPU has no AVX2 and FMA: tracing with Embree's %s kernels instead of its %s ones, so "
+                 "the %s can differ from one made on a CPU with them (--trace-kernels %s there runs these kernels too; "
+                 "glibc's maths, without FMA here, still round some results differently)\n",
+                 traceKernelsName(tracer.kernels()), traceKernelsName(asked), result,
+                 traceKernelsName(tracer.kernels()));
 }
 
 void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* result) {

@@ -127,8 +127,6 @@ void parseImageSize(const std::string& text, const std::string& option_name, std
 /// Adds --trace-kernels (avx2, sse4.2 or native; tracer.h's TraceKernels) to `command`, whose
 /// result ("cache", "image") it describes.
 void addTraceKernelsOption(CLI::App* command, std::string& kernels);
-/// The TraceKernels that --trace-kernels names (already checked by the option).
-TraceKernels traceKernelsNamed(const std::string& name);
 /// Warns (stderr, also under -q) when `tracer` runs other kernels than `asked` (SSE4.2 on a CPU
 /// without AVX2), so the `result` ("cache", "image") can differ from one made on a newer CPU.
 void warnWhenKernelsFellBack(TraceKernels asked, const Tracer& tracer, const char* result);

@@ -77,6 +77,13 @@ const char* traceKernelsName(TraceKernels kernels) {
     return "?";
 }
 
+TraceKernels traceKernelsNamed(std::string_view name) {
+    for (const TraceKernels kernels : {TraceKernels::kSse42, TraceKernels::kNative}) {
+        if (name == traceKernelsName(kernels)) return kernels;
+    }
+    return TraceKernels::kAvx2;
+}
+
 bool cpuRunsAvx2Kernels() {
     // What Embree's AVX2 kernels need, and what makes glibc's maths pick its FMA routines.
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi") &&

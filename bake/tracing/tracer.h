@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string_view>
 #include <vector>
 
 namespace sharcbake {
@@ -70,10 +71,15 @@ enum class TraceKernels {
 
 /// "avx2", "sse4.2" or "native", as the command line names them.
 const char* traceKernelsName(TraceKernels kernels);
+/// The kernels traceKernelsName names `name`; kAvx2 (the default) for any other name, which the
+/// command lines refuse before asking.
+TraceKernels traceKernelsNamed(std::string_view name);
 
 /// Whether this CPU runs Embree's AVX2 kernels (AVX2, FMA, BMI1 and BMI2). Where it does not,
-/// glibc's maths routines differ from their FMA versions in the last bit of a few results per
-/// million too, so a cache baked there can differ from one baked on a newer CPU in any case.
+/// glibc's maths routines run without FMA too and round some results differently in the last bit
+/// (0.07% of random inputs to double sin, exp and pow, 8 in 20 million to float sincos; none of 20
+/// million to float sin, exp, log and pow), so a cache baked there can differ from one baked on a
+/// newer CPU even with the same kernels.
 bool cpuRunsAvx2Kernels();
 
 /// Sets `hit`'s distance and barycentrics anew from the triangle Embree found (hit.triangle), in

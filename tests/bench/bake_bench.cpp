@@ -47,12 +47,6 @@ struct Options {
     std::string trace_kernels = "avx2";  ///< as the baker's --trace-kernels
 };
 
-TraceKernels kernelsOf(const Options& o) {
-    return o.trace_kernels == "sse4.2"   ? TraceKernels::kSse42
-           : o.trace_kernels == "native" ? TraceKernels::kNative
-                                         : TraceKernels::kAvx2;
-}
-
 void parseResolution(const std::string& text, int& width, int& height) {
     char x = 0;
     std::istringstream in(text);
@@ -62,8 +56,9 @@ void parseResolution(const std::string& text, int& width, int& height) {
 }
 
 std::unique_ptr<BakeScene> loadBakeScene(const Options& o, uint32_t triangles) {
-    if (!o.scene_path.empty()) return std::make_unique<BakeScene>(loadGltf(o.scene_path), kernelsOf(o));
-    return std::make_unique<BakeScene>(makeRoomScene(triangles), kernelsOf(o));
+    if (!o.scene_path.empty())
+        return std::make_unique<BakeScene>(loadGltf(o.scene_path), traceKernelsNamed(o.trace_kernels));
+    return std::make_unique<BakeScene>(makeRoomScene(triangles), traceKernelsNamed(o.trace_kernels));
 }
 
 std::string sceneName(const Options& o, const BakeScene& s) {
@@ -265,7 +260,7 @@ int main(int argc, char** argv) {
             }
         } else if (scene_size->parsed()) {
             for (uint32_t triangles : o.triangle_list) {
-                const BakeScene s(makeRoomScene(triangles), kernelsOf(o));
+                const BakeScene s(makeRoomScene(triangles), traceKernelsNamed(o.trace_kernels));
                 measureLimitAndBake(o, s, "scene-size", threads, o.capacity);
             }
         } else if (capacity->parsed()) {
