@@ -284,11 +284,11 @@ void addTraceKernelsOption(CLI::App* command, std::string& kernels) {
         ->add_option("--trace-kernels", kernels,
                      "Which of Embree's ray-tracing kernels trace the rays. Kernels of different widths round and "
                      "order their triangle tests differently: a ray that grazes an edge can hit the other triangle, "
-                     "and its path, and the result, go another way. avx2: the same result on every CPU with "
-                     "AVX2 (Intel Core and Xeon since 2013, AMD since 2015; SSE4.2 with a warning on CPUs without it); "
-                     "sse4.2: the same "
-                     "on every x86-64 CPU, slower; native: Embree's choice for this CPU (AVX-512 where it has "
-                     "it), the same only on CPUs where Embree makes the same choice")
+                     "and its path, and the result, go another way. avx2: AVX2's kernels, which Intel Core and Xeon "
+                     "CPUs since 2013 and AMD's since 2015 all run, so their caches agree (SSE4.2's, with a warning, "
+                     "on a CPU without AVX2); sse4.2: kernels every x86-64 CPU runs, slower; native: Embree's choice "
+                     "for this CPU (AVX-512 where it has it), so caches agree only between CPUs where it chooses "
+                     "alike. docs/baking.md says what was checked")
         ->capture_default_str()
         ->check(CLI::IsMember({"avx2", "sse4.2", "native"}));
 }
