@@ -290,7 +290,7 @@ void addTraceKernelsOption(CLI::App* command, std::string& kernels) {
                      "for this CPU (AVX-512 where it has it), so caches agree only between CPUs where it chooses "
                      "alike. docs/baking.md says what was checked")
         ->capture_default_str()
-        ->check(CLI::IsMember({"avx2", "sse4.2", "native"}));
+        ->check(CLI::IsMember(traceKernelsNames()));
 }
 
 void warnWhenKernelsFellBack(TraceKernels asked, const Tracer& tracer, const char* result) {

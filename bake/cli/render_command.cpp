@@ -275,7 +275,8 @@ private:
         // are checked before the build.
         const bool automatic = o_.look_at.empty() && o_.camera.empty() && scene_.cameras.empty();
         const auto build_start = std::chrono::steady_clock::now();
-        if (automatic) tracer_.emplace(scene_, traceKernelsNamed(o_.trace_kernels));
+        const TraceKernels kernels = traceKernelsNamed(o_.trace_kernels);
+        if (automatic) tracer_.emplace(scene_, kernels);
         const Camera chosen = chooseCamera(scene_, o_, tracer_ ? &*tracer_ : nullptr);
         if (!o_.quiet && chosen.index < 0 && chosen.name == "automatic") {
             std::printf("Camera: %s (the scene has no camera; --look-at or --camera choose another)\n",
@@ -285,8 +286,8 @@ private:
         camera_ = fitCameraToImage(chosen, width_, height_);
         warnAboutCameraFit(chosen, camera_, width_, height_);
 
-        if (!tracer_) tracer_.emplace(scene_, traceKernelsNamed(o_.trace_kernels));
-        warnWhenKernelsFellBack(traceKernelsNamed(o_.trace_kernels), *tracer_, "image");
+        if (!tracer_) tracer_.emplace(scene_, kernels);
+        warnWhenKernelsFellBack(kernels, *tracer_, "image");
         if (o_.light_selection == "power") {
             lights_.emplace(scene_);
         } else {

@@ -77,8 +77,14 @@ const char* traceKernelsName(TraceKernels kernels) {
     return "?";
 }
 
+std::vector<std::string> traceKernelsNames() {
+    std::vector<std::string> names;
+    for (const TraceKernels kernels : kAllTraceKernels) names.emplace_back(traceKernelsName(kernels));
+    return names;
+}
+
 TraceKernels traceKernelsNamed(std::string_view name) {
-    for (const TraceKernels kernels : {TraceKernels::kSse42, TraceKernels::kNative}) {
+    for (const TraceKernels kernels : kAllTraceKernels) {
         if (name == traceKernelsName(kernels)) return kernels;
     }
     return TraceKernels::kAvx2;

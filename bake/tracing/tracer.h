@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -61,16 +62,19 @@ void initEmbreeLane(const Ray& ray, RayN& packet, int lane) {
 /// AVX2's and AVX-512's with fused multiply-adds, and their BVHs are walked in other orders, so
 /// a ray that passes within a rounding of a triangle's edge, or meets two triangles at the same
 /// distance, can hit the other one: the same bake of a CAD model gave different caches with each
-/// of the three. Naming the kernels makes a cache the same on
-/// every CPU that runs them.
+/// of the three. Naming the kernels makes caches agree between CPUs that run them (but for the
+/// order of overlapping triangles across CPU makers: docs/baking.md).
 enum class TraceKernels {
     kAvx2,   ///< AVX2 with FMA: Intel Core and Xeon since Haswell (2013), AMD since Excavator (2015)
     kSse42,  ///< SSE4.2 (SSE2 where a CPU lacks it): every x86-64 CPU; slower
     kNative  ///< Embree's choice for this CPU (AVX-512 where it has it): caches differ between CPUs
 };
+inline constexpr TraceKernels kAllTraceKernels[] = {TraceKernels::kAvx2, TraceKernels::kSse42, TraceKernels::kNative};
 
 /// "avx2", "sse4.2" or "native", as the command line names them.
 const char* traceKernelsName(TraceKernels kernels);
+/// Every kernels' name, in kAllTraceKernels' order: what --trace-kernels accepts.
+std::vector<std::string> traceKernelsNames();
 /// The kernels traceKernelsName names `name`; kAvx2 (the default) for any other name, which the
 /// command lines refuse before asking.
 TraceKernels traceKernelsNamed(std::string_view name);

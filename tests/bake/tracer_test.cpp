@@ -2,6 +2,7 @@
 // The batched ray queries the update wavefront traces with (Embree packets of 16) answer exactly
 // as the single-ray queries do, for any count: whole packets, a short last one, and none. A closed
 // mesh of many triangles lets no ray out through the edges its triangles share.
+#include "../cache_format/float_bits.h"
 #include "test_bake_scene.h"
 #include "test_rooms.h"
 #include "tracing/sampling.h"
@@ -11,19 +12,11 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <cstdio>
-#include <cstring>
 #include <limits>
 #include <random>
 
 namespace sharcbake {
 namespace {
-
-/// A float's bits, so that -0 and +0 (and two NaNs) compare as the different values they are.
-uint32_t floatBits(float value) {
-    uint32_t bits;
-    std::memcpy(&bits, &value, sizeof bits);
-    return bits;
-}
 
 /// Rays from random points of the Cornell box's bounds in random directions, a few of them cut
 /// short so that occlusion queries see both answers.
@@ -171,15 +164,15 @@ TEST(TracerKernels, AHitOnTheSameTriangleIsTheSameBitsWithEveryKernel) {
             RayHit single;
             ASSERT_TRUE(other->intersect(rays[i], single));
             EXPECT_EQ(single.triangle, other_hits[i].triangle);
-            EXPECT_EQ(floatBits(single.t), floatBits(other_hits[i].t)) << "ray " << i;
+            EXPECT_EQ(toBits(single.t), toBits(other_hits[i].t)) << "ray " << i;
             if (hits[i].triangle != other_hits[i].triangle) {
                 ++other_triangle;
                 continue;
             }
             ++compared;
-            EXPECT_EQ(floatBits(hits[i].t), floatBits(other_hits[i].t)) << "ray " << i;
-            EXPECT_EQ(floatBits(hits[i].u), floatBits(other_hits[i].u)) << "ray " << i;
-            EXPECT_EQ(floatBits(hits[i].v), floatBits(other_hits[i].v)) << "ray " << i;
+            EXPECT_EQ(toBits(hits[i].t), toBits(other_hits[i].t)) << "ray " << i;
+            EXPECT_EQ(toBits(hits[i].u), toBits(other_hits[i].u)) << "ray " << i;
+            EXPECT_EQ(toBits(hits[i].v), toBits(other_hits[i].v)) << "ray " << i;
         }
     }
     std::printf("kernels %s and %s: %zu hits compared, %zu rays met another triangle\n",

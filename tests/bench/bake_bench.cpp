@@ -222,7 +222,7 @@ int main(int argc, char** argv) {
         cmd->add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
         cmd->add_option("--trace-kernels", o.trace_kernels, "Embree's kernels, as the baker's --trace-kernels")
             ->capture_default_str()
-            ->check(CLI::IsMember({"avx2", "sse4.2", "native"}));
+            ->check(CLI::IsMember(traceKernelsNames()));
     };
     CLI::App* limit = app.add_subcommand("limit", "Ray limit and bake throughput at one thread count");
     common(limit);
