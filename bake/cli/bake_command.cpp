@@ -584,25 +584,25 @@ std::string describeHitRate(const HitRatePrediction& p) {
     char text[256];
     if (p.eligible == 0 && p.refused > 0) {  // voxels far larger than what the views see
         std::snprintf(text, sizeof text,
-                      "no lookups from %zu views pass SHaRC's tests (all %llu refused: each bounce is shorter than "
+                      "no lookups from %s pass SHaRC's tests (all %llu refused: each bounce is shorter than "
                       "its voxel)",
-                      p.views.size(), (unsigned long long)p.refused);
+                      counted(p.views.size(), "view").c_str(), (unsigned long long)p.refused);
         return text;
     }
     if (p.eligible == 0) {  // every first bounce leaves the scene (a lone object): a rate of nothing
-        std::snprintf(text, sizeof text, "no lookups from %zu views (no first bounce from them hits a surface)",
-                      p.views.size());
+        std::snprintf(text, sizeof text, "no lookups from %s (no first bounce from them hits a surface)",
+                      counted(p.views.size(), "view").c_str());
         return text;
     }
     if (p.eligible < kLookupsForARate) {  // nearly every first bounce leaves the scene: no rate to speak of
         std::snprintf(text, sizeof text,
-                      "%.1f%% of only %llu lookups from %zu views (nearly every first bounce from them leaves the "
+                      "%.1f%% of only %s from %s (nearly every first bounce from them leaves the "
                       "scene: little for a cache to answer)",
-                      100.0 * p.rate(), (unsigned long long)p.eligible, p.views.size());
+                      100.0 * p.rate(), counted(p.eligible, "lookup").c_str(), counted(p.views.size(), "view").c_str());
         return text;
     }
-    std::snprintf(text, sizeof text, "%.1f%% of %llu lookups from %zu views", 100.0 * p.rate(),
-                  (unsigned long long)p.eligible, p.views.size());
+    std::snprintf(text, sizeof text, "%.1f%% of %llu lookups from %s", 100.0 * p.rate(), (unsigned long long)p.eligible,
+                  counted(p.views.size(), "view").c_str());
     std::string result = text;
     if (const ViewHitRate* worst = p.worst()) {
         std::snprintf(text, sizeof text, " (lowest: %s, %.1f%%)", worst->view.camera.name.c_str(), 100.0 * worst->rate());
@@ -1267,7 +1267,8 @@ private:
                         job_.settings.shard_count, job_.settings.shard_count, job_.settings.shard_index);
         }
         if (!o_.resume_path.empty()) {
-            std::printf("Resumed from %s after %u iterations\n", o_.resume_path.c_str(), first_iteration_);
+            std::printf("Resumed from %s after %s\n", o_.resume_path.c_str(),
+                        counted(first_iteration_, "iteration").c_str());
         }
         std::printf("Camera: %s\n", camera_description_.c_str());
         std::printf("Grid: scene scale %.9g, log base %.9g, %s\n", double(job_.settings.sharc.grid.scene_scale),
@@ -1282,11 +1283,11 @@ private:
                                                  : lights_->spatialSelection().describe().c_str());
         std::printf("Left out: %s\n", workLeftOut(scene_, *lights_).c_str());
         std::printf(
-            "Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %d threads, "
+            "Baking: %u paths per iteration (%dx%d, stride %u), capacity %u, history %s, %s, "
             "Embree's %s kernels\n",
             baker_->pathsPerIteration(), job_.settings.width, job_.settings.height, job_.settings.update_stride,
-            job_.settings.sharc.grid.capacity, job_.settings.sharc.history.describe().c_str(), threads_,
-            traceKernelsName(tracer_->kernels()));
+            job_.settings.sharc.grid.capacity, job_.settings.sharc.history.describe().c_str(),
+            counted(uint64_t(threads_), "thread").c_str(), traceKernelsName(tracer_->kernels()));
         std::fflush(stdout);
     }
 
@@ -1475,8 +1476,8 @@ private:
     void printSummary() const {
         const UpdateCounters& c = baker_->counters();
         const StageSeconds& stage = baker_->seconds();
-        std::printf("Baked %u iterations in %.2f s (stopped by %s)\n", baker_->iterationsDone(), bake_seconds_,
-                    stop_reason_);
+        std::printf("Baked %s in %.2f s (stopped by %s)\n", counted(baker_->iterationsDone(), "iteration").c_str(),
+                    bake_seconds_, stop_reason_);
         std::printf("  time: update %.2f s, commit %.2f s, resolve %.2f s; setup %.2f s, coverage+write %.2f s\n",
                     stage.update, stage.commit, stage.resolve, setup_seconds_, finish_seconds_);
         std::printf("  paths %llu, segments %llu, shadow rays %llu: %.3g rays/s, %.3g segments/s\n",
@@ -1820,7 +1821,8 @@ void runBatch(const BakeOptions& batch) {
     // -q prints nothing but warnings and errors, a batch's summary included: each failure has
     // printed its error, and the exit code and the last error name the first one.
     if (!batch.quiet)
-        std::printf("\nBatch: %zu of %zu scenes baked\n", outcomes.size() - size_t(failed), batch.scene_paths.size());
+        std::printf("\nBatch: %zu of %s baked\n", outcomes.size() - size_t(failed),
+                    counted(batch.scene_paths.size(), "scene").c_str());
     for (size_t i = 0; i < batch.scene_paths.size() && !batch.quiet; ++i) {
         if (i >= outcomes.size()) {
             std::printf("  not run   %s (the batch was stopped)\n", batch.scene_paths[i].c_str());

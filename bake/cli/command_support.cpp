@@ -41,6 +41,13 @@ const char* const kExitCodeHelp =
     "  130  interrupted (SIGINT)\n"
     "  143  terminated (SIGTERM)\n";
 
+std::string counted(uint64_t count, std::string_view singular, std::string_view plural) {
+    std::string text = std::to_string(count) + " ";
+    if (count == 1) return text.append(singular);
+    if (!plural.empty()) return text.append(plural);
+    return text.append(singular).append("s");
+}
+
 const CLI::Validator kFiniteNumber(
     [](std::string& text) -> std::string {
         char* end = nullptr;
@@ -587,11 +594,10 @@ Json provenanceJson(const char* output_kind, const Scene& scene, const std::stri
 }
 
 void describeScene(const Scene& scene) {
-    std::printf("Scene %s: %llu triangles, %zu materials, %zu textures, %zu punctual lights, "
-                "%zu cameras, sky %s\n",
-                scene.source_path.c_str(), (unsigned long long)scene.triangles.size(),
-                scene.materials.size(), scene.textures.size(), scene.lights.size(),
-                scene.cameras.size(),
+    std::printf("Scene %s: %s, %s, %s, %s, %s, sky %s\n", scene.source_path.c_str(),
+                counted(scene.triangles.size(), "triangle").c_str(),
+                counted(scene.materials.size(), "material").c_str(), counted(scene.textures.size(), "texture").c_str(),
+                counted(scene.lights.size(), "punctual light").c_str(), counted(scene.cameras.size(), "camera").c_str(),
                 scene.sky.map ? "map" : (scene.sky.isBlack() ? "black" : "uniform"));
     if (scene.stats.degenerate_triangles_dropped > 0 || scene.stats.primitives_skipped > 0) {
         std::printf("  dropped %llu degenerate triangles, skipped %llu non-triangle primitives\n",

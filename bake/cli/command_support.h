@@ -54,6 +54,10 @@ private:
     ExitCode code_;
 };
 
+/// "1 camera", "3 cameras": a count with its noun, plural unless the count is one (nouns whose
+/// plural is not the singular with an "s" pass it as `plural`).
+std::string counted(uint64_t count, std::string_view singular, std::string_view plural = {});
+
 /// CLI11 check for floating-point options: the value is a finite number. Range checks alone let
 /// "nan" through (every comparison with NaN is false); chain this one after them.
 extern const CLI::Validator kFiniteNumber;

@@ -61,7 +61,8 @@ void run(const ExportVdbOptions& o) {
     if (result == VdbExportStatus::kUnrepresentable) throw CommandError(kExitInvalidInput, o.input + ": " + message);
     if (result != VdbExportStatus::kOk) throw CommandError(kExitUsage, message);
     if (o.quiet) return;
-    std::printf("%s: %zu grids from %" PRIu64 " cache voxels", o.output.c_str(), grids.size(), view.voxelCount());
+    std::printf("%s: %s from %s", o.output.c_str(), counted(grids.size(), "grid").c_str(),
+                counted(view.voxelCount(), "cache voxel").c_str());
     if (o.length_scale != 1.0)
         std::printf(", positions and sizes x %.9g (voxel sizes below: the cache's)", o.length_scale);
     std::printf("\n");

@@ -248,9 +248,9 @@ void registerInfoCommand(CLI::App& app) {
             throw CommandError(exitCodeFor(status), std::string(status == CacheFileStatus::kIoError ? "" : "invalid: ") +
                                                         error.message + " [" + toString(status) + "]");
         }
-        std::printf("%s: valid (format %u.%u, %" PRIu64 " voxels, %zu levels, %zu sections)\n", v->path.c_str(),
-                    view.versionMajor(), view.versionMinor(), view.voxelCount(), view.levels().size(),
-                    view.sections().size());
+        std::printf("%s: valid (format %u.%u, %s, %s, %s)\n", v->path.c_str(), view.versionMajor(), view.versionMinor(),
+                    counted(view.voxelCount(), "voxel").c_str(), counted(view.levels().size(), "level").c_str(),
+                    counted(view.sections().size(), "section").c_str());
     });
 }
 

@@ -562,9 +562,9 @@ private:
         if (light_selection_seconds_ >= 0.005)
             std::snprintf(light_selection, sizeof light_selection, ", light selection %.2f s",
                           light_selection_seconds_);
-        std::printf("Rendered %dx%d, %u spp, %s in %.2f s (BVH build %.2f s%s, %d threads)\n", width_, height_, o_.spp,
+        std::printf("Rendered %dx%d, %u spp, %s in %.2f s (BVH build %.2f s%s, %s)\n", width_, height_, o_.spp,
                     cameraLabel(camera_).c_str(), render_seconds_, build_seconds_ - light_selection_seconds_,
-                    light_selection, threads_);
+                    light_selection, counted(uint64_t(threads_), "thread").c_str());
         std::printf("  rays: %llu closest-hit + %llu shadow = %.3g rays/s\n",
                     (unsigned long long)counts_.closest_hit_rays, (unsigned long long)counts_.shadow_rays,
                     double(rays()) / render_seconds_);

@@ -54,8 +54,12 @@ expect 0 "render --light-selection power" "$sharcbake" render "$outdoor" -o "$wo
 # is tracer_test's; which kernels a CPU without AVX2 falls back to cannot be shown on one with it.)
 cornell="$scenes/cornell_box/cornell_box.gltf"
 expect 0 "bake --trace-kernels sse4.2" "$sharcbake" bake "$cornell" -o "$work/sse.sharc" --iterations 2 \
-    --resolution 64x36 --trace-kernels sse4.2 --checkpoint "$work/sse.ckpt"
+    --resolution 64x36 --trace-kernels sse4.2 --checkpoint "$work/sse.ckpt" --threads 1
 grep -q "^Baking: .*, Embree's sse4.2 kernels" "$work/out.txt" || fail "the plan does not name the kernels"
+# Counts of one are singular ("1 thread", "1 camera", "2 iterations").
+grep -q "^Baking: .*, 1 thread, " "$work/out.txt" || fail "the plan does not say \"1 thread\": $(grep '^Baking' "$work/out.txt")"
+grep -q "^Scene .*, 1 camera, sky black" "$work/out.txt" || fail "the scene line does not say \"1 camera\""
+grep -q "^Baked 2 iterations in" "$work/out.txt" || fail "the summary does not say \"Baked 2 iterations\""
 "$sharcbake" info "$work/sse.sharc" | grep -q "trace_kernels: sse4.2" || fail "info does not show the cache's kernels"
 "$sharcbake" info "$work/cornell.sharc" | grep -Eq "trace_kernels: (avx2|sse4.2)$" ||
     fail "a default bake does not record AVX2's kernels (or SSE4.2's where the CPU lacks AVX2)"
