@@ -1686,12 +1686,14 @@ private:
         if (o_.quiet) {
             for (const std::string& w : stability_.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
         }
-        if (autoCapacity() && cache.numerics().failed_inserts > 0) {
+        if (autoCapacity() && cache.numerics().failed_inserts > cache.numerics().failed_inserts_equal_halves) {
             // The table doubles between iterations; one iteration filled it faster than that.
             std::fprintf(stderr,
                          "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no "
                          "slot within an iteration; bake with a fixed --capacity %llu\n",
-                         job_.settings.sharc.grid.capacity, cache.capacity(), (unsigned long long)cache.numerics().failed_inserts,
+                         job_.settings.sharc.grid.capacity, cache.capacity(),
+                         (unsigned long long)(cache.numerics().failed_inserts -
+                                              cache.numerics().failed_inserts_equal_halves),
                          2ull * cache.capacity());
         }
         if (g_stop_signal == SIGTERM) {

@@ -24,12 +24,30 @@ std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0
 }
 
 void addWarnings(StabilityReport& r) {
-    if (r.failed_inserts > 0) {
-        r.warnings.push_back(format("%.0f deposits found their hash bucket full and were dropped: %.3g%% of the "
-                                    "deposited energy is missing from the cache; raise --capacity (%.1f%% of the "
-                                    "slots are in use)",
-                                    double(r.failed_inserts), 100.0 * r.share(r.failed_insert_energy),
-                                    r.capacity ? 100.0 * double(r.occupied_slots) / double(r.capacity) : 0.0));
+    const uint64_t failed_for_capacity = r.failed_inserts - std::min(r.failed_inserts, r.failed_inserts_equal_halves);
+    if (failed_for_capacity > 0) {
+        r.warnings.push_back(
+            format("%.0f deposits found their hash bucket full and were dropped: %.3g%% of the "
+                   "deposited energy is missing from the cache; raise --capacity (%.1f%% of the "
+                   "slots are in use)",
+                   double(failed_for_capacity),
+                   100.0 * r.share(r.failed_insert_energy) * double(failed_for_capacity) / double(r.failed_inserts),
+                   r.capacity ? 100.0 * double(r.occupied_slots) / double(r.capacity) : 0.0));
+    }
+    if (r.failed_inserts_equal_halves > 0) {
+        // Keys x | y << 17 | z << 34 | level << 51 have equal halves where y = 4 x level (plus the
+        // normal's bits) and x = 4 z: a diagonal row of voxels on a surface that sits at that grid
+        // row, which another voxel size moves.
+        r.warnings.push_back(format(
+            "%.0f deposits fell on voxels whose keys SHaRC's hash sends to one bucket (a key whose two 32-bit halves "
+            "are equal hashes to 0), which was full: %.3g%% of the deposited energy is missing from the cache. No "
+            "--capacity holds them, and a runtime with the SDK's hash cannot either (lookups there miss and are "
+            "traced). Such keys are a diagonal row of voxels on a surface at grid row 4 x level (the floor of a tiny "
+            "scene, whose finest voxels are narrower than SHaRC's 1e-4 position bias, can sit there); another "
+            "--level-bias (a step of 1/64 changes the voxel sizes) or --scene-scale moves the surface off it",
+            double(r.failed_inserts_equal_halves),
+            100.0 * r.share(r.failed_insert_energy) * double(r.failed_inserts_equal_halves) /
+                double(r.failed_inserts)));
     }
     if (r.clamped_deposits > 0) {
         // The scale puts the brightest radiance the scene's emission, sky and punctual lights give
@@ -145,6 +163,7 @@ StabilityReport makeStabilityReport(const SharcCache& cache, const UpdateCounter
     r.clamped_energy = channelSum(n.clamped_energy);
     r.saturated_sums = n.saturated_sums;
     r.failed_inserts = n.failed_inserts;
+    r.failed_inserts_equal_halves = n.failed_inserts_equal_halves;
     r.failed_insert_energy = channelSum(n.failed_insert_energy);
     r.non_finite_dropped = n.non_finite_deposits + update.non_finite;
     r.negative_clamped = n.negative_deposits;
@@ -210,10 +229,12 @@ void printStabilitySection(std::FILE* out, const StabilityReport& r) {
     std::fprintf(out, "  clamped: %llu deposits, %.3g energy (%.3g%%); saturated sums %llu; below one step %llu\n",
                  (unsigned long long)r.clamped_deposits, r.clamped_energy, 100.0 * r.share(r.clamped_energy),
                  (unsigned long long)r.saturated_sums, (unsigned long long)r.sub_step_deposits);
-    std::fprintf(out, "  failed inserts: %llu deposits, %.3g energy (%.3g%%); %llu of %u slots in use%s\n",
-                 (unsigned long long)r.failed_inserts, r.failed_insert_energy, 100.0 * r.share(r.failed_insert_energy),
-                 (unsigned long long)r.occupied_slots, r.capacity,
-                 r.capacity_power_of_two ? "" : " (not a power of two: fine here, SHaRC recommends one)");
+    std::fprintf(out,
+                 "  failed inserts: %llu deposits (%llu on keys of equal halves), %.3g energy (%.3g%%); %llu of %u "
+                 "slots in use%s\n",
+                 (unsigned long long)r.failed_inserts, (unsigned long long)r.failed_inserts_equal_halves,
+                 r.failed_insert_energy, 100.0 * r.share(r.failed_insert_energy), (unsigned long long)r.occupied_slots,
+                 r.capacity, r.capacity_power_of_two ? "" : " (not a power of two: fine here, SHaRC recommends one)");
     std::fprintf(out, "  dropped or replaced: NaN/Inf %llu, negative %llu, resampled below emission %llu, "
                       "orphan sums %llu\n",
                  (unsigned long long)r.non_finite_dropped, (unsigned long long)r.negative_clamped,
@@ -245,6 +266,7 @@ Json stabilityJson(const StabilityReport& r) {
         {"clamped_energy_share", r.share(r.clamped_energy)},
         {"saturated_sums", r.saturated_sums},
         {"failed_inserts", r.failed_inserts},
+        {"failed_inserts_equal_halves", r.failed_inserts_equal_halves},
         {"failed_insert_energy", r.failed_insert_energy},
         {"failed_insert_energy_share", r.share(r.failed_insert_energy)},
         {"non_finite_dropped", r.non_finite_dropped},

@@ -40,6 +40,9 @@ struct StabilityReport {
     double clamped_energy = 0.0;       ///< removed by that ceiling
     uint64_t saturated_sums = 0;       ///< deposits into a voxel sum already at its ceiling
     uint64_t failed_inserts = 0;       ///< deposits dropped because their bucket was full
+    /// Of those, deposits whose key's two 32-bit halves are equal: SHaRC's hash sends every such
+    /// key to one bucket, so no capacity holds more than a bucket of them (keyHalvesAreEqual).
+    uint64_t failed_inserts_equal_halves = 0;
     double failed_insert_energy = 0.0;
     // Values replaced or dropped.
     uint64_t non_finite_dropped = 0;   ///< NaN/Inf radiance (update pass + commit)

@@ -36,6 +36,7 @@ struct NamedNumericsCount {
 constexpr NamedNumericsCount kNumericsCounts[] = {
     {"deposits", &NumericsCounters::deposits},
     {"failed_inserts", &NumericsCounters::failed_inserts},
+    {"failed_inserts_equal_halves", &NumericsCounters::failed_inserts_equal_halves},
     {"non_finite_deposits", &NumericsCounters::non_finite_deposits},
     {"negative_deposits", &NumericsCounters::negative_deposits},
     {"clamped_deposits", &NumericsCounters::clamped_deposits},

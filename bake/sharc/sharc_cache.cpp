@@ -158,7 +158,7 @@ private:
 
 /// What accumulating one chunk counted, added up in chunk order afterwards.
 struct SharcCache::ChunkNumerics {
-    uint64_t failed = 0, negative = 0, clamped = 0, saturated = 0, sub_step = 0;
+    uint64_t failed = 0, failed_equal_halves = 0, negative = 0, clamped = 0, saturated = 0, sub_step = 0;
     glm::dvec3 failed_energy{0.0}, clamped_energy{0.0};
     std::vector<uint32_t> touched;
 };
@@ -299,6 +299,7 @@ void SharcCache::commitChunks(const std::vector<std::vector<Deposit>>& chunks, u
     });
     for (const ChunkNumerics& n : chunk_numerics) {
         numerics_.failed_inserts += n.failed;
+        numerics_.failed_inserts_equal_halves += n.failed_equal_halves;
         numerics_.failed_insert_energy += n.failed_energy;
         numerics_.negative_deposits += n.negative;
         numerics_.clamped_deposits += n.clamped;
@@ -522,6 +523,7 @@ void SharcCache::accumulateChunk(const std::vector<Deposit>& deposits, size_t ch
         const Deposit& d = deposits[i];
         if (slots[i] == kFailedInsert) {
             ++numerics.failed;
+            numerics.failed_equal_halves += keyHalvesAreEqual(d.key) ? 1 : 0;
             numerics.failed_energy += glm::dvec3(glm::max(d.radiance, glm::vec3(0.0f)));
             continue;
         }
@@ -744,15 +746,17 @@ void SharcCache::linkCoarserVoxels(const std::vector<uint32_t>& sorted_slots) {
             }
         }
     });
-    std::atomic<uint64_t> failed{0};
+    std::atomic<uint64_t> failed{0}, failed_equal_halves{0};
     occupied_ += insertByRange(missing, [&](const NewKey& k, uint32_t parent) {
         if (parent == kNoSlot) {
             failed.fetch_add(1, std::memory_order_relaxed);  // the finer voxel keeps its samples; this level lacks it
+            if (keyHalvesAreEqual(k.key)) failed_equal_halves.fetch_add(1, std::memory_order_relaxed);
         } else {
             accumulation_[k.owner].coarser_slot = parent + 1;
         }
     });
     numerics_.failed_inserts += failed.load();
+    numerics_.failed_inserts_equal_halves += failed_equal_halves.load();
 }
 
 void SharcCache::resolve(uint32_t iteration) {
@@ -801,6 +805,7 @@ void SharcCache::grow(uint32_t capacity) {
         const std::optional<uint32_t> moved = table.insert(key);
         if (!moved) {  // a full bucket in a table at most an eighth full: counted, never silent
             ++numerics_.failed_inserts;
+            numerics_.failed_inserts_equal_halves += keyHalvesAreEqual(key) ? 1 : 0;
             continue;
         }
         resolved[*moved] = resolved_[slot];

@@ -125,6 +125,13 @@ struct ResolvedEntry {
     uint32_t total_samples = 0;   ///< samples ever received (saturating)
 };
 
+/// Whether SHaRC's hash sends `key` to the first bucket whatever the capacity: J(low 32 bits) ^
+/// J(high 32 bits) is 0 when the halves are equal. A row of voxels on a surface can make such keys
+/// (the key packs x | y << 17 | z << 34 | level << 51: equal halves where y is about 4 x level
+/// and x about 4 z), and only a bucket's worth of them fit; a runtime with the SDK's hash loses
+/// the rest too.
+inline bool keyHalvesAreEqual(uint64_t key) { return uint32_t(key) == uint32_t(key >> 32); }
+
 /// One deposit of an update path into a voxel: radiance x weight, and whether it counts as a
 /// sample (the voxel's own direct light) or is propagated from a later vertex (count 0).
 struct Deposit {
@@ -139,6 +146,9 @@ struct NumericsCounters {
     glm::dvec3 deposited_energy{0.0};      ///< radiance x weight of every finite deposit, before any change
     uint64_t failed_inserts = 0;           ///< deposits dropped because the bucket was full
     glm::dvec3 failed_insert_energy{0.0};  ///< radiance x samples those deposits carried
+    /// Of failed_inserts, those whose key's two 32-bit halves are equal: SHaRC's hash, J(low) ^
+    /// J(high), is 0 for every such key, so they all share the first bucket at any capacity.
+    uint64_t failed_inserts_equal_halves = 0;
     uint64_t non_finite_deposits = 0;      ///< NaN/Inf deposits dropped
     uint64_t negative_deposits = 0;        ///< negative channel values clamped to 0
     uint64_t clamped_deposits = 0;         ///< single deposits above the fixed-point ceiling
