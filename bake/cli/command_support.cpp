@@ -522,7 +522,7 @@ Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool q
             scene.sky.scale = sky.scale;
         }
     } catch (const SceneLoadError& e) {
-        throw CommandError(kExitInvalidInput, e.what());
+        throw CommandError(e.kind() == SceneLoadError::Kind::kMissingFile ? kExitIo : kExitInvalidInput, e.what());
     }
     if (scene.sky.map && sky.uniform.empty()) checkScaledSky(sky.exr_path, *scene.sky.map, scene.sky.scale);
     if (!sky.uniform.empty()) {

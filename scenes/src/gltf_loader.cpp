@@ -565,6 +565,9 @@ private:
     // ---------------------------------------------------------------- errors and warnings
 
     [[noreturn]] void fail(const std::string& what) const { throw SceneLoadError(path_ + ": " + what); }
+    [[noreturn]] void failMissingFile(const std::string& what) const {
+        throw SceneLoadError(path_ + ": " + what, SceneLoadError::Kind::kMissingFile);
+    }
 
     /// Records a warning once: a mesh instanced a thousand times should not repeat its
     /// repaired-normals warning a thousand times.
@@ -887,6 +890,23 @@ private:
         return true;
     }
 
+    /// "buffer 'rooms.bin' not found beside the scene (looked in /scenes)": the words a missing
+    /// image's warning uses, for a buffer, which the scene cannot load without.
+    std::string missingBufferMessage(const std::string& uri, const FileAccess& access) const {
+        return "buffer " + quoted(uri) + " not found beside the scene (looked in " + access.folder.string() + ")";
+    }
+
+    /// The file tinygltf reported with "File not found : URI" (a required file: a buffer; a
+    /// missing image is only a warning), if it did.
+    static std::optional<std::string> fileTinygltfDidNotFind(const std::string& err) {
+        static const std::string kPrefix = "File not found : ";
+        const size_t at = err.find(kPrefix);
+        if (at == std::string::npos) return std::nullopt;
+        const size_t begin = at + kPrefix.size();
+        const size_t end = err.find('\n', begin);
+        return err.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+    }
+
     void parseFile() {
         if (!std::filesystem::exists(path_)) fail("file not found");
         std::error_code error;
@@ -914,7 +934,7 @@ private:
         std::string warnings;
         // Decide by content, not extension: a .gltf that is really binary still loads.
         const bool glb = hasGlbMagic(path_);
-        if (glb) checkGlbContainerVersion(bytes);
+        if (glb) checkGlbContainer(bytes);
         access.json = jsonText(bytes, glb);
         std::optional<TinygltfInput> rewritten;
         if (mayNeedRewrite(bytes)) {
@@ -966,6 +986,8 @@ private:
         if (!ok) {
             if (const std::optional<std::string> problem = versionProblemInJson(jsonText(bytes, glb))) fail(*problem);
             if (const std::optional<std::string> problem = dataUriProblem(jsonText(bytes, glb), err)) fail(*problem);
+            if (const std::optional<std::string> uri = fileTinygltfDidNotFind(err); uri && uri->rfind("data:", 0) != 0)
+                failMissingFile(missingBufferMessage(*uri, access));
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }
@@ -1049,9 +1071,9 @@ private:
         }
     }
 
-    /// A GLB header's version is the container's: 1 is glTF 1.0's KHR_binary_glTF, whose JSON
-    /// chunk tinygltf would only call "Invalid glTF binary".
-    void checkGlbContainerVersion(const std::string& bytes) const {
+    /// The GLB container before tinygltf reads it: a header of version 1 is glTF 1.0's
+    /// KHR_binary_glTF, and a file cut short fails there with only "Invalid glTF binary".
+    void checkGlbContainer(const std::string& bytes) const {
         if (bytes.size() < 8) return;
         uint32_t version = 0;
         std::memcpy(&version, bytes.data() + 4, 4);
@@ -1061,6 +1083,25 @@ private:
                 "re-export or convert the scene to glTF 2.0");
         }
         if (version != 2) fail("binary glTF version " + std::to_string(version) + " is not supported (GLB 2 expected)");
+        // tinygltf says only "Invalid glTF binary." for a file cut short (an interrupted download
+        // or copy): the header's and the JSON chunk's lengths against the bytes there are.
+        const std::string size = std::to_string(bytes.size());
+        if (bytes.size() < 20)
+            fail("a GLB file of " + size + " bytes, shorter than its headers (20 bytes): the file is cut short");
+        uint32_t length = 0, json_length = 0, json_type = 0;
+        std::memcpy(&length, bytes.data() + 8, 4);
+        std::memcpy(&json_length, bytes.data() + 12, 4);
+        std::memcpy(&json_type, bytes.data() + 16, 4);
+        if (length > bytes.size()) {
+            fail("the GLB header says the file is " + std::to_string(length) + " bytes, but it has " + size +
+                 ": the file is cut short (an interrupted download or copy?) or its header is wrong");
+        }
+        if (json_type != 0x4E4F534Au) fail("the GLB's first chunk is not its JSON chunk (type 'JSON')");
+        if (uint64_t(json_length) + 20 > length) {
+            fail("the GLB's JSON chunk says it is " + std::to_string(json_length) + " bytes, but only " +
+                 std::to_string(length < 20 ? 0 : length - 20) + " follow it in the file's " + std::to_string(length) +
+                 " bytes: the file is cut short or was written wrongly");
+        }
     }
 
     /// An external buffer of a compressed file, read before tinygltf parses it (gltf_rewrite.h),
@@ -1070,6 +1111,8 @@ private:
         std::string err;
         FileAccess confined = access;
         const std::string file = (std::filesystem::path(path_).parent_path() / uriDecode(uri)).string();
+        std::error_code error;
+        if (!std::filesystem::exists(file, error)) failMissingFile(missingBufferMessage(uri, access));
         if (!readAndRecordFile(&data, &err, file, &confined)) {
             while (!err.empty() && err.back() == '\n') err.pop_back();
             throw GltfRewriteError("buffer " + quoted(uri) + ": " +

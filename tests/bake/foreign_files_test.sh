@@ -153,6 +153,31 @@ says "$work/err.txt" "buffer 1: data: URI data:application/octet-stream;base64,A
     "the message names the buffer and both sizes"
 [ "$(wc -c < "$work/err.txt")" -lt 400 ] || fail "the data: URI message is $(wc -c < "$work/err.txt") bytes long"
 
+# --- A buffer file left behind (the .gltf copied without its .bin): a missing file, exit 2, named
+# with the folder looked in, as a missing image is; and a GLB cut short says so (exit 3).
+python3 - "$work/bl_room.gltf" "$work/moved/room.gltf" "$work/whole.glb" <<'PY'
+import base64, json, os, struct, sys
+doc = json.load(open(sys.argv[1]))
+data = base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1])
+doc["buffers"][0]["uri"] = "room.bin"
+os.makedirs(os.path.dirname(sys.argv[2]), exist_ok=True)
+json.dump(doc, open(sys.argv[2], "w"))
+del doc["buffers"][0]["uri"]
+text = json.dumps(doc).encode()
+text += b" " * (-len(text) % 4)
+data += b"\0" * (-len(data) % 4)
+chunks = struct.pack("<II", len(text), 0x4E4F534A) + text + struct.pack("<II", len(data), 0x004E4942) + data
+open(sys.argv[3], "wb").write(struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks)
+PY
+expect 2 "bake a glTF whose .bin is missing" "$sharcbake" bake "$work/moved/room.gltf" -o "$work/moved.sharc"
+says "$work/err.txt" "room.gltf: buffer 'room.bin' not found beside the scene (looked in $(cd "$work/moved" && pwd -P))" \
+    "the missing buffer is named with the folder looked in"
+expect 0 "render the whole GLB" render "$work/whole.glb"
+head -c 200 "$work/whole.glb" > "$work/cut.glb"
+expect 3 "render a GLB cut short" render "$work/cut.glb"
+says "$work/err.txt" "cut.glb: the GLB header says the file is [0-9]* bytes, but it has 200: the file is cut short" \
+    "the GLB cut short is called that, not \"Invalid glTF binary\""
+
 # --- Other 3D formats: named, with how to convert them, as invalid input (exit 3).
 printf 'mtllib room.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > "$work/room.obj"
 expect 3 "bake an OBJ file" "$sharcbake" bake "$work/room.obj" -o "$work/room.sharc"

@@ -614,10 +614,18 @@ TEST(GltfLoaderErrors, MissingBufferFile) {
     GltfBuilder b;
     const int node = b.addMeshNode(unitTrianglePrimitive(b));
     b.setScene({node});
-    const std::string msg =
-        loadErrorOf([&] { loadGltf(b.writeExternal(dir, "no_bin.gltf", "missing.bin", /*writeBin=*/false)); });
-    EXPECT_NE(msg.find("no_bin.gltf"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("missing.bin"), std::string::npos) << msg;
+    const std::string path = b.writeExternal(dir, "no_bin.gltf", "missing.bin", /*writeBin=*/false);
+    const std::string folder = std::filesystem::canonical(std::filesystem::path(path).parent_path()).string();
+    // A file that is not there, not a malformed scene (the command exits 2, not 3), said in the
+    // words a missing image's warning uses (tinygltf's own: "File not found : missing.bin").
+    try {
+        loadGltf(path);
+        ADD_FAILURE() << "expected SceneLoadError";
+    } catch (const SceneLoadError& e) {
+        EXPECT_EQ(e.kind(), SceneLoadError::Kind::kMissingFile);
+        EXPECT_EQ(std::string(e.what()),
+                  path + ": buffer 'missing.bin' not found beside the scene (looked in " + folder + ")");
+    }
 }
 
 TEST(GltfLoaderErrors, ShortBinFile) {
@@ -825,6 +833,46 @@ TEST(GltfLoaderErrors, Gltf1FileIsRefusedAsGltf1) {
     test::writeFile(glb, bytes);
     const std::string glb_msg = loadErrorOf([&] { loadGltf(glb); });
     EXPECT_NE(glb_msg.find("binary glTF version 1"), std::string::npos) << glb_msg;
+}
+
+// A GLB cut short (an interrupted download or copy) got tinygltf's "Invalid glTF binary." alone;
+// the message says what the header promised and what the file holds.
+TEST(GltfLoaderErrors, AGlbCutShortSaysSo) {
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({b.addMeshNode(unitTrianglePrimitive(b))});
+    const std::string glb = b.writeGlb(dir, "whole.glb");
+    std::string bytes;
+    {
+        std::ifstream in(glb, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    ASSERT_GT(bytes.size(), 100u);
+    const std::string whole = std::to_string(bytes.size());
+    EXPECT_NO_THROW(loadGltf(glb));
+
+    const std::string cut = dir.file("cut.glb");
+    test::writeFile(cut, bytes.substr(0, bytes.size() - 40));
+    EXPECT_EQ(loadErrorOf([&] { loadGltf(cut); }),
+              cut + ": the GLB header says the file is " + whole + " bytes, but it has " +
+                  std::to_string(bytes.size() - 40) +
+                  ": the file is cut short (an interrupted download or copy?) or its header is wrong");
+
+    const std::string header_only = dir.file("header.glb");
+    test::writeFile(header_only, bytes.substr(0, 12));
+    EXPECT_EQ(loadErrorOf([&] { loadGltf(header_only); }),
+              header_only + ": a GLB file of 12 bytes, shorter than its headers (20 bytes): the file is cut short");
+
+    std::string long_json = bytes;  // the JSON chunk claims more than the file's own length
+    const uint32_t claimed = uint32_t(bytes.size());
+    std::memcpy(long_json.data() + 12, &claimed, 4);
+    const std::string long_path = dir.file("long_json.glb");
+    test::writeFile(long_path, long_json);
+    const std::string msg = loadErrorOf([&] { loadGltf(long_path); });
+    EXPECT_NE(msg.find("the GLB's JSON chunk says it is " + whole + " bytes, but only " +
+                       std::to_string(bytes.size() - 20) + " follow it"),
+              std::string::npos)
+        << msg;
 }
 
 TEST(GltfLoaderErrors, UsedButUnsupportedExtensionOnlyWarns) {

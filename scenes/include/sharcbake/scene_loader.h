@@ -13,9 +13,19 @@ namespace sharcbake {
 
 /// Thrown for any file that cannot be loaded. what() names the file and the problem, e.g.
 /// "scene.gltf: accessor 3 (indices of mesh 'Floor'): index 812 out of range (412 vertices)".
+/// kind() tells a wrong file from one the scene needs that is not there (an external buffer).
 class SceneLoadError : public std::runtime_error {
 public:
-    using std::runtime_error::runtime_error;
+    enum class Kind {
+        kInvalid,     ///< the content is wrong
+        kMissingFile  ///< a file the scene names (a buffer) is not there
+    };
+    explicit SceneLoadError(const std::string& what, Kind kind = Kind::kInvalid)
+        : std::runtime_error(what), kind_(kind) {}
+    Kind kind() const { return kind_; }
+
+private:
+    Kind kind_;
 };
 
 /// Loads a glTF 2.0 file (.gltf with external or embedded buffers, or .glb) and flattens the
