@@ -513,7 +513,9 @@ public:
         readSky();
         readKnownRadiance();
         removeRepeatedChildren();
+        warnAboutAMissingDefaultScene();
         for (int root : uniqueRootNodes()) visitNode(root, glm::dmat4(1.0));
+        warnAboutMeshesOutsideTheScene();
         warnAboutSeveralParents();
         warnAboutPrimitivesWithoutMaterial();
         warnAboutFlatEmitters();
@@ -533,6 +535,7 @@ private:
     tinygltf::Model model_;
     Scene scene_;
     int default_material_ = -1;
+    uint64_t mesh_nodes_visited_ = 0;  ///< nodes with a mesh in the loaded scene (instanced or not)
     /// The (mesh, primitive) pairs given the default material, and the label of the first the walk reached.
     std::set<std::pair<int, size_t>> primitives_without_material_;
     /// Per material: triangles read, and those left once degenerate ones were dropped.
@@ -1428,6 +1431,59 @@ private:
         return model_.scenes[static_cast<size_t>(s)];
     }
 
+    std::string sceneLabel(size_t index) const {
+        const std::string& name = model_.scenes[index].name;
+        return "scene " + std::to_string(index) + (name.empty() ? "" : " " + quoted(name));
+    }
+
+    /// A "scene" index the file does not have falls back to scene 0, as viewers do; said, since
+    /// the file meant another.
+    void warnAboutAMissingDefaultScene() {
+        const int s = model_.defaultScene;
+        if (model_.scenes.empty() || s < 0 || size_t(s) < model_.scenes.size()) return;
+        warn("the file's \"scene\" is " + std::to_string(s) + ", but it has " + std::to_string(model_.scenes.size()) +
+             (model_.scenes.size() == 1 ? " scene" : " scenes") + ": " + sceneLabel(0) + " is loaded");
+    }
+
+    /// Whether any node under `root` has a mesh (cycles were refused while visiting the scene;
+    /// `seen` keeps a bad file from looping here too).
+    bool placesAMesh(int root, std::vector<bool>& seen) const {
+        if (root < 0 || size_t(root) >= model_.nodes.size() || seen[size_t(root)]) return false;
+        seen[size_t(root)] = true;
+        const tinygltf::Node& node = model_.nodes[size_t(root)];
+        if (node.mesh >= 0) return true;
+        for (const int child : node.children)
+            if (placesAMesh(child, seen)) return true;
+        return false;
+    }
+
+    static std::string rootsListed(size_t count) {
+        if (count == 0) return "it lists no root nodes";
+        return "it lists " + std::to_string(count) + (count == 1 ? " root node" : " root nodes") + ", none with a mesh";
+    }
+
+    /// A loaded scene that places none of the file's meshes (its node list empty, or its nodes
+    /// without meshes) loads as nothing: "0 triangles", with the meshes sitting in another scene
+    /// or on nodes no scene lists. Said, with the scenes that do place them.
+    void warnAboutMeshesOutsideTheScene() {
+        if (mesh_nodes_visited_ > 0 || model_.meshes.empty() || model_.scenes.empty()) return;
+        const size_t loaded = size_t(&loadedScene() - model_.scenes.data());
+        std::string others;
+        for (size_t s = 0; s < model_.scenes.size(); ++s) {
+            if (s == loaded) continue;
+            std::vector<bool> seen(model_.nodes.size(), false);
+            bool places = false;
+            for (const int root : model_.scenes[s].nodes) places = places || placesAMesh(root, seen);
+            if (places) others += (others.empty() ? "" : ", ") + sceneLabel(s);
+        }
+        const size_t meshes = model_.meshes.size();
+        warn(sceneLabel(loaded) + ", the one loaded, places none of the file's " + std::to_string(meshes) +
+             (meshes == 1 ? " mesh" : " meshes") + " (" + rootsListed(loadedScene().nodes.size()) + "); " +
+             (others.empty() ? std::string("they are on nodes no scene lists")
+                             : others + " place" + (others.find(',') == std::string::npos ? "s" : "") +
+                                   " them: make it the file's \"scene\" (the one loaded)"));
+    }
+
     /// The loaded scene's roots, else every node that is nobody's child.
     std::vector<int> rootNodes() const {
         if (!model_.scenes.empty()) return loadedScene().nodes;
@@ -1575,6 +1631,7 @@ private:
             warnAboutRotation(index, node);
             const glm::dmat4 world = parent_world * localTransform(node);
             if (node.mesh >= 0) {
+                ++mesh_nodes_visited_;
                 const auto instancing = node.extensions.find("EXT_mesh_gpu_instancing");
                 if (instancing == node.extensions.end()) {
                     addMesh(node.mesh, world, index);

@@ -539,6 +539,39 @@ TEST(GltfLoader, DefaultSceneChosenAndAllRootsWithoutScenes) {
     EXPECT_EQ(all.triangles.size(), 2u);
 }
 
+// A loaded scene without meshes loaded as "0 triangles" without a word (render drew the sky, bake
+// said "no triangles"), though the file's meshes sat in another scene; a "scene" index the file
+// lacks fell back to scene 0 silently. Both are warned, naming the scenes.
+TEST(GltfLoader, ASceneWithoutTheFilesMeshesAndAMissingDefaultSceneAreSaid) {
+    TempDir dir;
+    GltfBuilder b;
+    const int mesh_node = b.addMeshNode(unitTrianglePrimitive(b));
+    const int empty_node = b.addNode({{"name", "Empty"}});
+    b.doc["scenes"] = json::array({{{"nodes", {empty_node}}}, {{"name", "Main"}, {"nodes", {mesh_node}}}});
+    b.doc["scene"] = 0;
+    const Scene first = loadGltf(b.writeEmbedded(dir, "empty_first.gltf"));
+    EXPECT_EQ(first.triangles.size(), 0u);
+    EXPECT_EQ(warningsWith(first, {"scene 0, the one loaded, places none of the file's 1 mesh (it lists 1 root node, "
+                                   "none with a mesh); scene 1 'Main' places them: make it the file's \"scene\""}),
+              1u)
+        << ::testing::PrintToString(first.stats.warnings);
+
+    b.doc["scenes"] = json::array({{{"nodes", json::array()}}});  // the mesh's node in no scene
+    const Scene orphan = loadGltf(b.writeEmbedded(dir, "orphan.gltf"));
+    EXPECT_EQ(warningsWith(orphan, {"scene 0, the one loaded, places none of the file's 1 mesh (it lists no root "
+                                    "nodes); they are on nodes no scene lists"}),
+              1u)
+        << ::testing::PrintToString(orphan.stats.warnings);
+
+    b.doc["scenes"] = json::array({{{"nodes", {mesh_node}}}});
+    b.doc["scene"] = 5;
+    const Scene fallback = loadGltf(b.writeEmbedded(dir, "scene_5.gltf"));
+    EXPECT_EQ(fallback.triangles.size(), 1u);
+    EXPECT_EQ(warningsWith(fallback, {"the file's \"scene\" is 5, but it has 1 scene: scene 0 is loaded"}), 1u)
+        << ::testing::PrintToString(fallback.stats.warnings);
+    EXPECT_EQ(warningsWith(fallback, {"places none"}), 0u);
+}
+
 TEST(GltfLoader, ANodeListedTwiceIsLoadedOnceWithAWarning) {
     // glTF wants each of a scene's root nodes, and each of a node's children, listed once. A root
     // listed twice was loaded twice: its light shone twice as brightly and its meshes lay on
