@@ -1142,7 +1142,7 @@ private:
     /// carries. Converters list some that nothing carries (assimp keeps the list of the file it
     /// converted), and those ignore nothing.
     void warnAboutIgnoredExtensions() {
-        std::optional<std::set<std::string>> carried;
+        std::optional<std::map<std::string, Carriers>> carried;
         for (const std::string& ext : model_.extensionsUsed) {
             const auto is = [&](const char* s) { return ext == s; };
             const bool known =
@@ -1151,14 +1151,35 @@ private:
                 std::any_of(kExtensionsThatChangeNothing.begin(), kExtensionsThatChangeNothing.end(), is);
             if (known) continue;
             if (!carried) carried = carriedExtensions();
-            if (carried->count(ext)) warn("extension " + quoted(ext) + " is not supported and is ignored");
+            const auto found = carried->find(ext);
+            if (found == carried->end()) continue;
+            const Carriers& on = found->second;
+            warn("extension " + quoted(ext) + " (on " + on.first +
+                 (on.count > 1
+                      ? " and " + std::to_string(on.count - 1) + (on.count == 2 ? " other object" : " other objects")
+                      : std::string()) +
+                 ") is not supported and is ignored");
         }
     }
 
-    /// The names of the extensions the file's objects carry in their `extensions`, also inside
-    /// another extension's object (a texture reference of KHR_materials_specular's has its own).
-    std::set<std::string> carriedExtensions() const {
-        std::set<std::string> names;
+    /// The objects that carry one extension: the first, named, and how many in all.
+    struct Carriers {
+        std::string first;
+        size_t count = 0;
+    };
+
+    /// The extensions the file's objects carry in their `extensions`, also inside another
+    /// extension's object (a texture reference of KHR_materials_specular's has its own), each with
+    /// the objects carrying it (a texture reference counts as its material).
+    std::map<std::string, Carriers> carriedExtensions() const {
+        std::map<std::string, Carriers> carriers;
+        std::string owner;               // the object being searched
+        std::set<std::string> on_owner;  // its extensions, so a material counts once for each
+        const auto note = [&](const std::string& name) {
+            if (!on_owner.insert(name).second) return;
+            Carriers& c = carriers[name];
+            if (c.count++ == 0) c.first = owner;
+        };
         std::function<void(const tinygltf::Value&)> inside = [&](const tinygltf::Value& value) {
             if (value.IsArray()) {
                 for (size_t i = 0; i < value.ArrayLen(); ++i) inside(value.Get(int(i)));
@@ -1166,26 +1187,47 @@ private:
                 for (const std::string& key : value.Keys()) {
                     const tinygltf::Value& member = value.Get(key);
                     if (key == "extensions" && member.IsObject())
-                        for (const std::string& name : member.Keys()) names.insert(name);
+                        for (const std::string& name : member.Keys()) note(name);
                     inside(member);
                 }
             }
         };
         const auto add = [&](const tinygltf::ExtensionMap& extensions) {
             for (const auto& [name, value] : extensions) {
-                names.insert(name);
+                note(name);
                 inside(value);
             }
         };
+        const auto object = [&](std::string label) {
+            owner = std::move(label);
+            on_owner.clear();
+        };
+        const auto named = [](std::string label, const std::string& name) {
+            return name.empty() ? label : label + " " + quoted(name);
+        };
+        object("the file");
         add(model_.extensions);
         add(model_.asset.extensions);
-        for (const tinygltf::Scene& scene : model_.scenes) add(scene.extensions);
-        for (const tinygltf::Node& node : model_.nodes) add(node.extensions);
-        for (const tinygltf::Mesh& mesh : model_.meshes) {
-            add(mesh.extensions);
-            for (const tinygltf::Primitive& primitive : mesh.primitives) add(primitive.extensions);
+        for (size_t i = 0; i < model_.scenes.size(); ++i) {
+            object(named("scene " + std::to_string(i), model_.scenes[i].name));
+            add(model_.scenes[i].extensions);
         }
-        for (const tinygltf::Material& material : model_.materials) {
+        for (size_t i = 0; i < model_.nodes.size(); ++i) {
+            object(nodeLabel(int(i)));
+            add(model_.nodes[i].extensions);
+        }
+        for (size_t i = 0; i < model_.meshes.size(); ++i) {
+            const tinygltf::Mesh& mesh = model_.meshes[i];
+            object(named("mesh " + std::to_string(i), mesh.name));
+            add(mesh.extensions);
+            for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+                object(meshLabel(int(i), p));
+                add(mesh.primitives[p].extensions);
+            }
+        }
+        for (size_t i = 0; i < model_.materials.size(); ++i) {
+            const tinygltf::Material& material = model_.materials[i];
+            object(named("material " + std::to_string(i), material.name));
             add(material.extensions);
             add(material.pbrMetallicRoughness.extensions);
             add(material.pbrMetallicRoughness.baseColorTexture.extensions);
@@ -1194,23 +1236,49 @@ private:
             add(material.occlusionTexture.extensions);
             add(material.emissiveTexture.extensions);
         }
-        for (const tinygltf::Texture& texture : model_.textures) add(texture.extensions);
-        for (const tinygltf::Image& image : model_.images) add(image.extensions);
-        for (const tinygltf::Sampler& sampler : model_.samplers) add(sampler.extensions);
-        for (const tinygltf::Camera& camera : model_.cameras) {
+        for (size_t i = 0; i < model_.textures.size(); ++i) {
+            object(named("texture " + std::to_string(i), model_.textures[i].name));
+            add(model_.textures[i].extensions);
+        }
+        for (size_t i = 0; i < model_.images.size(); ++i) {
+            object(imageLabel(int(i)));
+            add(model_.images[i].extensions);
+        }
+        for (size_t i = 0; i < model_.samplers.size(); ++i) {
+            object(named("sampler " + std::to_string(i), model_.samplers[i].name));
+            add(model_.samplers[i].extensions);
+        }
+        for (size_t i = 0; i < model_.cameras.size(); ++i) {
+            const tinygltf::Camera& camera = model_.cameras[i];
+            object(named("camera " + std::to_string(i), camera.name));
             add(camera.extensions);
             add(camera.perspective.extensions);
             add(camera.orthographic.extensions);
         }
-        for (const tinygltf::Light& light : model_.lights) {
-            add(light.extensions);
-            add(light.spot.extensions);
+        for (size_t i = 0; i < model_.lights.size(); ++i) {
+            object(named("light " + std::to_string(i), model_.lights[i].name));
+            add(model_.lights[i].extensions);
+            add(model_.lights[i].spot.extensions);
         }
-        for (const tinygltf::Accessor& accessor : model_.accessors) add(accessor.extensions);
-        for (const tinygltf::BufferView& view : model_.bufferViews) add(view.extensions);
-        for (const tinygltf::Buffer& buffer : model_.buffers) add(buffer.extensions);
-        for (const tinygltf::Skin& skin : model_.skins) add(skin.extensions);
-        for (const tinygltf::Animation& animation : model_.animations) {
+        for (size_t i = 0; i < model_.accessors.size(); ++i) {
+            object(named("accessor " + std::to_string(i), model_.accessors[i].name));
+            add(model_.accessors[i].extensions);
+        }
+        for (size_t i = 0; i < model_.bufferViews.size(); ++i) {
+            object(named("bufferView " + std::to_string(i), model_.bufferViews[i].name));
+            add(model_.bufferViews[i].extensions);
+        }
+        for (size_t i = 0; i < model_.buffers.size(); ++i) {
+            object(named("buffer " + std::to_string(i), model_.buffers[i].name));
+            add(model_.buffers[i].extensions);
+        }
+        for (size_t i = 0; i < model_.skins.size(); ++i) {
+            object(named("skin " + std::to_string(i), model_.skins[i].name));
+            add(model_.skins[i].extensions);
+        }
+        for (size_t i = 0; i < model_.animations.size(); ++i) {
+            const tinygltf::Animation& animation = model_.animations[i];
+            object(named("animation " + std::to_string(i), animation.name));
             add(animation.extensions);
             for (const tinygltf::AnimationChannel& channel : animation.channels) {
                 add(channel.extensions);
@@ -1218,7 +1286,7 @@ private:
             }
             for (const tinygltf::AnimationSampler& sampler : animation.samplers) add(sampler.extensions);
         }
-        return names;
+        return carriers;
     }
 
     // ---------------------------------------------------------------- accessors
@@ -1322,11 +1390,25 @@ private:
     }
 
     /// Reads any accessor as doubles (exact for every glTF component type), count x components.
+    /// glTF's word for an accessor type ("VEC3"), for messages; tinygltf keeps a number.
+    static std::string accessorTypeName(int type) {
+        switch (type) {
+            case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+            case TINYGLTF_TYPE_VEC2: return "VEC2";
+            case TINYGLTF_TYPE_VEC3: return "VEC3";
+            case TINYGLTF_TYPE_VEC4: return "VEC4";
+            case TINYGLTF_TYPE_MAT2: return "MAT2";
+            case TINYGLTF_TYPE_MAT3: return "MAT3";
+            case TINYGLTF_TYPE_MAT4: return "MAT4";
+        }
+        return "unknown (" + std::to_string(type) + ")";
+    }
+
     std::vector<double> readAccessor(int index, int expectedType, const std::string& what) const {
         const std::string label = what + " (accessor " + std::to_string(index) + ")";
         const tinygltf::Accessor& acc = accessorAt(index, what);
         if (acc.type != expectedType)
-            fail(label + ": has type " + std::to_string(acc.type) + ", expected " + std::to_string(expectedType));
+            fail(label + ": has type " + accessorTypeName(acc.type) + ", expected " + accessorTypeName(expectedType));
         const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
         // Bound the allocation before making it: an 8 KB file must not cost gigabytes. Elements in
         // a bufferView take at least a byte each; a zero-filled accessor gets the same allowance.
@@ -3181,19 +3263,19 @@ private:
         }
         light.intensity = glm::vec3(colour) * static_cast<float>(radiometric);
         light.range = src.range > 0.0 ? static_cast<float>(src.range) : 0.0f;
-        if (light.type == LightType::Spot) setSpotCone(src, light);
+        if (light.type == LightType::Spot) setSpotCone(src, label, light);
         return light;
     }
 
     /// The extension requires 0 <= inner < outer <= pi/2; clamp anything else so the
     /// renderer's smooth-step between the cones stays well defined.
-    void setSpotCone(const tinygltf::Light& src, PunctualLight& light) {
+    void setSpotCone(const tinygltf::Light& src, const std::string& label, PunctualLight& light) {
         constexpr double halfPi = 1.5707963267948966;
         const double outer = std::clamp(src.spot.outerConeAngle, 0.0, halfPi);
         const double inner = std::clamp(src.spot.innerConeAngle, 0.0, outer);
         if (outer != src.spot.outerConeAngle || inner != src.spot.innerConeAngle || inner == outer)
-            warn("light " + quoted(src.name) + ": spot cone angles (inner " + std::to_string(src.spot.innerConeAngle) +
-                 ", outer " + std::to_string(src.spot.outerConeAngle) + ") outside 0 <= inner < outer <= pi/2; clamped");
+            warn(label + ": spot cone angles (inner " + std::to_string(src.spot.innerConeAngle) + ", outer " +
+                 std::to_string(src.spot.outerConeAngle) + ") outside 0 <= inner < outer <= pi/2; clamped");
         light.inner_cone_angle = static_cast<float>(inner);
         light.outer_cone_angle = static_cast<float>(outer);
     }

@@ -642,6 +642,16 @@ TEST(GltfLoaderErrors, IndexOutOfRangeNamesFileMeshAndIndex) {
     EXPECT_NE(msg.find("3 vertices"), std::string::npos) << msg;
 }
 
+TEST(GltfLoaderErrors, AnAccessorOfTheWrongTypeIsNamedInGltfsWords) {
+    TempDir dir;
+    GltfBuilder b;
+    json prim = unitTrianglePrimitive(b);
+    b.doc["accessors"][prim["attributes"]["POSITION"].get<int>()]["type"] = "VEC2";
+    b.setScene({b.addMeshNode(prim)});
+    const std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "vec2.gltf")); });
+    EXPECT_NE(msg.find("POSITION (accessor 0): has type VEC2, expected VEC3"), std::string::npos) << msg;
+}
+
 TEST(GltfLoaderErrors, MissingBufferFile) {
     TempDir dir;
     GltfBuilder b;
@@ -1635,7 +1645,33 @@ TEST(GltfLoader, ExtensionsThatChangeNothingAreNotWarnedAbout) {
     const Scene scene = loadGltf(b.writeGlb(dir, "assimp.glb"));
     EXPECT_EQ(warningsWith(scene, {"FB_ngon_encoding"}), 0u) << ::testing::PrintToString(scene.stats.warnings);
     EXPECT_EQ(warningsWith(scene, {"KHR_materials_volume"}), 0u);
-    EXPECT_EQ(warningsWith(scene, {"extension 'EXT_nested_example' is not supported and is ignored"}), 1u);
+    // Named with the object that carries it (a texture reference counts as its material).
+    EXPECT_EQ(warningsWith(scene, {"extension 'EXT_nested_example' (on material 0) is not supported and is ignored"}),
+              1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+}
+
+// A warning of an ignored extension named no object: with 40 materials the user could not find
+// the one. It names the first carrier and counts the others.
+TEST(GltfLoader, AnIgnoredExtensionNamesTheObjectsCarryingIt) {
+    TempDir dir;
+    GltfBuilder b;
+    const json sheen = {{"KHR_materials_sheen", {{"sheenColorFactor", {1, 1, 1}}}}};
+    b.addMaterial({{"name", "Plain"}});
+    json prim = unitTrianglePrimitive(b);
+    prim["material"] = b.addMaterial({{"name", "Velvet"}, {"extensions", sheen}});
+    const int velvet = b.addMeshNode(prim);
+    prim["material"] = b.addMaterial({{"name", "Cloth"}, {"extensions", sheen}});
+    const int cloth = b.addMeshNode(prim);
+    prim["material"] = b.addMaterial({{"extensions", sheen}});
+    const int third = b.addMeshNode(prim);
+    b.setScene({velvet, cloth, third});
+    b.doc["extensionsUsed"] = {"KHR_materials_sheen"};
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "sheen.gltf"));
+    EXPECT_EQ(warningsWith(scene, {"extension 'KHR_materials_sheen' (on material 1 'Velvet' and 2 other objects) is "
+                                   "not supported and is ignored"}),
+              1u)
+        << ::testing::PrintToString(scene.stats.warnings);
 }
 
 // ------------------------------------------------------------------ images that cannot be decoded
@@ -1917,6 +1953,23 @@ TEST(GltfLoaderImages, RequiredBasisuIsRefusedSayingKtx2IsNotSupported) {
 }
 
 // ------------------------------------------------------------------------------------ lights etc.
+
+// The cone warning said "light ''" for a light without a name; it names the light by index and
+// node, as the other light warnings do.
+TEST(GltfLoaderLights, AnUnnamedSpotsBadConeIsNamedByIndexAndNode) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"type", "spot"}, {"intensity", 683.0}, {"spot", {{"innerConeAngle", 0.8}, {"outerConeAngle", 0.5}}}}});
+    const int lamp = b.addNode({{"name", "Lamp"}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    b.setScene({b.addMeshNode(unitTrianglePrimitive(b)), lamp});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "cone.gltf"));
+    EXPECT_EQ(warningsWith(scene, {"light 0 on node 0 'Lamp': spot cone angles (inner 0.800000, outer 0.500000) "
+                                   "outside 0 <= inner < outer <= pi/2; clamped"}),
+              1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+}
 
 TEST(GltfLoaderLights, PhotometricToRadiometric) {
     TempDir dir;
