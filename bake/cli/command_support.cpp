@@ -35,7 +35,7 @@ const char* const kExitCodeHelp =
     "Exit status:\n"
     "  0    success\n"
     "  1    usage error (bad command line)\n"
-    "  2    I/O error (a file could not be read or written)\n"
+    "  2    I/O error (a file could not be read or written, a scene's buffer file missing)\n"
     "  3    invalid input (a scene or cache file is malformed)\n"
     "  4    runtime failure\n"
     "  130  interrupted (SIGINT)\n"

@@ -17,6 +17,8 @@ expect 1 "zero samples" "$sharcbake" render "$scenes/cornell_box/cornell_box.glt
 expect 1 "bad resolution" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --resolution 10y
 expect 2 "missing scene" "$sharcbake" render "$work/missing.gltf" -o "$work/a.exr"
 printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri": "nowhere.bin" } ] }' > "$work/bad.gltf"
+expect 2 "a scene whose buffer file is missing" "$sharcbake" render "$work/bad.gltf" -o "$work/a.exr"
+printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, ' > "$work/bad.gltf"
 expect 3 "malformed scene" "$sharcbake" render "$work/bad.gltf" -o "$work/a.exr"
 grep -q "bad.gltf" "$work/err.txt" || { echo "FAIL: the error does not name the file"; failures=$((failures + 1)); }
 expect 2 "unwritable output" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/no/such/dir/a.exr" --resolution 8 --spp 1 -q
