@@ -9,8 +9,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
-#include <set>
 #include <memory>
+#include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -160,6 +161,21 @@ void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
     }
 }
 
+/// The first iteration (of the unsharded numbering) that both inputs ran, if any: an unsharded
+/// bake of K iterations ran 0 to K - 1, shard i/N ran i, N + i, ... (as many as its iterations).
+/// Merged inputs, which record several shards, are left to the shard checks.
+std::optional<uint64_t> sharedIteration(const CacheData& a, const CacheData& b) {
+    const std::vector<Shard> shards_a = shardsIn(a), shards_b = shardsIn(b);
+    const uint64_t iterations_a = iterationsOf(a), iterations_b = iterationsOf(b);
+    if (iterations_a == 0 || iterations_b == 0 || shards_a.size() > 1 || shards_b.size() > 1) return std::nullopt;
+    if (shards_a.empty() && shards_b.empty()) return 0;
+    if (!shards_a.empty() && !shards_b.empty()) return std::nullopt;  // same shard twice: refused as such
+    const Shard shard = shards_a.empty() ? shards_b[0] : shards_a[0];
+    const uint64_t unsharded_iterations = shards_a.empty() ? iterations_a : iterations_b;
+    if (shard.index < unsharded_iterations) return uint64_t(shard.index);
+    return std::nullopt;
+}
+
 /// A bake held by two inputs (a merged cache and one of its own shards) would count its samples
 /// twice, and shards of different counts (1/3 beside 0/2) are not one bake split: refused, naming
 /// the files.
@@ -184,6 +200,27 @@ void refuseOverlaps(const std::vector<CacheData>& inputs, const std::vector<std:
                                                           shard.text() + ": merging them would count it twice");
             }
             counts.insert(shard.count);
+        }
+    }
+    // One --seed draws the same samples for the same iteration, and shard i/N's iteration k is the
+    // unsharded bake's k*N + i: two inputs of one seed that both ran an iteration hold it twice (a
+    // 16- and a 32-iteration bake of seed 0 merged into "48 iterations", 16 of them counted twice).
+    for (size_t i = 0; i < inputs.size(); ++i) {
+        for (size_t j = i + 1; j < inputs.size(); ++j) {
+            const std::string* seed = findMetadata(inputs[i], "seed");
+            const std::string* other_seed = findMetadata(inputs[j], "seed");
+            if (!seed || !other_seed || *seed != *other_seed) continue;
+            const std::string* scene = findMetadata(inputs[i], "scene_hash");
+            const std::string* other_scene = findMetadata(inputs[j], "scene_hash");
+            if (!scene || !other_scene || *scene != *other_scene) continue;  // refused as other scenes
+            const std::optional<uint64_t> shared = sharedIteration(inputs[i], inputs[j]);
+            if (!shared) continue;
+            throw CommandError(kExitInvalidInput,
+                               paths[i] + " and " + paths[j] + " were both baked with --seed " + *seed +
+                                   " and both ran iteration " + std::to_string(*shared) +
+                                   ": an iteration of one seed is the same samples in every bake, and merging them "
+                                   "would count it twice. Merge bakes of different --seed values, or the shards of "
+                                   "one bake (--shard i/N)");
         }
     }
     if (counts.size() > 1) {

@@ -136,6 +136,18 @@ expect 0 "shard under another sky" "$sharcbake" bake "$furnace" -o "$work/sky.sh
 expect 3 "merge different skies" "$sharcbake" merge "$work/shard0.sharc" "$work/sky.sharc" -o "$work/x.sharc"
 grep -q '"sky" differs' "$work/err.txt" || fail "the sky mismatch message does not name the sky"
 expect 3 "merge the same shard twice" "$sharcbake" merge "$work/shard0.sharc" "$work/shard0.sharc" -o "$work/x.sharc"
+# Bakes of one --seed draw the same samples for the same iteration: a 2- and a 3-iteration bake of
+# seed 0 merged into "5 iterations", two of them counted twice; so did a bake beside a shard of its
+# seed (shard 1/4's iteration 0 is the bake's iteration 1). Other seeds are independent samples.
+expect 0 "unsharded, 2 iterations" "$sharcbake" bake "$furnace" -o "$work/two.sharc" --iterations 2 --resolution 96x96 -q
+expect 0 "unsharded, 3 iterations" "$sharcbake" bake "$furnace" -o "$work/three.sharc" --iterations 3 --resolution 96x96 -q
+expect 3 "merge two bakes of one seed" "$sharcbake" merge "$work/two.sharc" "$work/three.sharc" -o "$work/x.sharc"
+says "$work/err.txt" "were both baked with --seed 0 and both ran iteration 0" "the refusal names the seed and the iteration"
+expect 3 "merge a bake with a shard of its seed" "$sharcbake" merge "$work/two.sharc" "$work/shard1.sharc" -o "$work/x.sharc"
+says "$work/err.txt" "both ran iteration 1" "the shard's first iteration is named in the unsharded numbering"
+expect 0 "merge a bake with shard 2/4, which it never reached" "$sharcbake" merge "$work/two.sharc" "$work/shard2.sharc" -o "$work/x.sharc" -q
+expect 0 "another seed" "$sharcbake" bake "$furnace" -o "$work/seed7.sharc" --iterations 3 --resolution 96x96 -q --seed 7
+expect 0 "merge bakes of different seeds" "$sharcbake" merge "$work/two.sharc" "$work/seed7.sharc" -o "$work/x.sharc" -q
 # Merges of merges: a merged cache and one of its own shards counted that shard twice (exit 0); two
 # merged caches failed on a duplicate metadata key; shards split different ways merged silently.
 expect 0 "merge half" "$sharcbake" merge "$work/shard0.sharc" "$work/shard1.sharc" -o "$work/half01.sharc" -q
