@@ -1078,7 +1078,6 @@ public:
         : o_(o),
           threads_(o.threads > 0 ? int(o.threads) : tbb::info::default_concurrency()),
           checkpoint_path_(!o.checkpoint_path.empty() ? o.checkpoint_path : o.resume_path),
-          report_csv_(o.report_dir.empty() ? "" : o.report_dir + "/convergence.csv"),
           job_(bakeJobFromOptions(o)) {}
 
     void run() {
@@ -1123,7 +1122,41 @@ private:
         others.push_back(checkpoint_path_);
         if (!o_.stats_json.empty()) checkTextOutputPath(o_.stats_json, "stats JSON", others);
         others.push_back(o_.stats_json);
-        if (!report_csv_.empty()) checkOutputPath(report_csv_, "report", others);
+        if (!o_.report_dir.empty()) {
+            for (const char* name : kConvergenceReportFiles) {
+                const std::string file = (std::filesystem::path(o_.report_dir) / name).string();
+                checkOutputPath(file, "report", others);
+                others.push_back(file);
+            }
+        }
+    }
+
+    /// --report names a folder, made if missing. Checked before it is made: a folder made at the
+    /// cache's path (--report equal to -o) was left behind by the refusal, and an existing file
+    /// was called a folder that "does not exist".
+    /// Returns whether it made the folder.
+    bool prepareReportFolder() const {
+        namespace fs = std::filesystem;
+        std::error_code error;
+        const fs::path folder = fs::weakly_canonical(fs::absolute(o_.report_dir, error), error);
+        for (const auto& [other, what] : {std::pair{o_.output_path, "cache"}, std::pair{checkpoint_path_, "checkpoint"},
+                                          std::pair{o_.stats_json, "stats JSON"}}) {
+            if (other.empty() || isStandardOutput(other)) continue;
+            if (fs::weakly_canonical(fs::absolute(other, error), error) == folder) {
+                throw CommandError(kExitUsage, o_.report_dir + ": the report folder would take the " +
+                                                   std::string(what) + "'s path; choose another --report folder");
+            }
+        }
+        if (fs::exists(o_.report_dir, error) && !fs::is_directory(o_.report_dir, error)) {
+            throw CommandError(kExitIo, o_.report_dir +
+                                            ": --report names a file, not a folder: name a folder "
+                                            "(made if missing) for the report's tables and plot");
+        }
+        const bool made = fs::create_directories(o_.report_dir, error);
+        if (error) {
+            throw CommandError(kExitIo, o_.report_dir + ": cannot make the report folder: " + error.message());
+        }
+        return made;
     }
 
     /// A fresh bake (no --resume) whose --checkpoint names an existing file would replace it at its
@@ -1145,11 +1178,14 @@ private:
     }
 
     void prepareOutputs() {
-        if (!o_.report_dir.empty()) {
+        const bool made_report_folder = !o_.report_dir.empty() && prepareReportFolder();
+        try {
+            checkOutputs({});
+        } catch (const CommandError&) {
             std::error_code error;
-            std::filesystem::create_directories(o_.report_dir, error);
+            if (made_report_folder) std::filesystem::remove(o_.report_dir, error);  // empty: a refusal leaves nothing
+            throw;
         }
-        checkOutputs({});
         // Two bakes sharing one checkpoint: refuse the second now.
         if (!checkpoint_path_.empty()) {
             checkpointStep("", [&] { checkpoint_lock_.emplace(checkpoint_path_); });
@@ -1707,7 +1743,6 @@ private:
     const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
     const int threads_;
     const std::string checkpoint_path_;
-    const std::string report_csv_;
     std::optional<StopSignalHandlers> stop_signals_;
     std::optional<CheckpointLock> checkpoint_lock_;
 

@@ -179,6 +179,12 @@ struct ConvergenceReport {
 /// outside their range).
 std::optional<double> plainErrorAt(const std::vector<PlainPathTracingRow>& plain, double seconds);
 
+/// The files a report writes into its folder (the tables, the plot, its script and gnuplot's log),
+/// so a command can check each against its other outputs before it bakes.
+inline constexpr const char* kConvergenceReportFiles[] = {"convergence.csv",  "plain_path_tracing.csv",
+                                                          "convergence.json", "convergence.gp",
+                                                          "convergence.png",  "convergence.gnuplot.log"};
+
 /// Writes DIR/convergence.csv, DIR/plain_path_tracing.csv and DIR/convergence.json. Throws
 /// std::runtime_error naming the file that could not be written.
 void writeConvergenceTables(const std::string& dir, const ConvergenceReport& report);

@@ -78,6 +78,23 @@ expect 1 "--report-resolution different from the reference" sh -c \
     "'$sharcbake' render '$cornell' -o '$work/tiny.exr' --resolution 8x8 --spp 1 -q &&
      '$sharcbake' bake '$cornell' -o '$work/c.sharc' --iterations 2 --report '$work/r' --reference '$work/tiny.exr' --report-resolution 16x16"
 
+# The report's files against the other outputs, before any work: --stats-json inside the report
+# folder under one of its names replaced the report's file (exit 0); --report equal to -o made a
+# folder there before refusing (exit 2, the folder left behind); an existing file was called a
+# folder that "does not exist". A refusal leaves no folder it made.
+expect 1 "--stats-json over the report's convergence.json" \
+    "$sharcbake" bake "$furnace" -o "$work/f.sharc" --iterations 2 --report "$work/clash" \
+    --stats-json "$work/clash/convergence.json"
+says "$work/err.txt" "the report would overwrite .*clash/convergence.json" "the clash names the file"
+[ -e "$work/clash" ] && fail "the refused bake left its report folder behind"
+expect 1 "--report equal to -o" "$sharcbake" bake "$furnace" -o "$work/same.sharc" --iterations 2 --report "$work/same.sharc"
+says "$work/err.txt" "the report folder would take the cache's path" "the clash with the cache is named"
+[ -e "$work/same.sharc" ] && fail "the refused bake made a folder at the cache's path"
+printf 'notes\n' > "$work/notes.txt"
+expect 2 "--report naming a file" "$sharcbake" bake "$furnace" -o "$work/f.sharc" --iterations 2 --report "$work/notes.txt"
+says "$work/err.txt" "notes.txt: --report names a file, not a folder" "the file is called a file"
+[ "$(cat "$work/notes.txt")" = notes ] || fail "the file named by --report changed"
+
 # Furnace, rho = 0.9: every surface has radiance 10; the voxels end under 2% mean relative error.
 expect 0 "furnace bake with --report" \
     "$sharcbake" bake "$furnace" -o "$work/furnace.sharc" --iterations 1024 $small --report "$work/furnace"
