@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sharc/checkpoint.h"
 
-
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <stdexcept>
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -166,11 +166,16 @@ std::vector<std::string> resumeFromCheckpoint(const std::string& path, const Bak
     if (cache.settings().grow_when_loaded && data.capacity > cache.capacity() && baker.iterationsDone() == 0) {
         cache.grow(data.capacity);
     }
-    if (baker.iterationsDone() != 0 || data.capacity != cache.capacity() ||
-        data.bucket_size != cache.table().bucketSize()) {
-        throw CheckpointError(CheckpointError::Kind::kInvalid, path + ": the table (capacity " +
-                                                                   std::to_string(data.capacity) +
-                                                                   ") does not match this bake's");
+    if (baker.iterationsDone() != 0) throw std::logic_error("restoreCheckpoint: the baker has already run");
+    if (data.capacity != cache.capacity() || data.bucket_size != cache.table().bucketSize()) {
+        const auto table = [](uint64_t capacity, uint32_t bucket_size) {
+            return "capacity " + std::to_string(capacity) + ", buckets of " + std::to_string(bucket_size);
+        };
+        throw CheckpointError(CheckpointError::Kind::kInvalid, path + ": the checkpoint's table (" +
+                                                                   table(data.capacity, data.bucket_size) +
+                                                                   ") does not match this bake's (" +
+                                                                   table(cache.capacity(), cache.table().bucketSize()) +
+                                                                   "): resume with the --capacity it was baked with");
     }
     // The fixed-point scale is the checkpoint's: the same settings give the same one, unless the
     // sharcbake that wrote it chose scales by another rule (point lights counted at 1 cm before).

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string_view>
 #include <unordered_set>
 
@@ -139,8 +140,10 @@ bool validateContent(const CheckpointData& data, std::string* problem) {
                 return false;
             }
         }
-        if (!std::isfinite(s.weight) || s.weight < 0.0) {
-            *problem = name + ": weight must be finite and >= 0";
+        // The cache file keeps a voxel's weight in float32: a weight beyond its range resumed, baked
+        // every iteration and then failed to write the cache (exit 4).
+        if (!std::isfinite(s.weight) || s.weight < 0.0 || s.weight > double(std::numeric_limits<float>::max())) {
+            *problem = name + ": weight must be finite, >= 0 and within float32's range (the cache stores it so)";
             return false;
         }
     }

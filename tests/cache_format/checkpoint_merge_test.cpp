@@ -107,6 +107,10 @@ TEST(CheckpointFile, WriterRefusesStateAReaderWouldReject) {
     data.slots[0].feedback[2] = std::numeric_limits<float>::infinity();
     EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
     data = smallCheckpoint();
+    data.slots[0].weight = 1e300;  // finite, but no cache can store it (float32)
+    EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
+    EXPECT_NE(message.find("within float32's range"), std::string::npos) << message;
+    data = smallCheckpoint();
     data.settings.push_back(data.settings[0]);  // duplicate key
     EXPECT_EQ(encodeCheckpoint(data, &bytes, &message), CacheFileStatus::kInvalidData);
     EXPECT_NE(message.find("duplicate"), std::string::npos) << message;
