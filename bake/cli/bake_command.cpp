@@ -1509,11 +1509,21 @@ private:
         return double(baker_->cache().liveEntries()) / double(baker_->cache().capacity());
     }
 
+    /// The summary's words for stop_reason_ (the stats JSON keeps the bare reason).
+    static const char* howTheBakeStopped(const std::string& reason) {
+        if (reason == "iterations") return "all --iterations done";
+        if (reason == "time budget") return "stopped by --time-budget";
+        if (reason == "target error") return "stopped at --target-error";
+        if (reason == "interrupted") return "interrupted by SIGINT";
+        if (reason == "terminated") return "terminated by SIGTERM";
+        return "stopped";
+    }
+
     void printSummary() const {
         const UpdateCounters& c = baker_->counters();
         const StageSeconds& stage = baker_->seconds();
-        std::printf("Baked %s in %.2f s (stopped by %s)\n", counted(baker_->iterationsDone(), "iteration").c_str(),
-                    bake_seconds_, stop_reason_);
+        std::printf("Baked %s in %.2f s (%s)\n", counted(baker_->iterationsDone(), "iteration").c_str(), bake_seconds_,
+                    howTheBakeStopped(stop_reason_));
         std::printf("  time: update %.2f s, commit %.2f s, resolve %.2f s; setup %.2f s, coverage+write %.2f s\n",
                     stage.update, stage.commit, stage.resolve, setup_seconds_, finish_seconds_);
         std::printf("  paths %llu, segments %llu, shadow rays %llu: %.3g rays/s, %.3g segments/s\n",
@@ -1531,14 +1541,14 @@ private:
                           100.0 * coverage_.unreached_deposit_area);
         }
         if (written_levels_.empty()) {
-            std::printf("  coverage: %.2f%% of the surface area has no voxel (the cache is empty; %u points tested)\n",
-                        100.0 * coverage_.unreached_area, coverage_.points);
+            std::printf("  coverage: %.2f%% of the surface area has no voxel (the cache is empty; %s tested)\n",
+                        100.0 * coverage_.unreached_area, counted(coverage_.points, "point").c_str());
         } else {
             std::printf(
                 "  coverage: %.2f%% of the surface area has no voxel at any level, %.2f%% none at the finest "
-                "(level %u)%s (%u points tested)\n",
+                "(level %u)%s (%s tested)\n",
                 100.0 * coverage_.unreached_area, 100.0 * coverage_.unreached_finest_area, coverage_.finest_level,
-                deposit_levels, coverage_.points);
+                deposit_levels, counted(coverage_.points, "point").c_str());
         }
         std::printf("  predicted hit rate: %s\n", describeHitRate(prediction_).c_str());
         const std::vector<bool> listed = camerasToList(prediction_);

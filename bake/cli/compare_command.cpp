@@ -6,9 +6,14 @@
 #include "support/json.h"
 #include "reports/image_error.h"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
+
+#include <unistd.h>
 
 namespace sharcbake {
 namespace {
@@ -19,14 +24,28 @@ struct CompareOptions {
     bool json = false;
 };
 
-void runCompare(const CompareOptions& o) {
-    Image image, reference;
-    try {
-        image = readLinearImage(o.image_path);
-        reference = readLinearImage(o.reference_path);
-    } catch (const sharcbake::ImageError& e) {
-        throw CommandError(kExitIo, e.what());
+/// An image that cannot be read is exit 2; one that reads but is no radiance image (a PNG, a
+/// cache file, a damaged EXR) is invalid input, exit 3.
+Image readImageToCompare(const std::string& path) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(path, error)) {
+        throw CommandError(kExitIo, path + (std::filesystem::exists(path, error)
+                                                ? ": not a regular file (a FIFO, device or folder)"
+                                                : ": no such file"));
     }
+    if (::access(path.c_str(), R_OK) != 0) {
+        throw CommandError(kExitIo, path + ": cannot read: " + std::strerror(errno));
+    }
+    try {
+        return readLinearImage(path);
+    } catch (const sharcbake::ImageError& e) {
+        throw CommandError(kExitInvalidInput, e.what());
+    }
+}
+
+void runCompare(const CompareOptions& o) {
+    const Image image = readImageToCompare(o.image_path);
+    const Image reference = readImageToCompare(o.reference_path);
     ImageComparison error;
     try {
         error = compareImages(image, reference);

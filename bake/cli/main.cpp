@@ -44,6 +44,10 @@ int main(int argc, char** argv) {
 
     try {
         app.parse(argc, argv);
+    } catch (const CLI::FileError& e) {
+        // --config naming a file that cannot be read: an I/O error, as for any other input.
+        std::fprintf(stderr, "sharcbake: error: --config: %s\n", e.what());
+        return kExitIo;
     } catch (const CLI::ParseError& e) {
         // CLI11 prints help/version itself (exit 0) and usage errors (nonzero -> our code 1).
         const int code = app.exit(e);

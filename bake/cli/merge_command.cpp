@@ -287,9 +287,9 @@ void runMerge(const MergeOptions& o) {
     if (!o.quiet) {
         size_t input_voxels = 0;
         for (const CacheData& d : sorted) input_voxels += d.voxels.size();
-        std::printf("Merged %s (%zu voxels in all, %s iterations) into %s: %zu voxels\n",
-                    counted(sorted.size(), "cache").c_str(), input_voxels, findMetadata(merged, "iterations")->c_str(),
-                    o.output_path.c_str(), merged.voxels.size());
+        std::printf("Merged %s (%s in all, %s) into %s: %s\n", counted(sorted.size(), "cache").c_str(),
+                    counted(input_voxels, "voxel").c_str(), counted(iterationsOf(merged), "iteration").c_str(),
+                    o.output_path.c_str(), counted(merged.voxels.size(), "voxel").c_str());
     }
 }
 

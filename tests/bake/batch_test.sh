@@ -55,6 +55,8 @@ expect 0 "the command line overrides the config" "$sharcbake" --config "$work/ba
 python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['iterations'] == 2 and j['settings']['seed'] == 3, j['settings']" \
     "$work/override.json" && echo "ok: --iterations 2 overrides the file, its seed stays" || fail "override"
 printf '[bake]\niteratoins = 5\n' > "$work/typo.toml"
+expect 2 "a config file that is not there" "$sharcbake" --config "$work/missing.toml" bake "$cornell" -o "$work/x.sharc"
+says "$work/err.txt" "--config: .*missing.toml was not readable" "the missing config is named"
 expect 1 "a config with a misspelt option" "$sharcbake" --config "$work/typo.toml" bake "$cornell" -o "$work/x.sharc"
 says "$work/err.txt" "iteratoins" "the error names the unknown key"
 says "$work/err.txt" "typo.toml" "the error names the config file"

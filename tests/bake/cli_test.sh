@@ -155,10 +155,11 @@ print(("ok" if ok else "FAIL") + ": cornell cached vs reference:", m)
 sys.exit(0 if ok else 1)
 PY
 expect 2 "compare with a missing image" "$sharcbake" compare "$work/nothing.exr" "$work/ref48.exr"
+says "$work/err.txt" "nothing.exr: no such file" "compare names the missing image"
 expect 3 "compare different sizes" "$sharcbake" compare "$work/cornell.exr" "$work/ref48.exr"
 # A PNG (8-bit display values, tone-mapped) is no radiance: refused with the reason and the fix.
 expect 0 "a PNG preview" "$sharcbake" render "$cornell" -o "$work/preview.exr" --resolution 48 --spp 1 -q
-expect 2 "compare against a PNG" "$sharcbake" compare "$work/cached48.exr" "$work/preview.png"
+expect 3 "compare against a PNG (readable, but no radiance)" "$sharcbake" compare "$work/cached48.exr" "$work/preview.png"
 says "$work/err.txt" "it is a PNG image, whose 8-bit display values (usually tone-mapped) are not radiance" \
     "compare says why a PNG reference is refused"
 
