@@ -43,6 +43,8 @@
 #include <set>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace sharcbake {
 namespace {
 
@@ -145,6 +147,11 @@ std::atomic<int> g_stop_signal{0};
 /// A second signal while the first is being honoured ends the process at once (the default action).
 extern "C" void onStopSignal(int signal) {
     if (g_stop_signal.exchange(signal) != 0) {
+        // write() is safe in a signal handler; stdio is not. Said, since the abort writes nothing.
+        static const char kAborted[] =
+            "\nsharcbake: a second signal: aborted at once, no cache written (a --checkpoint keeps the bake "
+            "to its last checkpoint: --resume it)\n";
+        [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kAborted, sizeof kAborted - 1);
         std::signal(signal, SIG_DFL);
         std::raise(signal);
     }

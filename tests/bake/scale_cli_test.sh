@@ -49,6 +49,24 @@ fi
 expect 0 "resume after SIGINT" "$sharcbake" bake "$cornell" -o "$work/interrupted.sharc" $bake_args -q --resume "$work/interrupted.ckpt"
 cmp -s "$work/full.sharc" "$work/interrupted.sharc" || fail "the bake resumed after SIGINT differs from the uninterrupted one"
 
+# A second SIGINT while the first is honoured aborts at once, writing nothing; it said nothing
+# either (exit 130 and an empty stderr). It says so now, and where the bake stands.
+"$sharcbake" bake "$cornell" -o "$work/twice.sharc" --iterations 100000 --resolution 64x64 -q \
+    --checkpoint "$work/twice.ckpt" 2> "$work/twice_err.txt" &
+pid=$!
+sleep 2
+kill -INT "$pid"
+sleep 0.02
+kill -INT "$pid" 2>/dev/null
+wait "$pid"
+twice_code=$?
+[ "$twice_code" -eq 130 ] || fail "two SIGINTs: exit $twice_code, expected 130"
+if [ -e "$work/twice.sharc" ]; then
+    echo "note: the bake had written its cache before the second SIGINT"
+else
+    says "$work/twice_err.txt" "a second signal: aborted at once, no cache written" "the abort is said"
+fi
+
 # SIGTERM (a scheduler's time limit or preemption): the same, with exit 143.
 interrupt TERM terminated
 [ "$interrupted_code" -eq 143 ] || [ "$interrupted_code" -eq 0 ] || fail "SIGTERM: exit $interrupted_code, expected 143"
