@@ -152,7 +152,10 @@ std::vector<std::string> resumeFromCheckpoint(const std::string& path, const Bak
     const CacheFileStatus status = readCheckpointFile(path, &data, &message);
     if (status == CacheFileStatus::kIoError) throw CheckpointError(CheckpointError::Kind::kIo, message);
     if (status != CacheFileStatus::kOk) {
-        throw CheckpointError(CheckpointError::Kind::kInvalid, message + " (" + toString(status) + ")");
+        // The status' words are a cache file's ("not a sharcbake cache file"); C1's message says it.
+        const bool said = status == CacheFileStatus::kBadMagic;
+        throw CheckpointError(CheckpointError::Kind::kInvalid,
+                              said ? message : message + " (" + toString(status) + ")");
     }
     const std::string differences = settingDifferences(data.settings, settings);
     if (!differences.empty()) {

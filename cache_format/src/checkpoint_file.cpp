@@ -250,7 +250,12 @@ struct CheckpointSections {
 /// back with zero padding, the four required ones once each.
 CacheFileStatus readCheckpointFrame(const uint8_t* d, size_t size, CheckpointSections* sections, std::string* message) {
     using S = CacheFileStatus;
-    // C1: identifier.
+    // C1: identifier. A file that ends within it (an empty one: a copy or a write cut short) is
+    // truncated, not "not a checkpoint".
+    if (size < sizeof kCheckpointIdentifier && (size == 0 || std::memcmp(d, kCheckpointIdentifier, size) == 0)) {
+        return fail(S::kTruncated, message,
+                    "C1: the file ends within the checkpoint identifier (" + std::to_string(size) + " bytes)");
+    }
     if (size < sizeof kCheckpointIdentifier || std::memcmp(d, kCheckpointIdentifier, sizeof kCheckpointIdentifier) != 0) {
         if (size >= sizeof kCacheIdentifier && std::memcmp(d, kCacheIdentifier, sizeof kCacheIdentifier) == 0) {
             return fail(S::kBadMagic, message, "C1: this is a .sharc cache, not a checkpoint (give the file --checkpoint wrote)");

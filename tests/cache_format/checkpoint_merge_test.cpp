@@ -89,6 +89,14 @@ TEST(CheckpointFile, EveryChangedByteAndEveryPrefixIsRejected) {
     for (size_t n = 0; n < bytes.size(); ++n) {
         EXPECT_NE(decodeCheckpoint(bytes.data(), n, nullptr, &message), CacheFileStatus::kOk) << "prefix " << n;
     }
+    // A file cut within its identifier, an empty one included, is truncated (it said "not a
+    // sharcbake checkpoint"); other bytes there are not a checkpoint.
+    for (const size_t n : {size_t(0), size_t(5)}) {
+        EXPECT_EQ(decodeCheckpoint(bytes.data(), n, nullptr, &message), CacheFileStatus::kTruncated) << n;
+        EXPECT_NE(message.find("ends within the checkpoint identifier"), std::string::npos) << message;
+    }
+    const std::vector<uint8_t> text = {'g', 'a', 'r', 'b', 'a', 'g', 'e', '\n'};
+    EXPECT_EQ(decodeCheckpoint(text.data(), text.size(), nullptr, &message), CacheFileStatus::kBadMagic);
 }
 
 TEST(CheckpointFile, WriterRefusesStateAReaderWouldReject) {
