@@ -1085,14 +1085,16 @@ CacheFileStatus prepareGpuPacker(const GpuBufferOptions& options, const CacheVie
         return fail(error, CacheFileStatus::kInvalidArgument, 0,
                     std::string(what) + ": radiance scale must be finite and > 0 (0: the cache's own)");
     }
+    // NaN, 0 or a negative cap fell back to 65504 without a word (a NaN radiance scale is refused).
+    if (!(options.max_sample_count > 0.0f)) {
+        return fail(error, CacheFileStatus::kInvalidArgument, 0,
+                    std::string(what) + ": max sample count must be > 0 (at most 65504 is stored)");
+    }
     packer->scale = options.radiance_scale > 0.0f ? options.radiance_scale : view.gpuRadianceScale();
     packer->separate_emissive = options.build.separate_emissive;
     packer->demodulate = options.build.material_demodulation;
     packer->report.radiance_scale = packer->scale;
-    packer->max_count = std::min(std::isfinite(options.max_sample_count) && options.max_sample_count > 0.0f
-                                     ? options.max_sample_count
-                                     : 65504.0f,
-                                 65504.0f);
+    packer->max_count = std::min(options.max_sample_count, 65504.0f);
     packer->frames = std::min(options.accumulated_frame_num, kSharcMaxBakedFrameNum);
     return CacheFileStatus::kOk;
 }

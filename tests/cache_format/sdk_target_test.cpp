@@ -743,6 +743,17 @@ TEST(GpuRadianceScale, ClippingIsReportedWithTheScaleThatFixesIt) {
         options.radiance_scale = bad;
         EXPECT_EQ(view.gpuBuffers(options, &buffers, &error), CacheFileStatus::kInvalidArgument) << bad;
     }
+    // So is a sample-count cap that caps nothing meaningful (it fell back to 65504 silently);
+    // infinity caps at 65504.
+    options.radiance_scale = 0.0f;
+    for (float bad : {-1.0f, 0.0f, NAN}) {
+        options.max_sample_count = bad;
+        EXPECT_EQ(view.gpuBuffers(options, &buffers, &error), CacheFileStatus::kInvalidArgument) << bad;
+        EXPECT_NE(error.message.find("max sample count must be > 0"), std::string::npos) << error.message;
+        EXPECT_EQ(view.gpuInsertList(options, &list, &error), CacheFileStatus::kInvalidArgument) << bad;
+    }
+    options.max_sample_count = INFINITY;
+    EXPECT_EQ(view.gpuBuffers(options, &buffers, &error), CacheFileStatus::kOk);
 }
 
 TEST(GpuRadianceScale, LightTooDimForFp16IsReported) {

@@ -71,7 +71,7 @@ struct GpuBufferOptions {
     /// intact for A frames, larger values let new frames take over sooner (SPEC §G.4).
     uint32_t accumulated_frame_num = 1;
     /// The sample count stored is min(sample_weight, max_sample_count, 65504): caps how strongly
-    /// the baked mean resists new frames.
+    /// the baked mean resists new frames. Must be > 0 (NaN, 0 and negative values are kInvalidArgument).
     float max_sample_count = 65504.0f;
     /// The SDK release the engine runs: its key layout and bucket rule (SPEC §G.1).
     SharcSdkTarget sdk_target = kSharcSdkTargetDefault;

@@ -140,7 +140,8 @@ typedef struct sharcbake_gpu_options {
     uint32_t sdk_target;            /**< a sharcbake_sdk_target */
     uint32_t build_flags;           /**< SHARCBAKE_BUILD_* of the engine's SDK build; other bits are refused */
     uint32_t accumulated_frame_num; /**< stored accumulatedFrameNum (clamped to 64511) */
-    float max_sample_count;         /**< cap of the stored sample count (<= 65504) */
+    float
+        max_sample_count; /**< cap of the stored sample count: > 0 (else SHARCBAKE_INVALID_ARGUMENT), at most 65504 is stored */
     float radiance_scale;           /**< > 0: this factor; 0: the cache's own (1 if none) */
 } sharcbake_gpu_options;
 
