@@ -902,10 +902,14 @@ private:
     /// The file tinygltf reported with "File not found : URI" (a required file: a buffer; a
     /// missing image is only a warning), if it did.
     static std::optional<std::string> fileTinygltfDidNotFind(const std::string& err) {
-        static const std::string kPrefix = "File not found : ";
-        const size_t at = err.find(kPrefix);
+        return tinygltfFileAfter(err, "File not found : ");
+    }
+
+    /// The file named after `prefix` in tinygltf's error text ("File is empty : PATH"), if there.
+    static std::optional<std::string> tinygltfFileAfter(const std::string& err, const std::string& prefix) {
+        const size_t at = err.find(prefix);
         if (at == std::string::npos) return std::nullopt;
-        const size_t begin = at + kPrefix.size();
+        const size_t begin = at + prefix.size();
         const size_t end = err.find('\n', begin);
         return err.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
     }
@@ -991,6 +995,11 @@ private:
             if (const std::optional<std::string> problem = dataUriProblem(jsonText(bytes, glb), err)) fail(*problem);
             if (const std::optional<std::string> uri = fileTinygltfDidNotFind(err); uri && uri->rfind("data:", 0) != 0)
                 failMissingFile(missingBufferMessage(*uri, access));
+            // tinygltf: "File read error : PATH : File is empty : PATH" for a 0-byte buffer file.
+            if (const std::optional<std::string> empty = tinygltfFileAfter(err, "File is empty : ")) {
+                fail("buffer file " + quoted(std::filesystem::path(*empty).filename().string()) +
+                     " is empty (0 bytes): the scene's geometry is not in it (an interrupted copy or download?)");
+            }
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));
         }

@@ -671,6 +671,20 @@ TEST(GltfLoaderErrors, MissingBufferFile) {
     }
 }
 
+// A 0-byte buffer file (an interrupted copy; sample-model mirrors without their large files) said
+// "File read error : PATH : File is empty : PATH".
+TEST(GltfLoaderErrors, AnEmptyBinFileIsNamed) {
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({b.addMeshNode(unitTrianglePrimitive(b))});
+    const std::string path = b.writeExternal(dir, "empty_bin.gltf", "empty.bin");
+    test::writeFile(dir.file("empty.bin"), b.bin.data(), 0);
+    EXPECT_EQ(loadErrorOf([&] { loadGltf(path); }),
+              path +
+                  ": buffer file 'empty.bin' is empty (0 bytes): the scene's geometry is not in it (an "
+                  "interrupted copy or download?)");
+}
+
 TEST(GltfLoaderErrors, ShortBinFile) {
     TempDir dir;
     GltfBuilder b;
