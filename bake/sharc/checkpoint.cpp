@@ -169,7 +169,11 @@ std::vector<std::string> resumeFromCheckpoint(const std::string& path, const Bak
     if (cache.settings().grow_when_loaded && data.capacity > cache.capacity() && baker.iterationsDone() == 0) {
         cache.grow(data.capacity);
     }
-    if (baker.iterationsDone() != 0) throw std::logic_error("restoreCheckpoint: the baker has already run");
+    if (baker.iterationsDone() != 0) {
+        throw CheckpointError(CheckpointError::Kind::kInvalid,
+                              path + ": a checkpoint resumes a bake that has not run yet (this one ran " +
+                                  std::to_string(baker.iterationsDone()) + " iterations)");
+    }
     if (data.capacity != cache.capacity() || data.bucket_size != cache.table().bucketSize()) {
         const auto table = [](uint64_t capacity, uint32_t bucket_size) {
             return "capacity " + std::to_string(capacity) + ", buckets of " + std::to_string(bucket_size);
