@@ -274,6 +274,61 @@ std::optional<std::string> versionProblemInJson(std::string_view json) {
     return problem;
 }
 
+/// tinygltf's "'type' property is missing." names no object. The first object of the glTF's
+/// arrays that lacks `property` where glTF 2.0 (or KHR_lights_punctual) requires it, as "light 0
+/// 'Sun'", if there is one.
+std::optional<std::string> objectMissingProperty(std::string_view json, const std::string& property) {
+    const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return std::nullopt;
+    const auto lacking = [&](const nlohmann::json* array, const char* kind) -> std::optional<std::string> {
+        if (!array || !array->is_array()) return std::nullopt;
+        for (size_t i = 0; i < array->size(); ++i) {
+            const nlohmann::json& object = (*array)[i];
+            if (!object.is_object() || object.contains(property)) continue;
+            std::string label = std::string(kind) + " " + std::to_string(i);
+            if (object.contains("name") && object["name"].is_string())
+                label += " " + quoted(object["name"].get<std::string>());
+            return label;
+        }
+        return std::nullopt;
+    };
+    const auto member = [](const nlohmann::json& object, const char* key) -> const nlohmann::json* {
+        return object.is_object() && object.contains(key) ? &object[key] : nullptr;
+    };
+    struct Required {
+        const char* array;
+        const char* kind;
+        std::vector<std::string> properties;
+    };
+    static const Required kRequired[] = {
+        {"accessors", "accessor", {"componentType", "count", "type"}},
+        {"bufferViews", "bufferView", {"buffer", "byteLength"}},
+        {"buffers", "buffer", {"byteLength"}},
+        {"cameras", "camera", {"type"}},
+        {"meshes", "mesh", {"primitives"}},
+        {"skins", "skin", {"joints"}},
+        {"animations", "animation", {"channels", "samplers"}},
+    };
+    for (const Required& r : kRequired) {
+        if (std::find(r.properties.begin(), r.properties.end(), property) == r.properties.end()) continue;
+        if (std::optional<std::string> found = lacking(member(doc, r.array), r.kind)) return found;
+    }
+    if (property == "type") {
+        const nlohmann::json* extensions = member(doc, "extensions");
+        const nlohmann::json* punctual = extensions ? member(*extensions, "KHR_lights_punctual") : nullptr;
+        if (std::optional<std::string> found = lacking(punctual ? member(*punctual, "lights") : nullptr, "light"))
+            return *found + " (KHR_lights_punctual)";
+    }
+    if (property == "attributes" && doc.contains("meshes") && doc["meshes"].is_array()) {
+        for (size_t m = 0; m < doc["meshes"].size(); ++m) {
+            if (std::optional<std::string> found = lacking(member(doc["meshes"][m], "primitives"),
+                                                           ("mesh " + std::to_string(m) + " primitive").c_str()))
+                return found;
+        }
+    }
+    return std::nullopt;
+}
+
 glm::vec3 vec3Or(const std::vector<double>& v, glm::vec3 fallback) {
     if (v.size() < 3) return fallback;
     return glm::vec3(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
@@ -905,6 +960,15 @@ private:
         return tinygltfFileAfter(err, "File not found : ");
     }
 
+    /// NAME of tinygltf's "'NAME' property is missing", if that is its error.
+    static std::optional<std::string> tinygltfMissingProperty(const std::string& err) {
+        const size_t end = err.find("' property is missing");
+        if (end == std::string::npos) return std::nullopt;
+        const size_t begin = err.rfind('\'', end == 0 ? 0 : end - 1);
+        if (begin == std::string::npos || begin >= end) return std::nullopt;
+        return err.substr(begin + 1, end - begin - 1);
+    }
+
     /// The file named after `prefix` in tinygltf's error text ("File is empty : PATH"), if there.
     static std::optional<std::string> tinygltfFileAfter(const std::string& err, const std::string& prefix) {
         const size_t at = err.find(prefix);
@@ -999,6 +1063,10 @@ private:
             if (const std::optional<std::string> empty = tinygltfFileAfter(err, "File is empty : ")) {
                 fail("buffer file " + quoted(std::filesystem::path(*empty).filename().string()) +
                      " is empty (0 bytes): the scene's geometry is not in it (an interrupted copy or download?)");
+            }
+            if (const std::optional<std::string> property = tinygltfMissingProperty(err)) {
+                if (const std::optional<std::string> object = objectMissingProperty(jsonText(bytes, glb), *property))
+                    fail(*object + " lacks \"" + printable(*property) + "\", which glTF requires of it");
             }
             while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
             fail("glTF parse failed: " + (err.empty() ? std::string("unknown error") : parserMessage(err)));

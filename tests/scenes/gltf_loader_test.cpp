@@ -652,6 +652,26 @@ TEST(GltfLoaderErrors, AnAccessorOfTheWrongTypeIsNamedInGltfsWords) {
     EXPECT_NE(msg.find("POSITION (accessor 0): has type VEC2, expected VEC3"), std::string::npos) << msg;
 }
 
+// tinygltf says "'type' property is missing." of any object; the message names the object.
+TEST(GltfLoaderErrors, AMissingRequiredPropertyNamesItsObject) {
+    TempDir dir;
+    GltfBuilder b;
+    b.setScene({b.addMeshNode(unitTrianglePrimitive(b))});
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"type", "point"}}, {{"name", "Sun"}, {"intensity", 2.0}}});
+    std::string msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "no_type.gltf")); });
+    EXPECT_NE(msg.find("light 1 'Sun' (KHR_lights_punctual) lacks \"type\", which glTF requires of it"),
+              std::string::npos)
+        << msg;
+
+    b.doc.erase("extensions");
+    b.doc.erase("extensionsUsed");
+    b.doc["accessors"][1].erase("count");
+    msg = loadErrorOf([&] { loadGltf(b.writeEmbedded(dir, "no_count.gltf")); });
+    EXPECT_NE(msg.find("accessor 1 lacks \"count\""), std::string::npos) << msg;
+}
+
 TEST(GltfLoaderErrors, MissingBufferFile) {
     TempDir dir;
     GltfBuilder b;
