@@ -504,13 +504,18 @@ void checkScaledSky(const std::string& path, const Texture& map, float scale) {
 
 }  // namespace
 
-Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
+void requireRegularInputFile(const std::string& path) {
     std::error_code error;
     if (!std::filesystem::is_regular_file(path, error)) {
         throw CommandError(kExitIo, path + (std::filesystem::exists(path, error)
                                                 ? ": not a regular file (a FIFO, device or folder)"
                                                 : ": no such file"));
     }
+}
+
+Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool quiet, const GltfLoadLimits& limits) {
+    requireRegularInputFile(path);
+    std::error_code error;
     if (!sky.exr_path.empty() && !std::filesystem::is_regular_file(sky.exr_path, error)) {
         throw CommandError(kExitIo, sky.exr_path + ": --sky-exr is not a regular file");
     }

@@ -54,6 +54,10 @@ private:
     ExitCode code_;
 };
 
+/// Refuses (kExitIo) an input that is not a regular file: "PATH: no such file", or "PATH: not a
+/// regular file (a FIFO, device or folder)", before anything reads it (a FIFO would block).
+void requireRegularInputFile(const std::string& path);
+
 /// "1 camera", "3 cameras": a count with its noun, plural unless the count is one (nouns whose
 /// plural is not the singular with an "s" pass it as `plural`).
 std::string counted(uint64_t count, std::string_view singular, std::string_view plural = {});

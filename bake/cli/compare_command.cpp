@@ -9,7 +9,6 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
@@ -27,12 +26,7 @@ struct CompareOptions {
 /// An image that cannot be read is exit 2; one that reads but is no radiance image (a PNG, a
 /// cache file, a damaged EXR) is invalid input, exit 3.
 Image readImageToCompare(const std::string& path) {
-    std::error_code error;
-    if (!std::filesystem::is_regular_file(path, error)) {
-        throw CommandError(kExitIo, path + (std::filesystem::exists(path, error)
-                                                ? ": not a regular file (a FIFO, device or folder)"
-                                                : ": no such file"));
-    }
+    requireRegularInputFile(path);
     if (::access(path.c_str(), R_OK) != 0) {
         throw CommandError(kExitIo, path + ": cannot read: " + std::strerror(errno));
     }

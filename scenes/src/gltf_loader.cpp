@@ -1282,11 +1282,18 @@ private:
         const auto named = [](std::string label, const std::string& name) {
             return name.empty() ? label : label + " " + quoted(name);
         };
+        // Objects with nothing but their own `extensions` to search, labelled "KIND i 'name'".
+        const auto each = [&](const auto& objects, const char* kind) {
+            for (size_t i = 0; i < objects.size(); ++i) {
+                object(named(kind + (" " + std::to_string(i)), objects[i].name));
+                add(objects[i].extensions);
+            }
+        };
         object("the file");
         add(model_.extensions);
         add(model_.asset.extensions);
         for (size_t i = 0; i < model_.scenes.size(); ++i) {
-            object(named("scene " + std::to_string(i), model_.scenes[i].name));
+            object(sceneLabel(i));
             add(model_.scenes[i].extensions);
         }
         for (size_t i = 0; i < model_.nodes.size(); ++i) {
@@ -1313,18 +1320,12 @@ private:
             add(material.occlusionTexture.extensions);
             add(material.emissiveTexture.extensions);
         }
-        for (size_t i = 0; i < model_.textures.size(); ++i) {
-            object(named("texture " + std::to_string(i), model_.textures[i].name));
-            add(model_.textures[i].extensions);
-        }
+        each(model_.textures, "texture");
         for (size_t i = 0; i < model_.images.size(); ++i) {
             object(imageLabel(int(i)));
             add(model_.images[i].extensions);
         }
-        for (size_t i = 0; i < model_.samplers.size(); ++i) {
-            object(named("sampler " + std::to_string(i), model_.samplers[i].name));
-            add(model_.samplers[i].extensions);
-        }
+        each(model_.samplers, "sampler");
         for (size_t i = 0; i < model_.cameras.size(); ++i) {
             const tinygltf::Camera& camera = model_.cameras[i];
             object(named("camera " + std::to_string(i), camera.name));
@@ -1337,22 +1338,10 @@ private:
             add(model_.lights[i].extensions);
             add(model_.lights[i].spot.extensions);
         }
-        for (size_t i = 0; i < model_.accessors.size(); ++i) {
-            object(named("accessor " + std::to_string(i), model_.accessors[i].name));
-            add(model_.accessors[i].extensions);
-        }
-        for (size_t i = 0; i < model_.bufferViews.size(); ++i) {
-            object(named("bufferView " + std::to_string(i), model_.bufferViews[i].name));
-            add(model_.bufferViews[i].extensions);
-        }
-        for (size_t i = 0; i < model_.buffers.size(); ++i) {
-            object(named("buffer " + std::to_string(i), model_.buffers[i].name));
-            add(model_.buffers[i].extensions);
-        }
-        for (size_t i = 0; i < model_.skins.size(); ++i) {
-            object(named("skin " + std::to_string(i), model_.skins[i].name));
-            add(model_.skins[i].extensions);
-        }
+        each(model_.accessors, "accessor");
+        each(model_.bufferViews, "bufferView");
+        each(model_.buffers, "buffer");
+        each(model_.skins, "skin");
         for (size_t i = 0; i < model_.animations.size(); ++i) {
             const tinygltf::Animation& animation = model_.animations[i];
             object(named("animation " + std::to_string(i), animation.name));
