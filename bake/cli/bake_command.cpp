@@ -33,9 +33,11 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -144,6 +146,13 @@ struct BakeJob {
 /// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
 /// second signal aborts promptly.
 std::atomic<int> g_stop_signal{0};
+/// The checkpoint lock file a second signal removes before the process ends, so an aborted bake
+/// leaves no lock behind (the lock itself dies with the process; its file would stay). Written
+/// before g_abort_lock_path_set is raised and read in the handler only after it, as a plain
+/// array: unlink() is safe in a signal handler, a std::string is not.
+char g_abort_lock_path[PATH_MAX] = {};
+std::atomic<bool> g_abort_lock_path_set{false};
+
 /// A second signal while the first is being honoured ends the process at once (the default action).
 extern "C" void onStopSignal(int signal) {
     if (g_stop_signal.exchange(signal) != 0) {
@@ -152,10 +161,31 @@ extern "C" void onStopSignal(int signal) {
             "\nsharcbake: a second signal: aborted at once, no cache written (a --checkpoint keeps the bake "
             "to its last checkpoint: --resume it)\n";
         [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kAborted, sizeof kAborted - 1);
+        if (g_abort_lock_path_set.load(std::memory_order_acquire)) ::unlink(g_abort_lock_path);  // still held
         std::signal(signal, SIG_DFL);
         std::raise(signal);
     }
 }
+
+/// A CheckpointLock whose file a second stop signal removes (g_abort_lock_path) while it is held.
+class AbortSafeCheckpointLock {
+public:
+    explicit AbortSafeCheckpointLock(const std::string& checkpoint_path) : lock_(checkpoint_path) {
+        const std::string& path = lock_.lockPath();
+        if (path.size() < sizeof g_abort_lock_path) {  // a longer path keeps its file on an abort
+            std::memcpy(g_abort_lock_path, path.c_str(), path.size() + 1);
+            g_abort_lock_path_set.store(true, std::memory_order_release);
+        }
+    }
+    /// Runs before the lock's own destructor removes the file: a signal after it finds nothing to
+    /// remove (another bake may already have made a new lock file at the path).
+    ~AbortSafeCheckpointLock() { g_abort_lock_path_set.store(false, std::memory_order_release); }
+    AbortSafeCheckpointLock(const AbortSafeCheckpointLock&) = delete;
+    AbortSafeCheckpointLock& operator=(const AbortSafeCheckpointLock&) = delete;
+
+private:
+    CheckpointLock lock_;
+};
 
 /// SIGINT and SIGTERM set g_stop_signal while one lives; the handlers before it come back after.
 class StopSignalHandlers {
@@ -1761,7 +1791,7 @@ private:
     const int threads_;
     const std::string checkpoint_path_;
     std::optional<StopSignalHandlers> stop_signals_;
-    std::optional<CheckpointLock> checkpoint_lock_;
+    std::optional<AbortSafeCheckpointLock> checkpoint_lock_;
 
     BakeJob job_;
     Scene scene_;

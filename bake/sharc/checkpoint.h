@@ -63,6 +63,9 @@ public:
     CheckpointLock(const CheckpointLock&) = delete;
     CheckpointLock& operator=(const CheckpointLock&) = delete;
 
+    /// The lock file (`path` + ".lock").
+    const std::string& lockPath() const { return lock_path_; }
+
 private:
     std::string lock_path_;
     int fd_ = -1;

@@ -66,6 +66,8 @@ if [ -e "$work/twice.sharc" ]; then
 else
     says "$work/twice_err.txt" "a second signal: aborted at once, no cache written" "the abort is said"
 fi
+# The abort removes the checkpoint's lock file (it used to stay behind as clutter).
+[ ! -e "$work/twice.ckpt.lock" ] || fail "two SIGINTs left the checkpoint lock file behind"
 
 # SIGTERM (a scheduler's time limit or preemption): the same, with exit 143.
 interrupt TERM terminated
