@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <meshoptimizer.h>
 
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -174,6 +175,40 @@ TEST(Meshopt, CorruptOrImpossibleViewsAreRefusedNamingTheView) {
     GltfBuilder outside = compressedQuad();
     outside.doc["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["byteOffset"] = 100000;
     EXPECT_NE(errorOf(outside, "outside.gltf").find("missing or short buffer"), std::string::npos);
+}
+
+// The compressed bytes in an external .bin (gltfpack without -c embedding): the loader reads that
+// buffer itself, before tinygltf, so its missing file is reported by the loader's own path, in the
+// words and with the kind tinygltf's path uses (the command exits 2, a file not there).
+TEST(Meshopt, ExternalCompressedBufferLoadsAndItsMissingFileIsNamed) {
+    TempDir dir;
+    const GltfBuilder b = compressedQuad();
+    json d = b.doc;
+    d["buffers"] = json::array(
+        {{{"byteLength", b.bin.size()}, {"uri", "quad packed.bin"}},
+         {{"byteLength", 76}, {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}}});
+    const std::string path = dir.file("external.gltf");
+    test::writeFile(path, d.dump(2));
+    test::writeFile(dir.file("quad packed.bin"), b.bin.data(), b.bin.size());
+    d["buffers"][0]["uri"] = "quad%20packed.bin";  // a URI's percent-encoding names the same file
+    const std::string encoded = dir.file("encoded.gltf");
+    test::writeFile(encoded, d.dump(2));
+    for (const std::string& file : {path, encoded}) {
+        const Scene scene = loadGltf(file);
+        expectQuad(scene);
+        EXPECT_EQ(scene.source_files.size(), 2u);  // the .gltf and the buffer it read
+    }
+
+    std::filesystem::remove(dir.file("quad packed.bin"));
+    const std::string folder = std::filesystem::canonical(dir.file(".")).string();
+    try {
+        loadGltf(path);
+        ADD_FAILURE() << "expected SceneLoadError";
+    } catch (const SceneLoadError& e) {
+        EXPECT_EQ(e.kind(), SceneLoadError::Kind::kMissingFile);
+        EXPECT_EQ(std::string(e.what()),
+                  path + ": buffer 'quad packed.bin' not found beside the scene (looked in " + folder + ")");
+    }
 }
 
 }  // namespace
