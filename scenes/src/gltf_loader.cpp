@@ -612,6 +612,7 @@ private:
     /// Lights skipped for what they are, not where (a type not supported, an intensity beyond
     /// float32), already warned about: named once however many nodes place them.
     std::set<size_t> unusable_lights_;
+    std::set<size_t> placed_lights_;       ///< lights placed by a node so far (convertLight)
     std::vector<glm::dmat4> node_worlds_;  ///< every node's world matrix, made for the first skin
     std::set<std::string> warned_;
     /// Warnings many materials can share, by their text: the labels of the materials, in order.
@@ -3246,6 +3247,9 @@ private:
         light.node_name = model_.nodes[size_t(nodeIndex)].name;
         const std::string label = "light " + std::to_string(lightIndex) +
                                   (src.name.empty() ? "" : " " + quoted(src.name)) + " on " + nodeLabel(nodeIndex);
+        // What is wrong with the light itself (its colour, intensity, cone) is said at its first
+        // node, not again at each node that places it too.
+        const bool first_placement = placed_lights_.insert(lightIndex).second;
         if (src.type == "directional") light.type = LightType::Directional;
         else if (src.type == "spot") light.type = LightType::Spot;
         else if (src.type == "point") light.type = LightType::Point;
@@ -3279,7 +3283,7 @@ private:
             }
             return std::nullopt;
         }
-        if (colour != given_colour || intensity != src.intensity) {
+        if (first_placement && (colour != given_colour || intensity != src.intensity)) {
             warn(label + ": colour " + vec3Text(given_colour) + " and intensity " + numberText(src.intensity) +
                  " clamped into KHR_lights_punctual's ranges (colour [0, 1], intensity at least 0): " +
                  vec3Text(colour) + ", " + numberText(intensity));
@@ -3329,17 +3333,18 @@ private:
         }
         light.intensity = glm::vec3(colour) * static_cast<float>(radiometric);
         light.range = src.range > 0.0 ? static_cast<float>(src.range) : 0.0f;
-        if (light.type == LightType::Spot) setSpotCone(src, label, light);
+        if (light.type == LightType::Spot) setSpotCone(src, first_placement ? label : std::string(), light);
         return light;
     }
 
     /// The extension requires 0 <= inner < outer <= pi/2; clamp anything else so the
-    /// renderer's smooth-step between the cones stays well defined.
+    /// renderer's smooth-step between the cones stays well defined. Warns naming `label`, unless
+    /// it is empty (the light was warned about at another node).
     void setSpotCone(const tinygltf::Light& src, const std::string& label, PunctualLight& light) {
         constexpr double halfPi = 1.5707963267948966;
         const double outer = std::clamp(src.spot.outerConeAngle, 0.0, halfPi);
         const double inner = std::clamp(src.spot.innerConeAngle, 0.0, outer);
-        if (outer != src.spot.outerConeAngle || inner != src.spot.innerConeAngle || inner == outer)
+        if (!label.empty() && (outer != src.spot.outerConeAngle || inner != src.spot.innerConeAngle || inner == outer))
             warn(label + ": spot cone angles (inner " + std::to_string(src.spot.innerConeAngle) + ", outer " +
                  std::to_string(src.spot.outerConeAngle) + ") outside 0 <= inner < outer <= pi/2; clamped");
         light.inner_cone_angle = static_cast<float>(inner);

@@ -2005,6 +2005,34 @@ TEST(GltfLoaderLights, AnUnnamedSpotsBadConeIsNamedByIndexAndNode) {
         << ::testing::PrintToString(scene.stats.warnings);
 }
 
+// What is wrong with a light itself is said once, at its first node: a lamp placed by two nodes
+// gave each warning twice, once per node.
+TEST(GltfLoaderLights, ALightOnTwoNodesIsWarnedAboutOnce) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
+        {{{"type", "spot"},
+          {"intensity", 683.0},
+          {"color", {2.0, 1.0, 1.0}},
+          {"spot", {{"innerConeAngle", 0.8}, {"outerConeAngle", 0.5}}}}});
+    const json placed = {{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}};
+    json left = placed, right = placed;
+    left["name"] = "Left";
+    right["name"] = "Right";
+    right["translation"] = {2.0, 0.0, 0.0};
+    const int left_node = b.addNode(left), right_node = b.addNode(right);
+    b.setScene({b.addMeshNode(unitTrianglePrimitive(b)), left_node, right_node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "two_lamps.gltf"));
+    ASSERT_EQ(scene.lights.size(), 2u);
+    EXPECT_EQ(scene.lights[1].outer_cone_angle, 0.5f);  // clamped at the second node too
+    EXPECT_EQ(scene.lights[1].intensity, scene.lights[0].intensity);
+    EXPECT_EQ(warningsWith(scene, {"spot cone angles"}), 1u) << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"light 0 on node 0 'Left': colour (2, 1, 1)", "clamped"}), 1u)
+        << ::testing::PrintToString(scene.stats.warnings);
+    EXPECT_EQ(warningsWith(scene, {"'Right'"}), 0u) << ::testing::PrintToString(scene.stats.warnings);
+}
+
 TEST(GltfLoaderLights, PhotometricToRadiometric) {
     TempDir dir;
     GltfBuilder b;
