@@ -191,6 +191,7 @@ Tracer::~Tracer() {
 }
 
 bool Tracer::intersect(const Ray& ray, RayHit& hit) const {
+    if (!embreeTraces(ray)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rayhit;
@@ -203,6 +204,7 @@ bool Tracer::intersect(const Ray& ray, RayHit& hit) const {
 }
 
 bool Tracer::occluded(const Ray& ray) const {
+    if (!embreeTraces(ray)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rayhit;
@@ -217,14 +219,20 @@ namespace {
 /// first ray, which Embree skips).
 constexpr int kPacketWidth = 16;
 
-/// Sets the valid mask and the rays of one packet from rays[start, start + 16) (fewer at the
-/// end: lanes past `count` trace a copy of rays[start], masked off). Returns the active lanes.
+/// Sets the valid mask and the rays of one packet from rays[start, start + 16). A lane past
+/// `count` (the last packet), or holding a ray Embree does not trace (embreeTraces), is parked:
+/// masked off, and given an empty segment (tnear > tfar) too, since on a CPU without 16-wide
+/// kernels Embree traces a 16-ray packet as a stream, which ignores the mask and skips only the
+/// lanes whose segment is empty. Returns the lanes filled from `rays`.
 template <typename RayN>
 int fillPacket(const Ray* rays, size_t start, size_t count, int (&valid)[kPacketWidth], RayN& packet) {
     const int n = int(std::min<size_t>(kPacketWidth, count - start));
+    static const Ray kParked{glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f), 0.0f};
     for (int i = 0; i < kPacketWidth; ++i) {
-        valid[i] = i < n ? -1 : 0;
-        initEmbreeLane(rays[start + size_t(i < n ? i : 0)], packet, i);
+        const bool traced = i < n && embreeTraces(rays[start + size_t(i)]);
+        valid[i] = traced ? -1 : 0;
+        initEmbreeLane(traced ? rays[start + size_t(i)] : kParked, packet, i);
+        if (!traced) packet.tnear[i] = 1.0f;  // beyond tfar 0: an empty segment
     }
     return n;
 }
@@ -259,7 +267,7 @@ void Tracer::occludedMany(const Ray* rays, size_t count, uint8_t* blocked) const
     for (size_t start = 0; start < count; start += kPacketWidth) {
         const int n = fillPacket(rays, start, count, valid, packet);
         rtcOccluded16(valid, rtc_scene_, &context, &packet);
-        for (int i = 0; i < n; ++i) blocked[start + i] = packet.tfar[i] < 0.0f;  // Embree's mark
+        for (int i = 0; i < n; ++i) blocked[start + i] = valid[i] != 0 && packet.tfar[i] < 0.0f;  // Embree's mark
     }
 }
 

@@ -8,6 +8,7 @@
 #include <embree3/rtcore.h>
 #include <glm/glm.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -35,6 +36,17 @@ struct RayHit {
 /// reports a triangle through the origin itself at t = 0, so a camera standing on a floor would
 /// see the floor behind every upward ray; a distance of zero is never a hit.
 inline constexpr float kRayTNear = std::numeric_limits<float>::min();
+
+/// Whether Embree traces `ray` at all: its origin and direction within +-1.844e18 per component
+/// (Embree's FLT_LARGE) and t_max not NaN. Embree asserts this of every ray, and Debian's build
+/// keeps its assertions, so a ray beyond it aborts the process (a NaN from a degenerate normal,
+/// an offset by a voxel of 1e20 units). Tracer treats such a ray as meeting nothing.
+inline bool embreeTraces(const Ray& ray) {
+    constexpr float kLargest = 1.844e18f;
+    const glm::vec3 o = glm::abs(ray.origin), d = glm::abs(ray.direction);
+    return o.x <= kLargest && o.y <= kLargest && o.z <= kLargest && d.x <= kLargest && d.y <= kLargest &&
+           d.z <= kLargest && !std::isnan(ray.t_max);
+}
 
 /// Fills an Embree ray from `ray` over (kRayTNear, t_max): what Tracer traces, for code that
 /// calls Embree's packet or stream APIs itself.
@@ -104,9 +116,10 @@ public:
     Tracer(const Tracer&) = delete;
     Tracer& operator=(const Tracer&) = delete;
 
-    /// Closest hit along the ray within (0, t_max). Returns false on a miss.
+    /// Closest hit along the ray within (0, t_max). Returns false on a miss, and for a ray
+    /// Embree does not trace (embreeTraces).
     bool intersect(const Ray& ray, RayHit& hit) const;
-    /// True if anything blocks the segment (0, t_max).
+    /// True if anything blocks the segment (0, t_max); false for a ray Embree does not trace.
     bool occluded(const Ray& ray) const;
 
     /// Closest hits of `count` rays at once: hits[i] is valid where found[i] is 1. The same hits

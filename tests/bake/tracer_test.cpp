@@ -103,6 +103,44 @@ Scene tessellatedBox(int cells, const glm::quat& turn) {
     return scene;
 }
 
+// Debian's Embree keeps its assertions: a ray with a NaN or a component beyond 1.844e18 aborted
+// the process (`--scene-scale 1e-20` offset the wall-leak probe's rays by voxels 1e20 wide).
+// Tracer answers such a ray as meeting nothing, alone and in packets, beside rays it traces.
+TEST(TracerGuards, RaysEmbreeWouldAssertOnMeetNothing) {
+    const Scene box = tessellatedBox(2, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+    const Tracer tracer(box);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const Ray good{glm::vec3(0.0f), glm::vec3(1.0f, 0.0f, 0.0f), 1e30f};
+    std::vector<Ray> rays = {
+        {glm::vec3(nan, 0.0f, 0.0f), glm::vec3(1.0f, 0.0f, 0.0f), 1e30f},
+        {glm::vec3(0.0f), glm::vec3(0.0f, nan, 0.0f), 1e30f},
+        {glm::vec3(0.0f), glm::vec3(1.0f, 0.0f, 0.0f), nan},
+        {glm::vec3(0.0f, 0.0f, 1e20f), glm::vec3(0.0f, 0.0f, -1.0f), INFINITY},
+        {glm::vec3(0.0f), glm::vec3(-INFINITY, 0.0f, 0.0f), 1e30f},
+    };
+    for (const Ray& ray : rays) {
+        EXPECT_FALSE(embreeTraces(ray));
+        RayHit hit;
+        EXPECT_FALSE(tracer.intersect(ray, hit));
+        EXPECT_FALSE(tracer.occluded(ray));
+    }
+    ASSERT_TRUE(embreeTraces(good));
+    RayHit good_hit;
+    ASSERT_TRUE(tracer.intersect(good, good_hit));
+    ASSERT_TRUE(tracer.occluded(good));
+    rays.insert(rays.begin() + 2, good);  // a traced lane among the refused ones
+    std::vector<RayHit> hits(rays.size());
+    std::vector<uint8_t> found(rays.size()), blocked(rays.size());
+    tracer.intersectMany(rays.data(), rays.size(), hits.data(), found.data());
+    tracer.occludedMany(rays.data(), rays.size(), blocked.data());
+    for (size_t i = 0; i < rays.size(); ++i) {
+        EXPECT_EQ(found[i], i == 2 ? 1 : 0) << i;
+        EXPECT_EQ(blocked[i], i == 2 ? 1 : 0) << i;
+    }
+    EXPECT_EQ(hits[2].triangle, good_hit.triangle);
+    EXPECT_EQ(hits[2].t, good_hit.t);
+}
+
 // Rays from inside a closed mesh aimed at the midpoints of its shared edges must all hit it.
 // Embree's fast triangle test is not watertight: without its robust mode 9,950 of these 147,456
 // rays left a box of 64 x 64 quads a side (random rays: 3 in a million at 400 x 400), and a
