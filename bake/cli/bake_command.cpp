@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cfloat>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -554,6 +555,25 @@ float parseFiniteFloat(const std::string& text, const char* option) {
     return value;
 }
 
+/// The usage error for grid parameters validateHashGridParameters refuses (`status`), naming the
+/// options that set them where their values are each fine and only their voxel size is not.
+CommandError gridParametersError(const HashGridParameters& grid, HashGridStatus status) {
+    if (status != HashGridStatus::kUnrepresentableVoxelSize)
+        return CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(status));
+    // A subnormal scale is wrong whatever the bias; otherwise the bias is what the fit would set.
+    const char* remedy = grid.scene_scale < FLT_MIN
+                             ? "Use --scene-scale auto (50): SHaRC's scene scale is the same in any units"
+                             : "Use --level-bias auto, which fits the finest voxels to the scene's units";
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "--scene-scale %g, --log-base %g and --level-bias %g give voxels float32 cannot represent: the "
+                  "finest is %g wide (%g / (%g x %g^%g)), and every level's voxel would be 0 or infinitely wide. %s",
+                  double(grid.scene_scale), double(grid.logarithm_base), double(grid.level_bias),
+                  double(voxelSize(kHashGridLevelMin, grid)), double(grid.logarithm_base), double(grid.scene_scale),
+                  double(grid.logarithm_base), double(grid.level_bias), remedy);
+    return CommandError(kExitUsage, text);
+}
+
 /// The bake's settings from its options (usage errors for malformed ones).
 BakeSettings settingsFromOptions(const BakeOptions& o) {
     BakeSettings settings;
@@ -581,9 +601,7 @@ BakeSettings settingsFromOptions(const BakeOptions& o) {
                                            o.history + "\"");
     }
     const HashGridStatus grid_status = validateHashGridParameters(settings.sharc.grid);
-    if (grid_status != HashGridStatus::kOk) {
-        throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(grid_status));
-    }
+    if (grid_status != HashGridStatus::kOk) throw gridParametersError(settings.sharc.grid, grid_status);
     return settings;
 }
 
@@ -965,7 +983,7 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
         decision.choice = text;
     }
     const HashGridStatus status = validateHashGridParameters(grid);
-    if (status != HashGridStatus::kOk) throw CommandError(kExitUsage, std::string("hash grid parameters: ") + toString(status));
+    if (status != HashGridStatus::kOk) throw gridParametersError(grid, status);
     settings.sharc.grid_anchor = gridAnchorFor(scene, voxelSize(kHashGridLevelMin, grid));
     const DepositLevels levels = levelsFor(scene, settings);
     decision.finest_level = levels.finestLevel();

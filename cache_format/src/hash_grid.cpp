@@ -82,6 +82,9 @@ const char* toString(HashGridStatus status) {
         case HashGridStatus::kInvalidSceneScale: return "invalid scene scale (must be finite and > 0)";
         case HashGridStatus::kInvalidLevelBias: return "invalid level bias (must be finite)";
         case HashGridStatus::kInvalidCamera: return "invalid camera position (must be finite)";
+        case HashGridStatus::kUnrepresentableVoxelSize:
+            return "voxel sizes not representable in float32 (scene scale x base^bias must be finite and at least "
+                   "1.2e-38, and the finest voxel, base / that, finite)";
     }
     return "unknown status";
 }
@@ -99,6 +102,13 @@ HashGridStatus validateHashGridParameters(const HashGridParameters& params) {
     const Float3& c = params.camera_position;
     if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) {
         return HashGridStatus::kInvalidCamera;
+    }
+    // Each value fine alone, their voxel size may still have no binary32 value: voxelSize divides
+    // b^L by S * b^beta, and every level's size is 0, infinite or NaN when that is.
+    const float denominator = params.scene_scale * powF32(params.logarithm_base, params.level_bias);
+    const float finest = voxelSize(kHashGridLevelMin, params);
+    if (!std::isfinite(denominator) || !(denominator >= FLT_MIN) || !std::isfinite(finest) || !(finest > 0.0f)) {
+        return HashGridStatus::kUnrepresentableVoxelSize;
     }
     return HashGridStatus::kOk;
 }

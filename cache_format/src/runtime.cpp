@@ -48,6 +48,13 @@ std::string fourccText(uint32_t type) {
     return s;
 }
 
+/// A float as "%g" writes it ("1e-40", "50"); std::to_string's fixed notation makes 1e-40 "0.000000".
+std::string compactText(float value) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", double(value));
+    return buf;
+}
+
 CacheFileStatus fail(CacheError* error, CacheFileStatus status, uint32_t rule, const std::string& message) {
     if (error) {
         error->status = status;
@@ -467,13 +474,19 @@ CacheFileStatus CacheView::parseGrid(const CacheSectionInfo& grid_section, Cache
     }
     if (load<uint32_t>(g + 60) != 0) return fail(error, S::kCorrupt, 12, "GRID: reserved field is not zero");
     // V13: GRID parameters.
-    if (bucket_size_ == 0 || bake_capacity_ == 0 || !std::isfinite(logarithm_base_) || !(logarithm_base_ > 1.0f) ||
-        !std::isfinite(scene_scale_) || !(scene_scale_ > 0.0f) || !std::isfinite(level_bias_)) {
+    HashGridParameters parameters;
+    parameters.logarithm_base = logarithm_base_;
+    parameters.scene_scale = scene_scale_;
+    parameters.level_bias = level_bias_;
+    parameters.capacity = bake_capacity_;
+    parameters.bucket_size = bucket_size_;
+    const HashGridStatus grid_status = validateHashGridParameters(parameters);
+    if (grid_status != HashGridStatus::kOk) {
         return fail(error, S::kCorrupt, 13,
-                    "GRID: invalid parameters (bucket size " + std::to_string(bucket_size_) + ", capacity " +
-                        std::to_string(bake_capacity_) + ", log base " + std::to_string(logarithm_base_) +
-                        ", scene scale " + std::to_string(scene_scale_) + ", level bias " +
-                        std::to_string(level_bias_) + ")");
+                    std::string("GRID: ") + toString(grid_status) + " (bucket size " + std::to_string(bucket_size_) +
+                        ", capacity " + std::to_string(bake_capacity_) + ", log base " + compactText(logarithm_base_) +
+                        ", scene scale " + compactText(scene_scale_) + ", level bias " + compactText(level_bias_) +
+                        ")");
     }
     return S::kOk;
 }

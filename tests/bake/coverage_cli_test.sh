@@ -186,6 +186,17 @@ expect 1 "a malformed region" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --
 says "$work/err.txt" "box:x0,y0,z0,x1,y1,z1" "the message names the accepted forms"
 expect 1 "path region without a path" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --view-region path
 expect 1 "a non-number level bias" "$sharcbake" bake "$cornell" -o "$work/x.sharc" --level-bias fine
+# Values each fine alone whose voxel has no float32 size (50 x 2^200 overflows: every voxel 0 wide)
+# were baked into a cache of one cell per level; they are refused, naming the options and the fix.
+expect 1 "a level bias whose voxels float32 cannot hold" "$sharcbake" bake "$cornell" -o "$work/refused.sharc" --level-bias 200
+says "$work/err.txt" "--level-bias 200 give voxels float32 cannot represent" "the refusal names the options"
+says "$work/err.txt" "Use --level-bias auto" "the refusal names the fix"
+[ ! -e "$work/refused.sharc" ] || fail "a refused bake wrote a cache"
+# Voxels 1e20 wide offset the wall-leak probe's rays beyond what Embree accepts (its assertion
+# aborted the process, exit 134); the bake now runs, and warns that the voxels are too large.
+expect 0 "voxels 1e20 wide" "$sharcbake" bake "$cornell" -o "$work/huge_voxels.sharc" --iterations 2 \
+    --resolution 64x64 --scene-scale 1e-20
+says "$work/err.txt" "the voxels are far larger than what the cameras see" "the bake warns about its voxels"
 
 # A flat of rooms on a ground 2 km wide, with a window the roaming camera leaves by: free space
 # gives the whole ground level 1, in voxels wider than the rooms, and the bake says so with the fix;

@@ -463,6 +463,14 @@ TEST(CacheFileReject, SemanticRulesWithValidChecksums) {
     EXPECT_EQ(openBytes(mutate(0, 24, 1.0f), &error), CacheFileStatus::kCorrupt);  // log base 1
     EXPECT_EQ(error.rule, 13u);
     EXPECT_EQ(openBytes(mutate(0, 28, std::numeric_limits<float>::quiet_NaN()), &error), CacheFileStatus::kCorrupt);
+    // Each parameter fine alone, but no level has a voxel size: 50 x 2^200 overflows float32, so
+    // every voxel is 0 wide. Such a file passed validation; the message names the cause.
+    EXPECT_EQ(openBytes(mutate(0, 32, 200.0f), &error), CacheFileStatus::kCorrupt);
+    EXPECT_EQ(error.rule, 13u);
+    EXPECT_NE(error.message.find("voxel sizes not representable"), std::string::npos) << error.message;
+    EXPECT_NE(error.message.find("level bias 200"), std::string::npos) << error.message;
+    EXPECT_EQ(openBytes(mutate(0, 28, 1e-40f), &error), CacheFileStatus::kCorrupt);  // a subnormal scale
+    EXPECT_NE(error.message.find("scene scale 9.99995e-41"), std::string::npos) << error.message;
     EXPECT_EQ(openBytes(mutate(0, 48, uint64_t(1) << 60), &error), CacheFileStatus::kCorrupt);  // voxel count
     EXPECT_EQ(error.rule, 14u);
     // Keys out of order.

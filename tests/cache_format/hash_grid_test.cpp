@@ -14,6 +14,7 @@
 #include <random>
 #include <set>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace sharcbake {
@@ -483,6 +484,28 @@ TEST(HashGridParams, Validation) {
     p = HashGridParameters{};
     p.camera_position.y = NAN;
     EXPECT_EQ(validateHashGridParameters(p), HashGridStatus::kInvalidCamera);
+    // Each value fine alone, their voxel size has no float32 value (voxelSize is 0 or infinite at
+    // every level): refused. Values near the edges that still have one are not.
+    for (const auto& [scale, bias, base] :
+         {std::tuple{50.0f, 200.0f, 2.0f}, std::tuple{50.0f, -200.0f, 2.0f}, std::tuple{1e-40f, 0.0f, 2.0f},
+          std::tuple{3e38f, 1.0f, 2.0f}, std::tuple{1e-30f, 0.0f, 1e10f}}) {
+        p = HashGridParameters{};
+        p.scene_scale = scale;
+        p.level_bias = bias;
+        p.logarithm_base = base;
+        EXPECT_EQ(validateHashGridParameters(p), HashGridStatus::kUnrepresentableVoxelSize)
+            << scale << " " << bias << " " << base << ": finest voxel " << voxelSize(1, p);
+    }
+    for (const auto& [scale, bias, base] : {std::tuple{50.0f, 100.0f, 2.0f}, std::tuple{50.0f, -100.0f, 2.0f},
+                                            std::tuple{1e-30f, 0.0f, 2.0f}, std::tuple{1e30f, 0.0f, 2.0f}}) {
+        p = HashGridParameters{};
+        p.scene_scale = scale;
+        p.level_bias = bias;
+        p.logarithm_base = base;
+        EXPECT_EQ(validateHashGridParameters(p), HashGridStatus::kOk) << scale << " " << bias << " " << base;
+        EXPECT_GT(voxelSize(1, p), 0.0f);
+        EXPECT_TRUE(std::isfinite(voxelSize(1, p)));
+    }
     p = HashGridParameters{};
     p.capacity = 5;  // below the bucket size: allowed, the bucket shrinks to the table
     EXPECT_EQ(validateHashGridParameters(p), HashGridStatus::kOk);

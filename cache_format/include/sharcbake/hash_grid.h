@@ -82,12 +82,17 @@ struct HashGridParameters {
 /// Outcome of parameter validation and table construction.
 enum class HashGridStatus : uint32_t {
     kOk = 0,
-    kInvalidCapacity,     ///< capacity == 0
-    kInvalidBucketSize,   ///< bucket_size == 0
-    kInvalidLogBase,      ///< logarithm_base not finite or <= 1
-    kInvalidSceneScale,   ///< scene_scale not finite or <= 0
-    kInvalidLevelBias,    ///< level_bias not finite
-    kInvalidCamera,       ///< camera_position has a NaN/Inf component
+    kInvalidCapacity,    ///< capacity == 0
+    kInvalidBucketSize,  ///< bucket_size == 0
+    kInvalidLogBase,     ///< logarithm_base not finite or <= 1
+    kInvalidSceneScale,  ///< scene_scale not finite or <= 0
+    kInvalidLevelBias,   ///< level_bias not finite
+    kInvalidCamera,      ///< camera_position has a NaN/Inf component
+    /// The voxel size formula (voxelSize, binary32) has no finite, positive value at level 1:
+    /// S * b^beta is not finite or below FLT_MIN (a bias of 200 makes b^beta infinite, a scale of
+    /// 1e-40 is subnormal), or the finest voxel itself overflows. Every level's voxel is then 0,
+    /// infinite or NaN wide, and all points share one cell.
+    kUnrepresentableVoxelSize,
 };
 
 /// @brief Human-readable name of a status ("ok", "invalid capacity", ...). Never null.
@@ -96,7 +101,8 @@ SHARCBAKE_RUNTIME_API const char* toString(HashGridStatus status);
 /// @brief Checks parameters for values that make levels or voxel sizes meaningless.
 ///
 /// The key functions accept any parameters (the result is still defined), but a baker should
-/// refuse parameters for which this returns anything but kOk. Capacities below the bucket size
+/// refuse parameters for which this returns anything but kOk. Checks each parameter alone, then
+/// that level 1's voxel size is finite and positive (kUnrepresentableVoxelSize). Capacities below the bucket size
 /// are valid (see bucketBase()), although the SDK itself requires N >= 16.
 SHARCBAKE_RUNTIME_API HashGridStatus validateHashGridParameters(const HashGridParameters& params);
 
