@@ -33,8 +33,17 @@ SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels) {
 double estimateMaxRadiance(const Tracer& tracer) {
     const Scene& scene = tracer.scene();
     double max_radiance = 0.0;
-    for (const Material& m : scene.materials) {
-        if (m.isEmissive()) max_radiance = std::max(max_radiance, double(maxComponent(m.emissive) * m.emissive_strength));
+    // Only materials on the scene's triangles: a material no triangle uses (an unused one in the
+    // file, or one whose only triangle the loader dropped as degenerate) emits nothing, and a
+    // strength of 1e20 there put every deposit of a scene lit at 1 below one step (a black cache).
+    std::vector<bool> used(scene.materials.size(), false);
+    for (const uint32_t material : scene.triangle_materials) {
+        if (material < used.size()) used[material] = true;
+    }
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
+        if (used[i] && m.isEmissive())
+            max_radiance = std::max(max_radiance, double(maxComponent(m.emissive) * m.emissive_strength));
     }
     max_radiance = std::max(max_radiance, double(maxComponent(scene.sky.uniform)));
     if (scene.sky.map) {

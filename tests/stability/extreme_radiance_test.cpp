@@ -265,6 +265,24 @@ TEST(FixedPoint, APointLightCountsAtItsDistanceToTheSurfacesInTheScenesOwnUnits)
     EXPECT_NEAR(estimateMaxRadiance(far_tracer), intensity / 1e6 / kPi, 1e-5 * intensity / 1e6 / kPi);
 }
 
+/// Only the emission of materials the scene's triangles use sets the scale. A material of strength
+/// 1e20 that no triangle uses (unused in the file, or its only triangle dropped as degenerate) put
+/// a furnace lit at 1 below one step: a cache of zeros, rendered at 2.
+TEST(FixedPoint, AnEmissiveMaterialNoTriangleUsesDoesNotSetTheScale) {
+    Scene room = roomWithPointLight(3.0f, 0.0f);
+    room.lights.clear();
+    room.materials[0].emissive = glm::vec3(1.0f);
+    const double lit_at_one = estimateMaxRadiance(Tracer(room));
+    EXPECT_EQ(lit_at_one, 1.0);
+    Material unused;
+    unused.emissive = glm::vec3(1.0f);
+    unused.emissive_strength = 1e20f;
+    room.materials.push_back(unused);
+    EXPECT_EQ(estimateMaxRadiance(Tracer(room)), lit_at_one);
+    room.triangle_materials.back() = 1;  // used by one triangle: it counts
+    EXPECT_EQ(estimateMaxRadiance(Tracer(room)), double(1e20f));
+}
+
 /// A clamp happens only where radiance is 2^22 times the brightest the scale was chosen for;
 /// the warning says so with the figures, instead of blaming "extreme emission" (which the scale
 /// follows).
