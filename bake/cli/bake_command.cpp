@@ -464,12 +464,11 @@ void printProbeSummary(const ConvergenceReport& report, const CacheProbes& probe
     if (fit) {
         const double low = std::sqrt(std::max(0.0, fit->floor_squared - fit->floor_squared_ci));
         const double high = std::sqrt(fit->floor_squared + fit->floor_squared_ci);
-        std::printf("  bias floor (fitted over %zu checkpoints): %.3g%% (95%%: %.3g%% to %.3g%%); the cache is at "
-                    "%.2gx its floor: %s\n",
-                    fit->checkpoints, 100.0 * fit->floor(), 100.0 * low, 100.0 * high,
-                    fit->floor() > 0.0 ? end.rmsError() / fit->floor() : 0.0,
-                    end.rmsError() <= 1.25 * fit->floor() ? "converged, more iterations would not help"
-                                                          : "more iterations would still lower its noise");
+        std::printf(
+            "  bias floor (fitted over %zu checkpoints): %.3g%% (95%%: %.3g%% to %.3g%%); the cache is at "
+            "%.2gx its floor: %s\n",
+            fit->checkpoints, 100.0 * fit->floor(), 100.0 * low, 100.0 * high,
+            fit->floor() > 0.0 ? end.rmsError() / fit->floor() : 0.0, probeVerdict(report.rows, *fit).reason.c_str());
     }
     // Every level at the same points: what cameras at other distances would get.
     std::string by_level;

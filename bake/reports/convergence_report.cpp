@@ -328,6 +328,44 @@ std::optional<ProbeFloorFit> fitProbeFloor(std::vector<ConvergenceRow>& rows) {
     return fit;
 }
 
+ProbeVerdict probeVerdict(const std::vector<ConvergenceRow>& rows, const ProbeFloorFit& fit) {
+    std::vector<const ConvergenceRow*> measured;
+    for (const ConvergenceRow& r : rows) {
+        if (r.probes && r.probes->view.probes > 0) measured.push_back(&r);
+    }
+    if (measured.empty()) return {false, "no probe has a voxel yet"};
+    const ConvergenceRow& last = *measured.back();
+    const ProbeError& end = last.probes->view;
+    char text[200];
+    const uint64_t population = end.probes + end.not_live;
+    if (double(end.not_live) > 0.05 * double(population)) {
+        std::snprintf(text, sizeof text,
+                      "not converged: %.3g%% of the probes have no voxel yet (more iterations or camera "
+                      "positions reach them)",
+                      100.0 * double(end.not_live) / double(population));
+        return {false, text};
+    }
+    // The checkpoint nearest half the last one's iterations (at or below it).
+    const ConvergenceRow* half = nullptr;
+    for (const ConvergenceRow* r : measured) {
+        if (2 * uint64_t(r->iteration) <= uint64_t(last.iteration)) half = r;
+    }
+    if (half && half != &last) {
+        const ProbeError& mid = half->probes->view;
+        const double margin = std::sqrt(mid.relative_mse_ci * mid.relative_mse_ci +
+                                        end.relative_mse_ci * end.relative_mse_ci);
+        if (mid.relative_mse - end.relative_mse > margin) {
+            std::snprintf(text, sizeof text,
+                          "not converged: the RMS error still falls (%.3g%% at %u iterations, %.3g%% at %u), more "
+                          "iterations would lower it",
+                          100.0 * mid.rmsError(), half->iteration, 100.0 * end.rmsError(), last.iteration);
+            return {false, text};
+        }
+    }
+    if (end.rmsError() <= 1.25 * fit.floor()) return {true, "converged, more iterations would not help"};
+    return {false, "more iterations would still lower its noise"};
+}
+
 std::optional<double> plainErrorAt(const std::vector<PlainPathTracingRow>& plain, double seconds) {
     for (size_t i = 1; i < plain.size(); ++i) {
         const PlainPathTracingRow& a = plain[i - 1];
@@ -461,6 +499,9 @@ void writeConvergenceJson(const std::string& dir, const ConvergenceReport& repor
                                {"floor_squared_ci95", jsonNumber(fit->floor_squared_ci)},
                                {"noise_scale", jsonNumber(fit->noise_scale)},
                                {"checkpoints", fit->checkpoints}};
+        const ProbeVerdict verdict = probeVerdict(report.rows, *fit);
+        json["probe_floor"]["converged"] = verdict.converged;
+        json["probe_floor"]["verdict"] = verdict.reason;
     }
     if (const auto& floor = report.reference_floor) {
         json["reference_floor"] = {{"relative_mse", jsonNumber(floor->rest)},

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 // The probe reference of `bake --report`: its references are right where the answer is known,
 // its noise is taken out, and a cache biased in one region is caught in that region.
-#include "sharc/baker.h"
-#include "test_bake_scene.h"
 #include "reports/cache_probes.h"
+#include "reports/convergence_report.h"
+#include "sharc/baker.h"
 #include "sharc/cache_query.h"
 #include "sharc/camera_path.h"
-#include "tracing/lights.h"
 #include "sharcbake/scene_loader.h"
+#include "test_bake_scene.h"
+#include "tracing/lights.h"
 #include "tracing/tracer.h"
 
 #include <gtest/gtest.h>
@@ -148,6 +149,51 @@ TEST(CacheProbes, NoProbesMeansNoWork) {
     const size_t record = probes.record(BakedCache(bake.data, glm::vec3(0.0f)).view());
     EXPECT_EQ(probes.measure(record, record).view.probes, 0u);
     EXPECT_EQ(probes.referencedPoints(), 0u);
+}
+
+// The summary called 16 iterations of the Cornell box "converged, more iterations would not help"
+// (RMS 37% at 1.1x a floor of 33% fitted over early checkpoints) while 128 iterations reached 25%,
+// and a model whose probes were 60% without a voxel converged too. The verdict now also asks
+// whether the error still falls since half the iterations, and how many probes have no voxel.
+TEST(ProbeVerdict, ConvergedOnlyWhenTheErrorStoppedFallingAndTheProbesHaveVoxels) {
+    const auto row = [](uint32_t iteration, double mse, double ci, uint64_t probes, uint64_t not_live) {
+        ConvergenceRow r;
+        r.iteration = iteration;
+        r.probes.emplace();
+        r.probes->view.probes = probes;
+        r.probes->view.not_live = not_live;
+        r.probes->view.relative_mse = mse;
+        r.probes->view.relative_mse_ci = ci;
+        return r;
+    };
+    ProbeFloorFit fit;
+    fit.floor_squared = 0.33 * 0.33;
+    // The Cornell box's 16 iterations: 0.267 +- 0.107 at 8, 0.137 +- 0.059 at 16.
+    std::vector<ConvergenceRow> falling = {row(2, 0.236, 0.059, 254, 2), row(4, 0.417, 0.104, 256, 0),
+                                           row(8, 0.267, 0.107, 255, 0), row(11, 0.247, 0.104, 253, 0),
+                                           row(16, 0.137, 0.059, 255, 0)};
+    ProbeVerdict verdict = probeVerdict(falling, fit);
+    EXPECT_FALSE(verdict.converged);
+    EXPECT_NE(verdict.reason.find("still falls"), std::string::npos) << verdict.reason;
+    EXPECT_NE(verdict.reason.find("at 8 iterations"), std::string::npos) << verdict.reason;
+
+    // Flat since half the iterations, within the floor: converged.
+    std::vector<ConvergenceRow> flat = {row(8, 0.125, 0.05, 255, 0), row(16, 0.115, 0.05, 255, 0)};
+    verdict = probeVerdict(flat, fit);
+    EXPECT_TRUE(verdict.converged) << verdict.reason;
+    EXPECT_EQ(verdict.reason, "converged, more iterations would not help");
+
+    // As flat, but 155 of 256 probes without a voxel.
+    std::vector<ConvergenceRow> uncovered = {row(8, 0.125, 0.05, 101, 155), row(16, 0.115, 0.05, 101, 155)};
+    verdict = probeVerdict(uncovered, fit);
+    EXPECT_FALSE(verdict.converged);
+    EXPECT_NE(verdict.reason.find("60.5% of the probes have no voxel yet"), std::string::npos) << verdict.reason;
+
+    // Flat but well above the floor: the voxels' noise.
+    fit.floor_squared = 0.1 * 0.1;
+    verdict = probeVerdict(flat, fit);
+    EXPECT_FALSE(verdict.converged);
+    EXPECT_EQ(verdict.reason, "more iterations would still lower its noise");
 }
 
 }  // namespace
