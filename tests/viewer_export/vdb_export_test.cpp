@@ -354,6 +354,11 @@ TEST(VdbExportUnrepresentable, MicrometreVoxelsFitAtTheLengthScaleNamed) {
     EXPECT_NEAR(centre.z() / scaled.length_scale, double(p.z), 0.5 * size);
     EXPECT_NEAR(grid->voxelSize().x(), size * scaled.length_scale, 1e-6 * size * scaled.length_scale);
     EXPECT_EQ(meta->metaValue<double>("sharcbake_length_scale"), scaled.length_scale);
+    // The grid's voxel size metadata is in VDB units, as its transform (a viewer's emission per
+    // voxel width divides by it; it gave the scene's, 1/length_scale of that); the scene's own is
+    // beside it.
+    EXPECT_FLOAT_EQ(grid->metaValue<float>("sharcbake_voxel_size"), float(grid->voxelSize().x()));
+    EXPECT_EQ(grid->metaValue<float>("sharcbake_scene_voxel_size"), float(size));
     EXPECT_NE(meta->metaValue<std::string>("units").find("one VDB unit is 1/"), std::string::npos);
     // Not finite or not positive: refused as a request.
     for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity()}) {

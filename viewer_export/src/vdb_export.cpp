@@ -76,11 +76,15 @@ std::string octantName(int32_t octant) {
     return s;
 }
 
+/// Names and describes a grid. Its voxel size is recorded in VDB units (the grid transform's,
+/// scene units x `length_scale`: what a viewer measures, and what an emission of radiance per
+/// voxel width divides by) and in the scene's own units.
 void tagGrid(openvdb::GridBase& grid, const std::string& name, uint32_t level, int32_t octant, float voxel_size,
-             float scale, const std::string& meaning) {
+             double length_scale, float scale, const std::string& meaning) {
     grid.setName(name);
     grid.insertMeta("sharcbake_level", openvdb::Int32Metadata(int32_t(level)));
-    grid.insertMeta("sharcbake_voxel_size", openvdb::FloatMetadata(voxel_size));
+    grid.insertMeta("sharcbake_voxel_size", openvdb::FloatMetadata(float(double(voxel_size) * length_scale)));
+    grid.insertMeta("sharcbake_scene_voxel_size", openvdb::FloatMetadata(voxel_size));
     grid.insertMeta("sharcbake_scale", openvdb::FloatMetadata(scale));
     grid.insertMeta("sharcbake_normal_octant",
                     openvdb::StringMetadata(octant < 0 ? "merged (sample-weighted mean)" : octantName(octant)));
@@ -178,9 +182,9 @@ void addFinestGrids(const CacheView& cache, uint32_t finest, const openvdb::math
     const Groups merged = accumulate(cache, {finest}, false);
     const GridSet g = buildGrids(merged.begin()->second, xform, options.scale);
     const float s = voxelSize(finest, cache.gridParameters());
-    tagGrid(*g.density, "density", finest, -1, s, options.scale,
+    tagGrid(*g.density, "density", finest, -1, s, options.length_scale, options.scale,
             "luminance of radiance x scale, finest level (same as level" + std::to_string(finest) + "_density)");
-    tagGrid(*g.color, "color", finest, -1, s, options.scale,
+    tagGrid(*g.color, "color", finest, -1, s, options.length_scale, options.scale,
             "radiance x scale, finest level (same as level" + std::to_string(finest) + "_color)");
     list.add(g.density, finest, -1, s);
     list.add(g.color, finest, -1, s);
@@ -197,19 +201,23 @@ void addLevelGrids(const CacheView& cache, const std::vector<uint32_t>& levels,
         const std::string prefix =
             "level" + std::to_string(level) + (octant < 0 ? std::string() : "_" + octantName(octant)) + "_";
         if (options.density) {
-            tagGrid(*g.density, prefix + "density", level, octant, s, options.scale, "luminance of radiance x scale");
+            tagGrid(*g.density, prefix + "density", level, octant, s, options.length_scale, options.scale,
+                    "luminance of radiance x scale");
             list.add(g.density, level, octant, s);
         }
         if (options.color) {
-            tagGrid(*g.color, prefix + "color", level, octant, s, options.scale, "radiance x scale");
+            tagGrid(*g.color, prefix + "color", level, octant, s, options.length_scale, options.scale,
+                    "radiance x scale");
             list.add(g.color, level, octant, s);
         }
         if (options.radiance) {
-            tagGrid(*g.radiance, prefix + "radiance", level, octant, s, 1.0f, "mean outgoing radiance (unscaled)");
+            tagGrid(*g.radiance, prefix + "radiance", level, octant, s, options.length_scale, 1.0f,
+                    "mean outgoing radiance (unscaled)");
             list.add(g.radiance, level, octant, s);
         }
         if (options.samples) {
-            tagGrid(*g.samples, prefix + "samples", level, octant, s, 1.0f, "effective sample count (sum of weights)");
+            tagGrid(*g.samples, prefix + "samples", level, octant, s, options.length_scale, 1.0f,
+                    "effective sample count (sum of weights)");
             list.add(g.samples, level, octant, s);
         }
     }
