@@ -34,6 +34,15 @@ for what, ok in checks.items():
     print(("ok: " if ok else "FAIL: ") + what)
 sys.exit(0 if all(checks.values()) else 1)
 PY
+# Exported in millimetres (a volume 1000x larger than Blender's default far clip of 1000 units
+# reaches): the still was black. The camera's clip range follows the volume now.
+expect 0 "export in millimetres" "$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/cornell_mm.vdb" --levels 1 \
+    --length-scale 1000 -q
+expect 0 "Blender, a millimetre file" blender -b --factory-startup --python "$script" -- "$work/cornell_mm.vdb" \
+    --render "$work/blender_mm.png" --resolution 96
+python3 -c "import json,sys; r=json.loads(sys.argv[1]); print('render:', r); sys.exit(0 if r['lit_fraction'] > 0.5 and r['left_rgb'][0] > 1.5 * r['left_rgb'][1] else 1)" \
+    "$(grep '^sharcbake_vdb_render: ' "$work/out.txt" | sed 's/^sharcbake_vdb_render: //')" &&
+    echo "ok: a millimetre export renders lit" || fail "the millimetre export renders black or wrong"
 # Exported Z-up (export-vdb --up z) and read as such: upright again, without the script's turn.
 expect 0 "export Z-up" "$sharcbake" export-vdb "$work/cornell.sharc" -o "$work/cornell_z.vdb" --levels 1 --up z -q
 expect 0 "Blender, a Z-up file" blender -b --factory-startup --python "$script" -- "$work/cornell_z.vdb" \

@@ -93,6 +93,11 @@ def render_still(obj, path, resolution):
     scene.collection.objects.link(camera)
     camera.location = centre + mathutils.Vector((0.0, -1.2 * size, 0.0))
     camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
+    # Blender's default clip range (0.1 to 1000 units) would cut off a volume over about 400 units
+    # across (a --length-scale 1000 export, a model in millimetres): a black still, without a word.
+    # The range follows the volume: its far side is 1.7 sizes away at most.
+    camera.data.clip_start = 1e-3 * size
+    camera.data.clip_end = 4.0 * size
     scene.camera = camera
     scene.world = bpy.data.worlds.new("black")
     scene.world.color = (0.0, 0.0, 0.0)
