@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 
 namespace sharcbake {
 namespace {
@@ -319,13 +320,20 @@ ProbeMeasure CacheProbes::measure(size_t index, size_t population_index) {
         });
         m.levels.push_back(ProbeLevelError{level, errorOf(at_level, record, grey_floor)});
     }
+    // A material is named by its name where that is its own; by its index too where the name is
+    // empty or shared (CAD exports name ten materials "Material_20"), so regions stay apart.
+    std::map<std::string, uint32_t> name_uses;
+    for (const Material& material : scene_.materials) ++name_uses[material.name];
     for (uint32_t material = 0; material < scene_.materials.size(); ++material) {
         const std::vector<Pair> in_region = select([&](const Pair& pair) {
             return pair.view_level && candidates_[pair.candidate].material == material;
         });
         if (in_region.empty()) continue;
-        m.regions.push_back(ProbeRegionError{"material '" + scene_.materials[material].name + "'",
-                                             errorOf(in_region, record, grey_floor)});
+        const std::string& name = scene_.materials[material].name;
+        const std::string label = name.empty()            ? "material " + std::to_string(material)
+                                  : name_uses[name] == 1u ? "material '" + name + "'"
+                                                          : "material " + std::to_string(material) + " '" + name + "'";
+        m.regions.push_back(ProbeRegionError{label, errorOf(in_region, record, grey_floor)});
     }
     const glm::vec3 centre = 0.5f * (scene_.bounds_min + scene_.bounds_max);
     for (uint32_t octant = 0; octant < 8; ++octant) {

@@ -141,6 +141,27 @@ TEST(CacheProbes, ACornellBoxBiasedByFivePercentOnOneWallShowsIt) {
     EXPECT_EQ(green_after->error.relative_bias, green_before->error.relative_bias);
 }
 
+// Regions are named by material name where it is the material's own, and by index too where
+// the name is shared or empty: a CAD export with ten materials called "Material_20" printed
+// "material 'Material_20' stands out" three times, with different numbers.
+TEST(CacheProbes, MaterialsSharingANameGetRegionsNamedApart) {
+    ShortBake bake("cornell_box", 8);
+    uint32_t red = 0, green = 0;
+    for (uint32_t i = 0; i < bake.scene.materials.size(); ++i) {
+        if (bake.scene.materials[i].name == "red") red = i;
+        if (bake.scene.materials[i].name == "green") green = i;
+    }
+    ASSERT_NE(red, green);
+    bake.scene.materials[red].name = bake.scene.materials[green].name = "Material_20";
+    CacheProbes probes(bake.scene, *bake.tracer, *bake.lights, bake.probeSettings(256, 16));
+    const size_t record = probes.record(BakedCache(bake.data, glm::vec3(0.0f)).view());
+    const ProbeMeasure m = probes.measure(record, record);
+    EXPECT_TRUE(region(m, "material " + std::to_string(red) + " 'Material_20'")) << red;
+    EXPECT_TRUE(region(m, "material " + std::to_string(green) + " 'Material_20'")) << green;
+    EXPECT_FALSE(region(m, "material 'Material_20'"));
+    EXPECT_TRUE(region(m, "material 'white'"));  // a name of its own alone
+}
+
 TEST(CacheProbes, NoProbesMeansNoWork) {
     ShortBake bake("furnace_rho050", 2);
     ProbeSettings settings = bake.probeSettings(0, 16);
