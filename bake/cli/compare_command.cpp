@@ -7,6 +7,7 @@
 #include "reports/image_error.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -52,19 +53,29 @@ void runCompare(const CompareOptions& o) {
                      "fall back to an absolute 0.01, so they depend on the images' units\n",
                      o.reference_path.c_str());
     }
+    if (error.reference_non_finite_pixels > 0) {
+        std::fprintf(stderr,
+                     "warning: %s has %s with NaN or infinity: nothing to measure against there, so %s out of "
+                     "every measure\n",
+                     o.reference_path.c_str(), counted(error.reference_non_finite_pixels, "pixel").c_str(),
+                     error.reference_non_finite_pixels == 1 ? "it is left" : "they are left");
+    }
     if (o.json) {
         const Json json = {{"schema", jsonSchemaId("compare")},
                            {"relative_mse", jsonNumber(error.relative_mse)},
                            {"mean_relative_error", jsonNumber(error.mean_relative_error)},
                            {"relative_bias", jsonNumber(error.relative_bias)},
                            {"non_finite_pixels", error.non_finite_pixels},
+                           {"reference_non_finite_pixels", error.reference_non_finite_pixels},
                            {"error_scale", jsonNumber(error.scale)},
                            {"error_scale_is_fallback", error.scale_is_fallback}};
         std::fputs(jsonText(json).c_str(), stdout);
     } else {
-        std::printf("relative MSE %.6g, mean relative error %.4f%%, bias %+.4f%%, non-finite pixels %llu\n",
-                    error.relative_mse, 100.0 * error.mean_relative_error, 100.0 * error.relative_bias,
-                    (unsigned long long)error.non_finite_pixels);
+        char bias[48] = "bias - (the reference is black)";
+        if (std::isfinite(error.relative_bias))
+            std::snprintf(bias, sizeof bias, "bias %+.4f%%", 100.0 * error.relative_bias);
+        std::printf("relative MSE %.6g, mean relative error %.4f%%, %s, non-finite pixels %llu\n", error.relative_mse,
+                    100.0 * error.mean_relative_error, bias, (unsigned long long)error.non_finite_pixels);
     }
 }
 

@@ -35,7 +35,7 @@ constexpr uint32_t kPlainRenderSeed = 0x9a1e0000u;
 
 /// Empty for a missing value: spreadsheets and gnuplot both read that as "no data".
 std::string csvNumber(std::optional<double> value) {
-    if (!value) return "";
+    if (!value || !std::isfinite(*value)) return "";  // empty, as unmeasured (a black reference's bias)
     char text[32];
     std::snprintf(text, sizeof text, "%.6g", *value);
     return text;

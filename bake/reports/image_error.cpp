@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace sharcbake {
@@ -35,7 +36,8 @@ void requireSameSize(const Image& image, const Image& reference) {
 
 bool finite(glm::vec3 x) { return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z); }
 
-/// Mean relative error of the kComparisonTile^2 tile means (non-finite pixels left out of both).
+/// Mean relative error of the kComparisonTile^2 tile means (pixels non-finite in either image
+/// left out of both).
 double tileMeanRelativeError(const Image& image, const Image& reference, const Denominators& divide) {
     double sum = 0.0;
     uint64_t terms = 0;
@@ -46,7 +48,7 @@ double tileMeanRelativeError(const Image& image, const Image& reference, const D
             for (int y = ty; y < std::min(ty + kComparisonTile, image.height); ++y) {
                 for (int px = tx; px < std::min(tx + kComparisonTile, image.width); ++px) {
                     const size_t i = size_t(y) * size_t(image.width) + size_t(px);
-                    if (!finite(image.pixels[i])) continue;
+                    if (!finite(image.pixels[i]) || !finite(reference.pixels[i])) continue;
                     x += glm::dvec3(image.pixels[i]);
                     r += glm::dvec3(reference.pixels[i]);
                     ++pixels;
@@ -94,6 +96,10 @@ ImageComparison compareImages(const Image& image, const Image& reference, const 
     for (size_t i = 0; i < n; ++i) {
         const glm::vec3 x = image.pixels[i];
         const glm::vec3 r = reference.pixels[i];
+        if (!finite(r)) {  // no answer to measure against there
+            ++e.reference_non_finite_pixels;
+            continue;
+        }
         const bool masked = !mask || (*mask)[i] != 0;
         e.masked_pixels += masked ? 1 : 0;
         if (!finite(x)) {
@@ -118,14 +124,16 @@ ImageComparison compareImages(const Image& image, const Image& reference, const 
             sum_reference += double(r[c]);
         }
     }
-    const double count = 3.0 * double(std::max<size_t>(n, 1));
+    const double count = 3.0 * double(std::max<uint64_t>(n - e.reference_non_finite_pixels, 1));
     e.relative_mse /= count;
     e.mean_relative_error /= count;
     const double masked_count = 3.0 * double(std::max<uint64_t>(e.masked_pixels, 1));
     e.masked_relative_mse /= masked_count;
     e.masked_mean_relative_error /= masked_count;
     e.tile_mean_relative_error = tileMeanRelativeError(image, reference, divide);
-    e.relative_bias = sum_reference > 0.0 ? (sum_image - sum_reference) / sum_reference : 0.0;
+    // A black reference has no relative bias: 0 read as "no bias" for an image of 1 against it.
+    e.relative_bias = sum_reference > 0.0 ? (sum_image - sum_reference) / sum_reference
+                                          : std::numeric_limits<double>::quiet_NaN();
     return e;
 }
 

@@ -27,8 +27,11 @@ namespace sharcbake {
 struct ImageComparison {
     double relative_mse = 0.0;
     double mean_relative_error = 0.0;
-    double relative_bias = 0.0;
+    double relative_bias = 0.0;      ///< NaN where the reference's sum is not positive (a black one)
     uint64_t non_finite_pixels = 0;  ///< pixels of the test image with NaN/Inf (counted as error 1)
+    /// Pixels of the reference with NaN/Inf: nothing to measure against, so left out of every
+    /// measure (and of the count they average over).
+    uint64_t reference_non_finite_pixels = 0;
     double tile_mean_relative_error = 0.0;
     double masked_relative_mse = 0.0;         ///< as relative_mse, over the mask (all pixels without one)
     double masked_mean_relative_error = 0.0;  ///< as mean_relative_error, over the mask

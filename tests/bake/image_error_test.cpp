@@ -187,21 +187,21 @@ TEST(CompareImages, ABlackReferenceDividesByNoZero) {
     EXPECT_EQ(none.relative_mse, 0.0);
     EXPECT_EQ(none.mean_relative_error, 0.0);
     EXPECT_EQ(none.tile_mean_relative_error, 0.0);
-    EXPECT_EQ(none.relative_bias, 0.0);
+    EXPECT_TRUE(std::isnan(none.relative_bias));  // no mean to be relative to
     const ImageComparison grey = compareImages(filled(9, 7, glm::vec3(0.5f)), black);
     EXPECT_TRUE(grey.scale_is_fallback);
     EXPECT_NEAR(grey.relative_mse, 0.25 / 0.01, 1e-9);
     EXPECT_NEAR(grey.mean_relative_error, 0.5 / 0.01, 1e-9);
     EXPECT_NEAR(grey.tile_mean_relative_error, 0.5 / 0.01, 1e-9);
     EXPECT_NEAR(grey.masked_relative_mse, grey.relative_mse, 1e-12);
-    EXPECT_EQ(grey.relative_bias, 0.0);  // no mean to be relative to
+    EXPECT_TRUE(std::isnan(grey.relative_bias));  // it read +0%, "no bias", for an image of 0.5
     const RelativeMseSplit split = splitRelativeMse(filled(9, 7, glm::vec3(0.4f)), 4, filled(9, 7, glm::vec3(0.6f)), 4,
                                                     black);
     EXPECT_NEAR(split.total, 0.25 / 0.01, 1e-5);  // 0.4f and 0.6f round
     EXPECT_NEAR(split.noise, 0.25 * 0.04 / 0.01, 1e-5);
     EXPECT_TRUE(std::isfinite(split.rest_standard_error));
-    // A NaN pixel in the reference counts as a full error of its own (compareImages), and the
-    // scale is the other pixels' mean: it does not fall back to 1 for the whole image.
+    // A NaN pixel in the reference is left out of the measures (compareImages), and the scale is
+    // the other pixels' mean: it does not fall back to 1 for the whole image.
     Image poisoned = filled(4, 4, glm::vec3(3e-3f));
     poisoned.pixels[3].y = std::numeric_limits<float>::quiet_NaN();
     bool fallback = true;
@@ -214,6 +214,27 @@ TEST(CompareImages, ABlackReferenceDividesByNoZero) {
     EXPECT_TRUE(fallback);
     EXPECT_EQ(errorScale(filled(4, 4, glm::vec3(3e-5f)), &fallback), double(3e-5f));
     EXPECT_FALSE(fallback);
+}
+
+// A reference pixel with NaN or infinity has no answer to measure against: it is left out of
+// every measure and of the count they average over, and counted. An infinite one made the
+// relative MSE NaN while the bias ignored it; a NaN one made both NaN.
+TEST(CompareImages, NonFiniteReferencePixelsAreLeftOutAndCounted) {
+    const Image image = filled(4, 4, glm::vec3(2.5f));
+    const ImageComparison clean = compareImages(image, filled(4, 4, glm::vec3(2.0f)));
+    for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        Image reference = filled(4, 4, glm::vec3(2.0f));
+        reference.pixels[5].x = bad;
+        reference.pixels[9] = glm::vec3(-bad);
+        const ImageComparison e = compareImages(image, reference);
+        EXPECT_EQ(e.reference_non_finite_pixels, 2u);
+        EXPECT_EQ(e.non_finite_pixels, 0u);
+        EXPECT_NEAR(e.relative_mse, clean.relative_mse, 1e-12) << bad;
+        EXPECT_NEAR(e.mean_relative_error, clean.mean_relative_error, 1e-12) << bad;
+        EXPECT_NEAR(e.relative_bias, clean.relative_bias, 1e-12) << bad;
+        EXPECT_NEAR(e.tile_mean_relative_error, clean.tile_mean_relative_error, 1e-12) << bad;
+        EXPECT_EQ(e.masked_pixels, 14u);
+    }
 }
 
 TEST(CompareImages, RefusesDifferentSizes) {
