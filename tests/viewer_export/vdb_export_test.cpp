@@ -296,6 +296,27 @@ TEST(VdbExportUnrepresentable, EmptyCache) {
     EXPECT_NE(::access(out.c_str(), F_OK), 0) << "a file was written";
 }
 
+// --scale multiplies radiance into float32 grids: a scale that takes the brightest voxel beyond
+// float32's range wrote infinities (exit 0); it is refused naming the largest scale that fits.
+TEST(VdbExportScale, OneBeyondFloat32IsRefusedNamingTheLargestThatFits) {
+    CacheData data;
+    data.bake_capacity = 1024;
+    data.voxels.push_back(makeVoxel({1, 2, 3}, 1, 0, 1e30f, 2.0f, 3.0f, 1.0f));
+    std::vector<uint8_t> bytes;
+    CacheView view;
+    ASSERT_NO_FATAL_FAILURE(openInMemory(data, bytes, view));
+    std::string message;
+    const std::string out = ::testing::TempDir() + "sharcbake_bright_" + std::to_string(::getpid()) + ".vdb";
+    VdbExportOptions options;
+    options.scale = 1e10f;
+    EXPECT_EQ(exportCacheToVdb(view, out, options, nullptr, &message), VdbExportStatus::kInvalidArgument);
+    EXPECT_NE(message.find("Use a scale of at most 3.4e+08"), std::string::npos) << message;
+    EXPECT_NE(::access(out.c_str(), F_OK), 0) << "a file was written";
+    options.scale = 3e8f;
+    EXPECT_EQ(exportCacheToVdb(view, out, options, nullptr, &message), VdbExportStatus::kOk) << message;
+    std::remove(out.c_str());
+}
+
 // A model a millimetre across has micrometre voxels at its finest levels, which OpenVDB's
 // transforms refuse; its coarser levels fit. The refusal names them, and exporting them works.
 TEST(VdbExportUnrepresentable, MicrometreVoxelsNameTheLevelsThatFit) {

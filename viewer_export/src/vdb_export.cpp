@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -308,6 +309,23 @@ VdbExportStatus exportCacheToVdb(const CacheView& cache, const std::string& out_
         return fail(VdbExportStatus::kInvalidArgument, problem);
     }
     if (levels.empty()) return fail(VdbExportStatus::kUnrepresentable, "the cache holds no voxels: nothing to export");
+    // density and color are radiance x scale in float32: a scale that takes the brightest voxel
+    // beyond float32's range wrote infinities into the grids (exit 0). A cell's mean and its
+    // luminance are at most its voxels' largest component.
+    double brightest = 0.0;
+    for (uint64_t i = 0; i < cache.voxelCount(); ++i) {
+        const CacheVoxel v = cache.voxel(i);
+        brightest = std::max({brightest, double(v.radiance[0]), double(v.radiance[1]), double(v.radiance[2])});
+    }
+    constexpr double kLargestFloat = double(std::numeric_limits<float>::max());
+    if (brightest * std::abs(double(options.scale)) > kLargestFloat) {
+        char text[240];
+        std::snprintf(text, sizeof text,
+                      "scale %g takes the brightest voxel's radiance (%g) beyond float32's range (%g): the grids "
+                      "would hold infinities. Use a scale of at most %.3g",
+                      double(options.scale), brightest, kLargestFloat, kLargestFloat / brightest);
+        return fail(VdbExportStatus::kInvalidArgument, text);
+    }
 
     openvdb::initialize();
     // A level's transform at a length scale, or null where OpenVDB refuses its voxel size

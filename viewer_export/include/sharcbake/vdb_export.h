@@ -66,13 +66,15 @@ struct VdbGridInfo {
 
 enum class VdbExportStatus {
     kOk,
-    kInvalidArgument,  ///< the request: a level the cache lacks, a scale or length scale not finite and > 0
+    kInvalidArgument,  ///< the request: a level the cache lacks, a scale or length scale not finite and > 0,
+                       ///< a scale beyond float32 for the brightest voxel
     kIoError,
     kUnrepresentable,  ///< a valid cache VDB cannot hold: no voxels, a voxel size out of VDB's range
 };
 
 /// @brief Writes the grids of `cache` to `out_path` (.vdb). kInvalidArgument: a requested level
-/// is not in the cache, the scale is not finite or the length scale not finite and positive;
+/// is not in the cache, the scale is not finite or takes the brightest voxel beyond float32, or
+/// the length scale is not finite and positive;
 /// kUnrepresentable: the cache holds no voxels or a voxel size OpenVDB cannot take at the length
 /// scale (the message names the levels that fit and a length scale at which all of them do);
 /// kIoError: the file could not be written. `grids` (optional) receives what was written;
