@@ -26,6 +26,10 @@ namespace sharcbake {
 /// the origin) no longer keeps surfaces that lie on voxel boundaries on one side of them
 /// (docs/sharc_algorithm.md §10.9); the bias is part of the bit-exact key and cannot follow the scene.
 inline constexpr double kPositionBiasWarningFactor = 16.0;
+/// A scene fewer than this many voxels of the position bias's distance across
+/// (StabilityReport::bias_distance_voxel_size) is warned about: its lookups are mostly refused.
+/// A room 4e-5 across is 19 such voxels and renders through its cache as at 4 m; at 4e-6, 1.2.
+inline constexpr double kBiasVoxelsAcrossScene = 4.0;
 
 /// Above this share of deposits below one fixed-point step the dim part of the scene is mostly
 /// rounding noise (a room lit at 1e-6 beside a 1e12 emitter read 0 in every voxel).
@@ -63,6 +67,10 @@ struct StabilityReport {
     double ray_offset = 0.0;           ///< how far the tracer moves ray origins off a surface there
     uint32_t finest_level = 0;         ///< 0 when the cache is empty
     double finest_voxel_size = 0.0;
+    /// The voxel of a lookup at the distance of SHaRC's position bias alone (|(1e-4, 1e-4, 1e-4)|,
+    /// 1.7e-4): every key adds the bias before choosing its level, so in a scene much smaller than
+    /// that every lookup's level follows that distance, whatever the camera's.
+    double bias_distance_voxel_size = 0.0;
     /// Largest |cell index - the grid anchor's| the scene's bounds reach, at any level present.
     int64_t max_grid_coordinate = 0;
     bool grid_coordinates_wrap = false;  ///< beyond the 17-bit signed key field

@@ -264,6 +264,26 @@ TEST(ExtremeScaleAdvice, TinySceneIsSafeHugeOneIsToldToScaleDownAndAFarOneToMove
     EXPECT_FALSE(advice(huge, "towards the origin"));
     EXPECT_TRUE(advice(far, "towards the origin"));
     EXPECT_FALSE(advice(far, "scale it down"));
+
+    // A room 4e-6 across (4 m scaled by 1e-6), with the bias the grid fit gives it: every lookup's
+    // level follows the position bias's 1.7e-4, in voxels 3.3e-6 wide, and a render through its
+    // cache found 8 hits among 112,573 refused lookups while the bake found no problem. At 4e-5
+    // (19 such voxels across) renders hit as at 4 m: no warning.
+    const auto biasWarning = [&](float side, float level_bias) {
+        settings.grid.level_bias = level_bias;
+        const SharcCache cache(settings, 1.0);
+        const StabilityReport report = makeStabilityReport(cache, UpdateCounters{}, glm::vec3(-0.5f * side),
+                                                           glm::vec3(0.5f * side), {1});
+        for (const std::string& w : report.warnings) {
+            if (w.find("SHaRC adds 1e-4 to every coordinate") != std::string::npos) return w;
+        }
+        return std::string();
+    };
+    const std::string micro = biasWarning(4e-6f, 20.5625f);
+    EXPECT_NE(micro.find("in voxels 3.31e-06 wide (83% of the scene)"), std::string::npos) << micro;
+    EXPECT_NE(micro.find("Scale the scene up"), std::string::npos) << micro;
+    EXPECT_EQ(biasWarning(4e-5f, 17.25f), "");
+    EXPECT_EQ(biasWarning(1e-3f, 12.48f), "");
 }
 
 }  // namespace
