@@ -38,9 +38,6 @@
 namespace sharcbake {
 namespace {
 
-/// render warns when the tracer's ray offset exceeds this share of the scene's largest side.
-constexpr float kRayOffsetWarningShare = 0.01f;
-
 struct RenderOptions {
     std::string light_selection = "auto";  ///< as bake's --light-selection
     std::string trace_kernels = "avx2";    ///< as bake's --trace-kernels

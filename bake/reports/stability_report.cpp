@@ -126,6 +126,16 @@ void addWarnings(StabilityReport& r) {
                    "more than the finest voxel (%.3g): light leaks through walls thinner than "
                    "that; move the scene towards the origin",
                    r.ray_offset, double(kRayOffsetRoundings), r.finest_voxel_size));
+    } else if (r.largest_side > 0.0 && r.ray_offset > double(kRayOffsetWarningShare) * r.largest_side) {
+        // The grid fit widens the voxels far out (precision), so they can exceed an offset that is
+        // already a large part of the scene: a 4-unit room 1e7 out baked 30% dark, with 20-unit
+        // voxels and an offset of 19, and only render warned.
+        r.warnings.push_back(
+            format("the tracer moves ray origins up to %.3g off surfaces at the scene's far corner "
+                   "(%g float32 roundings of its coordinates there, its self-intersection guard), %.3g%% of "
+                   "the scene's largest side (%.3g): light leaks through its walls and corners darken; move "
+                   "the scene towards the origin",
+                   r.ray_offset, double(kRayOffsetRoundings), 100.0 * r.ray_offset / r.largest_side, r.largest_side));
     }
     if (r.largest_side > 0.0 && r.largest_side < kBiasVoxelsAcrossScene * r.bias_distance_voxel_size) {
         // A 4 mm room in metres scaled by 1e-3 again (4e-6 across): its lookups all fell at the

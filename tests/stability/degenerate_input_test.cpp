@@ -265,6 +265,19 @@ TEST(ExtremeScaleAdvice, TinySceneIsSafeHugeOneIsToldToScaleDownAndAFarOneToMove
     EXPECT_TRUE(advice(far, "towards the origin"));
     EXPECT_FALSE(advice(far, "scale it down"));
 
+    // A 4-unit room 1e7 out: the grid fit's voxels there (20 units) exceed the ray offset (19),
+    // which is still 476% of the room; it baked 30% dark and only render warned.
+    settings.grid.level_bias = -8.97f;  // level 1 about 20 units wide
+    const SharcCache distant_cache(settings, 1.0);
+    const StabilityReport distant = makeStabilityReport(distant_cache, UpdateCounters{}, glm::vec3(1e7f, 0.0f, 0.0f),
+                                                        glm::vec3(1e7f + 4.0f, 4.0f, 4.0f), {1});
+    EXPECT_LT(distant.ray_offset, distant.finest_voxel_size);
+    bool offset_named = false;
+    for (const std::string& w : distant.warnings)
+        offset_named |= w.find("of the scene's largest side (4)") != std::string::npos &&
+                        w.find("towards the origin") != std::string::npos;
+    EXPECT_TRUE(offset_named);
+
     // A room 4e-6 across (4 m scaled by 1e-6), with the bias the grid fit gives it: every lookup's
     // level follows the position bias's 1.7e-4, in voxels 3.3e-6 wide, and a render through its
     // cache found 8 hits among 112,573 refused lookups while the bake found no problem. At 4e-5
