@@ -143,6 +143,11 @@ struct BakeJob {
     TraceKernels trace_kernels = TraceKernels::kAvx2;
 };
 
+/// Above this share of the deposited energy dropped for want of a slot, the cache's gaps are the
+/// table's doing: the warnings that blame where the roaming camera went are left out (the
+/// stability warning about full buckets names --capacity).
+constexpr double kTableFullShare = 0.1;
+
 /// The signal that asked the bake to stop (SIGINT, or SIGTERM as batch schedulers send before a
 /// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
 /// second signal aborts promptly.
@@ -1738,8 +1743,21 @@ private:
                                  : job_.settings.view_region.kind != ViewRegion::Kind::BakeCamera
                                      ? coverage_.unreached_deposit_area
                                      : coverage_.unreached_area;
-        warnAboutHitRate(prediction_, unreached, cameras_in_solids_, !scene_.cameras.empty());
-        if (live_voxels_ == 0) {
+        // A table too small for the scene drops most deposits: what the cache lacks is then not
+        // the roaming camera's doing, and the warnings below that blame it would mislead (the
+        // stability warning names --capacity).
+        const bool table_full = stability_.share(stability_.failed_insert_energy) > kTableFullShare;
+        if (baker_->iterationsDone() == 0) {
+            std::fprintf(stderr,
+                         "warning: the cache is empty: no iteration ran (%s before the first), so every lookup will "
+                         "miss\n",
+                         howTheBakeStopped(stop_reason_));
+        } else if (!table_full) {
+            warnAboutHitRate(prediction_, unreached, cameras_in_solids_, !scene_.cameras.empty());
+        }
+        if (baker_->iterationsDone() == 0 || table_full) {
+            // Said above, or by the stability warning that names --capacity.
+        } else if (live_voxels_ == 0) {
             // The file is valid, and every lookup from it will miss: say so once, plainly.
             const char* remedies = !job_.camera.path_file.empty() ? "a --camera-path whose cameras look at the scene"
                                    : job_.camera.source == CameraPathSource::GltfCameras

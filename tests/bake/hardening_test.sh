@@ -82,6 +82,16 @@ says "$work/s.json" '"width"' "the stats JSON has its content"
 expect 1 "render --fov nan" "$sharcbake" render "$furnace" -o "$work/n.exr" --look-at 0,0,3,0,0,0 --fov nan --resolution 8 --spp 1 -q
 expect 1 "render --exposure inf" "$sharcbake" render "$furnace" -o "$work/n.exr" --exposure inf --resolution 8 --spp 1 -q
 expect 1 "bake --time-budget nan" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --time-budget nan $quick
+# A budget spent before the first iteration: the empty cache was blamed on the camera ("check that
+# the camera looks at the scene"), with advice to give more iterations.
+expect 0 "bake --time-budget 1e-9" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --time-budget 1e-9 $quick
+says "$work/err.txt" "no iteration ran (stopped by --time-budget before the first)" "the empty cache is explained"
+grep -q "camera" "$work/err.txt" && fail "a bake that ran no iteration blames the camera"
+# A table far too small: its gaps were blamed on the roaming camera, next to the warning naming
+# --capacity; that one alone is said now.
+expect 0 "bake --capacity 16" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --capacity 16 $quick
+says "$work/err.txt" "found their hash bucket full" "the full table is named"
+grep -q "roaming camera" "$work/err.txt" && fail "a full table's gaps are blamed on the roaming camera"
 expect 1 "bake --sky-scale nan" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --sky-scale nan $quick
 expect 1 "bake --sky with a negative radiance" "$sharcbake" bake "$furnace" -o "$work/n.sharc" --sky=-1,0,0 $quick
 # Cameras beyond +-1e9 (where no vertex may lie): rays from 1e20 failed Embree's ray.valid()
