@@ -155,7 +155,7 @@ std::string LightLeakReport::describe(const EmitterLeak& leak) {
     // The material's name goes in outside the buffer: a long one would cut the advice short.
     char text[640];
     std::snprintf(text, sizeof text,
-                  ": %.0f%% of its area shares voxels (%.3g units wide, from the scene's nearest camera) with a "
+                  ": %.0f%% of its area shares voxels (%.3g units wide, as the nearest view keys them) with a "
                   "surface facing the same way %.3g units behind it (median) that shows around its edge, so renders "
                   "through the cache show the emitter's light on that surface around it (a light leak, brighter "
                   "than path tracing). Move the emitter at least %.3g away from the surface, or remove the surface "

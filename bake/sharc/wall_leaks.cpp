@@ -131,8 +131,8 @@ std::string WallLeakReport::describe() const {
     if (share < kWallLeakShare || leaking_sides < kWallLeakSides) return "";
     char text[640];
     std::snprintf(text, sizeof text,
-                  "%.2g%% of the surface the roaming camera reaches shares voxels (%.3g units wide, from the "
-                  "scene's nearest camera) with surface facing the same way on the other side of a wall thinner "
+                  "%.2g%% of the surface the roaming camera reaches shares voxels (%.3g units wide, as the "
+                  "nearest view keys them) with surface facing the same way on the other side of a wall thinner "
                   "than that: where paths reach both sides, renders through the cache show each side's light on "
                   "the other, and the cache's own lookups carry it through the room (two rooms 0.1 mm apart: the "
                   "dim one 60 times too bright). Give partitions a thickness of at least %.3g, or bake the rooms "
