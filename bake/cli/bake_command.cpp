@@ -374,11 +374,11 @@ std::unique_ptr<ConvergenceEvaluator> makeEvaluator(const BakeOptions& o, const 
         errorScale(*reference, &no_scale);
         if (no_scale) {
             // As compare says: the image rows' numbers would then be in the scene's units.
-            std::fprintf(stderr,
-                         "warning: --reference %s has no positive finite mean (black, or no finite pixel): the "
-                         "report's image measures fall back to absolute epsilons of 0.01 and depend on the "
-                         "scene's units (its probe measures do not)\n",
-                         o.reference_path.c_str());
+            warn(
+                formatted("--reference %s has no positive finite mean (black, or no finite pixel): the "
+                          "report's image measures fall back to absolute epsilons of 0.01 and depend on the "
+                          "scene's units (its probe measures do not)",
+                          o.reference_path.c_str()));
         }
         if (!o.report_resolution.empty()) {
             int width = 0, height = 0;
@@ -699,15 +699,15 @@ Json lightLeaksJson(const LightLeakReport& r) {
 }
 
 /// Below 95% of SHaRC's lookups answered, the cache does not serve its views: say which and why.
-/// `unreached_area`: the share of the surface no update path reached (see warnAndStop).
+/// `unreached_area`: the share of the surface no update path reached (see warnAboutTheCache).
 void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
                       const std::vector<std::string>& cameras_in_solids, bool has_gltf_cameras) {
     if (p.eligible == 0 && p.refused > 0) {
-        std::fprintf(stderr,
-                     "warning: SHaRC's eligibility tests refuse every one of the %llu lookups from the views (each "
-                     "bounce is shorter than its voxel): the voxels are far larger than what the cameras see, so "
-                     "a runtime traces every path in full. Give a larger --level-bias (each +1 halves the voxels)\n",
-                     (unsigned long long)p.refused);
+        warn(
+            formatted("SHaRC's eligibility tests refuse every one of the %llu lookups from the views (each "
+                      "bounce is shorter than its voxel): the voxels are far larger than what the cameras see, so "
+                      "a runtime traces every path in full. Give a larger --level-bias (each +1 halves the voxels)",
+                      (unsigned long long)p.refused));
         return;
     }
     if (p.eligible < kLookupsForARate) return;  // a rate of a handful says nothing (describeHitRate says why)
@@ -758,11 +758,11 @@ void warnAboutHitRate(const HitRatePrediction& p, double unreached_area,
                  " inside a solid (the Camera line names it): if it stands inside a closed object by mistake, "
                  "move it.";
     }
-    std::fprintf(stderr,
-                 "warning: the cache answers %.1f%% of SHaRC's lookups from its views%s; a runtime traces the rest. "
-                 "%s%s Engines can also fall back to the nearest level the file holds (lookupNearestLevel; render "
-                 "--cache-lookup nearest shows it)\n",
-                 100.0 * p.rate(), lowest, remedy, inside.c_str());
+    warn(
+        formatted("the cache answers %.1f%% of SHaRC's lookups from its views%s; a runtime traces the rest. "
+                  "%s%s Engines can also fall back to the nearest level the file holds (lookupNearestLevel; render "
+                  "--cache-lookup nearest shows it)",
+                  100.0 * p.rate(), lowest, remedy, inside.c_str()));
 }
 
 /// The bake's summary lists each glTF camera's predicted rate up to this many cameras; beyond, the
@@ -1163,8 +1163,9 @@ private:
         if (!o_.quiet) printSummary();
         if (evaluator_) writeReport();
         stats_on_stdout.release();
-        if (!o_.stats_json.empty()) writeStatsJson();
-        warnAndStop();
+        warnAboutTheCache();
+        if (!o_.stats_json.empty()) writeStatsJson();  // after the warnings, which it lists
+        stopIfSignalled();
     }
 
     /// No output may be an input or another output; --resume F keeps checkpointing into F.
@@ -1302,8 +1303,7 @@ private:
         }
         // Along the rays of the camera the bake will use, the exploring one's having served the grid.
         warnWhenNoLightArrives();
-        for (const std::string& warning : grid_decision_.warnings)
-            std::fprintf(stderr, "warning: %s\n", warning.c_str());
+        for (const std::string& warning : grid_decision_.warnings) warn(warning);
         warnAboutLeaks();
         if (autoCapacity()) chooseAutoCapacity();
         baker_ = std::make_unique<Baker>(*tracer_, *lights_, *camera_path_, job_.settings,
@@ -1316,18 +1316,17 @@ private:
                 neutral_differences = resumeFromCheckpoint(o_.resume_path, resume_settings_, *baker_);
             });
             for (const std::string& difference : neutral_differences) {
-                std::fprintf(stderr,
-                             "warning: --resume %s: %s (it does not change the baked voxels; the bake goes on)\n",
-                             o_.resume_path.c_str(), difference.c_str());
+                warn(formatted("--resume %s: %s (it does not change the baked voxels; the bake goes on)",
+                               o_.resume_path.c_str(), difference.c_str()));
             }
         }
         first_iteration_ = baker_->iterationsDone();
         if (first_iteration_ > o_.iterations) {
             // A checkpoint is never cut back: the cache holds every iteration it had.
-            std::fprintf(stderr,
-                         "warning: %s holds %u iterations, more than --iterations %u: no more are baked, and the "
-                         "cache holds all %u\n",
-                         o_.resume_path.c_str(), first_iteration_, o_.iterations, first_iteration_);
+            warn(
+                formatted("%s holds %u iterations, more than --iterations %u: no more are baked, and the "
+                          "cache holds all %u",
+                          o_.resume_path.c_str(), first_iteration_, o_.iterations, first_iteration_));
         }
         report_.scene = job_.scene_path;
         if (o_.target_error > 0.0) report_.target_error = o_.target_error;
@@ -1527,10 +1526,10 @@ private:
         const LightProbe probe = probeLight(*tracer_, *lights_, rays, job_.settings.seed);
         if (probe.met_light || probe.surface_hits < kProbeHitsForAVerdict) return;
         warned_no_light_ = true;
-        std::fprintf(stderr,
-                     "warning: none of %u paths from the roaming camera met light (%u of them met a surface), so "
-                     "the cache will be black: %s\n",
-                     probe.paths, probe.surface_hits, whyNoLightArrives(*tracer_, rays).c_str());
+        warn(
+            formatted("none of %u paths from the roaming camera met light (%u of them met a surface), so "
+                      "the cache will be black: %s",
+                      probe.paths, probe.surface_hits, whyNoLightArrives(*tracer_, rays).c_str()));
     }
 
     /// Light leaks the voxels will cause, seen from the scene's own cameras (render's automatic
@@ -1547,16 +1546,15 @@ private:
         if (cameras.empty()) cameras = waypoints;
         light_leaks_ = findLightLeaks(*tracer_, job_.settings.sharc.grid, cameras, 256, job_.settings.seed);
         wall_leaks_ = findWallLeaks(*tracer_, job_.settings.sharc.grid, cameras, waypoints, 16384, job_.settings.seed);
-        if (const std::string wall = wall_leaks_.describe(); !wall.empty())
-            std::fprintf(stderr, "warning: %s\n", wall.c_str());
+        if (const std::string wall = wall_leaks_.describe(); !wall.empty()) warn(wall);
         constexpr size_t kLeaksNamed = 5;  // a city of lit windows would fill the log
         for (size_t i = 0; i < light_leaks_.leaks.size() && i < kLeaksNamed; ++i)
-            std::fprintf(stderr, "warning: %s\n", LightLeakReport::describe(light_leaks_.leaks[i]).c_str());
+            warn(LightLeakReport::describe(light_leaks_.leaks[i]));
         if (light_leaks_.leaks.size() > kLeaksNamed) {
-            std::fprintf(stderr,
-                         "warning: %zu more emissive materials leak light the same way (--stats-json lists "
-                         "them under light_leaks)\n",
-                         light_leaks_.leaks.size() - kLeaksNamed);
+            warn(
+                formatted("%zu more emissive materials leak light the same way (--stats-json lists "
+                          "them under light_leaks)",
+                          light_leaks_.leaks.size() - kLeaksNamed));
         }
     }
 
@@ -1660,7 +1658,7 @@ private:
             throw CommandError(kExitIo, e.what());
         }
         const std::string plot_problem = plotConvergence(o_.report_dir, report_);
-        if (!plot_problem.empty()) std::fprintf(stderr, "warning: no convergence plot: %s\n", plot_problem.c_str());
+        if (!plot_problem.empty()) warn(formatted("no convergence plot: %s", plot_problem.c_str()));
         if (!o_.quiet) {
             std::printf("Wrote %s/convergence.csv, plain_path_tracing.csv, convergence.json%s\n", o_.report_dir.c_str(),
                         plot_problem.empty() ? ", convergence.png" : "");
@@ -1726,12 +1724,13 @@ private:
               {"voxel_size", jsonNumber(wall_leaks_.voxel_size)},
               {"warned", !wall_leaks_.describe().empty()}}},
             {"light_selection", lightSelectionJson(lights_->spatialSelection())},
+            {"warnings", warningsGiven()},
         });
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
 
-    /// Warnings about what the cache lacks, then the exit code of a bake a signal stopped.
-    void warnAndStop() const {
+    /// Warnings about what the cache lacks.
+    void warnAboutTheCache() const {
         const SharcCache& cache = baker_->cache();
         // Every deposit goes to the level DepositLevels gives its point (the finest for the default
         // region, the level of the distance to the region's cameras for gltf, path and box), so a
@@ -1748,10 +1747,10 @@ private:
         // stability warning names --capacity).
         const bool table_full = stability_.share(stability_.failed_insert_energy) > kTableFullShare;
         if (baker_->iterationsDone() == 0) {
-            std::fprintf(stderr,
-                         "warning: the cache is empty: no iteration ran (%s before the first), so every lookup will "
-                         "miss\n",
-                         howTheBakeStopped(stop_reason_));
+            warn(
+                formatted("the cache is empty: no iteration ran (%s before the first), so every lookup will "
+                          "miss",
+                          howTheBakeStopped(stop_reason_)));
         } else if (!table_full) {
             warnAboutHitRate(prediction_, unreached, cameras_in_solids_, !scene_.cameras.empty());
         }
@@ -1763,10 +1762,10 @@ private:
                                    : job_.camera.source == CameraPathSource::GltfCameras
                                        ? "--camera-source explore (the free space around the glTF cameras)"
                                        : "more --explore-points, or a --camera-path that looks at the scene";
-            std::fprintf(stderr,
-                         "warning: the cache is empty: no path from the roaming camera hit a surface, so every "
-                         "lookup will miss. Check that the camera looks at the scene, or give %s\n",
-                         remedies);
+            warn(
+                formatted("the cache is empty: no path from the roaming camera hit a surface, so every "
+                          "lookup will miss. Check that the camera looks at the scene, or give %s",
+                          remedies));
         } else if (unreached > 0.3) {
             // Not a stability problem, so not in that section, but the cache is missing much of the scene.
             char sight[200] = "";
@@ -1786,34 +1785,39 @@ private:
                                    : scene_.cameras.empty()
                                        ? "--explore-points, or a --camera-path through the scene"
                                        : "--explore-points, a --camera-path through the scene, or --camera-source gltf";
-            std::fprintf(stderr,
-                         "warning: %.0f%% of the surface area was never reached by the roaming camera (%u points "
-                         "tested; hidden sides count too)%s: cameras that see it will miss. Give more --iterations, "
-                         "%s\n",
-                         100.0 * unreached, coverage_.points, sight, remedies);
+            warn(
+                formatted("%.0f%% of the surface area was never reached by the roaming camera (%u points "
+                          "tested; hidden sides count too)%s: cameras that see it will miss. Give more --iterations, "
+                          "%s",
+                          100.0 * unreached, coverage_.points, sight, remedies));
         }
         if (live_voxels_ > 0 && stability_.deposits > 0 && !(stability_.deposited_energy > 0.0) &&
             lights_->hasLights() && !warned_no_light_) {
             // The probe before the bake found light the bake's own paths never did, or too few of
             // its rays met a surface to tell; more of the camera's rays find what it sees.
-            std::fprintf(stderr, "warning: the cache is black: none of its %llu deposits carried light: %s\n",
-                         (unsigned long long)stability_.deposits, whyNoLightArrives(*tracer_, probeRays(1024)).c_str());
+            warn(formatted("the cache is black: none of its %llu deposits carried light: %s",
+                           (unsigned long long)stability_.deposits,
+                           whyNoLightArrives(*tracer_, probeRays(1024)).c_str()));
         }
-        if (!gpu_warning_.empty()) std::fprintf(stderr, "warning: GPU buffers: %s\n", gpu_warning_.c_str());
+        if (!gpu_warning_.empty()) warn(formatted("GPU buffers: %s", gpu_warning_.c_str()));
         // Without the summary (-q) its Stability section's warnings would go unsaid.
         if (o_.quiet) {
+            // Not through warn(): the stats JSON lists them under stability.warnings either way.
             for (const std::string& w : stability_.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
         }
         if (autoCapacity() && cache.numerics().failed_inserts > cache.numerics().failed_inserts_equal_halves) {
             // The table doubles between iterations; one iteration filled it faster than that.
-            std::fprintf(stderr,
-                         "warning: --capacity auto started at %u slots and grew to %u, but %llu deposits found no "
-                         "slot within an iteration; bake with a fixed --capacity %llu\n",
-                         job_.settings.sharc.grid.capacity, cache.capacity(),
-                         (unsigned long long)(cache.numerics().failed_inserts -
-                                              cache.numerics().failed_inserts_equal_halves),
-                         2ull * cache.capacity());
+            warn(formatted(
+                "--capacity auto started at %u slots and grew to %u, but %llu deposits found no "
+                "slot within an iteration; bake with a fixed --capacity %llu",
+                job_.settings.sharc.grid.capacity, cache.capacity(),
+                (unsigned long long)(cache.numerics().failed_inserts - cache.numerics().failed_inserts_equal_halves),
+                2ull * cache.capacity()));
         }
+    }
+
+    /// The exit code of a bake a signal stopped (its outputs are written).
+    static void stopIfSignalled() {
         if (g_stop_signal == SIGTERM) {
             throw CommandError(kExitTerminated,
                                "terminated (SIGTERM); the cache and checkpoint written hold the iterations done");

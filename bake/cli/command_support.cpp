@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <sstream>
 
@@ -40,6 +41,32 @@ const char* const kExitCodeHelp =
     "  4    runtime failure\n"
     "  130  interrupted (SIGINT)\n"
     "  143  terminated (SIGTERM)\n";
+
+namespace {
+/// warn()'s record: a command is one process, and its warnings are said from its main thread or,
+/// rarely, a worker (hence the lock).
+struct WarningLog {
+    std::mutex mutex;
+    std::vector<std::string> given;
+};
+WarningLog& warningLog() {
+    static WarningLog log;
+    return log;
+}
+}  // namespace
+
+void warn(const std::string& text) {
+    WarningLog& log = warningLog();
+    const std::lock_guard<std::mutex> lock(log.mutex);
+    std::fprintf(stderr, "warning: %s\n", text.c_str());
+    log.given.push_back(text);
+}
+
+std::vector<std::string> warningsGiven() {
+    WarningLog& log = warningLog();
+    const std::lock_guard<std::mutex> lock(log.mutex);
+    return log.given;
+}
 
 std::string counted(uint64_t count, std::string_view singular, std::string_view plural) {
     std::string text = std::to_string(count) + " ";
@@ -269,11 +296,11 @@ void warnAboutCameraFit(const Camera& camera, const Camera& fitted, int width, i
                       "of view %.3g deg instead of %.3g",
                       double(glm::degrees(after)), double(glm::degrees(before)));
     }
-    std::fprintf(stderr,
-                 "warning: %s%s has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
-                 "fit Auto frames it (%s). Give only the width (--resolution %d) for the camera's own frame\n",
-                 orthographic ? "orthographic " : "", cameraLabel(camera).c_str(), double(*camera.aspect_ratio), width,
-                 height, double(width) / double(height), change, width);
+    warn(
+        formatted("%s%s has aspect ratio %.3g but the image is %dx%d (%.3g): framed as Blender's sensor "
+                  "fit Auto frames it (%s). Give only the width (--resolution %d) for the camera's own frame",
+                  orthographic ? "orthographic " : "", cameraLabel(camera).c_str(), double(*camera.aspect_ratio), width,
+                  height, double(width) / double(height), change, width));
 }
 
 namespace {
@@ -302,12 +329,11 @@ void addTraceKernelsOption(CLI::App* command, std::string& kernels) {
 
 void warnWhenKernelsFellBack(TraceKernels asked, const Tracer& tracer, const char* result) {
     if (tracer.kernels() == asked) return;
-    std::fprintf(stderr,
-                 "warning: this CPU has no AVX2 and FMA: tracing with Embree's %s kernels instead of its %s ones, so "
-                 "the %s can differ from one made on a CPU with them (--trace-kernels %s there runs these kernels too; "
-                 "glibc's maths, without FMA here, still round some results differently)\n",
-                 traceKernelsName(tracer.kernels()), traceKernelsName(asked), result,
-                 traceKernelsName(tracer.kernels()));
+    warn(formatted(
+        "this CPU has no AVX2 and FMA: tracing with Embree's %s kernels instead of its %s ones, so "
+        "the %s can differ from one made on a CPU with them (--trace-kernels %s there runs these kernels too; "
+        "glibc's maths, without FMA here, still round some results differently)",
+        traceKernelsName(tracer.kernels()), traceKernelsName(asked), result, traceKernelsName(tracer.kernels())));
 }
 
 void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* result) {
@@ -324,11 +350,11 @@ void warnWhenUnlit(const Scene& scene, const LightSampler& lights, const char* r
     }
     // Models made for glTF viewers (sample collections, asset stores) carry no lights: viewers light
     // them with an environment, which is what --sky gives.
-    std::fprintf(stderr,
-                 "warning: the scene has %s, no emissive surfaces and a black sky: the %s will be black. A model made "
-                 "for glTF viewers is lit by their environment: give it one with --sky r,g,b (e.g. --sky 1,1,1) or "
-                 "--sky-exr FILE\n",
-                 what.c_str(), result);
+    warn(
+        formatted("the scene has %s, no emissive surfaces and a black sky: the %s will be black. A model made "
+                  "for glTF viewers is lit by their environment: give it one with --sky r,g,b (e.g. --sky 1,1,1) or "
+                  "--sky-exr FILE",
+                  what.c_str(), result));
 }
 
 void warnAboutPunctualLightUnits(const Tracer& tracer) {
@@ -345,16 +371,15 @@ void warnAboutPunctualLightUnits(const Tracer& tracer) {
     if (light_distances.empty()) return;
     const float distance = median(std::move(light_distances));
     if (!(distance > kFarPunctualLightDistance)) return;
-    std::fprintf(
-        stderr,
-        "warning: the scene's point and spot lights are a median %.3g units from the surfaces around them. glTF's "
-        "units are metres, and these lights fall off with the squared distance (their intensity is in "
-        "candela), so they light this scene as lamps %.3g m away would: if it was modelled in "
-        "millimetres (CAD, some exporters' unit settings), they are 10^6 times too dim (in "
-        "centimetres 10^4). Scale it to metres (a 0.001 or 0.01 scale on its root node, or the "
-        "exporter's unit setting); emissive surfaces, the "
-        "sky and the grid do not depend on the units, these lights do\n",
-        double(distance), double(distance));
+    warn(
+        formatted("the scene's point and spot lights are a median %.3g units from the surfaces around them. glTF's "
+                  "units are metres, and these lights fall off with the squared distance (their intensity is in "
+                  "candela), so they light this scene as lamps %.3g m away would: if it was modelled in "
+                  "millimetres (CAD, some exporters' unit settings), they are 10^6 times too dim (in "
+                  "centimetres 10^4). Scale it to metres (a 0.001 or 0.01 scale on its root node, or the "
+                  "exporter's unit setting); emissive surfaces, the "
+                  "sky and the grid do not depend on the units, these lights do",
+                  double(distance), double(distance)));
 }
 
 void parseImageSize(const std::string& text, const std::string& option_name, std::optional<float> aspect, int& width,
@@ -539,7 +564,7 @@ Scene loadSceneForCommand(const std::string& path, const SkyOptions& sky, bool q
     }
     if (!quiet) describeScene(scene);
     // Warnings are not progress: --quiet never hides them.
-    for (const std::string& warning : scene.stats.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    for (const std::string& warning : scene.stats.warnings) warn(warning);
     return scene;
 }
 

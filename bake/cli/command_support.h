@@ -8,6 +8,7 @@
 #include "sharcbake/scene.h"
 #include "sharcbake/scene_loader.h"
 #include "support/json.h"
+#include "support/text_format.h"
 #include "tracing/tracer.h"
 
 #include <CLI/CLI.hpp>
@@ -57,6 +58,14 @@ private:
 /// Refuses (kExitIo) an input that is not a regular file: "PATH: no such file", or "PATH: not a
 /// regular file (a FIFO, device or folder)", before anything reads it (a FIFO would block).
 void requireRegularInputFile(const std::string& path);
+
+/// Prints "warning: TEXT" on stderr and keeps TEXT for the command's stats JSON (warningsGiven).
+/// Every warning a command gives goes through here, so that a pipeline reading the JSON sees what a
+/// person reading the log saw.
+void warn(const std::string& text);
+
+/// Every warning given so far (warn), in order.
+std::vector<std::string> warningsGiven();
 
 /// "1 camera", "3 cameras": a count with its noun, plural unless the count is one (nouns whose
 /// plural is not the singular with an "s" pass it as `plural`).

@@ -48,17 +48,17 @@ void runCompare(const CompareOptions& o) {
         throw CommandError(kExitInvalidInput, o.image_path + ": " + e.what());
     }
     if (error.scale_is_fallback) {
-        std::fprintf(stderr,
-                     "warning: %s has no positive finite mean (black, or no finite pixel): the measures' epsilons "
-                     "fall back to an absolute 0.01, so they depend on the images' units\n",
-                     o.reference_path.c_str());
+        warn(
+            formatted("%s has no positive finite mean (black, or no finite pixel): the measures' epsilons "
+                      "fall back to an absolute 0.01, so they depend on the images' units",
+                      o.reference_path.c_str()));
     }
     if (error.reference_non_finite_pixels > 0) {
-        std::fprintf(stderr,
-                     "warning: %s has %s with NaN or infinity: nothing to measure against there, so %s out of "
-                     "every measure\n",
-                     o.reference_path.c_str(), counted(error.reference_non_finite_pixels, "pixel").c_str(),
-                     error.reference_non_finite_pixels == 1 ? "it is left" : "they are left");
+        warn(
+            formatted("%s has %s with NaN or infinity: nothing to measure against there, so %s out of "
+                      "every measure",
+                      o.reference_path.c_str(), counted(error.reference_non_finite_pixels, "pixel").c_str(),
+                      error.reference_non_finite_pixels == 1 ? "it is left" : "they are left"));
     }
     if (o.json) {
         const Json json = {{"schema", jsonSchemaId("compare")},

@@ -155,8 +155,8 @@ void warnAboutMissingShards(const std::vector<CacheData>& inputs) {
             if (++missing_count <= 8) missing += (missing.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(count);
         }
         if (missing_count > 0) {
-            std::fprintf(stderr, "warning: %u of %u shards missing (%s%s); the merge holds the work of the others\n",
-                         missing_count, count, missing.c_str(), missing_count > 8 ? ", ..." : "");
+            warn(formatted("%u of %u shards missing (%s%s); the merge holds the work of the others", missing_count,
+                           count, missing.c_str(), missing_count > 8 ? ", ..." : ""));
         }
     }
 }

@@ -328,10 +328,10 @@ private:
             throw CommandError(kExitInvalidInput, o_.cache_path + ": " + mismatch +
                                                       "; rebake it, or pass --allow-cache-mismatch to render with it");
         }
-        if (!mismatch.empty()) std::fprintf(stderr, "warning: %s: %s\n", o_.cache_path.c_str(), mismatch.c_str());
+        if (!mismatch.empty()) warn(formatted("%s: %s", o_.cache_path.c_str(), mismatch.c_str()));
         if (!has_hash) {
-            std::fprintf(stderr, "warning: %s records no scene_hash: cannot check that it belongs to %s\n",
-                         o_.cache_path.c_str(), o_.scene_path.c_str());
+            warn(formatted("%s records no scene_hash: cannot check that it belongs to %s", o_.cache_path.c_str(),
+                           o_.scene_path.c_str()));
         }
     }
 
@@ -409,13 +409,13 @@ private:
         if (scene_.triangles.empty() || !(largest_side > 0.0f)) return;  // nothing to leak through
         const float offset = largestRayOffset(far_coordinate);
         if (!(offset > kRayOffsetWarningShare * largest_side)) return;
-        std::fprintf(stderr,
-                     "warning: the tracer moves ray origins up to %.3g off surfaces (its self-intersection guard: "
-                     "%g float32 roundings of coordinates %.3g from the origin), %.3g%% of the scene's largest side "
-                     "(%.3g): light leaks through thin walls and corners darken or brighten; move the scene towards "
-                     "the origin\n",
-                     double(offset), double(kRayOffsetRoundings), double(far_coordinate),
-                     100.0 * double(offset / largest_side), double(largest_side));
+        warn(
+            formatted("the tracer moves ray origins up to %.3g off surfaces (its self-intersection guard: "
+                      "%g float32 roundings of coordinates %.3g from the origin), %.3g%% of the scene's largest side "
+                      "(%.3g): light leaks through thin walls and corners darken or brighten; move the scene towards "
+                      "the origin",
+                      double(offset), double(kRayOffsetRoundings), double(far_coordinate),
+                      100.0 * double(offset / largest_side), double(largest_side)));
     }
 
     /// In a scene that keeps its light (a closed room of near-white walls) Russian roulette keeps
@@ -426,15 +426,15 @@ private:
         const SceneReflectance reflectance = estimateSceneReflectance(*tracer_, &*lights_);
         if (!(reflectance.reflectance > kStiffReflectance)) return;
         if (reflectance.unbounded()) {
-            std::fprintf(stderr,
-                         "warning: %s; a path ends only at --max-bounces (%u), and the image shows that cap, not "
-                         "the scene's light: give the surfaces an albedo below 1 (base colour) or open the scene\n",
-                         reflectance.describe().c_str(), o_.max_bounces);
+            warn(
+                formatted("%s; a path ends only at --max-bounces (%u), and the image shows that cap, not "
+                          "the scene's light: give the surfaces an albedo below 1 (base colour) or open the scene",
+                          reflectance.describe().c_str(), o_.max_bounces));
         } else {
-            std::fprintf(stderr,
-                         "warning: %s; paths run long (Russian roulette keeps them while the albedo is near 1, up "
-                         "to --max-bounces %u), so the render is slow\n",
-                         reflectance.describe().c_str(), o_.max_bounces);
+            warn(
+                formatted("%s; paths run long (Russian roulette keeps them while the albedo is near 1, up "
+                          "to --max-bounces %u), so the render is slow",
+                          reflectance.describe().c_str(), o_.max_bounces));
         }
     }
 
@@ -443,14 +443,14 @@ private:
     void warnAboutNonFiniteSamples() const {
         if (primaryView() || counts_.non_finite_samples == 0) return;
         const double samples = double(width_) * double(height_) * double(o_.spp);
-        std::fprintf(stderr,
-                     "warning: %llu of %.0f path samples (%.3g%%) were NaN or infinite and were dropped%s. Most "
-                     "often radiance overflowed float32 (beyond 3.4e38): an emissive strength, a light's "
-                     "intensity, the sky or --sky-scale is too large. Scale the scene's light down (the image "
-                     "scales with it; --exposure sets the preview's brightness)\n",
-                     (unsigned long long)counts_.non_finite_samples, samples,
-                     100.0 * double(counts_.non_finite_samples) / samples,
-                     o_.debug_view.empty() ? " (counted as black): the image is too dark where they fell" : "");
+        warn(
+            formatted("%llu of %.0f path samples (%.3g%%) were NaN or infinite and were dropped%s. Most "
+                      "often radiance overflowed float32 (beyond 3.4e38): an emissive strength, a light's "
+                      "intensity, the sky or --sky-scale is too large. Scale the scene's light down (the image "
+                      "scales with it; --exposure sets the preview's brightness)",
+                      (unsigned long long)counts_.non_finite_samples, samples,
+                      100.0 * double(counts_.non_finite_samples) / samples,
+                      o_.debug_view.empty() ? " (counted as black): the image is too dark where they fell" : ""));
     }
 
     /// A scene with lights can still render black: from a camera inside a closed object, or in a
@@ -470,33 +470,33 @@ private:
             for (int x = 0; x < kGrid; ++x)
                 rays.push_back(rays_of.generate(x * width_ / kGrid, y * height_ / kGrid, glm::vec2(0.5f)));
         }
-        std::fprintf(stderr,
-                     "warning: every pixel of the image is black: no light reaches what %s at (%g, %g, %g) "
-                     "sees: %s. --camera or --look-at choose another view\n",
-                     camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z,
-                     whyNoLightArrives(*tracer_, rays).c_str());
+        warn(
+            formatted("every pixel of the image is black: no light reaches what %s at (%g, %g, %g) "
+                      "sees: %s. --camera or --look-at choose another view",
+                      camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z,
+                      whyNoLightArrives(*tracer_, rays).c_str()));
     }
 
     void warnAboutHitRate() const {
         if (cache_ && !primaryView() && eligible_ == 0 && cache_->refused() > 0) {
             // Nothing was served and the hit-rate warning below has nothing to measure: say why.
-            std::fprintf(stderr,
-                         "warning: SHaRC's eligibility tests refused all %llu cache lookups from this camera (each "
-                         "bounce is shorter than its voxel): the cache's voxels are far larger than what this camera "
-                         "sees, so every path was traced in full. Bake with a larger --level-bias (finer voxels)\n",
-                         (unsigned long long)cache_->refused());
+            warn(
+                formatted("SHaRC's eligibility tests refused all %llu cache lookups from this camera (each "
+                          "bounce is shorter than its voxel): the cache's voxels are far larger than what this camera "
+                          "sees, so every path was traced in full. Bake with a larger --level-bias (finer voxels)",
+                          (unsigned long long)cache_->refused()));
             return;
         }
         if (cache_ && !primaryView() && eligible_ >= kLookupsForARate && hit_rate_ < 0.9) {
             // Warned even with -q: the image is mostly plain path tracing, which the user did not ask for.
-            std::fprintf(stderr,
-                         "warning: the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); "
-                         "the rest were traced. It was baked for other views: bake with --view-region free or a "
-                         "region holding this camera, and check the bake's \"predicted hit rate\"%s\n",
-                         100.0 * hit_rate_, describeLevels(cache_->levels()).c_str(), o_.cache_path.c_str(),
-                         o_.cache_lookup == "nearest"
-                             ? ""
-                             : "; --cache-lookup nearest falls back to the nearest level the file holds");
+            warn(
+                formatted("the cache answered only %.1f%% of the lookups from this camera (levels %s of %s); "
+                          "the rest were traced. It was baked for other views: bake with --view-region free or a "
+                          "region holding this camera, and check the bake's \"predicted hit rate\"%s",
+                          100.0 * hit_rate_, describeLevels(cache_->levels()).c_str(), o_.cache_path.c_str(),
+                          o_.cache_lookup == "nearest"
+                              ? ""
+                              : "; --cache-lookup nearest falls back to the nearest level the file holds"));
         }
     }
 
@@ -619,6 +619,7 @@ private:
             json["cache_hit_rate"] = eligible_ > 0 ? jsonNumber(hit_rate_) : Json(nullptr);  // null: no lookups
         }
         if (o_.debug_view == "cache") json["debug_missing"] = debug_counts_.total(kDebugMissing);
+        json["warnings"] = warningsGiven();
         writeTextOutput(o_.stats_json, "stats JSON", jsonText(json));
     }
 

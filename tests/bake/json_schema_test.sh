@@ -27,6 +27,7 @@ image="--resolution 64x36 --spp 4 -q"
 expect 0 "bake with --stats-json and --report" "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 16 $small \
     --report "$work/report" --report-probes 128 --report-probe-spp 32 --report-resolution 32 \
     --stats-json "$work/bake-stats.json" -q
+cp "$work/err.txt" "$work/bake-stats-err.txt"  # its warnings, which the stats list
 expect 0 "furnace bake with --report" "$sharcbake" bake "$furnace" -o "$work/f.sharc" --iterations 8 \
     --resolution 64x64 --capacity 65536 --report "$work/furnace_report" --report-probes 0 --report-resolution 16 \
     --report-spp 2 -q
@@ -127,6 +128,14 @@ check("debug_missing" in documents["render-stats-debug-cache.json"]
 detail = documents["render-stats-detail.json"]["light_selection"]["detail"]
 check(detail is not None and detail["cell_size"] < 1.0 and documents["render-stats.json"]["light_selection"]["detail"] is None,
       "render stats: a light-selection detail grid over the flat on a 2 km ground, none in the Cornell box")
+# The stats list the warnings the command printed (the hit-rate, coverage and "will be black"
+# warnings were in the log only); the stability section's are under stability.warnings.
+printed = [line[len("warning: "):].rstrip("\n") for line in open(work + "/bake-stats-err.txt") if line.startswith("warning: ")]
+listed = documents["bake-stats.json"]["warnings"]
+stability = documents["bake-stats.json"]["stability"]["warnings"]
+check(listed and all(w in printed for w in listed) and all(w in listed or w in stability for w in printed),
+      "bake stats: warnings lists what the bake printed (%d of %d lines)" % (len(listed), len(printed)))
+check(any("light leak" in w for w in listed), "bake stats: the Cornell box's light-leak warning is listed")
 check(any("probes" in row for row in documents["report/convergence.json"]["checkpoints"]), "convergence.json rows with probes")
 furnace = documents["furnace_report/convergence.json"]
 check(any("voxel" in row for row in furnace["checkpoints"]) and
