@@ -474,13 +474,7 @@ CacheFileStatus CacheView::parseGrid(const CacheSectionInfo& grid_section, Cache
     }
     if (load<uint32_t>(g + 60) != 0) return fail(error, S::kCorrupt, 12, "GRID: reserved field is not zero");
     // V13: GRID parameters.
-    HashGridParameters parameters;
-    parameters.logarithm_base = logarithm_base_;
-    parameters.scene_scale = scene_scale_;
-    parameters.level_bias = level_bias_;
-    parameters.capacity = bake_capacity_;
-    parameters.bucket_size = bucket_size_;
-    const HashGridStatus grid_status = validateHashGridParameters(parameters);
+    const HashGridStatus grid_status = validateHashGridParameters(gridParameters());
     if (grid_status != HashGridStatus::kOk) {
         return fail(error, S::kCorrupt, 13,
                     std::string("GRID: ") + toString(grid_status) + " (bucket size " + std::to_string(bucket_size_) +
