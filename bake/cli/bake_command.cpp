@@ -1269,8 +1269,11 @@ private:
             };
             add(stats.primitives_skipped, " primitive of points or lines skipped",
                 " primitives of points or lines skipped", ": they have no surface");
-            add(stats.degenerate_triangles_dropped, " degenerate triangle dropped", " degenerate triangles dropped",
-                ": they have no area");
+            const uint64_t flat = stats.degenerate_triangles_dropped - stats.triangles_collapsed_by_rounding -
+                                  stats.triangles_too_small_for_float;
+            add(flat, " degenerate triangle dropped", " degenerate triangles dropped", ": they have no area");
+            add(stats.triangles_too_small_for_float, " triangle too small for float32",
+                " triangles too small for float32", " (edges of about 1e-9 units or less): scale the model up");
             add(stats.triangles_collapsed_by_rounding, " triangle collapsed", " triangles collapsed",
                 " when rounded to float32 far from the origin: move the model towards the origin");
             throw CommandError(kExitInvalidInput, job_.scene_path + ": the scene has no triangles to bake" + why +

@@ -580,6 +580,7 @@ public:
         computeBounds();
         scene_.stats.triangles_loaded = scene_.triangles.size();
         warnAboutCollapsedTriangles();
+        warnAboutTinyTriangles();
         warnAboutCoincidentEmitters();
         return std::move(scene_);
     }
@@ -2330,7 +2331,7 @@ private:
             if (!m.isEmissive() || counts.second > 0) continue;
             warn("material " + std::to_string(material) + (m.name.empty() ? "" : " " + quoted(m.name)) +
                  " emits light, but all " + std::to_string(counts.first) +
-                 " of its triangles have no area (dropped as degenerate): it gives no light");
+                 " of its triangles were dropped as degenerate (no area, or too small for float32): it gives no light");
         }
     }
 
@@ -2354,7 +2355,11 @@ private:
         auto degenerate = [&](const glm::uvec3& t) {
             if (t.x == t.y || t.y == t.z || t.x == t.z) return true;
             const glm::vec3 &a = geo.positions[t.x], &b = geo.positions[t.y], &c = geo.positions[t.z];
-            if (!flat(glm::dvec3(a), glm::dvec3(b), glm::dvec3(c))) return tooSmallForFloat(a, b, c);
+            if (!flat(glm::dvec3(a), glm::dvec3(b), glm::dvec3(c))) {
+                if (!tooSmallForFloat(a, b, c)) return false;
+                ++scene_.stats.triangles_too_small_for_float;
+                return true;
+            }
             // Flat in float but not in double: rounding the world positions to float collapsed it
             // (a model far from the origin, where float steps are as large as its detail).
             if (exact.size() == geo.positions.size() && !flat(exact[t.x], exact[t.y], exact[t.z])) {
@@ -2398,6 +2403,20 @@ private:
              " emissive triangles lie exactly on another emissive triangle (the same three corners: a duplicated "
              "face, or an emissive mesh placed twice): each is a light, so two copies light the scene twice as "
              "brightly while a camera sees one surface; remove the duplicates");
+    }
+
+    /// One warning for every triangle too small for float32's normals: a model of size 1e-10
+    /// (a room scaled down twice by a unit setting) was refused as "24 degenerate triangles have no
+    /// area", which they do.
+    void warnAboutTinyTriangles() {
+        const uint64_t tiny = scene_.stats.triangles_too_small_for_float;
+        if (tiny == 0) return;
+        warn(std::to_string(tiny) + (tiny == 1 ? " triangle is" : " triangles are") +
+             " too small for float32 (edges of about 1e-9 units or less, whose normal underflows) and " +
+             (tiny == 1 ? "was" : "were") +
+             " dropped: the model is far too small in its units; scale it up (a scale on its root node, or the "
+             "exporter's unit setting)" +
+             (scene_.triangles.empty() ? "; no triangle is left" : ""));
     }
 
     /// One warning for every triangle that rounding to float collapsed: the scene lies too far

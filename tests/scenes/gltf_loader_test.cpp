@@ -258,6 +258,15 @@ TEST(GltfLoader, TrianglesTooSmallForAFloatNormalAreDropped) {
     const Scene origin = loadGltf(near.writeEmbedded(dir, "tiny_origin.gltf"));
     EXPECT_EQ(origin.triangles.size(), 1u);
     EXPECT_EQ(origin.stats.degenerate_triangles_dropped, 1u);
+    // Named apart from flat ones, with the fix: a room scaled by 1e-10 was refused as "24
+    // degenerate triangles ... have no area", which they do.
+    EXPECT_EQ(origin.stats.triangles_too_small_for_float, 1u);
+    EXPECT_EQ(warningsWith(origin, {"1 triangle is too small for float32", "scale it up"}), 1u)
+        << ::testing::PrintToString(origin.stats.warnings);
+    // At (10, 10, 10) none is too small for a normal: float rounding collapses the 1e-9 one (named
+    // as such: move towards the origin), and the others are flat even in double there.
+    EXPECT_EQ(scene.stats.triangles_too_small_for_float, 0u);
+    EXPECT_EQ(scene.stats.triangles_collapsed_by_rounding, 1u);
 }
 
 TEST(GltfLoader, AnEmitterOnlyOnTrianglesWithoutAreaIsNamed) {
@@ -281,7 +290,9 @@ TEST(GltfLoader, AnEmitterOnlyOnTrianglesWithoutAreaIsNamed) {
     for (const std::string& w : scene.stats.warnings) {
         if (w.find("no area") != std::string::npos) named += w;
     }
-    EXPECT_NE(named.find("'lamp' emits light, but all 1 of its triangles have no area"), std::string::npos) << named;
+    EXPECT_NE(named.find("'lamp' emits light, but all 1 of its triangles were dropped as degenerate"),
+              std::string::npos)
+        << named;
     EXPECT_EQ(named.find("'floor'"), std::string::npos) << named;
 }
 

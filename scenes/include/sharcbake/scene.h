@@ -235,6 +235,9 @@ struct LoadStats {
     /// Of those, triangles with area in double precision that rounding their world positions to
     /// float32 collapsed (a model far from the origin).
     uint64_t triangles_collapsed_by_rounding = 0;
+    /// Of those, triangles with area whose float32 normal underflows (edges of about 1e-9 units or
+    /// less: a model far too small in its units).
+    uint64_t triangles_too_small_for_float = 0;
     uint64_t primitives_skipped = 0;            ///< non-triangle modes (points, lines)
     std::vector<std::string> warnings;          ///< human-readable, one per issue
 };
