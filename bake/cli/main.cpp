@@ -9,6 +9,33 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
+
+namespace {
+
+/// "--seed: cannot read "4294967296" as UINT: expected ...", from CLI11's "Could not convert:
+/// --seed = 4294967296" and the option's type.
+std::string conversionErrorMessage(CLI::App& app, const std::string& what) {
+    const std::string prefix = "Could not convert: ";
+    const size_t at = what.find(prefix);
+    const size_t equals = at == std::string::npos ? std::string::npos : what.find(" = ", at);
+    if (equals == std::string::npos) return what;
+    const std::string name = what.substr(at + prefix.size(), equals - at - prefix.size());
+    const std::string value = what.substr(equals + 3);
+    std::string type;
+    for (CLI::App* command : app.get_subcommands()) {  // the command being parsed
+        if (const CLI::Option* option = command->get_option_no_throw(name)) type = option->get_type_name();
+    }
+    const char* accepts = type == "UINT"    ? "a whole number of 0 or more, in digits, that fits the option "
+                                              "(most hold up to 4294967295)"
+                          : type == "INT"   ? "a whole number, in digits, that fits the option"
+                          : type == "FLOAT" ? "a number"
+                                            : nullptr;
+    return name + ": cannot read \"" + value + "\"" + (type.empty() ? "" : " as " + type) +
+           (accepts ? std::string(": expected ") + accepts : std::string());
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace sharcbake;
@@ -48,6 +75,12 @@ int main(int argc, char** argv) {
         // --config naming a file that cannot be read: an I/O error, as for any other input.
         std::fprintf(stderr, "sharcbake: error: --config: %s\n", e.what());
         return kExitIo;
+    } catch (const CLI::ConversionError& e) {
+        // CLI11's own words, "Could not convert: --seed = 4294967296", say neither what the option
+        // takes nor why the value is not it: name the option's type and what it accepts.
+        std::fprintf(stderr, "sharcbake: error: %s\nRun with --help for more information.\n",
+                     conversionErrorMessage(app, e.what()).c_str());
+        return kExitUsage;
     } catch (const CLI::ParseError& e) {
         // CLI11 prints help/version itself (exit 0) and usage errors (nonzero -> our code 1).
         const int code = app.exit(e);

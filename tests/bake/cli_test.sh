@@ -15,6 +15,9 @@ expect 1 "no subcommand" "$sharcbake"
 expect 1 "unknown option" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --no-such-option
 expect 1 "zero samples" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --spp 0
 expect 1 "bad resolution" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --resolution 10y
+# A value the option's type cannot hold: CLI11 said only "Could not convert: --seed = 4294967296".
+expect 1 "a seed beyond 32 bits" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --seed 4294967296
+says "$work/err.txt" '--seed: cannot read "4294967296" as UINT: expected a whole number' "the option's type is named"
 expect 2 "missing scene" "$sharcbake" render "$work/missing.gltf" -o "$work/a.exr"
 printf '{ "asset": { "version": "2.0" }, "buffers": [ { "byteLength": 12, "uri": "nowhere.bin" } ] }' > "$work/bad.gltf"
 expect 2 "a scene whose buffer file is missing" "$sharcbake" render "$work/bad.gltf" -o "$work/a.exr"
