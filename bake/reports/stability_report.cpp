@@ -2,6 +2,7 @@
 #include "reports/stability_report.h"
 
 #include "support/float_spacing.h"
+#include "support/text_format.h"
 #include "tracing/tracer.h"
 
 #include <algorithm>
@@ -13,32 +14,22 @@ namespace {
 
 double channelSum(const glm::dvec3& v) { return v.x + v.y + v.z; }
 
-std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
-    // Sized by a first pass: a fixed buffer cut the longest warnings short.
-    const int length = std::snprintf(nullptr, 0, pattern, a, b, c, d);
-    if (length <= 0) return {};
-    std::string text(size_t(length) + 1, '\0');
-    std::snprintf(text.data(), text.size(), pattern, a, b, c, d);
-    text.resize(size_t(length));
-    return text;
-}
-
 void addWarnings(StabilityReport& r) {
     const uint64_t failed_for_capacity = r.failed_inserts - std::min(r.failed_inserts, r.failed_inserts_equal_halves);
     if (failed_for_capacity > 0) {
         r.warnings.push_back(
-            format("%.0f deposits found their hash bucket full and were dropped: %.3g%% of the "
-                   "deposited energy is missing from the cache; raise --capacity (%.1f%% of the "
-                   "slots are in use)",
-                   double(failed_for_capacity),
-                   100.0 * r.share(r.failed_insert_energy) * double(failed_for_capacity) / double(r.failed_inserts),
-                   r.capacity ? 100.0 * double(r.occupied_slots) / double(r.capacity) : 0.0));
+            formatted("%.0f deposits found their hash bucket full and were dropped: %.3g%% of the "
+                      "deposited energy is missing from the cache; raise --capacity (%.1f%% of the "
+                      "slots are in use)",
+                      double(failed_for_capacity),
+                      100.0 * r.share(r.failed_insert_energy) * double(failed_for_capacity) / double(r.failed_inserts),
+                      r.capacity ? 100.0 * double(r.occupied_slots) / double(r.capacity) : 0.0));
     }
     if (r.failed_inserts_equal_halves > 0) {
         // Keys x | y << 17 | z << 34 | level << 51 have equal halves where y = 4 x level (plus the
         // normal's bits) and x = 4 z: a diagonal row of voxels on a surface that sits at that grid
         // row, which another voxel size moves.
-        r.warnings.push_back(format(
+        r.warnings.push_back(formatted(
             "%.0f deposits fell on voxels whose keys SHaRC's hash sends to one bucket (a key whose two 32-bit halves "
             "are equal hashes to 0), which was full: %.3g%% of the deposited energy is missing from the cache. No "
             "--capacity holds them, and a runtime with the SDK's hash cannot either (lookups there miss and are "
@@ -54,33 +45,33 @@ void addWarnings(StabilityReport& r) {
         // at 2^40 steps, whatever its magnitude in float32 (chooseRadianceScale), and one deposit
         // holds 2^62: only radiance 2^22 times that brightest one is clamped, never bright emission.
         r.warnings.push_back(
-            format("%.0f deposits carried radiance above %.3g, the most one deposit holds (2^62 fixed-point steps "
-                   "at scale %g, which puts %.3g, at least the brightest radiance the scene's emission, sky and "
-                   "punctual lights give, at 2^40 steps), ",
-                   double(r.clamped_deposits), r.radiance_scale > 0.0 ? 0x1p62 / r.radiance_scale : 0.0,
-                   r.radiance_scale, r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0) +
-            format("and were clamped, removing %.3g%% of the deposited energy: something made radiance 2^22 times "
-                   "what the lights give (a punctual light almost touching a surface, or an extreme path weight)",
-                   100.0 * r.share(r.clamped_energy)));
+            formatted("%.0f deposits carried radiance above %.3g, the most one deposit holds (2^62 fixed-point steps "
+                      "at scale %g, which puts %.3g, at least the brightest radiance the scene's emission, sky and "
+                      "punctual lights give, at 2^40 steps), ",
+                      double(r.clamped_deposits), r.radiance_scale > 0.0 ? 0x1p62 / r.radiance_scale : 0.0,
+                      r.radiance_scale, r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0) +
+            formatted("and were clamped, removing %.3g%% of the deposited energy: something made radiance 2^22 times "
+                      "what the lights give (a punctual light almost touching a surface, or an extreme path weight)",
+                      100.0 * r.share(r.clamped_energy)));
     }
     if (r.deposits > 0 && double(r.sub_step_deposits) > kSubStepWarningShare * double(r.deposits)) {
         // The scale puts the brightest radiance the scene can make at 2^40 steps (chooseRadianceScale).
         r.warnings.push_back(
-            format("%.3g%% of deposits carried less than one fixed-point step (radiance below "
-                   "%.3g, where the brightest radiance the scene's lights give, %.3g, is 2^40 steps): "
-                   "dithered rounding keeps them on average, but the voxels they feed hold a few steps "
-                   "at most and read as noise or 0. The scene's radiance spans more than the fixed point "
-                   "holds: a small, very bright emitter (or a point or spot light, whose radiance counts as "
-                   "seen from an eighth of its distance to the nearest surface) sets the scale far above what these "
-                   "surfaces receive. Give such an "
-                   "emitter more area and less radiance (the same power), or bake the dim part as a "
-                   "scene of its own",
-                   100.0 * double(r.sub_step_deposits) / double(r.deposits),
-                   r.radiance_scale > 0.0 ? 1.0 / r.radiance_scale : 0.0,
-                   r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0));
+            formatted("%.3g%% of deposits carried less than one fixed-point step (radiance below "
+                      "%.3g, where the brightest radiance the scene's lights give, %.3g, is 2^40 steps): "
+                      "dithered rounding keeps them on average, but the voxels they feed hold a few steps "
+                      "at most and read as noise or 0. The scene's radiance spans more than the fixed point "
+                      "holds: a small, very bright emitter (or a point or spot light, whose radiance counts as "
+                      "seen from an eighth of its distance to the nearest surface) sets the scale far above what these "
+                      "surfaces receive. Give such an "
+                      "emitter more area and less radiance (the same power), or bake the dim part as a "
+                      "scene of its own",
+                      100.0 * double(r.sub_step_deposits) / double(r.deposits),
+                      r.radiance_scale > 0.0 ? 1.0 / r.radiance_scale : 0.0,
+                      r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0));
     }
     if (r.saturated_sums > 0) {
-        r.warnings.push_back(format(
+        r.warnings.push_back(formatted(
             "%.0f deposits met a voxel sum already at its 72-bit ceiling (2^72 fixed-point "
             "steps in one iteration, a summed radiance of %.3g at scale %g); those voxels are "
             "darker than they should be",
@@ -92,83 +83,85 @@ void addWarnings(StabilityReport& r) {
         const double brightest = r.radiance_scale > 0.0 ? 0x1p40 / r.radiance_scale : 0.0;
         if (brightest > double(std::numeric_limits<float>::max()) * 0x1p-20) {
             r.warnings.push_back(
-                format("%.0f NaN/Inf radiance values were dropped (the cache holds none): the "
-                       "scene's brightest radiance, up to %.3g, is within 2^20 of float32's "
-                       "largest (%.3g), and radiance that adds to it or carries it overflows; "
-                       "scale the scene's emission down",
-                       double(r.non_finite_dropped), brightest, double(std::numeric_limits<float>::max())));
+                formatted("%.0f NaN/Inf radiance values were dropped (the cache holds none): the "
+                          "scene's brightest radiance, up to %.3g, is within 2^20 of float32's "
+                          "largest (%.3g), and radiance that adds to it or carries it overflows; "
+                          "scale the scene's emission down",
+                          double(r.non_finite_dropped), brightest, double(std::numeric_limits<float>::max())));
         } else {
             r.warnings.push_back(
-                format("%.0f NaN/Inf radiance values were dropped (a material, light or sky "
-                       "produced them); the cache holds none",
-                       double(r.non_finite_dropped)));
+                formatted("%.0f NaN/Inf radiance values were dropped (a material, light or sky "
+                          "produced them); the cache holds none",
+                          double(r.non_finite_dropped)));
         }
     }
     if (r.orphan_sums > 0) {
-        r.warnings.push_back(format("%.0f voxel sums had radiance but no sample and were dropped (a bug in the "
-                                    "update pass)",
-                                    double(r.orphan_sums)));
+        r.warnings.push_back(
+            formatted("%.0f voxel sums had radiance but no sample and were dropped (a bug in the "
+                      "update pass)",
+                      double(r.orphan_sums)));
     }
     if (r.grid_coordinates_wrap) {
         r.warnings.push_back(
-            format("the scene reaches %.0f grid cells from the grid anchor at level %.0f, beyond "
-                   "the key's 17-bit range (+-65536): keys stay unique near the camera, but voxel "
-                   "positions decoded from keys (export-vdb) wrap; lower --level-bias or --scene-scale "
-                   "(wider voxels), or use --level-bias auto",
-                   double(r.max_grid_coordinate), double(r.finest_level)));
+            formatted("the scene reaches %.0f grid cells from the grid anchor at level %.0f, beyond "
+                      "the key's 17-bit range (+-65536): keys stay unique near the camera, but voxel "
+                      "positions decoded from keys (export-vdb) wrap; lower --level-bias or --scene-scale "
+                      "(wider voxels), or use --level-bias auto",
+                      double(r.max_grid_coordinate), double(r.finest_level)));
     }
     if (r.finest_voxel_size > 0.0 && r.ray_offset > r.finest_voxel_size) {
         // The guard is a few float32 roundings of the coordinates (rayOffsetFor): only the
         // scene's distance from the origin makes it large against the scene's own voxels.
         r.warnings.push_back(
-            format("the tracer moves ray origins up to %.3g off surfaces at the scene's far corner "
-                   "(%g float32 roundings of its coordinates there, its self-intersection guard), "
-                   "more than the finest voxel (%.3g): light leaks through walls thinner than "
-                   "that; move the scene towards the origin",
-                   r.ray_offset, double(kRayOffsetRoundings), r.finest_voxel_size));
+            formatted("the tracer moves ray origins up to %.3g off surfaces at the scene's far corner "
+                      "(%g float32 roundings of its coordinates there, its self-intersection guard), "
+                      "more than the finest voxel (%.3g): light leaks through walls thinner than "
+                      "that; move the scene towards the origin",
+                      r.ray_offset, double(kRayOffsetRoundings), r.finest_voxel_size));
     } else if (r.largest_side > 0.0 && r.ray_offset > double(kRayOffsetWarningShare) * r.largest_side) {
         // The grid fit widens the voxels far out (precision), so they can exceed an offset that is
         // already a large part of the scene: a 4-unit room 1e7 out baked 30% dark, with 20-unit
         // voxels and an offset of 19, and only render warned.
-        r.warnings.push_back(
-            format("the tracer moves ray origins up to %.3g off surfaces at the scene's far corner "
-                   "(%g float32 roundings of its coordinates there, its self-intersection guard), %.3g%% of "
-                   "the scene's largest side (%.3g): light leaks through its walls and corners darken; move "
-                   "the scene towards the origin",
-                   r.ray_offset, double(kRayOffsetRoundings), 100.0 * r.ray_offset / r.largest_side, r.largest_side));
+        r.warnings.push_back(formatted(
+            "the tracer moves ray origins up to %.3g off surfaces at the scene's far corner "
+            "(%g float32 roundings of its coordinates there, its self-intersection guard), %.3g%% of "
+            "the scene's largest side (%.3g): light leaks through its walls and corners darken; move "
+            "the scene towards the origin",
+            r.ray_offset, double(kRayOffsetRoundings), 100.0 * r.ray_offset / r.largest_side, r.largest_side));
     }
     if (r.largest_side > 0.0 && r.largest_side < kBiasVoxelsAcrossScene * r.bias_distance_voxel_size) {
         // A 4 mm room in metres scaled by 1e-3 again (4e-6 across): its lookups all fell at the
         // level of the bias's 1.7e-4, in voxels 3.3e-6 wide, and a render through the cache found
         // 8 hits among 112,573 refused lookups, while the bake said "no problems found".
         r.warnings.push_back(
-            format("the scene is only %.3g across, and SHaRC adds 1e-4 to every coordinate before choosing a "
-                   "voxel: every lookup's level follows a distance of about 1.7e-4 whatever the camera's, in voxels "
-                   "%.3g wide (%.0f%% of the scene), so a runtime refuses most lookups (bounces shorter than their "
-                   "voxel). Scale the scene up (export it in smaller units, e.g. millimetres for metres: a scale "
-                   "of 1000 on its root node) and use the same units in the engine",
-                   r.largest_side, r.bias_distance_voxel_size, 100.0 * r.bias_distance_voxel_size / r.largest_side));
+            formatted("the scene is only %.3g across, and SHaRC adds 1e-4 to every coordinate before choosing a "
+                      "voxel: every lookup's level follows a distance of about 1.7e-4 whatever the camera's, in voxels "
+                      "%.3g wide (%.0f%% of the scene), so a runtime refuses most lookups (bounces shorter than their "
+                      "voxel). Scale the scene up (export it in smaller units, e.g. millimetres for metres: a scale "
+                      "of 1000 on its root node) and use the same units in the engine",
+                      r.largest_side, r.bias_distance_voxel_size, 100.0 * r.bias_distance_voxel_size / r.largest_side));
     }
     if (r.float_spacing > kPositionBiasWarningFactor * double(kHashGridPositionBias)) {
         // Centring a scene puts its far corner at half its largest side; when the corner is no
         // farther than the whole side, moving gains at most 2x: the scene's own size is the cause
         // (a site exported in millimetres, say).
         const bool own_size = r.far_corner_distance <= r.largest_side;
-        r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g) is %.0f times SHaRC's position "
-                                    "bias (1e-4): surfaces lying on voxel boundaries split between two voxels, which "
-                                    "then average light from both sides; ",
-                                    r.float_spacing, r.float_spacing / double(kHashGridPositionBias)) +
-                             (own_size ? "the scene is very large in its units (the bias is an absolute 1e-4, made "
-                                         "for metres): scale it down (millimetres to metres: a scale of 0.001 on its "
-                                         "root node, or the exporter's unit setting)"
-                                       : "move the scene towards the origin"));
+        r.warnings.push_back(
+            formatted("float32 spacing at the scene's far corner (%.3g) is %.0f times SHaRC's position "
+                      "bias (1e-4): surfaces lying on voxel boundaries split between two voxels, which "
+                      "then average light from both sides; ",
+                      r.float_spacing, r.float_spacing / double(kHashGridPositionBias)) +
+            (own_size ? "the scene is very large in its units (the bias is an absolute 1e-4, made "
+                        "for metres): scale it down (millimetres to metres: a scale of 0.001 on its "
+                        "root node, or the exporter's unit setting)"
+                      : "move the scene towards the origin"));
     }
     if (r.precisionShare() > kPrecisionWarningShare) {
-        r.warnings.push_back(format("float32 spacing at the scene's far corner (%.3g from the origin) is %.3g, "
-                                    "%.3g%% of the finest voxel (%.3g): hit points there jitter between voxels; "
-                                    "move the scene towards the origin or lower --scene-scale",
-                                    r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(),
-                                    r.finest_voxel_size));
+        r.warnings.push_back(
+            formatted("float32 spacing at the scene's far corner (%.3g from the origin) is %.3g, "
+                      "%.3g%% of the finest voxel (%.3g): hit points there jitter between voxels; "
+                      "move the scene towards the origin or lower --scene-scale",
+                      r.far_corner_distance, r.float_spacing, 100.0 * r.precisionShare(), r.finest_voxel_size));
     }
 }
 
