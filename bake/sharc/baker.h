@@ -99,8 +99,8 @@ DepositLevels levelsFor(const Scene& scene, const BakeSettings& settings);
 SharcSettings withCoverage(SharcSettings sharc, const DepositLevels& levels);
 
 /// The brightest radiance the scene can put into a voxel, for the fixed-point scale: emission of
-/// the materials its triangles use, sky, and for each point or spot light the radiance a white surface facing it would have at an
-/// eighth of the distance to the nearest surface 64 rays from it hit (a surface the rays pass
+/// the materials its triangles use, sky, and for each point or spot light the radiance a white
+/// surface facing it would have at an eighth of the distance to the nearest surface 64 rays from it hit (a surface the rays pass
 /// between, nearer still, fits the scale's 2^22 headroom). That distance is never taken below
 /// 1e-4 of the scene's diagonal (a light touching a surface would otherwise put every other
 /// deposit below one step), and where the rays hit nothing it is the distance to the scene's

@@ -215,8 +215,7 @@ bool Tracer::occluded(const Ray& ray) const {
 }
 
 namespace {
-/// Embree's packets: 16 lanes, a lane beyond the rays' count inactive (it traces a copy of the
-/// first ray, which Embree skips).
+/// Embree's packets: 16 lanes (fillPacket parks those beyond the rays' count).
 constexpr int kPacketWidth = 16;
 
 /// Sets the valid mask and the rays of one packet from rays[start, start + 16). A lane past
