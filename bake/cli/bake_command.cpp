@@ -21,12 +21,11 @@
 #include "support/json.h"
 #include "support/progress.h"
 #include "support/stopwatch.h"
+#include "support/worker_threads.h"
 #include "tracing/light_reach.h"
 #include "tracing/render.h"
 #include "tracing/tracer.h"
 
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 #include <tbb/info.h>
 
 #include <algorithm>
@@ -1140,11 +1139,7 @@ public:
           job_(bakeJobFromOptions(o)) {}
 
     void run() {
-        // Exactly --threads workers, even beyond the core count (the cache is the same for any
-        // count, which tests check with more threads than the test machine has cores).
-        tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
-        tbb::task_arena arena(threads_);
-        arena.execute([&] { runPhases(); });
+        runOnWorkerThreads(threads_, [&] { runPhases(); });
     }
 
 private:

@@ -13,6 +13,7 @@
 #include "support/json.h"
 #include "support/progress.h"
 #include "support/stopwatch.h"
+#include "support/worker_threads.h"
 #include "tracing/light_reach.h"
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
@@ -21,7 +22,6 @@
 #include "tracing/surface.h"
 #include "tracing/tracer.h"
 
-#include <tbb/global_control.h>
 #include <tbb/info.h>
 
 #include <algorithm>
@@ -234,9 +234,11 @@ public:
         HumanOutputOnStderr stats_on_stdout(isStandardOutput(o_.stats_json));
         checkOutputs({});
         start_ = std::chrono::steady_clock::now();
-        tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, size_t(threads_));
-        setUp();
-        render();
+        // Set up inside the workers' arena: Embree's scene commit must not be the first to start one.
+        runOnWorkerThreads(threads_, [&] {
+            setUp();
+            render();
+        });
         warnAboutNonFiniteSamples();
         warnAboutBlackImage();
         warnAboutHitRate();

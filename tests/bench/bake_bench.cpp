@@ -8,13 +8,13 @@
 
 #include "sharcbake/scene_loader.h"
 #include "support/fnv1a.h"
+#include "support/worker_threads.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 #include <tbb/info.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -86,10 +86,10 @@ void measureLimitAndBake(const Options& o, const BakeScene& s, const char* serie
     }
     int width = 0, height = 0;
     parseResolution(o.resolution, width, height);
-    // Exactly `threads` workers for the bake (a task arena), as `sharcbake bake --threads` does.
+    // Exactly `threads` workers for the bake, as `sharcbake bake --threads` runs it.
     BakeRun bake;
-    tbb::task_arena arena{int(threads)};
-    arena.execute([&] { bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations, o.warmup); });
+    runOnWorkerThreads(int(threads),
+                       [&] { bake = runBake(s, benchBakeSettings(width, height, capacity), o.iterations, o.warmup); });
     const double after = measurePairsPerSecond(s.tracer, pairs, best_api, o.repetitions);
     const double ray_limit = std::max(best, after);
     const double rate = bake.segmentsPerSecond();
@@ -126,9 +126,8 @@ void measureRender(const Options& o, const BakeScene& s, unsigned threads) {
     const PathTracer path_tracer(s.tracer, s.lights, PathTracerSettings{});
     TraceCounters counters;
     Image image;
-    tbb::task_arena arena{int(threads)};
     const auto start = std::chrono::steady_clock::now();
-    arena.execute([&] {
+    runOnWorkerThreads(int(threads), [&] {
         image = renderImage(
             CameraRays(camera, width, height), ImageRenderSettings{width, height, o.spp, 1},
             [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); },
@@ -155,9 +154,10 @@ void measureOneBake(const Options& o) {
     const uint64_t scene_peak = peakResidentBytes();
     int width = 0, height = 0;
     parseResolution(o.resolution, width, height);
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
-                              o.threads ? o.threads : unsigned(tbb::info::default_concurrency()));
-    const BakeRun bake = runBake(*s, benchBakeSettings(width, height, o.capacity), o.iterations, o.warmup);
+    BakeRun bake;
+    runOnWorkerThreads(o.threads ? int(o.threads) : tbb::info::default_concurrency(), [&] {
+        bake = runBake(*s, benchBakeSettings(width, height, o.capacity), o.iterations, o.warmup);
+    });
     const uint64_t peak = peakResidentBytes();
     std::printf("{\"series\": \"capacity\", \"scene\": \"%s\", \"capacity\": %u, \"iterations\": %u, "
                 "\"bake_segments_per_second\": %.4g, \"seconds\": {\"update\": %.4f, \"commit\": %.4f, "
