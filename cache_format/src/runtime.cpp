@@ -22,7 +22,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-
+#if defined(__linux__)
+#include <sys/mman.h>  // madvise(MADV_HUGEPAGE) for large lookup indexes
+#endif
 
 namespace sharcbake {
 namespace {
@@ -72,7 +74,21 @@ CacheFileStatus fail(CacheError* error, CacheFileStatus status, uint32_t rule, c
 
 bool finiteNonNegative(float v) { return std::isfinite(v) && v >= 0.0f; }
 
-constexpr uint64_t kIndexMultiplier = 0x9E3779B97F4A7C15ull;  // 2^64 / golden ratio (lookup index)
+/// The lookup index's slot is (key x multiplier) >> shift. Keys are the file's, so a crafted file
+/// can hold keys that all land on one slot under a known multiplier (k0 + i / multiplier), and
+/// linear probing then made building the index quadratic: 13 s for a valid 3.8 MB file of 160,000
+/// such keys, and lookups as long as the cluster. The build gives up on a multiplier whose probes
+/// run long and takes the next; keys that defeat every one keep the binary search.
+constexpr uint64_t kIndexMultipliers[] = {
+    0x9E3779B97F4A7C15ull,  // 2^64 / golden ratio
+    0xBF58476D1CE4E5B9ull,  // splitmix64's two multipliers
+    0x94D049BB133111EBull,
+    0xD6E8FEB86659FD93ull,  // another odd constant with well-mixed high bits
+};
+/// Random keys at the index's load (at most 2/3) probe about 2 slots per insertion on average
+/// and far fewer than 512 at most, even for millions of keys.
+constexpr uint64_t kIndexProbesPerKey = 16;
+constexpr uint64_t kIndexLongestProbe = 512;
 
 }  // namespace
 
@@ -153,6 +169,7 @@ CacheView& CacheView::operator=(CacheView&& other) noexcept {
     index_ = std::move(other.index_);
     index_slots_ = other.index_slots_;
     index_shift_ = other.index_shift_;
+    index_multiplier_ = other.index_multiplier_;
     other.data_ = nullptr;
     other.mapping_ = nullptr;
     other.mapping_size_ = 0;
@@ -171,6 +188,13 @@ void CacheView::reset() {
     version_major_ = version_minor_ = 0;
     header_size_ = 0;
     sections_.clear();
+    // The grid's fields too: a view whose open failed, or that was moved from, reported the
+    // previous cache's grid, which an engine reloading a cache could take for the new one's.
+    logarithm_base_ = 2.0f;
+    scene_scale_ = 50.0f;
+    level_bias_ = 0.0f;
+    bucket_size_ = kHashGridBucketSize;
+    bake_capacity_ = 0;
     gpu_radiance_scale_ = 1.0f;
     grid_anchor_ = Float3{0.0f, 0.0f, 0.0f};
     voxel_count_ = 0;
@@ -181,6 +205,7 @@ void CacheView::reset() {
     index_.reset();
     index_slots_ = 0;
     index_shift_ = 64;
+    index_multiplier_ = 0;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -729,27 +754,42 @@ CacheFileStatus CacheView::buildLookupIndex() {
 #ifdef MADV_HUGEPAGE
     if (alignment == kHugePage) ::madvise(memory, rounded, MADV_HUGEPAGE);
 #endif
-    std::memset(memory, 0, rounded);
-    index_.reset(static_cast<IndexSlot*>(memory));
-    index_slots_ = slots;
-    index_shift_ = 64 - bits;
+    std::unique_ptr<IndexSlot[], FreeDeleter> table(static_cast<IndexSlot*>(memory));
+    const uint32_t shift = 64 - bits;
     const size_t mask = slots - 1;
-    for (uint64_t i = 0; i < voxel_count_; ++i) {
-        const uint64_t k = key(i);
-        size_t slot = size_t((k * kIndexMultiplier) >> index_shift_);
-        while (index_[slot].key != 0) slot = (slot + 1) & mask;
-        IndexSlot& s = index_[slot];
-        s.key = k;
-        std::memcpy(s.radiance, voxels_ + i * 16, 12);
-        s.voxel = uint32_t(i);  // voxel_count <= file size / 24 < 2^32 - 1 for files < 96 GiB
+    // Linear in the voxels whatever the keys: each multiplier gets a bounded number of probes.
+    const auto fill = [&](uint64_t multiplier) {
+        std::memset(table.get(), 0, rounded);
+        uint64_t probes = 0;
+        for (uint64_t i = 0; i < voxel_count_; ++i) {
+            const uint64_t k = key(i);
+            size_t slot = size_t((k * multiplier) >> shift);
+            for (uint64_t run = 0; table[slot].key != 0; ++run) {
+                if (run == kIndexLongestProbe || ++probes > kIndexProbesPerKey * voxel_count_) return false;
+                slot = (slot + 1) & mask;
+            }
+            IndexSlot& s = table[slot];
+            s.key = k;
+            std::memcpy(s.radiance, voxels_ + i * 16, 12);
+            s.voxel = uint32_t(i);  // voxel_count <= file size / 24 < 2^32 - 1 for files < 96 GiB
+        }
+        return true;
+    };
+    for (const uint64_t multiplier : kIndexMultipliers) {
+        if (!fill(multiplier)) continue;
+        index_ = std::move(table);
+        index_slots_ = slots;
+        index_shift_ = shift;
+        index_multiplier_ = multiplier;
+        return CacheFileStatus::kOk;
     }
-    return CacheFileStatus::kOk;
+    return CacheFileStatus::kOk;  // keys crafted to collide: lookups keep the binary search
 }
 
 const CacheView::IndexSlot* CacheView::findSlot(uint64_t k) const {
     // Linear probing ends at the key or at an empty slot; the load factor (<= 2/3) keeps one.
     const size_t mask = index_slots_ - 1;
-    for (size_t slot = size_t((k * kIndexMultiplier) >> index_shift_);; slot = (slot + 1) & mask) {
+    for (size_t slot = homeSlot(k);; slot = (slot + 1) & mask) {
         const IndexSlot& s = index_[slot];
         if (s.key == k) return &s;
         if (s.key == 0) return nullptr;
@@ -957,7 +997,7 @@ size_t CacheView::lookupBatch(size_t count, const Float3* positions, const Float
             const size_t n = std::min(kBlock, count - start);
             keysFor(n, positions + start, normals + start, camera_position, keys);
             for (size_t j = 0; j < n; ++j) {
-                const uintptr_t home = reinterpret_cast<uintptr_t>(&index_[size_t((keys[j] * kIndexMultiplier) >> index_shift_)]);
+                const uintptr_t home = reinterpret_cast<uintptr_t>(&index_[homeSlot(keys[j])]);
                 __builtin_prefetch(reinterpret_cast<const void*>(home));
                 if ((home & 63u) + sizeof(IndexSlot) > 64u) {
                     __builtin_prefetch(reinterpret_cast<const void*>(home + sizeof(IndexSlot) - 1));
@@ -1084,6 +1124,11 @@ struct GpuPacker {
 /// Checks the options shared by gpuBuffers() and gpuInsertList() (`what` names the caller).
 CacheFileStatus prepareGpuPacker(const GpuBufferOptions& options, const CacheView& view, const char* what,
                                  GpuPacker* packer, CacheError* error) {
+    // An enumerator the library does not have is a caller's mistake, as the C API says.
+    if (!isKnownSharcSdkTarget(options.sdk_target)) {
+        return fail(error, CacheFileStatus::kInvalidArgument, 0,
+                    std::string(what) + ": unknown sdk_target " + std::to_string(uint32_t(options.sdk_target)));
+    }
     std::string refused;
     const CacheFileStatus build =
         checkSharcBuildOptions(options.build, options.sdk_target, view.hasVoxelMaterials(), &refused);
@@ -1113,6 +1158,10 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: null output");
     if (!data_) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: the view is not open");
     if (options.capacity == 0) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: capacity 0");
+    if (!isKnownSharcSdkTarget(options.sdk_target)) {
+        return fail(error, CacheFileStatus::kInvalidArgument, 0,
+                    "gpuBuffers: unknown sdk_target " + std::to_string(uint32_t(options.sdk_target)));
+    }
     const SharcSdkLayout& layout = sharcSdkLayout(options.sdk_target);
     if (options.capacity < layout.min_capacity) {
         return fail(error, CacheFileStatus::kInvalidArgument, 0,

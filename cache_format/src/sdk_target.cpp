@@ -107,7 +107,11 @@ CacheFileStatus sharcSdkTargetForRelease(const std::string& release, SharcSdkTar
                    "1.6.3 - 1.6.x: described, not verified against SDK code (identifySharcSdkTarget checks it)");
     } else if (minor == 7 || patch < 3) {
         *out = SharcSdkTarget::kSdk1_7;
-        if (minor == 8 && patch >= 1) {
+        if (minor == 7 && patch < 2) {
+            setMessage(message, name +
+                                    ": assumed to have 1.7.2's layout, which was verified; this release was not "
+                                    "(identifySharcSdkTarget checks it)");
+        } else if (minor == 8 && patch >= 1) {
             setMessage(message, name +
                                     ": from the description of 1.8.2's source, not verified against SDK code "
                                     "(identifySharcSdkTarget checks it)");

@@ -275,6 +275,12 @@ TEST(SdkTarget, ReleaseNamesMapToTargets) {
     EXPECT_EQ(target("1.7.2"), CacheFileStatus::kOk);
     EXPECT_EQ(t, SharcSdkTarget::kSdk1_7);
     EXPECT_TRUE(message.empty()) << message;
+    // 1.7.0 and 1.7.1 get 1.7.2's layout, which was verified; they were not, and the note says so.
+    for (const char* early : {"1.7.0", "1.7.1", "1.7"}) {
+        EXPECT_EQ(target(early), CacheFileStatus::kOk) << early;
+        EXPECT_EQ(t, SharcSdkTarget::kSdk1_7) << early;
+        EXPECT_NE(message.find("assumed"), std::string::npos) << early << ": " << message;
+    }
     EXPECT_EQ(target("v1.8.0.0"), CacheFileStatus::kOk);
     EXPECT_EQ(t, SharcSdkTarget::kSdk1_7);
     EXPECT_EQ(target("1.8.2"), CacheFileStatus::kOk);
@@ -422,6 +428,25 @@ TEST(SdkTarget, CapacityBelowTheRulesMinimumIsRefused) {
     EXPECT_NE(error.message.find("16"), std::string::npos) << error.message;
     options.capacity = 16;
     EXPECT_EQ(cache.view.gpuBuffers(options, &buffers, &error), CacheFileStatus::kOk);
+}
+
+/// An sdk_target that is none of the enumerators is the caller's mistake in both APIs (C++ said
+/// kUnsupportedFeature, C SHARCBAKE_INVALID_ARGUMENT).
+TEST(SdkTarget, UnknownTargetIsAnInvalidArgument) {
+    TestCache cache;
+    makeTestCache(10, &cache);
+    for (const uint32_t unknown : {0u, 4u, 99u}) {
+        GpuBufferOptions options;
+        options.sdk_target = SharcSdkTarget(unknown);
+        GpuBuffers buffers;
+        GpuInsertList list;
+        CacheError error;
+        EXPECT_EQ(cache.view.gpuBuffers(options, &buffers, &error), CacheFileStatus::kInvalidArgument) << unknown;
+        EXPECT_NE(error.message.find("unknown sdk_target " + std::to_string(unknown)), std::string::npos)
+            << error.message;
+        EXPECT_EQ(cache.view.gpuInsertList(options, &list, &error), CacheFileStatus::kInvalidArgument) << unknown;
+        EXPECT_NE(error.message.find("unknown sdk_target"), std::string::npos) << error.message;
+    }
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -192,7 +192,8 @@ public:
     /// open addressing with each key stored next to its radiance, so a hit reads one cache line
     /// and not the file (24 bytes x 1.5..3 per voxel; huge pages where Linux offers them). Call
     /// once before sharing the view between threads. kIoError if the allocation fails (lookups
-    /// then keep working).
+    /// then keep working). Linear in the voxels for any file: keys crafted to collide in the
+    /// index leave it unbuilt (kOk, hasLookupIndex() false) and lookups on the binary search.
     CacheFileStatus buildLookupIndex();
     bool hasLookupIndex() const { return index_slots_ != 0; }
     CacheStats stats() const;
@@ -231,7 +232,7 @@ public:
     /// keys in the layout of options.sdk_target, inserted in file (key) order with that release's
     /// bucket rule + linear probe (SPEC §G.2). Voxels whose bucket is full are counted in
     /// failed_inserts. Errors: kInvalidArgument (capacity 0, or below 16 for SDK 1.8.3+; a bad
-    /// radiance scale; null out), kUnsupportedFeature (a build option the library cannot serve;
+    /// radiance scale; an sdk_target that is none of SharcSdkTarget's enumerators; null out), kUnsupportedFeature (a build option the library cannot serve;
     /// the message says why), kIoError (allocation failed). A clipping warning is in
     /// out->radiance.warning (and in `error->message` with status kOk).
     CacheFileStatus gpuBuffers(const GpuBufferOptions& options, GpuBuffers* out, CacheError* error = nullptr) const;
@@ -310,8 +311,10 @@ private:
     };
     std::unique_ptr<IndexSlot[], FreeDeleter> index_;
     size_t index_slots_ = 0;                ///< a power of two, or 0 without an index
-    uint32_t index_shift_ = 64;             ///< slot = (key * golden) >> shift
+    uint32_t index_shift_ = 64;             ///< slot = (key * index_multiplier_) >> shift
+    uint64_t index_multiplier_ = 0;         ///< the first of the build's multipliers whose probes ran short
 
+    size_t homeSlot(uint64_t key) const { return size_t((key * index_multiplier_) >> index_shift_); }
     const IndexSlot* findSlot(uint64_t key) const;  ///< nullptr when absent; needs the index
 };
 

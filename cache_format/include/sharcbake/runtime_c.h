@@ -57,7 +57,8 @@ SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_open_memory(const void* d
  *  slot next to its radiance instead of binary-searching the file's keys, and batched lookups
  *  overlap their memory misses (24 bytes x 1.5..3 per voxel). Call once after opening, before
  *  other threads use the cache. SHARCBAKE_IO_ERROR if the memory cannot be had (lookups keep
- *  working, unindexed); SHARCBAKE_INVALID_ARGUMENT for NULL. */
+ *  working, unindexed); SHARCBAKE_INVALID_ARGUMENT for NULL. Linear in the voxels for any file: keys
+ *  crafted to collide in the index leave it unbuilt (SHARCBAKE_OK), lookups then binary-search. */
 SHARCBAKE_RUNTIME_API sharcbake_status sharcbake_cache_build_lookup_index(sharcbake_cache* cache);
 /** Closes a cache (NULL is allowed). */
 SHARCBAKE_RUNTIME_API void sharcbake_cache_close(sharcbake_cache* cache);

@@ -66,7 +66,8 @@ struct SharcSdkLayout {
     const char* basis;      ///< how the layout is known: "verified: ..." or "described: ..."
 };
 
-/// The constants of `target`; an unknown value gives the default target's.
+/// The constants of `target`; an unknown value gives the default target's (gpuBuffers() and
+/// gpuInsertList() refuse one: kInvalidArgument).
 SHARCBAKE_RUNTIME_API const SharcSdkLayout& sharcSdkLayout(SharcSdkTarget target);
 /// "SHaRC SDK 1.7.2 - 1.8.2" etc.; "unknown SHaRC SDK target" for other values. Never null.
 SHARCBAKE_RUNTIME_API const char* toString(SharcSdkTarget target);
@@ -76,7 +77,8 @@ SHARCBAKE_RUNTIME_API bool isKnownSharcSdkTarget(SharcSdkTarget target);
 /// @brief The target for an SDK release written "1.8.2", "v1.8.2.0" or "1.6": kOk and `*out`, or
 /// kUnsupportedFeature with a message that says why (1.6.0 - 1.6.2 and older use other buffer
 /// layouts that the library does not make; releases newer than 1.8.x are unknown).
-/// `message` (optional) also receives a note when the mapping rests on the description only.
+/// `message` (optional) also receives a note when the mapping rests on the description only, or
+/// on an assumption (1.7.0 and 1.7.1, unverified, are given 1.7.2's layout).
 SHARCBAKE_RUNTIME_API CacheFileStatus sharcSdkTargetForRelease(const std::string& release, SharcSdkTarget* out, std::string* message);
 
 /// @brief A file key (SPEC §H.6 layout) in `target`'s layout: the 17-bit coordinates stay, the
