@@ -38,6 +38,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -151,25 +152,56 @@ constexpr double kTableFullShare = 0.1;
 /// time limit or a preemption), or 0. The bake finishes its iteration and writes its outputs; a
 /// second signal aborts promptly.
 std::atomic<int> g_stop_signal{0};
+/// When the first signal came (CLOCK_MONOTONIC, nanoseconds): the same signal again within
+/// kSameStopRequest is one request delivered twice, not a second Ctrl-C. GNU `timeout`, a common
+/// limit in CI, signals the bake and then its whole process group, the bake included, and that
+/// second copy aborted the bake with nothing written.
+std::atomic<int64_t> g_stop_signal_time{0};
+constexpr int64_t kSameStopRequest = 250'000'000;  // 0.25 s: faster than a person presses twice
 /// The checkpoint lock file a second signal removes before the process ends, so an aborted bake
-/// leaves no lock behind (the lock itself dies with the process; its file would stay). Written
-/// before g_abort_lock_path_set is raised and read in the handler only after it, as a plain
-/// array: unlink() is safe in a signal handler, a std::string is not.
+/// leaves no lock behind (the lock itself dies with the process; its file would stay), and the
+/// checkpoint the abort message names when one is on disk. Written before
+/// g_abort_lock_path_set is raised and read in the handler only after it, as plain arrays:
+/// unlink() and access() are safe in a signal handler, a std::string is not.
 char g_abort_lock_path[PATH_MAX] = {};
+char g_abort_checkpoint_path[PATH_MAX] = {};
 std::atomic<bool> g_abort_lock_path_set{false};
+
+int64_t monotonicNanoseconds() {  // clock_gettime is async-signal-safe
+    timespec now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &now);
+    return int64_t(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+/// write() of a NUL-terminated string; safe in a signal handler.
+void writeToStderr(const char* text) {
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, text, std::strlen(text));
+}
 
 /// A second signal while the first is being honoured ends the process at once (the default action).
 extern "C" void onStopSignal(int signal) {
-    if (g_stop_signal.exchange(signal) != 0) {
-        // write() is safe in a signal handler; stdio is not. Said, since the abort writes nothing.
-        static const char kAborted[] =
-            "\nsharcbake: a second signal: aborted at once, no cache written (a --checkpoint keeps the bake "
-            "to its last checkpoint: --resume it)\n";
-        [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kAborted, sizeof kAborted - 1);
-        if (g_abort_lock_path_set.load(std::memory_order_acquire)) ::unlink(g_abort_lock_path);  // still held
-        std::signal(signal, SIG_DFL);
-        std::raise(signal);
+    const int64_t now = monotonicNanoseconds();
+    const int first = g_stop_signal.exchange(signal);
+    if (first == 0) {
+        g_stop_signal_time.store(now);
+        return;
     }
+    if (first == signal && now - g_stop_signal_time.load() < kSameStopRequest) {
+        g_stop_signal.store(first);
+        return;  // the first request delivered again
+    }
+    // Said, since the abort writes nothing; the checkpoint only if one is on disk to resume.
+    const bool locked = g_abort_lock_path_set.load(std::memory_order_acquire);
+    writeToStderr("\nsharcbake: a second signal: aborted at once, no cache written");
+    if (locked && ::access(g_abort_checkpoint_path, F_OK) == 0) {
+        writeToStderr("; the last checkpoint, ");
+        writeToStderr(g_abort_checkpoint_path);
+        writeToStderr(", is kept: --resume it");
+    }
+    writeToStderr("\n");
+    if (locked) ::unlink(g_abort_lock_path);  // still held
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
 }
 
 /// A CheckpointLock whose file a second stop signal removes (g_abort_lock_path) while it is held.
@@ -177,8 +209,10 @@ class AbortSafeCheckpointLock {
 public:
     explicit AbortSafeCheckpointLock(const std::string& checkpoint_path) : lock_(checkpoint_path) {
         const std::string& path = lock_.lockPath();
-        if (path.size() < sizeof g_abort_lock_path) {  // a longer path keeps its file on an abort
+        // A longer path keeps its file on an abort (and is not named).
+        if (path.size() < sizeof g_abort_lock_path && checkpoint_path.size() < sizeof g_abort_checkpoint_path) {
             std::memcpy(g_abort_lock_path, path.c_str(), path.size() + 1);
+            std::memcpy(g_abort_checkpoint_path, checkpoint_path.c_str(), checkpoint_path.size() + 1);
             g_abort_lock_path_set.store(true, std::memory_order_release);
         }
     }
@@ -198,6 +232,7 @@ public:
     StopSignalHandlers()
         : interrupt_(std::signal(SIGINT, onStopSignal)), terminate_(std::signal(SIGTERM, onStopSignal)) {
         g_stop_signal = 0;
+        g_stop_signal_time = 0;
     }
     ~StopSignalHandlers() {
         std::signal(SIGINT, interrupt_);
@@ -1319,6 +1354,7 @@ private:
             }
         }
         first_iteration_ = baker_->iterationsDone();
+        counters_at_start_ = baker_->counters();  // a checkpoint's: the rates count this run's rays
         if (first_iteration_ > o_.iterations) {
             // A checkpoint is never cut back: the cache holds every iteration it had.
             warn(
@@ -1556,9 +1592,18 @@ private:
         }
     }
 
+    /// Rays traced by this run, per second of its update stage: the counters a resumed bake
+    /// restores from its checkpoint are not this run's (a resume of 64 + 64 iterations reported
+    /// twice its rate, and one that baked none 1.7e16 rays/s).
     double raysPerSecond() const {
         const UpdateCounters& c = baker_->counters();
-        return double(c.segments + c.shadow_rays) / std::max(baker_->seconds().update, 1e-9);
+        const uint64_t rays = (c.segments + c.shadow_rays) -
+                              (counters_at_start_.segments + counters_at_start_.shadow_rays);
+        return rays == 0 ? 0.0 : double(rays) / std::max(baker_->seconds().update, 1e-9);
+    }
+    double segmentsPerSecond() const {
+        const uint64_t segments = baker_->counters().segments - counters_at_start_.segments;
+        return segments == 0 ? 0.0 : double(segments) / std::max(baker_->seconds().update, 1e-9);
     }
     double occupancy() const {
         return double(baker_->cache().liveEntries()) / double(baker_->cache().capacity());
@@ -1577,13 +1622,16 @@ private:
     void printSummary() const {
         const UpdateCounters& c = baker_->counters();
         const StageSeconds& stage = baker_->seconds();
-        std::printf("Baked %s in %.2f s (%s)\n", counted(baker_->iterationsDone(), "iteration").c_str(), bake_seconds_,
+        const uint32_t this_run = baker_->iterationsDone() - std::min(baker_->iterationsDone(), first_iteration_);
+        std::printf("Baked %s%s in %.2f s (%s)\n", counted(baker_->iterationsDone(), "iteration").c_str(),
+                    first_iteration_ > 0 ? formatted(", %u of them in this run,", this_run).c_str() : "", bake_seconds_,
                     howTheBakeStopped(stop_reason_));
         std::printf("  time: update %.2f s, commit %.2f s, resolve %.2f s; setup %.2f s, coverage+write %.2f s\n",
                     stage.update, stage.commit, stage.resolve, setup_seconds_, finish_seconds_);
-        std::printf("  paths %llu, segments %llu, shadow rays %llu: %.3g rays/s, %.3g segments/s\n",
+        std::printf("  paths %llu, segments %llu, shadow rays %llu%s: %.3g rays/s, %.3g segments/s%s\n",
                     (unsigned long long)c.paths, (unsigned long long)c.segments, (unsigned long long)c.shadow_rays,
-                    raysPerSecond(), double(c.segments) / std::max(stage.update, 1e-9));
+                    first_iteration_ > 0 ? " (all iterations)" : "", raysPerSecond(), segmentsPerSecond(),
+                    first_iteration_ > 0 ? " (this run)" : "");
         std::printf("  cache: %llu live voxels, occupancy %.2f%% of %u, levels {%s}\n",
                     (unsigned long long)live_voxels_, 100.0 * occupancy(), baker_->cache().capacity(),
                     joined(written_levels_).c_str());
@@ -1846,6 +1894,7 @@ private:
     std::unique_ptr<Baker> baker_;
     BakeSettingsText resume_settings_;
     uint32_t first_iteration_ = 0;
+    UpdateCounters counters_at_start_;  ///< restored from --resume's checkpoint, else zero
     double setup_seconds_ = 0.0;
 
     ConvergenceReport report_;
