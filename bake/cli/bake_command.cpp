@@ -311,7 +311,8 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
         } catch (const CameraPathError& e) {
             throw CommandError(kExitInvalidInput, e.what());
         }
-        description = "path file " + job.camera.path_file + " (" + std::to_string(poses.size()) + " waypoints)";
+        description = "path file " + pathAsGiven(job.camera.path_file) + " (" + std::to_string(poses.size()) +
+                      " waypoints)";
         return CameraPath(std::move(poses), false, job.camera.iterations_per_leg, 0.002f * diagonal, job.settings.seed);
     }
     if (job.camera.source == CameraPathSource::GltfCameras) {
@@ -995,7 +996,7 @@ GridDecision decideGrid(BakeJob& job, const Tracer& tracer, const SeenSurface* s
         } catch (const CameraPathError& e) {
             throw CommandError(kExitInvalidInput, e.what());
         }
-        region.source = "waypoints of " + job.camera.path_file;
+        region.source = "waypoints of " + pathAsGiven(job.camera.path_file);
     }
     GridDecision decision;
     HashGridParameters& grid = settings.sharc.grid;
@@ -1083,7 +1084,7 @@ std::vector<std::pair<std::string, std::string>> bakeMetadata(const BakeJob& job
     const BakeSettings& settings = job.settings;
     std::vector<std::pair<std::string, std::string>> metadata = {
         {"writer", "sharcbake " SHARCBAKE_VERSION},
-        {"scene", job.scene_path},
+        {"scene", pathAsGiven(job.scene_path)},
         {"scene_hash", scene_hash},
         {"sky", skyDescription(job.sky)},
         {"iterations", outcome ? std::to_string(outcome->iterations) : ""},

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <istream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <vector>
@@ -14,12 +15,20 @@
 namespace sharcbake {
 namespace {
 
+/// Path values read from config files, as resolved (the key) and as the file writes them.
+std::map<std::string, std::string>& pathsAsWritten() {
+    static std::map<std::string, std::string> paths;
+    return paths;
+}
+
 /// `value` read from a config file in `folder`: a relative path becomes relative to the folder.
 std::string relativeToConfig(const std::filesystem::path& folder, const std::string& value) {
     if (value.empty() || isStandardOutput(value) || folder.empty() || !std::filesystem::path(value).is_relative()) {
         return value;
     }
-    return (folder / value).string();
+    const std::string resolved = (folder / value).string();
+    pathsAsWritten().emplace(resolved, value);
+    return resolved;
 }
 
 /// Sections and keys nest at most this deep. sharcbake's options are one level deep ([bake]
@@ -169,6 +178,11 @@ void addConfigFileOption(CLI::App& app, const std::string& help) {
     app.config_formatter(std::make_shared<ConfigFileReader>(app));
     app.set_config("--config", "", help)->type_name("FILE");
     app.allow_config_extras(CLI::config_extras_mode::error);
+}
+
+std::string pathAsGiven(const std::string& value) {
+    const auto it = pathsAsWritten().find(value);
+    return it == pathsAsWritten().end() ? value : it->second;
 }
 
 void makePathOptionsAbsolute(CLI::App& command) {

@@ -20,6 +20,12 @@ namespace sharcbake {
 /// the option refuses is a CLI::ConfigError whose message starts with the file's name.
 void addConfigFileOption(CLI::App& app, const std::string& help);
 
+/// A path option's value as the user gave it: for a value read from a config file, the text of the
+/// file (a relative path there is relative to the file's folder); any other value unchanged. What a
+/// bake records in its cache, so that the same config file gives the same bytes from any checkout
+/// (the path resolved against the file's folder differed with the checkout's location).
+std::string pathAsGiven(const std::string& value);
+
 /// For --print-config: the relative values of `command`'s path options made absolute (from the
 /// current folder, where they were given), so that the printed file, read back from wherever it
 /// is kept, names the same files. "-" stays standard output.

@@ -98,7 +98,15 @@ expect 0 "a config with relative paths, from another folder" sh -c "cd '$work/el
 for f in level.sharc level.ckpt level.json; do
     [ -s "$work/level/out/$f" ] || fail "the config's relative path out/$f was not taken from the config's folder"
 done
-says "$work/level/out/level.json" "path file .*level/path.txt" "the camera path is read from the config's folder"
+says "$work/level/out/level.json" "path file path.txt (2 waypoints)" "the camera path is read from the config's folder"
+# The cache records the paths as the config writes them, so the same config baked in another
+# checkout gives the same bytes (the paths resolved against the file's folder made them differ).
+cp -r "$work/level" "$work/level_copy" && rm -f "$work/level_copy/out/"*
+expect 0 "the same config in another folder" "$sharcbake" --config "$work/level_copy/scene.toml" bake -q
+cmp -s "$work/level/out/level.sharc" "$work/level_copy/out/level.sharc" ||
+    fail "the same config baked in two folders gives different caches"
+"$sharcbake" info "$work/level/out/level.sharc" > "$work/level_info.txt"
+says "$work/level_info.txt" "scene: furnace_rho050.gltf$" "the cache records the scene's path as the config writes it"
 expect 0 "the config's paths overridden on the command line" sh -c "cd '$work/elsewhere' && '$sharcbake' \
     --config ../level/scene.toml bake -q -o line.sharc --stats-json line.json --checkpoint line.ckpt"
 [ -s "$work/elsewhere/line.sharc" ] && [ -s "$work/elsewhere/line.json" ] ||
