@@ -1204,11 +1204,14 @@ private:
         std::vector<std::string> others = {job_.scene_path, o_.resume_path, job_.sky.exr_path};
         others.insert(others.end(), more_inputs.begin(), more_inputs.end());
         checkOutputPath(o_.output_path, "cache", others);
+        checkReplacesOnlyItsKind(o_.output_path, "cache", cacheFileIdentifier(), "a sharcbake cache");
         others.push_back(o_.output_path);
         if (!checkpoint_path_.empty()) {
             std::vector<std::string> checkpoint_others = others;
             std::erase(checkpoint_others, o_.resume_path);  // the one input it may replace
             checkOutputPath(checkpoint_path_, "checkpoint", checkpoint_others);
+            checkReplacesOnlyItsKind(checkpoint_path_, "checkpoint", checkpointFileIdentifier(),
+                                     "a sharcbake checkpoint");
         }
         others.push_back(checkpoint_path_);
         if (!o_.stats_json.empty()) checkTextOutputPath(o_.stats_json, "stats JSON", others);

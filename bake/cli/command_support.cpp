@@ -3,6 +3,7 @@
 
 #include "sharc/camera_path.h"
 #include "sharcbake/cache_file.h"
+#include "sharcbake/format.h"
 #include "sharcbake/scene_loader.h"
 #include "support/fnv1a.h"
 #include "support/median.h"
@@ -152,6 +153,32 @@ void checkOutputPath(const std::string& path, const std::string& what, const std
                                                ", which this command also reads or writes; choose another output");
         }
     }
+}
+
+void checkReplacesOnlyItsKind(const std::string& path, const std::string& what, std::string_view identifier,
+                              const char* kind) {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(path, error)) return;  // a new file
+    std::ifstream in(path, std::ios::binary);
+    std::string head(identifier.size(), '\0');
+    in.read(head.data(), std::streamsize(head.size()));
+    const size_t read = size_t(std::max<std::streamsize>(in.gcount(), 0));
+    if (read == 0 || (read == identifier.size() && head == identifier)) return;  // empty, or its kind
+    throw CommandError(kExitUsage, path + ": exists and is not " + kind + ": writing the " + what +
+                                       " there would destroy it. Remove it first if it is not needed, or choose "
+                                       "another output");
+}
+
+std::string_view cacheFileIdentifier() {
+    return {reinterpret_cast<const char*>(kCacheIdentifier), sizeof kCacheIdentifier};
+}
+std::string_view checkpointFileIdentifier() {
+    return {reinterpret_cast<const char*>(kCheckpointIdentifier), sizeof kCheckpointIdentifier};
+}
+std::string_view vdbFileIdentifier() {
+    // OpenVDB's magic number 0x56444220 ("VDB "), written first as a little-endian 64-bit integer.
+    static constexpr char kVdbMagic[8] = {0x20, 0x42, 0x44, 0x56, 0, 0, 0, 0};
+    return {kVdbMagic, sizeof kVdbMagic};
 }
 
 namespace {

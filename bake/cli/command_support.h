@@ -86,6 +86,18 @@ glm::vec3 parseVec3(const std::string& text, const std::string& option_name);
 /// resolving links, or by resolved path when it does not exist yet.
 void checkOutputPath(const std::string& path, const std::string& what, const std::vector<std::string>& others = {});
 
+/// Refuses (kExitUsage) an output `path` that exists, is not empty and does not start with
+/// `identifier`: a file of another kind (a scene, an image, notes) that the `what` would replace.
+/// Swapping two arguments (`bake -o scene.gltf ...`) destroyed the scene without a word; a command
+/// replaces only a file of its own kind (`kind`, as in "a sharcbake cache"). Call after
+/// checkOutputPath, which refuses what is not a regular file.
+void checkReplacesOnlyItsKind(const std::string& path, const std::string& what, std::string_view identifier,
+                              const char* kind);
+/// The first bytes of the files the commands write: caches, checkpoints, OpenVDB files.
+std::string_view cacheFileIdentifier();
+std::string_view checkpointFileIdentifier();
+std::string_view vdbFileIdentifier();
+
 /// Marks `option` as naming files or folders (its help shows PATH): a relative value read from a
 /// --config file is taken relative to that file's folder (config_file.h). Returns `option`.
 CLI::Option* pathOption(CLI::Option* option);

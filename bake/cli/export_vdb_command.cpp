@@ -29,6 +29,7 @@ struct ExportVdbOptions {
 
 void run(const ExportVdbOptions& o) {
     checkOutputPath(o.output, "VDB", {o.input});
+    checkReplacesOnlyItsKind(o.output, "VDB", vdbFileIdentifier(), "an OpenVDB file");
     CacheView view;
     CacheError error;
     const CacheFileStatus status = CacheView::openFile(o.input, &view, &error, CacheView::FileMode::kMap);

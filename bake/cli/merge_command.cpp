@@ -233,6 +233,7 @@ void refuseOverlaps(const std::vector<CacheData>& inputs, const std::vector<std:
 
 void runMerge(const MergeOptions& o) {
     checkOutputPath(o.output_path, "merged cache", o.inputs);
+    checkReplacesOnlyItsKind(o.output_path, "merged cache", cacheFileIdentifier(), "a sharcbake cache");
     std::vector<CacheData> inputs(o.inputs.size());
     for (size_t i = 0; i < o.inputs.size(); ++i) {
         std::string message;

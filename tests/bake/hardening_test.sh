@@ -1,7 +1,7 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
 # Hostile inputs and outputs (docs/untrusted_input.md): an output never
-# replaces a device, a FIFO or one of the command's inputs, a failed write keeps the previous
+# replaces a device, a FIFO, one of the command's inputs or a file of another kind, a failed write keeps the previous
 # file, and crafted scenes and caches end with the documented exit code, quickly.
 # Usage: hardening_test.sh SHARCBAKE SCENES_DIR WORK_DIR
 set -u
@@ -26,6 +26,23 @@ if [ -d /sys ] && ! touch /sys/sharcbake-probe 2>/dev/null; then
     grep -q "^Baked" "$work/out.txt" && fail "the bake ran before its output was refused"
     says "$work/err.txt" "/sys" "the message names the folder"
 fi
+# An existing file of another kind is not replaced: arguments swapped (bake -o scene.gltf ...)
+# destroyed the scene without a word. A file of the output's own kind, or an empty one, is replaced.
+cp "$furnace" "$work/precious.gltf"
+echo "notes" > "$work/notes.txt"
+expect 1 "bake -o over a glTF scene" "$sharcbake" bake "$furnace" -o "$work/precious.gltf" $quick
+says "$work/err.txt" "precious.gltf: exists and is not a sharcbake cache" "the refusal names the file and why"
+cmp -s "$furnace" "$work/precious.gltf" || fail "bake -o replaced a glTF scene"
+expect 1 "bake --checkpoint over a text file" "$sharcbake" bake "$furnace" -o "$work/b.sharc" --checkpoint "$work/notes.txt" $quick
+expect 1 "merge -o over a glTF scene" "$sharcbake" merge "$work/a.sharc" -o "$work/precious.gltf"
+expect 1 "export-vdb -o over a text file" "$sharcbake" export-vdb "$work/a.sharc" -o "$work/notes.txt" -q
+cmp -s "$furnace" "$work/precious.gltf" && [ "$(cat "$work/notes.txt")" = "notes" ] || fail "an output replaced another kind of file"
+cp "$work/a.sharc" "$work/replaced.sharc"
+expect 0 "bake -o over a cache" "$sharcbake" bake "$furnace" -o "$work/replaced.sharc" $quick
+: > "$work/empty.vdb"
+expect 0 "export-vdb -o over an empty file" "$sharcbake" export-vdb "$work/a.sharc" -o "$work/empty.vdb" -q
+expect 0 "export-vdb -o over a VDB" "$sharcbake" export-vdb "$work/a.sharc" -o "$work/empty.vdb" -q
+
 expect 2 "export-vdb -o /dev/full is refused" "$sharcbake" export-vdb "$work/a.sharc" -o /dev/full
 mkfifo "$work/fifo_out.exr"
 expect 2 "render -o FIFO is refused" "$sharcbake" render "$furnace" -o "$work/fifo_out.exr" --resolution 8 --spp 1 -q
