@@ -1175,7 +1175,15 @@ public:
           job_(bakeJobFromOptions(o)) {}
 
     void run() {
-        runOnWorkerThreads(threads_, [&] { runPhases(); });
+        try {
+            runOnWorkerThreads(threads_, [&] { runPhases(); });
+        } catch (...) {
+            // A refusal after the folder was made (an unknown --report-camera, a missing
+            // --reference) left it behind, empty; remove() leaves a folder that holds anything.
+            std::error_code error;
+            if (made_report_folder_) std::filesystem::remove(o_.report_dir, error);
+            throw;
+        }
     }
 
 private:
@@ -1272,14 +1280,9 @@ private:
     }
 
     void prepareOutputs() {
-        const bool made_report_folder = !o_.report_dir.empty() && prepareReportFolder();
-        try {
-            checkOutputs({});
-        } catch (const CommandError&) {
-            std::error_code error;
-            if (made_report_folder) std::filesystem::remove(o_.report_dir, error);  // empty: a refusal leaves nothing
-            throw;
-        }
+        if (!o_.reference_path.empty()) requireRegularInputFile(o_.reference_path);  // before the scene loads
+        made_report_folder_ = !o_.report_dir.empty() && prepareReportFolder();
+        checkOutputs({});
         // Two bakes sharing one checkpoint: refuse the second now.
         if (!checkpoint_path_.empty()) {
             checkpointStep("", [&] { checkpoint_lock_.emplace(checkpoint_path_); });
@@ -1897,6 +1900,7 @@ private:
     std::string capacity_choice_text_;  ///< empty for a fixed --capacity
     std::unique_ptr<Baker> baker_;
     BakeSettingsText resume_settings_;
+    bool made_report_folder_ = false;  ///< this bake made --report's folder (removed, if empty, on failure)
     uint32_t first_iteration_ = 0;
     UpdateCounters counters_at_start_;  ///< restored from --resume's checkpoint, else zero
     double setup_seconds_ = 0.0;
@@ -2020,6 +2024,24 @@ void runBatch(const BakeOptions& batch) {
 /// (an empty path) are left out: read back, an empty value would be checked as a path. Paths are
 /// written absolute: --config reads relative ones from the file's folder, and where the printed
 /// file will be kept is not known here.
+/// The options that shape the error report do nothing without one: `--reference out/ref.exr` alone
+/// baked without a word of measurement. Refused, naming what they need.
+void requireReportForReportOptions(const CLI::App& command, const BakeOptions& o) {
+    if (!o.report_dir.empty() || o.target_error > 0.0) return;
+    std::vector<std::string> given;
+    for (const char* name : {"--reference", "--report-camera", "--report-resolution", "--report-spp", "--report-probes",
+                             "--report-probe-spp"}) {
+        if (command.get_option(name)->count() > 0) given.push_back(name);
+    }
+    if (given.empty()) return;
+    std::string names;
+    for (const std::string& name : given) names += (names.empty() ? "" : ", ") + name;
+    throw CommandError(kExitUsage, names + (given.size() == 1 ? " shapes" : " shape") +
+                                       " the error report, which only --report DIR (or --target-error E) makes: "
+                                       "give one of them too, or leave " +
+                                       (given.size() == 1 ? "it" : "them") + " out");
+}
+
 void printConfig(CLI::App& command) {
     makePathOptionsAbsolute(command);
     std::istringstream lines(command.config_to_str(true, true));
@@ -2261,6 +2283,7 @@ void registerBakeCommand(CLI::App& app) {
                   "folder)");
     cmd->callback([o, cmd] {
         if (o->print_config) return printConfig(*cmd);
+        requireReportForReportOptions(*cmd, *o);
         runBake(*o);
     });
 }

@@ -72,8 +72,18 @@ expect 1 "--report without anything to measure against" \
 grep -q "reference" "$work/err.txt" || fail "the message does not say to give --reference"
 expect 1 "--target-error without anything to measure against" \
     "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --target-error 0.1 --report-probes 0
+# The report's options without a report: --reference alone baked without a word of measurement.
+expect 1 "--reference without --report" \
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --reference "$work/none.exr"
+says "$work/err.txt" "--reference shapes the error report, which only --report DIR" "the refusal says what it needs"
+[ ! -e "$work/c.sharc" ] || fail "a refused bake wrote its cache"
 expect 2 "missing --reference" \
     "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/r" --reference "$work/none.exr"
+# A refusal leaves no report folder behind, also one that comes after the scene is loaded.
+[ ! -e "$work/r" ] || fail "a refused bake left its --report folder behind (missing --reference)"
+expect 1 "an unknown --report-camera" \
+    "$sharcbake" bake "$cornell" -o "$work/c.sharc" --iterations 2 --report "$work/r" --report-camera nope
+[ ! -e "$work/r" ] || fail "a refused bake left its --report folder behind (unknown --report-camera)"
 expect 1 "--report-resolution different from the reference" sh -c \
     "'$sharcbake' render '$cornell' -o '$work/tiny.exr' --resolution 8x8 --spp 1 -q &&
      '$sharcbake' bake '$cornell' -o '$work/c.sharc' --iterations 2 --report '$work/r' --reference '$work/tiny.exr' --report-resolution 16x16"
