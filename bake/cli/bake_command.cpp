@@ -2025,14 +2025,18 @@ void runBatch(const BakeOptions& batch) {
 /// written absolute: --config reads relative ones from the file's folder, and where the printed
 /// file will be kept is not known here.
 /// The options that shape the error report do nothing without one: `--reference out/ref.exr` alone
-/// baked without a word of measurement. Refused, naming what they need.
-void requireReportForReportOptions(const CLI::App& command, const BakeOptions& o) {
+/// baked without a word of measurement. Refused, naming what they need. Compared with the
+/// defaults, not counted as given: --print-config writes every option, defaults included.
+void requireReportForReportOptions(const BakeOptions& o) {
     if (!o.report_dir.empty() || o.target_error > 0.0) return;
+    const BakeOptions defaults;
     std::vector<std::string> given;
-    for (const char* name : {"--reference", "--report-camera", "--report-resolution", "--report-spp", "--report-probes",
-                             "--report-probe-spp"}) {
-        if (command.get_option(name)->count() > 0) given.push_back(name);
-    }
+    if (o.reference_path != defaults.reference_path) given.push_back("--reference");
+    if (o.report_camera != defaults.report_camera) given.push_back("--report-camera");
+    if (o.report_resolution != defaults.report_resolution) given.push_back("--report-resolution");
+    if (o.report_spp != defaults.report_spp) given.push_back("--report-spp");
+    if (o.report_probes != defaults.report_probes) given.push_back("--report-probes");
+    if (o.report_probe_spp != defaults.report_probe_spp) given.push_back("--report-probe-spp");
     if (given.empty()) return;
     std::string names;
     for (const std::string& name : given) names += (names.empty() ? "" : ", ") + name;
@@ -2283,7 +2287,7 @@ void registerBakeCommand(CLI::App& app) {
                   "folder)");
     cmd->callback([o, cmd] {
         if (o->print_config) return printConfig(*cmd);
-        requireReportForReportOptions(*cmd, *o);
+        requireReportForReportOptions(*o);
         runBake(*o);
     });
 }

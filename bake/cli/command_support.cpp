@@ -169,6 +169,48 @@ void checkReplacesOnlyItsKind(const std::string& path, const std::string& what, 
                                        "another output");
 }
 
+/// "--seed: cannot read "abc" as UINT: expected a whole number ...": a value the option's type
+/// cannot hold, named with the type and what it accepts.
+std::string unreadableValueMessage(const std::string& name, const std::string& value, const std::string& full_type) {
+    const std::string type = full_type.substr(0, full_type.find(':'));
+    const char* accepts = type == "UINT"    ? "a whole number of 0 or more, in digits, that fits the option "
+                                              "(most hold up to 4294967295)"
+                          : type == "INT"   ? "a whole number, in digits, that fits the option"
+                          : type == "FLOAT" ? "a number"
+                                            : nullptr;
+    return name + ": cannot read \"" + value + "\"" + (type.empty() ? "" : " as " + type) +
+           (accepts ? std::string(": expected ") + accepts : std::string());
+}
+
+/// From CLI11's range check, "--time-budget: Value abc not in range 0.000000 to 1797693...": its
+/// range check runs before the conversion, so a word was called out of range, with the largest
+/// double written out in 310 digits. A value that is no number of the option's type is named so;
+/// one out of range gets its bounds as a person writes them.
+std::string rangeErrorMessage(const std::string& what, const std::string& type) {
+    const size_t colon = what.find(": Value ");
+    const size_t range = what.find(" not in range ");
+    const size_t to = what.find(" to ", range == std::string::npos ? 0 : range);
+    if (colon == std::string::npos || range == std::string::npos || to == std::string::npos) return what;
+    const std::string name = what.substr(0, colon);
+    const std::string value = what.substr(colon + 8, range - colon - 8);
+    const bool whole = type.rfind("UINT", 0) == 0 || type.rfind("INT", 0) == 0;
+    char* end = nullptr;
+    const double number = std::strtod(value.c_str(), &end);
+    const bool is_number = !value.empty() && end == value.c_str() + value.size() && std::isfinite(number);
+    if (!is_number || (whole && number != std::floor(number))) return unreadableValueMessage(name, value, type);
+    const double low = std::strtod(what.c_str() + range + 14, nullptr);
+    const double high = std::strtod(what.c_str() + to + 4, nullptr);
+    char bounds[96];
+    if (type.find("POSITIVE") != std::string::npos) {
+        std::snprintf(bounds, sizeof bounds, "greater than 0");
+    } else if (high >= 1e300) {
+        std::snprintf(bounds, sizeof bounds, "at least %g", low);
+    } else {
+        std::snprintf(bounds, sizeof bounds, "from %.17g to %.17g", low, high);
+    }
+    return name + ": " + value + " is out of range: expected " + bounds;
+}
+
 std::string_view cacheFileIdentifier() {
     return {reinterpret_cast<const char*>(kCacheIdentifier), sizeof kCacheIdentifier};
 }

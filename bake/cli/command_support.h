@@ -98,6 +98,15 @@ std::string_view cacheFileIdentifier();
 std::string_view checkpointFileIdentifier();
 std::string_view vdbFileIdentifier();
 
+/// "--seed: cannot read "abc" as UINT: expected a whole number ...": a value the option's type
+/// (`full_type`, CLI11's type name such as "UINT" or "FLOAT:POSITIVE") cannot hold.
+std::string unreadableValueMessage(const std::string& name, const std::string& value, const std::string& full_type);
+/// CLI11's range check's message ("--time-budget: Value abc not in range 0.000000 to 1797693...",
+/// the check runs before the conversion) in a person's words: a value that is no number of the
+/// option's type (`type`) named so, one out of range with its bounds as a person writes them.
+/// Other messages come back unchanged.
+std::string rangeErrorMessage(const std::string& what, const std::string& type);
+
 /// Marks `option` as naming files or folders (its help shows PATH): a relative value read from a
 /// --config file is taken relative to that file's folder (config_file.h). Returns `option`.
 CLI::Option* pathOption(CLI::Option* option);

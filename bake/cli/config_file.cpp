@@ -21,6 +21,13 @@ std::map<std::string, std::string>& pathsAsWritten() {
     return paths;
 }
 
+/// The options given values by config files, by name ("--view-region"), and where: "FILE ([bake]
+/// view-region)".
+std::map<std::string, std::string>& optionSources() {
+    static std::map<std::string, std::string> sources;
+    return sources;
+}
+
 /// `value` read from a config file in `folder`: a relative path becomes relative to the folder.
 std::string relativeToConfig(const std::filesystem::path& folder, const std::string& value) {
     if (value.empty() || isStandardOutput(value) || folder.empty() || !std::filesystem::path(value).is_relative()) {
@@ -101,6 +108,14 @@ public:
         std::istringstream lines(text);
         std::string line;
         for (size_t number = 1; std::getline(lines, line); ++number) {
+            const size_t first = line.find_first_not_of(" \t");
+            if (first != std::string::npos && line[first] == '[' && line.find(']', first) == std::string::npos) {
+                // CLI11 read "[bake" as a key and said "[bake is not an option".
+                throw CLI::ConfigError(file + ":" + std::to_string(number) +
+                                       ": a section header without its "
+                                       "closing ']' (" +
+                                       line.substr(first) + ")");
+            }
             const size_t nesting = nestingOf(line);
             if (nesting > kMaxConfigNesting) {
                 throw CLI::ConfigError(file + ":" + std::to_string(number) + ": a section or key nested " +
@@ -138,6 +153,7 @@ public:
             if (isPathOption(*option)) {
                 for (std::string& value : item.inputs) value = relativeToConfig(folder, value);
             }
+            optionSources()[option->get_name()] = file + " (" + keyName(item) + ")";
             try {
                 if (option->get_expected_min() == 0) {  // a flag
                     option->add_result(option->get_flag_value(item.name, to_flag(item)));
@@ -146,7 +162,8 @@ public:
                     option->run_callback();
                 }
             } catch (const CLI::ParseError& e) {
-                throw CLI::ConfigError(file + ": " + keyName(item) + ": " + e.what());
+                throw CLI::ConfigError(file + ": " + keyName(item) + ": " +
+                                       rangeErrorMessage(e.what(), option->get_type_name()));
             }
         }
         return items;
@@ -178,6 +195,13 @@ void addConfigFileOption(CLI::App& app, const std::string& help) {
     app.config_formatter(std::make_shared<ConfigFileReader>(app));
     app.set_config("--config", "", help)->type_name("FILE");
     app.allow_config_extras(CLI::config_extras_mode::error);
+}
+
+std::string withConfigSource(const std::string& message) {
+    const size_t colon = message.find(':');
+    if (message.rfind("--", 0) != 0 || colon == std::string::npos) return message;
+    const auto it = optionSources().find(message.substr(0, colon));
+    return it == optionSources().end() ? message : it->second + ": " + message;
 }
 
 std::string pathAsGiven(const std::string& value) {

@@ -20,6 +20,11 @@ namespace sharcbake {
 /// the option refuses is a CLI::ConfigError whose message starts with the file's name.
 void addConfigFileOption(CLI::App& app, const std::string& help);
 
+/// `message` (an error about an option's value, "--view-region: ...") prefixed with the config file
+/// and key that gave the value, when one did: "bake.toml ([bake] view-region): --view-region: ...".
+/// Values the commands check themselves, after the file was read, were reported without the file.
+std::string withConfigSource(const std::string& message);
+
 /// A path option's value as the user gave it: for a value read from a config file, the text of the
 /// file (a relative path there is relative to the file's folder); any other value unchanged. What a
 /// bake records in its cache, so that the same config file gives the same bytes from any checkout

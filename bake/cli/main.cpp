@@ -7,32 +7,121 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
+#include <vector>
 
 namespace {
 
-/// "--seed: cannot read "4294967296" as UINT: expected ...", from CLI11's "Could not convert:
-/// --seed = 4294967296" and the option's type.
+/// The type CLI11 shows for option `name` of the command being parsed ("UINT", "FLOAT:POSITIVE"), or "".
+std::string optionTypeName(CLI::App& app, const std::string& name) {
+    std::string type;
+    for (CLI::App* command : app.get_subcommands()) {  // the command being parsed
+        if (const CLI::Option* option = command->get_option_no_throw(name)) type = option->get_type_name();
+    }
+    return type;
+}
+
+/// From CLI11's "Could not convert: --seed = 4294967296".
 std::string conversionErrorMessage(CLI::App& app, const std::string& what) {
     const std::string prefix = "Could not convert: ";
     const size_t at = what.find(prefix);
     const size_t equals = at == std::string::npos ? std::string::npos : what.find(" = ", at);
     if (equals == std::string::npos) return what;
     const std::string name = what.substr(at + prefix.size(), equals - at - prefix.size());
-    const std::string value = what.substr(equals + 3);
-    std::string type;
-    for (CLI::App* command : app.get_subcommands()) {  // the command being parsed
-        if (const CLI::Option* option = command->get_option_no_throw(name)) type = option->get_type_name();
+    return sharcbake::unreadableValueMessage(name, what.substr(equals + 3), optionTypeName(app, name));
+}
+
+/// Levenshtein distance, for suggesting the command a typo meant.
+size_t editDistance(const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        size_t diagonal = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j) {
+            const size_t above = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diagonal = above;
+        }
     }
-    const char* accepts = type == "UINT"    ? "a whole number of 0 or more, in digits, that fits the option "
-                                              "(most hold up to 4294967295)"
-                          : type == "INT"   ? "a whole number, in digits, that fits the option"
-                          : type == "FLOAT" ? "a number"
-                                            : nullptr;
-    return name + ": cannot read \"" + value + "\"" + (type.empty() ? "" : " as " + type) +
-           (accepts ? std::string(": expected ") + accepts : std::string());
+    return row[b.size()];
+}
+
+/// Mistakes CLI11 reports in words that do not name them: a misspelt command ("A subcommand is
+/// required" for `sharcbake bak scene.gltf`) and --config after the command ("--output is required",
+/// then "The following argument was not expected: --config", though the file holds the output).
+/// Empty when the command line has neither.
+std::string commandLineMistake(CLI::App& app, int argc, char** argv) {
+    std::vector<std::string> commands;
+    for (const CLI::App* command : app.get_subcommands({})) commands.push_back(command->get_name());
+    int at = 1;
+    while (at < argc) {  // the top-level options: --config FILE, --config=FILE, --help, --version
+        const std::string arg = argv[at];
+        if (arg == "--config") {
+            at += 2;
+        } else if (!arg.empty() && arg[0] == '-') {
+            ++at;
+        } else {
+            break;
+        }
+    }
+    if (at >= argc) return {};
+    const std::string command = argv[at];
+    if (std::find(commands.begin(), commands.end(), command) == commands.end()) {
+        std::string names, closest;
+        size_t best = 3;  // suggest only near misses
+        for (const std::string& name : commands) {
+            names += (names.empty() ? "" : ", ") + name;
+            const size_t distance = editDistance(command, name);
+            if (distance < best) {
+                best = distance;
+                closest = name;
+            }
+        }
+        return "unknown command '" + command + "'" + (closest.empty() ? "" : " (did you mean '" + closest + "'?)") +
+               "; the commands are " + names;
+    }
+    for (int i = at + 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg == "--config" || arg.rfind("--config=", 0) == 0) {
+            return "--config goes before the command, as it reads sections for every command: sharcbake --config "
+                   "FILE " +
+                   command + " ...";
+        }
+    }
+    return {};
+}
+
+/// CLI11's "The following arguments were not expected: 4 --iterations" lists them backwards and
+/// does not say where an option belongs: "render: not expected: --iterations 4 (--iterations is an
+/// option of bake)".
+std::string extrasMessage(CLI::App& app) {
+    std::vector<std::string> extras;
+    std::string where;
+    for (CLI::App* command : app.get_subcommands()) {  // the command that was parsed
+        const std::vector<std::string> remaining = command->remaining();
+        extras.insert(extras.end(), remaining.begin(), remaining.end());
+        where = command->get_name();
+    }
+    for (const std::string& extra : app.remaining()) extras.push_back(extra);
+    std::string listed, hints;
+    for (const std::string& extra : extras) {
+        listed += (listed.empty() ? "" : " ") + extra;
+        if (extra.rfind("--", 0) != 0) continue;
+        const std::string name = extra.substr(0, extra.find('='));
+        for (const CLI::App* command : app.get_subcommands({})) {
+            if (command->get_name() != where && command->get_option_no_throw(name)) {
+                hints += (hints.empty() ? " (" : "; ") + name + " is an option of " + command->get_name();
+                break;
+            }
+        }
+    }
+    return (where.empty() ? "" : where + ": ") + "not expected: " + listed + (hints.empty() ? "" : hints + ")");
 }
 
 }  // namespace
@@ -69,6 +158,10 @@ int main(int argc, char** argv) {
     registerExportVdbCommand(app);
     registerMergeCommand(app);
 
+    if (const std::string mistake = commandLineMistake(app, argc, argv); !mistake.empty()) {
+        std::fprintf(stderr, "sharcbake: error: %s\nRun with --help for more information.\n", mistake.c_str());
+        return kExitUsage;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::FileError& e) {
@@ -81,12 +174,26 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "sharcbake: error: %s\nRun with --help for more information.\n",
                      conversionErrorMessage(app, e.what()).c_str());
         return kExitUsage;
+    } catch (const CLI::ValidationError& e) {
+        const std::string what = e.what();
+        std::fprintf(stderr, "sharcbake: error: %s\nRun with --help for more information.\n",
+                     sharcbake::rangeErrorMessage(what, optionTypeName(app, what.substr(0, what.find(':')))).c_str());
+        return kExitUsage;
+    } catch (const CLI::ConfigError& e) {
+        // The reader's messages start with the file's name (config_file.h).
+        std::fprintf(stderr, "sharcbake: error: %s\n", e.what());
+        return kExitUsage;
+    } catch (const CLI::ExtrasError& e) {
+        std::fprintf(stderr, "sharcbake: error: %s\nRun with --help for more information.\n",
+                     extrasMessage(app).c_str());
+        return kExitUsage;
     } catch (const CLI::ParseError& e) {
         // CLI11 prints help/version itself (exit 0) and usage errors (nonzero -> our code 1).
         const int code = app.exit(e);
         return code == 0 ? kExitOk : kExitUsage;
     } catch (const CommandError& e) {
-        std::fprintf(stderr, "sharcbake: error: %s\n", e.what());
+        const std::string message = e.code() == kExitUsage ? withConfigSource(e.what()) : std::string(e.what());
+        std::fprintf(stderr, "sharcbake: error: %s\n", message.c_str());
         return e.code();
     } catch (const std::exception& e) {
         std::fprintf(stderr, "sharcbake: error: %s\n", e.what());

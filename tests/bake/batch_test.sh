@@ -63,6 +63,13 @@ says "$work/err.txt" "typo.toml" "the error names the config file"
 printf '[bake]\niterations = "many"\n' > "$work/bad_value.toml"
 expect 1 "a config with a bad value" "$sharcbake" --config "$work/bad_value.toml" bake "$cornell" -o "$work/x.sharc"
 says "$work/err.txt" "bad_value.toml: .*iterations" "the error names the config file and the option"
+# Values the bake checks itself, after the file is read, name the file too; so does a broken header.
+printf '[bake]\nview-region = "glft"\n' > "$work/bad_region.toml"
+expect 1 "a config with a bad view region" "$sharcbake" --config "$work/bad_region.toml" bake "$cornell" -o "$work/x.sharc"
+says "$work/err.txt" "bad_region.toml (\[bake\] view-region): --view-region" "the error names the config file and key"
+printf '[bake\niterations = 2\n' > "$work/broken.toml"
+expect 1 "a config with a broken section header" "$sharcbake" --config "$work/broken.toml" bake "$cornell" -o "$work/x.sharc"
+says "$work/err.txt" "broken.toml:1: a section header without its closing" "the broken header is named"
 # A section header of 20,000 dotted parts (40 KB) took CLI11's reader 58 s and 12 GB: refused at once.
 python3 -c "print('[' + '.'.join(['b'] * 20000) + ']')" > "$work/deep.toml"
 expect 1 "a config nested 20,000 deep" timeout 20 "$sharcbake" --config "$work/deep.toml" bake "$cornell" -o "$work/x.sharc"

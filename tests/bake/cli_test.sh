@@ -16,6 +16,21 @@ expect 1 "unknown option" "$sharcbake" render "$scenes/cornell_box/cornell_box.g
 expect 1 "zero samples" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --spp 0
 expect 1 "bad resolution" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --resolution 10y
 # A value the option's type cannot hold: CLI11 said only "Could not convert: --seed = 4294967296".
+# Mistakes named in the user's words. CLI11's own said "A subcommand is required" for a misspelt
+# command, "--output is required" for --config after the command, "Value abc not in range 0.000000
+# to 1797693..." (310 digits) for a word given as a number, and listed stray arguments backwards.
+expect 1 "a misspelt command" "$sharcbake" bak "$scenes/cornell_box/cornell_box.gltf"
+says "$work/err.txt" "unknown command 'bak' (did you mean 'bake'?); the commands are render, bake" "the typo is named"
+expect 1 "--config after the command" "$sharcbake" bake --config "$work/x.toml"
+says "$work/err.txt" "--config goes before the command" "the fix is said"
+expect 1 "a word for a number" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --time-budget abc
+says "$work/err.txt" '--time-budget: cannot read "abc" as FLOAT: expected a number' "a word is not called out of range"
+expect 1 "a fraction for a count" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --iterations 2.5
+says "$work/err.txt" '--iterations: cannot read "2.5" as UINT' "a fraction is named as such"
+expect 1 "a negative time budget" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --time-budget -1
+says "$work/err.txt" "--time-budget: -1 is out of range: expected at least 0$" "the bound is written as a person would"
+expect 1 "a bake option given to render" "$sharcbake" render "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.exr" --iterations 4
+says "$work/err.txt" "render: not expected: --iterations 4 (--iterations is an option of bake)" "the stray option is placed"
 expect 1 "a seed beyond 32 bits" "$sharcbake" bake "$scenes/cornell_box/cornell_box.gltf" -o "$work/a.sharc" --seed 4294967296
 says "$work/err.txt" '--seed: cannot read "4294967296" as UINT: expected a whole number' "the option's type is named"
 expect 2 "missing scene" "$sharcbake" render "$work/missing.gltf" -o "$work/a.exr"

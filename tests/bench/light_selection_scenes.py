@@ -22,6 +22,7 @@ Usage: light_selection_scenes.py OUT_DIR
 """
 import json
 import math
+import os
 import struct
 import sys
 
@@ -197,6 +198,7 @@ def flat(path, ground=0.0):
 if __name__ == "__main__":
     if len(sys.argv) != 2:
         sys.exit(__doc__)
+    os.makedirs(sys.argv[1], exist_ok=True)  # the docs' commands name a folder that is not there yet
     thin_walls(sys.argv[1] + "/thin_walls.gltf")
     thin_walls(sys.argv[1] + "/thin_walls_both_seen.gltf", camera_in_a=True)
     thin_walls(sys.argv[1] + "/thin_walls_off_grid.gltf", wall_x=0.37, camera_in_a=True)

@@ -287,8 +287,9 @@ Image readLinearImage(const std::string& path) {
     const std::vector<unsigned char>& bytes = head;
     if (const char* format = displayFormatName(bytes)) {
         throw ImageError("cannot read '" + path + "': it is " + format +
-                         " image, whose 8-bit display values (usually tone-mapped) are not radiance; render "
-                         "the reference to OpenEXR (Blender: File Format OpenEXR), PFM or Radiance HDR");
+                         " image, whose 8-bit display values (usually tone-mapped) are not radiance; give the "
+                         "image as OpenEXR (sharcbake render writes one beside its PNG preview; Blender: File Format "
+                         "OpenEXR), PFM or Radiance HDR");
     }
     throw ImageError("cannot read '" + path + "': not an OpenEXR, PFM or Radiance HDR image" +
                      (bytes.empty() ? std::string(" (the file is empty)") : std::string()));
