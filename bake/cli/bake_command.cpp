@@ -495,20 +495,27 @@ void printProbeSummary(const ConvergenceReport& report, const CacheProbes& probe
                 "no voxel at the level the evaluation camera looks them up at\n",
                 (unsigned long long)probes.referencedPoints(), probes.settings().reference_samples,
                 probes.referenceSeconds(), (unsigned long long)end.not_live);
-    std::printf("  the cache's RMS error at the camera's levels: %s after %u iteration%s, %s after %u; of the last, "
-                "voxel noise %.3g%%, bias %.3g%% (signed %+.2f%% +- %.2f%%)\n",
-                probeRms(first->probes->view).c_str(), first->iteration, first->iteration == 1 ? "" : "s",
-                probeRms(end).c_str(), last.iteration,
-                100.0 * std::sqrt(std::max(0.0, end.relative_variance)), 100.0 * end.biasFloor(),
-                100.0 * end.relative_bias, 100.0 * end.relative_bias_ci);
+    // The noise estimate scaled as the fit found it (the cache's own samples are less noisy than a
+    // reference path): unscaled, the furnace's "voxel noise 10.1%" exceeded its whole RMS of 1.55%.
+    // The split is of the mean square, so the two parts never exceed the whole.
+    const double mean_square = end.rmsError() * end.rmsError();
+    const double noise_square = std::clamp((fit ? fit->noise_scale : 1.0) * end.relative_variance, 0.0, mean_square);
+    std::printf(
+        "  the cache's RMS error at the camera's levels: %s after %u iteration%s, %s after %u; of the last, "
+        "voxel noise %.3g%%, bias %.3g%% (signed %+.2f%% +- %.2f%%)\n",
+        probeRms(first->probes->view).c_str(), first->iteration, first->iteration == 1 ? "" : "s",
+        probeRms(end).c_str(), last.iteration, 100.0 * std::sqrt(noise_square),
+        100.0 * std::sqrt(mean_square - noise_square), 100.0 * end.relative_bias, 100.0 * end.relative_bias_ci);
     if (fit) {
         const double low = std::sqrt(std::max(0.0, fit->floor_squared - fit->floor_squared_ci));
         const double high = std::sqrt(fit->floor_squared + fit->floor_squared_ci);
-        std::printf(
-            "  bias floor (fitted over %zu checkpoints): %.3g%% (95%%: %.3g%% to %.3g%%); the cache is at "
-            "%.2gx its floor: %s\n",
-            fit->checkpoints, 100.0 * fit->floor(), 100.0 * low, 100.0 * high,
-            fit->floor() > 0.0 ? end.rmsError() / fit->floor() : 0.0, probeVerdict(report.rows, *fit).reason.c_str());
+        // A floor that fits 0 has no ratio ("the cache is at 0x its floor" said the opposite).
+        const std::string where = fit->floor() > 0.0
+                                      ? formatted("the cache is at %.2gx its floor", end.rmsError() / fit->floor())
+                                      : std::string("the floor fits 0, so the error left is noise");
+        std::printf("  bias floor (fitted over %zu checkpoints): %.3g%% (95%%: %.3g%% to %.3g%%); %s: %s\n",
+                    fit->checkpoints, 100.0 * fit->floor(), 100.0 * low, 100.0 * high, where.c_str(),
+                    probeVerdict(report.rows, *fit).reason.c_str());
     }
     // Every level at the same points: what cameras at other distances would get.
     std::string by_level;
@@ -561,12 +568,17 @@ void printConvergence(const ConvergenceReport& report, const CacheProbes& probes
     printProbeSummary(report, probes);
     const ConvergenceRow& end = report.rows.back();
     if (end.image) {
-        std::printf("  image at the end: mean relative error %s; over %dx%d-pixel tiles %s (most render noise "
-                    "averaged out); over the %llu pixels seen through the cache %s\n",
-                    percent(end.image->mean_relative_error).c_str(), kComparisonTile, kComparisonTile,
-                    percent(end.image->tile_mean_relative_error).c_str(),
-                    (unsigned long long)end.image->masked_pixels,
-                    percent(end.image->masked_mean_relative_error).c_str());
+        // "over the 0 pixels seen through the cache 0%" was printed for a view that sees none.
+        const std::string seen = end.image->masked_pixels == 0
+                                     ? std::string("; no pixel sees the cache directly")
+                                     : formatted("; over the %llu pixels seen through the cache %s",
+                                                 (unsigned long long)end.image->masked_pixels,
+                                                 percent(end.image->masked_mean_relative_error).c_str());
+        std::printf(
+            "  image at the end: mean relative error %s; over %dx%d-pixel tiles %s (most render noise "
+            "averaged out)%s\n",
+            percent(end.image->mean_relative_error).c_str(), kComparisonTile, kComparisonTile,
+            percent(end.image->tile_mean_relative_error).c_str(), seen.c_str());
     }
     if (report.reference_floor) {
         std::printf("  the reference's own floor: relative MSE %.2g +- %.1g (its noise and what differs between the "
