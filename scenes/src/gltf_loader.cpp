@@ -572,6 +572,7 @@ public:
         for (int root : uniqueRootNodes()) visitNode(root, glm::dmat4(1.0));
         warnAboutMeshesOutsideTheScene();
         warnAboutSeveralParents();
+        warnAboutAnimations();
         warnAboutPrimitivesWithoutMaterial();
         warnAboutFlatEmitters();
         if (scene_.materials.empty()) scene_.materials.push_back(defaultMaterial());
@@ -627,6 +628,40 @@ private:
     [[noreturn]] void fail(const std::string& what) const { throw SceneLoadError(path_ + ": " + what); }
     [[noreturn]] void failMissingFile(const std::string& what) const {
         throw SceneLoadError(path_ + ": " + what, SceneLoadError::Kind::kMissingFile);
+    }
+
+    /// Animations are not played (a bake is of one static pose), and nothing said so: an animated
+    /// object or walkthrough camera was baked where its node's transform puts it, which Blender's
+    /// exporter sets to the first frame, not the frame shown when the file was written.
+    void warnAboutAnimations() {
+        std::set<int> nodes;
+        for (const tinygltf::Animation& animation : model_.animations) {
+            for (const tinygltf::AnimationChannel& channel : animation.channels) {
+                if (channel.target_node >= 0 && size_t(channel.target_node) < model_.nodes.size())
+                    nodes.insert(channel.target_node);
+            }
+        }
+        if (nodes.empty()) return;
+        // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "text" + std::string.
+        std::string cameras;
+        for (const int node : nodes) {
+            if (model_.nodes[size_t(node)].camera < 0) continue;
+            if (!cameras.empty()) cameras += ", ";
+            cameras += nodeLabel(node);
+        }
+        std::string text = std::to_string(model_.animations.size());
+        text += model_.animations.size() == 1 ? " animation moves " : " animations move ";
+        text += std::to_string(nodes.size());
+        text += nodes.size() == 1 ? " node" : " nodes";
+        if (!cameras.empty()) {
+            text += " (cameras among them: ";
+            text += cameras;
+            text += ")";
+        }
+        text +=
+            "; animations are not played: the scene is loaded in the pose its nodes' transforms hold, which "
+            "exporters write as the rest pose or the first frame (Blender's: frame 1, not the frame shown)";
+        warn(text);
     }
 
     /// Records a warning once: a mesh instanced a thousand times should not repeat its

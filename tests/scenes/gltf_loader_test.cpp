@@ -113,6 +113,36 @@ TEST(GltfLoader, MatrixNodeTransform) {
     expectVec3Near(scene.bounds_max, {3, 3, 5});
 }
 
+/// Animations are not played: the mesh stays where its node's translation puts it, and the
+/// warning names how many nodes move and which cameras among them (an animated walkthrough
+/// camera, or an object baked in a pose the artist was not looking at, said nothing).
+TEST(GltfLoader, AnimationsAreNotPlayedAndSaySo) {
+    TempDir dir;
+    GltfBuilder b;
+    const json prim = unitTrianglePrimitive(b);
+    const int mesh_node = b.addMeshNode(prim, {{"translation", {-2, 0, 0}}});
+    const int camera_node = b.addNode({{"camera", 0}, {"name", "WalkCam"}, {"translation", {0, 0, 5}}});
+    b.doc["cameras"] = json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}}}}});
+    const int times = b.addData(std::vector<float>{0.0f, 1.0f}, test::kFloat, "SCALAR");
+    const int moves = b.addData(std::vector<float>{-2, 0, 0, 2, 0, 0}, test::kFloat, "VEC3");
+    b.doc["animations"] = json::array(
+        {{{"samplers", json::array({{{"input", times}, {"output", moves}}})},
+          {"channels",
+           json::array({{{"sampler", 0}, {"target", {{"node", mesh_node}, {"path", "translation"}}}},
+                        {{"sampler", 0}, {"target", {{"node", camera_node}, {"path", "translation"}}}}})}}});
+    b.setScene({mesh_node, camera_node});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "animated.gltf"));
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    EXPECT_FLOAT_EQ(scene.bounds_min.x, -2.0f) << "the node's own translation, not an animated one";
+    const auto warning =
+        std::find_if(scene.stats.warnings.begin(), scene.stats.warnings.end(), [](const std::string& w) {
+            return w.find(
+                       "1 animation moves 2 nodes (cameras among them: node 1 'WalkCam'); animations are not played") !=
+                   std::string::npos;
+        });
+    EXPECT_NE(warning, scene.stats.warnings.end()) << ::testing::PrintToString(scene.stats.warnings);
+}
+
 TEST(GltfLoader, MirroringTransformFlipsWinding) {
     TempDir dir;
     GltfBuilder b;
