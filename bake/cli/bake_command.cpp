@@ -45,6 +45,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <unistd.h>
 
@@ -1968,6 +1969,18 @@ void checkBatch(const BakeOptions& o) {
     for (const std::string& scene : o.scene_paths) {
         if (!stems.insert(sceneStem(scene)).second) {
             refuse("two scenes named \"" + sceneStem(scene) + "\" would write the same outputs; bake them apart");
+        }
+    }
+    // A folder named like one output file is a mistake (a folder called out/all.sharc was made).
+    for (const auto& [folder, option, extension] :
+         {std::tuple{o.output_path, "-o", ".sharc"}, std::tuple{o.stats_json, "--stats-json", ".json"},
+          std::tuple{o.checkpoint_path, "--checkpoint", ".ckpt"}}) {
+        std::error_code error;
+        if (hasExtension(folder, extension) && !std::filesystem::is_directory(folder, error)) {
+            refuse(std::string(option) + " " + folder +
+                   " names a folder with several scenes (each scene's file goes "
+                   "into it as NAME" +
+                   extension + "), and this name looks like one file's: give a folder");
         }
     }
     for (const std::string& folder : {o.output_path, o.stats_json, o.checkpoint_path, o.report_dir}) {

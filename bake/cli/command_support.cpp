@@ -11,6 +11,7 @@
 #include "tracing/sampling.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -209,6 +210,12 @@ std::string rangeErrorMessage(const std::string& what, const std::string& type) 
         std::snprintf(bounds, sizeof bounds, "from %.17g to %.17g", low, high);
     }
     return name + ": " + value + " is out of range: expected " + bounds;
+}
+
+bool hasExtension(const std::string& path, const char* extension) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == extension;
 }
 
 std::string_view cacheFileIdentifier() {

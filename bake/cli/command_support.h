@@ -107,6 +107,9 @@ std::string unreadableValueMessage(const std::string& name, const std::string& v
 /// Other messages come back unchanged.
 std::string rangeErrorMessage(const std::string& what, const std::string& type);
 
+/// True if `path` ends in `extension` (".exr"), in any letter case.
+bool hasExtension(const std::string& path, const char* extension);
+
 /// Marks `option` as naming files or folders (its help shows PATH): a relative value read from a
 /// --config file is taken relative to that file's folder (config_file.h). Returns `option`.
 CLI::Option* pathOption(CLI::Option* option);

@@ -80,13 +80,6 @@ std::string describeLevels(const std::vector<uint32_t>& levels) {
 
 /// Opens and validates a .sharc file with the runtime library: kExitIo if it cannot be read,
 /// kExitInvalidInput if it is not a valid cache.
-/// True if `path` ends in `extension` (".exr"), in any letter case.
-bool hasExtension(const std::string& path, const char* extension) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext == extension;
-}
-
 CacheView openCacheForCommand(const std::string& path) {
     CacheView view;
     CacheError error;
@@ -312,7 +305,7 @@ private:
 
     /// A cache records the scene and sky it was baked under (metadata scene_hash and sky); one
     /// from another scene, or another version of this one, gives plausible but wrong light.
-    void checkCacheBelongsToScene(const CacheView& view) const {
+    void checkCacheBelongsToScene(const CacheView& view) {
         bool has_hash = false, has_sky = false;
         const std::string cache_hash(view.metadata("scene_hash", &has_hash));
         const std::string cache_sky(view.metadata("sky", &has_sky));
@@ -331,6 +324,7 @@ private:
                                                       "; rebake it, or pass --allow-cache-mismatch to render with it");
         }
         if (!mismatch.empty()) warn(formatted("%s: %s", o_.cache_path.c_str(), mismatch.c_str()));
+        cache_mismatch_ = !mismatch.empty();
         if (!has_hash) {
             warn(formatted("%s records no scene_hash: cannot check that it belongs to %s", o_.cache_path.c_str(),
                            o_.scene_path.c_str()));
@@ -487,6 +481,15 @@ private:
                           "bounce is shorter than its voxel): the cache's voxels are far larger than what this camera "
                           "sees, so every path was traced in full. Bake with a larger --level-bias (finer voxels)",
                           (unsigned long long)cache_->refused()));
+            return;
+        }
+        if (cache_ && !primaryView() && eligible_ >= kLookupsForARate && hit_rate_ < 0.9 && cache_mismatch_) {
+            // Advice about view regions would mislead: the voxels are another scene's or sky's.
+            warn(
+                formatted("the cache answered only %.1f%% of the lookups from this camera; it was baked for "
+                          "another scene or sky (--allow-cache-mismatch, warned above), so its voxels are not this "
+                          "render's: bake this scene",
+                          100.0 * hit_rate_));
             return;
         }
         if (cache_ && !primaryView() && eligible_ >= kLookupsForARate && hit_rate_ < 0.9) {
@@ -650,6 +653,7 @@ private:
     double render_seconds_ = 0.0, total_seconds_ = 0.0;
     double hit_rate_ = 0.0;
     uint64_t eligible_ = 0;
+    bool cache_mismatch_ = false;  ///< the cache is of another scene or sky (--allow-cache-mismatch)
     float max_bounces_seen_ = 0.0f;
 };
 

@@ -41,6 +41,12 @@ says "$work/err.txt" "same outputs" "the refusal says why"
 expect 1 "--resume with several scenes" "$sharcbake" bake "$furnace" "$cornell" -o "$work/batch" --resume "$work/x.ckpt"
 expect 2 "a batch into a file" sh -c "touch '$work/file' && '$sharcbake' bake '$furnace' '$cornell' -o '$work/file' $small"
 
+# With several scenes -o names a folder: one named like a cache file is refused, not made.
+expect 1 "several scenes into -o X.sharc" "$sharcbake" bake "$cornell" "$scenes/furnace_rho050/furnace_rho050.gltf" \
+    -o "$work/batch.sharc" --iterations 1
+says "$work/err.txt" "names a folder with several scenes" "the refusal says -o names a folder"
+[ ! -e "$work/batch.sharc" ] || fail "a folder named batch.sharc was made"
+
 # A config file: printed by --print-config, read by --config, overridden by the command line.
 expect 0 "--print-config" "$sharcbake" bake "$cornell" -o "$work/from_config.sharc" $small --seed 3 --print-config
 cp "$work/out.txt" "$work/bake.toml"

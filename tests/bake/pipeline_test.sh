@@ -145,6 +145,11 @@ says "$work/err.txt" "another sky" "the sky refusal says why"
 expect 0 "render with another scene's cache, allowed" "$sharcbake" render "$work/edited.gltf" --cache "$work/c.sharc" \
     --allow-cache-mismatch -o "$work/x.exr" --resolution 8 --spp 1 -q --stats-json "$work/render.json"
 says "$work/err.txt" "^warning: .*another scene" "the override still warns"
+# Through another scene's cache few lookups hit; the warning says why, not to bake other views.
+expect 0 "render another scene through the cache, allowed" "$sharcbake" render "$scenes/two_rooms/two_rooms.gltf" \
+    --cache "$work/c.sharc" --allow-cache-mismatch -o "$work/x.exr" --resolution 32 --spp 2 -q
+says "$work/err.txt" "it was baked for another scene or sky" "the low hit rate is put down to the mismatch"
+grep -q "view-region" "$work/err.txt" && fail "the mismatched cache's warning advises another view region"
 
 # The render's stats JSON: provenance and the camera's pose.
 python3 - "$work/render.json" "$work/c.sharc" <<'PY' || fail "render stats JSON provenance"
