@@ -1231,8 +1231,11 @@ private:
             std::vector<std::string> checkpoint_others = others;
             std::erase(checkpoint_others, o_.resume_path);  // the one input it may replace
             checkOutputPath(checkpoint_path_, "checkpoint", checkpoint_others);
-            checkReplacesOnlyItsKind(checkpoint_path_, "checkpoint", checkpointFileIdentifier(),
-                                     "a sharcbake checkpoint");
+            // --resume's own file is read first, and refused there with what it is (exit 3).
+            if (checkpoint_path_ != o_.resume_path) {
+                checkReplacesOnlyItsKind(checkpoint_path_, "checkpoint", checkpointFileIdentifier(),
+                                         "a sharcbake checkpoint");
+            }
         }
         others.push_back(checkpoint_path_);
         if (!o_.stats_json.empty()) checkTextOutputPath(o_.stats_json, "stats JSON", others);
