@@ -3420,6 +3420,7 @@ private:
             }
             cam.orthographic_half_height = float(ymag);
             cam.aspect_ratio = sensibleAspectRatio(xmag / ymag, "xmag / ymag", label);
+            readClipPlanes(src.orthographic.znear, src.orthographic.zfar, true, label, cam);
             addSceneCamera(std::move(cam));
             return;
         }
@@ -3430,7 +3431,34 @@ private:
                  std::to_string(cam.yfov));
         if (src.perspective.aspectRatio > 0.0)
             cam.aspect_ratio = sensibleAspectRatio(src.perspective.aspectRatio, "aspectRatio", label);
+        readClipPlanes(src.perspective.znear, src.perspective.zfar, false, label, cam);
         addSceneCamera(std::move(cam));
+    }
+
+    /// The camera's clip planes (Blender writes its clip start and end there). glTF gives them in
+    /// the camera's units along its view axis, and derives the view "with the scaling ignored", as
+    /// this loader reads `yfov` and `ymag`: a scaled camera node or parent scales neither, so the
+    /// distances are world units as written. Bad values are warned about and dropped, as for
+    /// `yfov`, leaving the camera to see from its position (znear 0) or without end (no zfar); a
+    /// perspective `znear` of 0 (below glTF's minimum, but meaning the same) and its absent `zfar`
+    /// (tinygltf's 0: an infinite projection) are no error.
+    void readClipPlanes(double znear, double zfar, bool orthographic, const std::string& label, Camera& cam) {
+        if (znear >= 0.0 && znear <= kMaxWorldCoordinate) {
+            cam.znear = float(znear);
+        } else {
+            warn(label + ": invalid znear " + numberText(znear) +
+                 " (a distance from 0 to 1e9); the camera sees from its position");
+        }
+        const bool absent = !orthographic && zfar == 0.0;
+        if (absent) return;
+        // Compared as the floats the rays use: a zfar a rounding past znear is no gap to see in.
+        if (!(zfar > double(cam.znear)) || (zfar <= kMaxWorldCoordinate && !(float(zfar) > cam.znear))) {
+            warn(label + ": invalid zfar " + numberText(zfar) + " (must be greater than znear " +
+                 numberText(double(cam.znear)) + "); no far clip plane");
+            return;
+        }
+        // Beyond the world's limit there is nothing to clip.
+        if (zfar <= kMaxWorldCoordinate) cam.zfar = float(zfar);
     }
 
     /// Aspect ratios of real frames, from tall phone screens to wide panoramas, are well inside
