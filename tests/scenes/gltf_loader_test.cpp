@@ -2458,12 +2458,12 @@ TEST(GltfLoaderCameras, ClipPlanesRead) {
          {{"name", "Iso"},
           {"type", "orthographic"},
           {"orthographic", {{"xmag", 2}, {"ymag", 1}, {"znear", 0}, {"zfar", 30}}}}});
-    // glTF ignores a camera node's scale: its clip distances stay as written.
+    // Given in the camera node's space: a node scaled x3 puts the near plane 3 times as far.
     b.setScene(
         {b.addNode({{"camera", 0}, {"scale", {3, 3, 3}}}), b.addNode({{"camera", 1}}), b.addNode({{"camera", 2}})});
     const Scene scene = loadGltf(b.writeEmbedded(dir, "clip.gltf"));
     ASSERT_EQ(scene.cameras.size(), 3u);
-    EXPECT_FLOAT_EQ(scene.cameras[0].znear, 0.8f);
+    EXPECT_FLOAT_EQ(scene.cameras[0].znear, 2.4f);
     EXPECT_FALSE(scene.cameras[0].zfar.has_value());
     EXPECT_FLOAT_EQ(scene.cameras[1].znear, 0.1f);
     ASSERT_TRUE(scene.cameras[1].zfar.has_value());
