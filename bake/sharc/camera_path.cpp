@@ -122,6 +122,11 @@ glm::vec3 viewStart(const Tracer& tracer, const Camera& camera) {
     if (!(camera.znear > 0.0f)) return camera.position;
     const glm::vec3 forward = glm::normalize(camera.forward);
     if (!tracer.occluded(Ray{camera.position, forward, camera.znear})) return camera.position;
+    // A near plane past everything on the axis (a scene shrunk around a camera whose znear was
+    // not) looks into nothing: the camera's own position is the better start.
+    RayHit beyond;
+    if (!tracer.intersect(Ray{camera.position, forward, std::numeric_limits<float>::infinity(), camera.znear}, beyond))
+        return camera.position;
     return camera.position + camera.znear * forward;
 }
 

@@ -97,8 +97,9 @@ inline constexpr float kOpenSceneEscapedFraction = 0.5f;
 
 /// Where a glTF camera's view begins: its position, or, where geometry stands between it and its
 /// near clip plane along its forward axis (a cutaway: a camera outside a room looking in through
-/// the wall its znear clips away), the centre of that plane. The free space the camera looks into
-/// is there, and exploring from the camera's own position would stay outside the room.
+/// the wall its znear clips away), the centre of that plane, if the axis meets anything past it.
+/// The free space the camera looks into is there, and exploring from the camera's own position
+/// would stay outside the room.
 glm::vec3 viewStart(const Tracer& tracer, const Camera& camera);
 
 /// The radius of the sphere around the scene's bounds (at least 1e-3).

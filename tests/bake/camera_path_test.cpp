@@ -1013,6 +1013,9 @@ TEST(PredictHitRate, ACutawayCameraOutsideAClosedRoomIsPredictedThroughItsClip) 
     Camera unclipped = cutaway;
     unclipped.znear = 0.0f;
     EXPECT_EQ(viewStart(tracer, unclipped), cutaway.position);
+    Camera past_everything = cutaway;  // a near plane beyond the room looks into nothing
+    past_everything.znear = 10.0f;
+    EXPECT_EQ(viewStart(tracer, past_everything), cutaway.position);
     for (const CameraPose& pose : bake.path->waypoints()) {
         EXPECT_TRUE(glm::all(glm::lessThan(glm::abs(pose.position - glm::vec3(0.0f, 1.0f, 0.0f)), glm::vec3(1.0f))))
             << "a waypoint outside the room at " << pose.position.x << ", " << pose.position.y << ", "
