@@ -466,10 +466,15 @@ private:
             for (int x = 0; x < kGrid; ++x)
                 rays.push_back(rays_of.generate(x * width_ / kGrid, y * height_ / kGrid, glm::vec2(0.5f)));
         }
+        // The rays see only what lies between the camera's clip planes; a near plane past the
+        // scene, or a far one short of it, is the cause to name then.
+        std::string clip;
+        if (camera_.znear > 0.0f) clip += formatted(" from its near clip plane (znear %g)", double(camera_.znear));
+        if (camera_.zfar) clip += formatted(" up to its far clip plane (zfar %g)", double(*camera_.zfar));
         warn(
             formatted("every pixel of the image is black: no light reaches what %s at (%g, %g, %g) "
-                      "sees: %s. --camera or --look-at choose another view",
-                      camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z,
+                      "sees%s: %s. --camera or --look-at choose another view",
+                      camera.c_str(), camera_.position.x, camera_.position.y, camera_.position.z, clip.c_str(),
                       whyNoLightArrives(*tracer_, rays).c_str()));
     }
 

@@ -103,13 +103,31 @@ FreeSpaceProbe probeFreeSpace(const Tracer& tracer, glm::vec3 p, float clearance
 
 }  // namespace
 
+CameraPose poseOf(const Camera& camera) {
+    return CameraPose{camera.position, camera.forward, camera.up, camera.yfov, camera.znear, camera.zfar};
+}
+
 Camera toCamera(const CameraPose& pose) {
     Camera camera;
     camera.position = pose.position;
     camera.forward = pose.forward;
     camera.up = pose.up;
     camera.yfov = pose.yfov;
+    camera.znear = pose.znear;
+    camera.zfar = pose.zfar;
     return camera;
+}
+
+glm::vec3 viewStart(const Tracer& tracer, const Camera& camera) {
+    if (!(camera.znear > 0.0f)) return camera.position;
+    const glm::vec3 forward = glm::normalize(camera.forward);
+    if (!tracer.occluded(Ray{camera.position, forward, camera.znear})) return camera.position;
+    // A near plane past everything on the axis (a scene shrunk around a camera whose znear was
+    // not) looks into nothing: the camera's own position is the better start.
+    RayHit beyond;
+    if (!tracer.intersect(Ray{camera.position, forward, std::numeric_limits<float>::infinity(), camera.znear}, beyond))
+        return camera.position;
+    return camera.position + camera.znear * forward;
 }
 
 bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pose) {
@@ -118,6 +136,8 @@ bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pos
     if (!(length > 0.0f) || !std::isfinite(length)) return false;
     pose.position = eye;
     pose.forward = d / length;
+    pose.znear = 0.0f;
+    pose.zfar.reset();
     glm::vec3 up(0.0f, 1.0f, 0.0f);
     if (std::abs(glm::dot(up, pose.forward)) > 0.999f) up = glm::vec3(0.0f, 0.0f, -1.0f);
     const glm::vec3 right = glm::normalize(glm::cross(pose.forward, up));
@@ -671,7 +691,16 @@ CameraPose CameraPath::poseAt(uint32_t iteration) const {
         if (glm::length(forward) < 1e-4f) forward = a.forward;
         const glm::vec3 position = (1.0f - t) * a.position + t * b.position;
         makeLookAtPose(position, position + glm::normalize(forward), (1.0f - t) * a.yfov + t * b.yfov, pose);
+        // At the waypoint itself the view is the waypoint's: a glTF camera's keeps its clip
+        // planes (a cutaway camera outside a room sees in). Between waypoints it is no camera's,
+        // and a near plane carried along a glide would cut through whatever it passes.
+        if (t == 0.0f) {
+            pose.znear = a.znear;
+            pose.zfar = a.zfar;
+        }
     }
+    // The position jitter (a fraction of a percent of the scene) shakes a view without making it
+    // another: the clip planes stay.
     if (position_jitter_ > 0.0f) {
         const glm::vec3 u(hashToUnitFloat(seed_, iteration, 20), hashToUnitFloat(seed_, iteration, 21),
                           hashToUnitFloat(seed_, iteration, 22));
@@ -701,10 +730,10 @@ CameraPath atGltfCameraPositions(const Scene& scene, uint32_t seed) {
     std::vector<CameraPose> poses;
     std::vector<bool> aimed;
     for (const Camera& camera : scene.cameras) {
-        const CameraPose own{camera.position, camera.forward, camera.up, camera.yfov};
+        const CameraPose own = poseOf(camera);  // its own view, clip planes and all
         poses.push_back(own);
         aimed.push_back(true);
-        poses.push_back(own);  // its direction is drawn afresh each iteration
+        poses.push_back(own);  // its direction is drawn afresh each iteration, without clip planes
         aimed.push_back(false);
     }
     return CameraPath(std::move(poses), true, 1, 0.0f, seed, std::move(aimed));
@@ -713,7 +742,8 @@ CameraPath atGltfCameraPositions(const Scene& scene, uint32_t seed) {
 std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene& scene, uint32_t points,
                                               uint32_t seed, ExplorationResult* explored) {
     std::vector<glm::vec3> starts;
-    for (const Camera& c : scene.cameras) starts.push_back(c.position);
+    // From where each camera's view begins: a cutaway camera outside a room looks into the room.
+    for (const Camera& c : scene.cameras) starts.push_back(viewStart(tracer, c));
     const bool starts_are_cameras = !starts.empty();
     if (starts.empty()) starts.push_back(0.5f * (scene.bounds_min + scene.bounds_max));
     ExplorationResult result = exploreFreeSpace(tracer, starts, starts_are_cameras, points, seed);
@@ -729,8 +759,8 @@ std::optional<CameraPath> exploringCameraPath(const Tracer& tracer, const Scene&
     // bounds (a street, a room with an open side, a house's interior beside its exterior view)
     // keeps the bake's paths near it.
     result.cameras_outside = starts_are_cameras;
-    for (const Camera& c : scene.cameras) {
-        if (insideBox(c.position, scene.bounds_min, scene.bounds_max)) result.cameras_outside = false;
+    for (const glm::vec3& start : starts) {
+        if (insideBox(start, scene.bounds_min, scene.bounds_max)) result.cameras_outside = false;
     }
     std::vector<CameraPose> around;
     if ((!starts_are_cameras || result.cameras_outside) &&

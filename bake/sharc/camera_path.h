@@ -27,7 +27,14 @@ struct CameraPose {
     glm::vec3 forward{0.0f, 0.0f, -1.0f};  ///< unit
     glm::vec3 up{0.0f, 1.0f, 0.0f};        ///< unit, orthogonal to forward
     float yfov = 1.5707963f;               ///< vertical field of view, radians
+    /// A glTF camera's clip planes (Camera::znear, zfar), kept only while the pose is that
+    /// camera's own view (poseOf); every view the roaming camera turns or moves to has none.
+    float znear = 0.0f;
+    std::optional<float> zfar;
 };
+
+/// A glTF camera's pose: its position, orientation, field of view and clip planes.
+CameraPose poseOf(const Camera& camera);
 
 /// Where the waypoints come from.
 enum class CameraPathSource : uint8_t {
@@ -51,11 +58,12 @@ public:
 /// and line on malformed input or when the file has no waypoint.
 std::vector<CameraPose> readCameraPathFile(const std::string& path);
 
-/// The pinhole camera of a pose (no name, no aspect ratio of its own).
+/// The pinhole camera of a pose (no name, no aspect ratio of its own), with the pose's clip planes.
 Camera toCamera(const CameraPose& pose);
 
 /// Builds a pose looking from `eye` towards `target` with +Y up (a different up when the view
-/// is vertical). Returns false if eye == target.
+/// is vertical), without clip planes: a view no glTF camera gives. Returns false if eye ==
+/// target.
 bool makeLookAtPose(glm::vec3 eye, glm::vec3 target, float yfov, CameraPose& pose);
 
 /// What free-space exploration found, for the bake's report.
@@ -86,6 +94,13 @@ struct ExplorationResult {
 /// Above this share of escaping probe rays the space the exploration found is open, as around a
 /// lone object, and a scene without cameras is seen from outside (exploringCameraPath).
 inline constexpr float kOpenSceneEscapedFraction = 0.5f;
+
+/// Where a glTF camera's view begins: its position, or, where geometry stands between it and its
+/// near clip plane along its forward axis (a cutaway: a camera outside a room looking in through
+/// the wall its znear clips away), the centre of that plane, if the axis meets anything past it.
+/// The free space the camera looks into is there, and exploring from the camera's own position
+/// would stay outside the room.
+glm::vec3 viewStart(const Tracer& tracer, const Camera& camera);
 
 /// The radius of the sphere around the scene's bounds (at least 1e-3).
 float boundingRadius(const Scene& scene);

@@ -90,7 +90,8 @@ std::vector<PredictionView> predictionViews(const Tracer& tracer, const ViewRegi
     const Scene& scene = tracer.scene();
     std::vector<PredictionView> views = declaredViews(tracer, region);
     std::vector<glm::vec3> starts;
-    for (const Camera& c : scene.cameras) starts.push_back(c.position);
+    // As the bake explores (exploringCameraPath): from where each camera's view begins.
+    for (const Camera& c : scene.cameras) starts.push_back(viewStart(tracer, c));
     std::vector<glm::vec3> points;
     switch (region.kind) {
     case ViewRegion::Kind::FreeSpace:

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <limits>
 
 namespace sharcbake {
 namespace {
@@ -51,13 +52,19 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
     orthographic_ = camera.orthographic_half_height.has_value();
     half_y_ = halfViewHeight(camera);
     aspect_ = float(width) / float(height);
+    znear_ = camera.znear;
+    zfar_ = camera.zfar.value_or(std::numeric_limits<float>::infinity());
 }
 
 Ray CameraRays::generate(int x, int y, glm::vec2 jitter) const {
     const float sx = (2.0f * (float(x) + jitter.x) / float(width_) - 1.0f) * half_y_ * aspect_;
     const float sy = (1.0f - 2.0f * (float(y) + jitter.y) / float(height_)) * half_y_;
-    if (orthographic_) return Ray{origin_ + sx * right_ + sy * up_, forward_};
-    return Ray{origin_, glm::normalize(forward_ + sx * right_ + sy * up_)};
+    if (orthographic_) return Ray{origin_ + sx * right_ + sy * up_, forward_, zfar_, znear_};
+    const glm::vec3 direction = glm::normalize(forward_ + sx * right_ + sy * up_);
+    // The clip planes stand across the forward axis: along this ray they are 1 / cos farther.
+    // Without planes the segment stays (0, inf), whatever the cosine.
+    const float cosine = glm::dot(direction, forward_);
+    return Ray{origin_, direction, zfar_ / cosine, znear_ / cosine};
 }
 
 Image renderImage(const CameraRays& camera, const ImageRenderSettings& settings,

@@ -22,6 +22,8 @@ Camera fitCameraToImage(Camera camera, int width, int height);
 
 /// Primary rays of a pinhole camera, or of an orthographic one (parallel rays from the view
 /// rectangle around the camera's position), for an image of width x height (row 0 at the top).
+/// Each ray's segment lies between the camera's clip planes (Camera::znear, zfar): planes across
+/// its forward axis, so a ray at an angle to it begins farther out than znear.
 class CameraRays {
 public:
     CameraRays(const Camera& camera, int width, int height);
@@ -33,6 +35,7 @@ private:
     bool orthographic_;
     float half_y_;  ///< tan(yfov / 2), or the orthographic half height
     float aspect_;
+    float znear_, zfar_;  ///< along forward_; zfar_ infinite without a far plane
     int width_, height_;
 };
 

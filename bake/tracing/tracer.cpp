@@ -121,7 +121,7 @@ void recomputeHit(const Scene& scene, const Ray& ray, RayHit& hit) {
     }
     hit.u = float(u);
     hit.v = float(v);
-    hit.t = std::clamp(float(glm::dot(e2, q) * inverse), kRayTNear, ray.t_max);
+    hit.t = std::clamp(float(glm::dot(e2, q) * inverse), rayTNear(ray), ray.t_max);
 }
 
 Tracer::Tracer(const Scene& scene, TraceKernels kernels)
@@ -177,7 +177,7 @@ void initEmbreeRay(const Ray& ray, RTCRay& r) {
     r.dir_x = ray.direction.x;
     r.dir_y = ray.direction.y;
     r.dir_z = ray.direction.z;
-    r.tnear = kRayTNear;
+    r.tnear = rayTNear(ray);
     r.tfar = ray.t_max;
     r.time = 0.0f;
     r.mask = 0xffffffffu;

@@ -21,6 +21,9 @@ struct Ray {
     glm::vec3 origin;
     glm::vec3 direction;  ///< unit length
     float t_max = std::numeric_limits<float>::infinity();
+    /// Where the ray's segment begins: a camera's near clip plane, which hides what lies nearer
+    /// (a camera outside a room sees through its wall). Never before kRayTNear (rayTNear).
+    float t_min = 0.0f;
 };
 
 /// What the closest-hit query returns; the surface itself is reconstructed by the caller from
@@ -37,18 +40,21 @@ struct RayHit {
 /// see the floor behind every upward ray; a distance of zero is never a hit.
 inline constexpr float kRayTNear = std::numeric_limits<float>::min();
 
+/// Where Embree begins tracing `ray`: at its t_min, and no nearer than kRayTNear.
+inline float rayTNear(const Ray& ray) { return ray.t_min > kRayTNear ? ray.t_min : kRayTNear; }
+
 /// Whether Embree traces `ray` at all: its origin and direction within +-1.844e18 per component
-/// (Embree's FLT_LARGE) and t_max not NaN. Embree asserts this of every ray, and Debian's build
+/// (Embree's FLT_LARGE) and t_min and t_max not NaN. Embree asserts this of every ray, and Debian's build
 /// keeps its assertions, so a ray beyond it aborts the process (a NaN from a degenerate normal,
 /// an offset by a voxel of 1e20 units). Tracer treats such a ray as meeting nothing.
 inline bool embreeTraces(const Ray& ray) {
     constexpr float kLargest = 1.844e18f;
     const glm::vec3 o = glm::abs(ray.origin), d = glm::abs(ray.direction);
     return o.x <= kLargest && o.y <= kLargest && o.z <= kLargest && d.x <= kLargest && d.y <= kLargest &&
-           d.z <= kLargest && !std::isnan(ray.t_max);
+           d.z <= kLargest && !std::isnan(ray.t_max) && !std::isnan(ray.t_min);
 }
 
-/// Fills an Embree ray from `ray` over (kRayTNear, t_max): what Tracer traces, for code that
+/// Fills an Embree ray from `ray` over (rayTNear(ray), t_max): what Tracer traces, for code that
 /// calls Embree's packet or stream APIs itself.
 void initEmbreeRay(const Ray& ray, RTCRay& embree_ray);
 
@@ -61,7 +67,7 @@ void initEmbreeLane(const Ray& ray, RayN& packet, int lane) {
     packet.dir_x[lane] = ray.direction.x;
     packet.dir_y[lane] = ray.direction.y;
     packet.dir_z[lane] = ray.direction.z;
-    packet.tnear[lane] = kRayTNear;
+    packet.tnear[lane] = rayTNear(ray);
     packet.tfar[lane] = ray.t_max;
     packet.time[lane] = 0.0f;
     packet.mask[lane] = 0xffffffffu;
@@ -116,10 +122,10 @@ public:
     Tracer(const Tracer&) = delete;
     Tracer& operator=(const Tracer&) = delete;
 
-    /// Closest hit along the ray within (0, t_max). Returns false on a miss, and for a ray
+    /// Closest hit along the ray within (t_min, t_max) (from just after the origin for t_min 0). Returns false on a miss, and for a ray
     /// Embree does not trace (embreeTraces).
     bool intersect(const Ray& ray, RayHit& hit) const;
-    /// True if anything blocks the segment (0, t_max); false for a ray Embree does not trace.
+    /// True if anything blocks the segment (t_min, t_max); false for a ray Embree does not trace.
     bool occluded(const Ray& ray) const;
 
     /// Closest hits of `count` rays at once: hits[i] is valid where found[i] is 1. The same hits

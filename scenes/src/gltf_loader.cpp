@@ -3431,7 +3431,8 @@ private:
         }
         cam.position = glm::vec3(position);
         const glm::dmat3 linear(world);
-        const glm::dvec3 forward = glm::normalize(linear * glm::dvec3(0.0, 0.0, -1.0));
+        const glm::dvec3 view_axis = linear * glm::dvec3(0.0, 0.0, -1.0);
+        const glm::dvec3 forward = glm::normalize(view_axis);
         // Scale or shear in the node matrix can tilt +Y off perpendicular; project it back.
         glm::dvec3 up = linear * glm::dvec3(0.0, 1.0, 0.0);
         up = glm::normalize(up - glm::dot(up, forward) * forward);
@@ -3455,6 +3456,7 @@ private:
             }
             cam.orthographic_half_height = float(ymag);
             cam.aspect_ratio = sensibleAspectRatio(xmag / ymag, "xmag / ymag", label);
+            readClipPlanes(src.orthographic.znear, src.orthographic.zfar, true, glm::length(view_axis), label, cam);
             addSceneCamera(std::move(cam));
             return;
         }
@@ -3465,7 +3467,40 @@ private:
                  std::to_string(cam.yfov));
         if (src.perspective.aspectRatio > 0.0)
             cam.aspect_ratio = sensibleAspectRatio(src.perspective.aspectRatio, "aspectRatio", label);
+        readClipPlanes(src.perspective.znear, src.perspective.zfar, false, glm::length(view_axis), label, cam);
         addSceneCamera(std::move(cam));
+    }
+
+    /// The camera's clip planes (Blender writes its clip start and end there), given in the camera
+    /// node's space: `scale` is the length its world matrix gives the view axis. glTF derives the
+    /// view "with the scaling ignored", and `yfov` and `ymag` are read so; the clip distances are
+    /// scaled all the same, as viewers that clip in the camera's space (three.js) do, so that a
+    /// root node changing units (x0.001 from millimetres) keeps the clip where the file's author
+    /// put it against the scene: unscaled, the Cornell box under a kilometre root lost its whole
+    /// view behind a near plane 10 m away in the box's units. A camera node of scale 1 (Blender's)
+    /// reads them as written. Bad values are warned about and dropped, as for `yfov`, leaving the
+    /// camera to see from its position (znear 0) or without end (no zfar); a perspective `znear`
+    /// of 0 (below glTF's minimum, but meaning the same) and its absent `zfar` (tinygltf's 0: an
+    /// infinite projection) are no error.
+    void readClipPlanes(double znear, double zfar, bool orthographic, double scale, const std::string& label,
+                        Camera& cam) {
+        const double near = znear * scale, far = zfar * scale;
+        if (near >= 0.0 && near <= kMaxWorldCoordinate) {
+            cam.znear = float(near);
+        } else {
+            warn(label + ": invalid znear " + numberText(znear) +
+                 " (a distance from 0 to 1e9 in the scene); the camera sees from its position");
+        }
+        const bool absent = !orthographic && zfar == 0.0;
+        if (absent) return;
+        // Compared as the floats the rays use: a zfar a rounding past znear is no gap to see in.
+        if (!(far > double(cam.znear)) || (far <= kMaxWorldCoordinate && !(float(far) > cam.znear))) {
+            warn(label + ": invalid zfar " + numberText(zfar) + " (must be greater than znear " +
+                 numberText(cam.znear > 0.0f ? znear : 0.0) + "); no far clip plane");
+            return;
+        }
+        // Beyond the world's limit there is nothing to clip.
+        if (far <= kMaxWorldCoordinate) cam.zfar = float(far);
     }
 
     /// Aspect ratios of real frames, from tall phone screens to wide panoramas, are well inside

@@ -2,14 +2,15 @@
 // `render --cache`: SHaRC's query eligibility tests, BakedCache lookups, and a cached render of
 // the rho = 0.9 furnace, whose every surface has outgoing radiance Le / (1 - rho) = 10.
 #include "sharc/baker.h"
-#include "test_bake_scene.h"
 #include "sharc/cache_query.h"
 #include "sharc/camera_path.h"
+#include "sharcbake/cache_file.h"
+#include "sharcbake/scene_loader.h"
+#include "test_bake_scene.h"
+#include "test_rooms.h"
 #include "tracing/lights.h"
 #include "tracing/path_tracer.h"
 #include "tracing/render.h"
-#include "sharcbake/cache_file.h"
-#include "sharcbake/scene_loader.h"
 #include "tracing/surface.h"
 #include "tracing/tracer.h"
 
@@ -240,6 +241,88 @@ TEST(CameraRays, OrthographicRaysAreParallelFromTheViewRectangle) {
     const Ray centre = rays.generate(100, 50, glm::vec2(0.0f));
     EXPECT_NEAR(glm::length(centre.origin - iso.position), 0.0f, 1e-5f);
     EXPECT_EQ(centre.direction, iso.forward);
+}
+
+// ---- Clip planes (glTF znear and zfar, Blender's clip start and end) --------------------------
+
+TEST(CameraRays, SegmentsLieBetweenTheClipPlanesAcrossTheForwardAxis) {
+    Camera camera;
+    camera.yfov = 1.2f;
+    camera.znear = 0.5f;
+    camera.zfar = 4.0f;
+    const CameraRays rays(camera, 64, 64);
+    for (const glm::ivec2 pixel : {glm::ivec2(32, 32), glm::ivec2(0, 0), glm::ivec2(63, 10)}) {
+        const Ray ray = rays.generate(pixel.x, pixel.y, glm::vec2(0.5f));
+        const float cosine = glm::dot(ray.direction, camera.forward);
+        // Where the ray meets each plane, it is znear or zfar along forward.
+        EXPECT_NEAR(ray.t_min * cosine, 0.5f, 1e-5f);
+        EXPECT_NEAR(ray.t_max * cosine, 4.0f, 1e-5f);
+    }
+    // Orthographic rays run along forward: the distances themselves.
+    camera.orthographic_half_height = 1.0f;
+    const Ray parallel = CameraRays(camera, 8, 8).generate(0, 7, glm::vec2(0.5f));
+    EXPECT_EQ(parallel.t_min, 0.5f);
+    EXPECT_EQ(parallel.t_max, 4.0f);
+    // No planes: the whole ray, as before.
+    const Ray whole = CameraRays(Camera{}, 8, 8).generate(3, 3, glm::vec2(0.5f));
+    EXPECT_EQ(whole.t_min, 0.0f);
+    EXPECT_TRUE(std::isinf(whole.t_max));
+}
+
+/// `scene` through `camera` at 24 x 24 pixels, 4 samples each, path traced.
+Image renderThrough(const Scene& scene, const Camera& camera, PathTracerSettings settings = {}) {
+    const Tracer tracer(scene);
+    const LightSampler lights(scene);  // without learning where light arrives: quicker, as unbiased
+    const PathTracer path_tracer(tracer, lights, settings);
+    TraceCounters counters;
+    return renderImage(
+        CameraRays(camera, 24, 24), ImageRenderSettings{24, 24, 4, 1},
+        [&](const Ray& ray, PixelSampler& sampler) { return path_tracer.radiance(ray, sampler, counters); }, nullptr);
+}
+
+double meanOf(const Image& image) {
+    double sum = 0.0;
+    for (const glm::vec3& p : image.pixels) sum += double(p.x + p.y + p.z) / 3.0;
+    return sum / double(image.pixels.size());
+}
+
+TEST(CameraClipPlanes, ACameraOutsideAClosedRoomSeesInPastItsNearPlane) {
+    const Scene scene = cutawayRoom();
+    Camera cutaway = scene.cameras.at(0);
+    const double inside = meanOf(renderThrough(scene, cutaway));
+    EXPECT_GT(inside, 0.01) << "the lit room behind the clipped wall";
+    // Without the clip the camera sees the front wall's unlit outer side: black.
+    cutaway.znear = 0.0f;
+    EXPECT_EQ(meanOf(renderThrough(scene, cutaway)), 0.0);
+    // An orthographic camera outside with its near plane inside sees what the same camera inside
+    // sees: parallel rays from its view rectangle meet the same points.
+    Camera outside = scene.cameras.at(0);
+    outside.orthographic_half_height = 0.9f;
+    Camera within = outside;
+    within.position.z = outside.position.z - outside.znear;
+    within.znear = 0.0f;
+    const Image seen_from_outside = renderThrough(scene, outside), seen_within = renderThrough(scene, within);
+    EXPECT_GT(meanOf(seen_within), 0.01);
+    EXPECT_NEAR(meanOf(seen_from_outside), meanOf(seen_within), 1e-3 * meanOf(seen_within));
+}
+
+TEST(CameraClipPlanes, NothingBeyondTheFarPlaneIsSeenButTheSky) {
+    Scene scene = cutawayRoom();
+    scene.sky.uniform = glm::vec3(0.25f);  // outside the closed room, seen only past a far plane
+    Camera centre = scene.cameras.at(0);
+    centre.position = glm::vec3(0.0f, 1.0f, 0.0f);  // 1 m from every wall it sees
+    centre.znear = 0.0f;
+    centre.zfar = 0.5f;
+    PathTracerSettings short_paths;  // in a closed room under a sky the paths run long; what the
+    short_paths.max_bounces = 2;     // camera sees is the question here
+    const Image clipped = renderThrough(scene, centre, short_paths);
+    for (const glm::vec3& p : clipped.pixels) ASSERT_EQ(p, glm::vec3(0.25f));
+    centre.zfar = 5.0f;  // beyond the room: its walls
+    const Image whole = renderThrough(scene, centre, short_paths);
+    size_t sky = 0;
+    for (const glm::vec3& p : whole.pixels) sky += p == glm::vec3(0.25f);
+    EXPECT_EQ(sky, 0u);
+    EXPECT_GT(meanOf(whole), 0.01);
 }
 
 }  // namespace sharcbake

@@ -1001,6 +1001,42 @@ TEST(PredictHitRate, ACameraThatSeesASmallModelIsReplayedAtAHigherResolution) {
     }
 }
 
+// Blender artists frame an interior from outside, the near clip plane past the wall. The bake
+// explores from where that camera's view begins, inside the room; its own views, in the roaming
+// camera and in the hit-rate prediction, look through its clip; every other view has none.
+TEST(PredictHitRate, ACutawayCameraOutsideAClosedRoomIsPredictedThroughItsClip) {
+    const TestBakeScene bake(cutawayRoom());
+    const Tracer& tracer = *bake.tracer;
+    const Camera& cutaway = bake.scene.cameras.at(0);
+    const glm::vec3 start = viewStart(tracer, cutaway);
+    EXPECT_NEAR(glm::distance(start, glm::vec3(0.0f, 1.0f, 0.8f)), 0.0f, 1e-6f);
+    Camera unclipped = cutaway;
+    unclipped.znear = 0.0f;
+    EXPECT_EQ(viewStart(tracer, unclipped), cutaway.position);
+    Camera past_everything = cutaway;  // a near plane beyond the room looks into nothing
+    past_everything.znear = 10.0f;
+    EXPECT_EQ(viewStart(tracer, past_everything), cutaway.position);
+    for (const CameraPose& pose : bake.path->waypoints()) {
+        EXPECT_TRUE(glm::all(glm::lessThan(glm::abs(pose.position - glm::vec3(0.0f, 1.0f, 0.0f)), glm::vec3(1.0f))))
+            << "a waypoint outside the room at " << pose.position.x << ", " << pose.position.y << ", "
+            << pose.position.z;
+        EXPECT_EQ(pose.znear, 0.0f);
+    }
+    const CameraPath at_camera = atGltfCameraPositions(bake.scene, 1);
+    EXPECT_EQ(at_camera.poseAt(0).znear, 0.8f);  // the camera's own view
+    EXPECT_EQ(at_camera.poseAt(1).znear, 0.0f);  // turned: no camera's view
+    EXPECT_EQ(toCamera(at_camera.poseAt(0)).znear, 0.8f);
+
+    const CacheData data = smallBake(bake, 4);
+    const std::vector<PredictionView> views = predictionViews(tracer, ViewRegion{}, 0, 1);
+    ASSERT_EQ(views.size(), 1u);
+    const HitRatePrediction through_clip = predictHitRate(tracer, data, ViewRegion{}, views);
+    // Outside the room, or unclipped, the camera's first bounces met nothing lit: no lookups. Through
+    // its clip it sees the room the bake explored; 4 short iterations answer about 15% of them.
+    EXPECT_GT(through_clip.eligible, 1000u);
+    EXPECT_GT(through_clip.hits, through_clip.eligible / 20);
+}
+
 TEST(PredictHitRate, LookupsRefusedByVoxelsLargerThanTheViewAreCounted) {
     // Voxels 41 m wide in a 4 m room: every bounce is shorter than its voxel, so SHaRC's tests
     // refuse every lookup. The prediction counted only eligible lookups and reported "no first

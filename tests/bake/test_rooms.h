@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <utility>
 
 namespace sharcbake {
 
@@ -34,6 +35,41 @@ inline void addInwardBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t mate
     }
     scene.bounds_min = glm::min(scene.bounds_min, lo);
     scene.bounds_max = glm::max(scene.bounds_max, hi);
+}
+
+/// Appends the box [lo, hi], its twelve triangles wound to face out of it, in `material`.
+inline void addOutwardBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t material) {
+    const size_t first = scene.triangles.size();
+    addInwardBox(scene, lo, hi, material);
+    for (size_t t = first; t < scene.triangles.size(); ++t) std::swap(scene.triangles[t].y, scene.triangles[t].z);
+}
+
+/// A closed room 2 x 2 x 2 m (x and z in [-1, 1], y in [0, 2]) with walls 0.2 m thick, grey
+/// inside and out, lit only by a point light inside; and its glTF camera "Cutaway" 0.4 m in front
+/// of the front wall's outer side (z = 1.6), looking in (-Z), with its near clip plane past the wall
+/// (znear 0.8: the plane at z = 0.8, inside the room), as Blender artists frame an interior.
+inline Scene cutawayRoom() {
+    Scene scene = emptyTestScene();
+    Material wall;
+    wall.name = "wall";
+    wall.base_color = glm::vec3(0.8f);
+    scene.materials.push_back(wall);
+    addInwardBox(scene, glm::vec3(-1.0f, 0.0f, -1.0f), glm::vec3(1.0f, 2.0f, 1.0f), 0);
+    addOutwardBox(scene, glm::vec3(-1.2f, -0.2f, -1.2f), glm::vec3(1.2f, 2.2f, 1.2f), 0);
+    PunctualLight lamp;
+    lamp.name = "lamp";
+    lamp.position = glm::vec3(0.3f, 1.6f, -0.2f);
+    lamp.intensity = glm::vec3(10.0f);
+    scene.lights.push_back(lamp);
+    Camera camera;
+    camera.name = "Cutaway";
+    camera.index = 0;
+    camera.position = glm::vec3(0.0f, 1.0f, 1.6f);
+    camera.forward = glm::vec3(0.0f, 0.0f, -1.0f);
+    camera.yfov = 0.9f;
+    camera.znear = 0.8f;
+    scene.cameras.push_back(camera);
+    return scene;
 }
 
 }  // namespace sharcbake

@@ -2477,6 +2477,63 @@ TEST(GltfLoaderCameras, AbsurdAspectRatioIgnoredWithAWarning) {
     EXPECT_EQ(warnings.find("'Wide'"), std::string::npos) << warnings;
 }
 
+// The clip planes (Blender's clip start and end): a perspective camera's zfar may be absent (an
+// infinite projection); an orthographic camera has both.
+TEST(GltfLoaderCameras, ClipPlanesRead) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["cameras"] = json::array(
+        {{{"name", "Near"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 0.8}}}},
+         {{"name", "Both"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 0.1}, {"zfar", 100}}}},
+         {{"name", "Iso"},
+          {"type", "orthographic"},
+          {"orthographic", {{"xmag", 2}, {"ymag", 1}, {"znear", 0}, {"zfar", 30}}}}});
+    // Given in the camera node's space: a node scaled x3 puts the near plane 3 times as far.
+    b.setScene(
+        {b.addNode({{"camera", 0}, {"scale", {3, 3, 3}}}), b.addNode({{"camera", 1}}), b.addNode({{"camera", 2}})});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "clip.gltf"));
+    ASSERT_EQ(scene.cameras.size(), 3u);
+    EXPECT_FLOAT_EQ(scene.cameras[0].znear, 2.4f);
+    EXPECT_FALSE(scene.cameras[0].zfar.has_value());
+    EXPECT_FLOAT_EQ(scene.cameras[1].znear, 0.1f);
+    ASSERT_TRUE(scene.cameras[1].zfar.has_value());
+    EXPECT_FLOAT_EQ(*scene.cameras[1].zfar, 100.0f);
+    EXPECT_FLOAT_EQ(scene.cameras[2].znear, 0.0f);
+    ASSERT_TRUE(scene.cameras[2].zfar.has_value());
+    EXPECT_FLOAT_EQ(*scene.cameras[2].zfar, 30.0f);
+    EXPECT_TRUE(scene.stats.warnings.empty()) << scene.stats.warnings.front();
+}
+
+// Bad clip planes are warned about, naming the camera, and dropped: the camera is kept and sees
+// from its position, or without end.
+TEST(GltfLoaderCameras, InvalidClipPlanesDroppedWithAWarning) {
+    TempDir dir;
+    GltfBuilder b;
+    b.doc["cameras"] = json::array(
+        {{{"name", "Behind"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", -1}}}},
+         {{"name", "Inverted"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 5}, {"zfar", 2}}}},
+         {{"name", "FlatOrtho"},
+          {"type", "orthographic"},
+          {"orthographic", {{"xmag", 1}, {"ymag", 1}, {"znear", 0}, {"zfar", 0}}}},
+         {{"name", "Huge"}, {"type", "perspective"}, {"perspective", {{"yfov", 0.6}, {"znear", 1e300}}}}});
+    b.setScene({b.addNode({{"camera", 0}}), b.addNode({{"camera", 1}}), b.addNode({{"camera", 2}}),
+                b.addNode({{"camera", 3}})});
+    const Scene scene = loadGltf(b.writeEmbedded(dir, "bad_clip.gltf"));
+    ASSERT_EQ(scene.cameras.size(), 4u);
+    EXPECT_FLOAT_EQ(scene.cameras[0].znear, 0.0f);
+    EXPECT_FLOAT_EQ(scene.cameras[1].znear, 5.0f);  // the near plane is fine; the far one is not
+    EXPECT_FALSE(scene.cameras[1].zfar.has_value());
+    EXPECT_FALSE(scene.cameras[2].zfar.has_value());
+    EXPECT_FLOAT_EQ(scene.cameras[3].znear, 0.0f);
+    std::string warnings;
+    for (const std::string& w : scene.stats.warnings) warnings += w + "\n";
+    EXPECT_NE(warnings.find("camera 'Behind': invalid znear -1"), std::string::npos) << warnings;
+    EXPECT_NE(warnings.find("camera 'Inverted': invalid zfar 2 (must be greater than znear 5)"), std::string::npos)
+        << warnings;
+    EXPECT_NE(warnings.find("camera 'FlatOrtho': invalid zfar 0"), std::string::npos) << warnings;
+    EXPECT_NE(warnings.find("camera 'Huge': invalid znear 1e+300"), std::string::npos) << warnings;
+}
+
 TEST(GltfLoaderSky, UniformRadianceFromRootExtras) {
     TempDir dir;
     GltfBuilder b;

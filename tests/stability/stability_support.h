@@ -34,7 +34,13 @@ inline std::string scenePath(const std::string& name) {
 /// punctual lights and bounds.
 inline void transformScene(Scene& scene, float scale, glm::vec3 offset) {
     for (glm::vec3& p : scene.positions) p = p * scale + offset;
-    for (Camera& c : scene.cameras) c.position = c.position * scale + offset;
+    for (Camera& c : scene.cameras) {
+        c.position = c.position * scale + offset;
+        // Clip distances scale with the scene too, as the generator's --scale writes them: a
+        // near plane left at 0.01 clips away a room shrunk to 4 mm.
+        c.znear *= scale;
+        if (c.zfar) *c.zfar *= scale;
+    }
     for (PunctualLight& l : scene.lights) l.position = l.position * scale + offset;
     scene.bounds_min = scene.bounds_min * scale + offset;
     scene.bounds_max = scene.bounds_max * scale + offset;

@@ -206,6 +206,13 @@ struct Camera {
     /// Orthographic cameras: half the view's height in scene units (glTF `ymag`; `aspect_ratio`
     /// is xmag / ymag). Rays leave the view rectangle in parallel; `yfov` is not used for them.
     std::optional<float> orthographic_half_height;
+    /// The clip planes (glTF `znear`, `zfar`; Blender's clip start and end): distances along
+    /// `forward` from the camera's position, in world units, between which it sees. Geometry nearer
+    /// than `znear` is not seen (a camera outside a room with its near plane past the wall sees the
+    /// room's inside); beyond `zfar` the view sees the sky. 0 and no far plane for the cameras the
+    /// tool makes.
+    float znear = 0.0f;
+    std::optional<float> zfar;
 };
 
 /// How messages name a camera, so that the user can pick it with `render --camera`: by its node's
