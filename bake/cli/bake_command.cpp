@@ -321,7 +321,7 @@ CameraPath makeCameraPath(const BakeJob& job, const Scene& scene, const Tracer& 
             throw CommandError(kExitInvalidInput, job.scene_path + ": --camera-source gltf, but the scene has no camera");
         }
         std::vector<CameraPose> poses;
-        for (const Camera& c : scene.cameras) poses.push_back(poseOf(c));  // each camera's own view, clip planes included
+        for (const Camera& c : scene.cameras) poses.push_back(poseOf(c));  // its own view, clip planes included
         description = "glTF cameras (" + std::to_string(poses.size()) + " waypoints)";
         return CameraPath(std::move(poses), false, job.camera.iterations_per_leg, 0.002f * diagonal, job.settings.seed);
     }

@@ -44,9 +44,10 @@ inline constexpr float kRayTNear = std::numeric_limits<float>::min();
 inline float rayTNear(const Ray& ray) { return ray.t_min > kRayTNear ? ray.t_min : kRayTNear; }
 
 /// Whether Embree traces `ray` at all: its origin and direction within +-1.844e18 per component
-/// (Embree's FLT_LARGE) and t_min and t_max not NaN. Embree asserts this of every ray, and Debian's build
-/// keeps its assertions, so a ray beyond it aborts the process (a NaN from a degenerate normal,
-/// an offset by a voxel of 1e20 units). Tracer treats such a ray as meeting nothing.
+/// (Embree's FLT_LARGE) and t_min and t_max not NaN. Embree asserts this of every ray, and
+/// Debian's build keeps its assertions, so a ray beyond it aborts the process (a NaN from a
+/// degenerate normal, an offset by a voxel of 1e20 units). Tracer treats such a ray as meeting
+/// nothing.
 inline bool embreeTraces(const Ray& ray) {
     constexpr float kLargest = 1.844e18f;
     const glm::vec3 o = glm::abs(ray.origin), d = glm::abs(ray.direction);
@@ -122,8 +123,8 @@ public:
     Tracer(const Tracer&) = delete;
     Tracer& operator=(const Tracer&) = delete;
 
-    /// Closest hit along the ray within (t_min, t_max) (from just after the origin for t_min 0). Returns false on a miss, and for a ray
-    /// Embree does not trace (embreeTraces).
+    /// Closest hit along the ray within (t_min, t_max), from just after the origin for t_min 0.
+    /// Returns false on a miss, and for a ray Embree does not trace (embreeTraces).
     bool intersect(const Ray& ray, RayHit& hit) const;
     /// True if anything blocks the segment (t_min, t_max); false for a ray Embree does not trace.
     bool occluded(const Ray& ray) const;

@@ -17,11 +17,7 @@ constexpr uint32_t kSeed = 7;
 /// A 4 x 3 x 4 room of grey walls facing into it, the material named "wall".
 Scene greyRoom() {
     Scene scene = emptyTestScene();
-    Material wall;
-    wall.name = "wall";
-    wall.base_color = glm::vec3(0.8f);
-    scene.materials.push_back(wall);
-    addInwardBox(scene, glm::vec3(-2.0f, 0.0f, -2.0f), glm::vec3(2.0f, 3.0f, 2.0f), 0);
+    addInwardBox(scene, glm::vec3(-2.0f, 0.0f, -2.0f), glm::vec3(2.0f, 3.0f, 2.0f), addGreyWallMaterial(scene));
     return scene;
 }
 

@@ -37,6 +37,15 @@ inline void addInwardBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t mate
     scene.bounds_max = glm::max(scene.bounds_max, hi);
 }
 
+/// Appends the grey (0.8) material "wall" the test rooms are built of; returns its index.
+inline uint32_t addGreyWallMaterial(Scene& scene) {
+    Material wall;
+    wall.name = "wall";
+    wall.base_color = glm::vec3(0.8f);
+    scene.materials.push_back(wall);
+    return uint32_t(scene.materials.size() - 1);
+}
+
 /// Appends the box [lo, hi], its twelve triangles wound to face out of it, in `material`.
 inline void addOutwardBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t material) {
     const size_t first = scene.triangles.size();
@@ -50,12 +59,9 @@ inline void addOutwardBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, uint32_t mat
 /// (znear 0.8: the plane at z = 0.8, inside the room), as Blender artists frame an interior.
 inline Scene cutawayRoom() {
     Scene scene = emptyTestScene();
-    Material wall;
-    wall.name = "wall";
-    wall.base_color = glm::vec3(0.8f);
-    scene.materials.push_back(wall);
-    addInwardBox(scene, glm::vec3(-1.0f, 0.0f, -1.0f), glm::vec3(1.0f, 2.0f, 1.0f), 0);
-    addOutwardBox(scene, glm::vec3(-1.2f, -0.2f, -1.2f), glm::vec3(1.2f, 2.2f, 1.2f), 0);
+    const uint32_t wall = addGreyWallMaterial(scene);
+    addInwardBox(scene, glm::vec3(-1.0f, 0.0f, -1.0f), glm::vec3(1.0f, 2.0f, 1.0f), wall);
+    addOutwardBox(scene, glm::vec3(-1.2f, -0.2f, -1.2f), glm::vec3(1.2f, 2.2f, 1.2f), wall);
     PunctualLight lamp;
     lamp.name = "lamp";
     lamp.position = glm::vec3(0.3f, 1.6f, -0.2f);

@@ -232,8 +232,9 @@ public:
     /// keys in the layout of options.sdk_target, inserted in file (key) order with that release's
     /// bucket rule + linear probe (SPEC §G.2). Voxels whose bucket is full are counted in
     /// failed_inserts. Errors: kInvalidArgument (capacity 0, or below 16 for SDK 1.8.3+; a bad
-    /// radiance scale; an sdk_target that is none of SharcSdkTarget's enumerators; null out), kUnsupportedFeature (a build option the library cannot serve;
-    /// the message says why), kIoError (allocation failed). A clipping warning is in
+    /// radiance scale; an sdk_target that is none of SharcSdkTarget's enumerators; null out),
+    /// kUnsupportedFeature (a build option the library cannot serve; the message says why),
+    /// kIoError (allocation failed). A clipping warning is in
     /// out->radiance.warning (and in `error->message` with status kOk).
     CacheFileStatus gpuBuffers(const GpuBufferOptions& options, GpuBuffers* out, CacheError* error = nullptr) const;
 
