@@ -7,7 +7,9 @@
 #   (a) CMake, a C-only project: the static sharcbake::runtime, the shared sharcbake::runtime_shared;
 #   (b) CMake, a C++ project: the README's example, static and shared;
 #   (c) plain cc with pkg-config: the shared library (rpath), and --static with -static;
-#   (d) the README's lookup snippets are the consumers' marked lines, word for word.
+#   (d) the README's lookup snippets are the consumers' marked lines, word for word;
+#   (e) CMake, add_subdirectory of the repository with sharcbake's defaults: the runtime alone,
+#       and the engine's (empty) build type left as it was.
 # Usage: install_consumer_test.sh CMAKE BUILD_DIR WORK_DIR C_COMPILER
 set -euo pipefail
 CMAKE=$1
@@ -93,6 +95,13 @@ lookup "$WORK/pc_shared"
 quiet "$WORK/pc.log" "$CC" -static "$CONSUMER/consumer.c" -o "$WORK/pc_static" $(pkg-config --static --cflags --libs $pc)
 ! loads_shared_runtime "$WORK/pc_static" || fail "pc_static should be linked statically"
 lookup "$WORK/pc_static"
+
+echo "== (e) CMake, add_subdirectory of the repository"
+quiet "$WORK/sub.log" "$CMAKE" -S "$CONSUMER/subdirectory" -B "$WORK/sub" -DSHARCBAKE_SOURCE_DIR="$HERE/../.."
+grep -q '^CMAKE_BUILD_TYPE:STRING=$' "$WORK/sub/CMakeCache.txt" ||
+    fail "the subproject changed the engine's build type: $(grep '^CMAKE_BUILD_TYPE' "$WORK/sub/CMakeCache.txt")"
+quiet "$WORK/sub.log" "$CMAKE" --build "$WORK/sub" --target consumer_cpp
+lookup "$WORK/sub/consumer_cpp"
 
 echo "== (d) README snippets"
 # marked FILE: the lines between the file's readme markers, without the function's indentation.
