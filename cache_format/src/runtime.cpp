@@ -1158,10 +1158,9 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
     if (!out) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: null output");
     if (!data_) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: the view is not open");
     if (options.capacity == 0) return fail(error, CacheFileStatus::kInvalidArgument, 0, "gpuBuffers: capacity 0");
-    if (!isKnownSharcSdkTarget(options.sdk_target)) {
-        return fail(error, CacheFileStatus::kInvalidArgument, 0,
-                    "gpuBuffers: unknown sdk_target " + std::to_string(uint32_t(options.sdk_target)));
-    }
+    GpuPacker packer;  // first: it refuses an unknown sdk_target, whose layout the next check reads
+    const CacheFileStatus prepared = prepareGpuPacker(options, *this, "gpuBuffers", &packer, error);
+    if (prepared != CacheFileStatus::kOk) return prepared;
     const SharcSdkLayout& layout = sharcSdkLayout(options.sdk_target);
     if (options.capacity < layout.min_capacity) {
         return fail(error, CacheFileStatus::kInvalidArgument, 0,
@@ -1169,9 +1168,6 @@ CacheFileStatus CacheView::gpuBuffers(const GpuBufferOptions& options, GpuBuffer
                         std::to_string(layout.min_capacity) + ", the least " + toString(options.sdk_target) +
                         "'s bucket rule is defined for");
     }
-    GpuPacker packer;
-    const CacheFileStatus prepared = prepareGpuPacker(options, *this, "gpuBuffers", &packer, error);
-    if (prepared != CacheFileStatus::kOk) return prepared;
     GpuBuffers result;
     try {
         result.hash_entries.assign(options.capacity, kHashGridInvalidKey);
