@@ -1620,13 +1620,12 @@ private:
     /// twice its rate, and one that baked none 1.7e16 rays/s).
     double raysPerSecond() const {
         const UpdateCounters& c = baker_->counters();
-        const uint64_t rays = (c.segments + c.shadow_rays) -
-                              (counters_at_start_.segments + counters_at_start_.shadow_rays);
-        return rays == 0 ? 0.0 : double(rays) / std::max(baker_->seconds().update, 1e-9);
+        return perUpdateSecond((c.segments + c.shadow_rays) - (counters_at_start_.segments + counters_at_start_.shadow_rays));
     }
-    double segmentsPerSecond() const {
-        const uint64_t segments = baker_->counters().segments - counters_at_start_.segments;
-        return segments == 0 ? 0.0 : double(segments) / std::max(baker_->seconds().update, 1e-9);
+    double segmentsPerSecond() const { return perUpdateSecond(baker_->counters().segments - counters_at_start_.segments); }
+    /// `count` of this run's events per second of its update stage; 0 when it had none.
+    double perUpdateSecond(uint64_t count) const {
+        return count == 0 ? 0.0 : double(count) / std::max(baker_->seconds().update, 1e-9);
     }
     double occupancy() const {
         return double(baker_->cache().liveEntries()) / double(baker_->cache().capacity());
